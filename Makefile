@@ -1,0 +1,225 @@
+# ampath — plain GNU make. Targets: all (default), check, demo, bench, cross, fuzz,
+# install, uninstall, clean. Honours CC, CFLAGS, LDFLAGS, PREFIX, DESTDIR, OPENMP=0.
+#
+# Sources are found by name, so a new module needs no edit here:
+#   lib/*.c              -> lib/libampath.a and lib/libampath.so
+#   tools/*.c            -> tools/ampath (tools/cmd_NAME.c = command NAME, tools/bench_NAME.c = benchmark NAME)
+#   tools/vprinter/*.c   -> tools/ampath-vprinter (virtual printer)
+#   bridge/*.c           -> bridge/ampath-bridge (bridge/main.c holds main; the rest is also linked into tests)
+#   tests/test_*.c       -> one Check program each; other tests/*.c are shared fixtures
+#   tests/fuzz/fuzz_*.c  -> libFuzzer targets (make fuzz)
+
+VERSION := $(shell sed -n 's/^\#define AMP_VERSION_STRING "\(.*\)"/\1/p' include/ampath/version.h)
+PREFIX ?= /usr/local
+BINDIR ?= $(PREFIX)/bin
+LIBDIR ?= $(PREFIX)/lib
+INCDIR ?= $(PREFIX)/include
+MANDIR ?= $(PREFIX)/share/man
+OPENMP ?= 1
+CFLAGS ?= -O2 -g
+SAN ?= 0
+
+# Build directory: the plain build in build/, the sanitizer build in build/san.
+ifeq ($(SAN),1)
+B := build/san
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+OUTLIB := $(B)
+OUTBIN := $(B)
+else
+B := build
+SANFLAGS :=
+OUTLIB := lib
+OUTBIN := .
+endif
+
+WARN := -std=c99 -Wall -Wextra -Wpedantic -Wshadow -Wstrict-prototypes -Wmissing-prototypes -Werror
+ifeq ($(OPENMP),1)
+OMP := -fopenmp
+else
+OMP := -Wno-unknown-pragmas
+endif
+ALL_CFLAGS := $(WARN) $(OMP) $(SANFLAGS) -Iinclude -MMD -MP $(CFLAGS)
+ALL_LDFLAGS := $(OMP) $(SANFLAGS) $(LDFLAGS)
+
+LIB_SRC := $(sort $(wildcard lib/*.c))
+TOOL_SRC := $(sort $(wildcard tools/*.c))
+VPR_SRC := $(sort $(wildcard tools/vprinter/*.c))
+BRIDGE_SRC := $(sort $(wildcard bridge/*.c))
+BRIDGE_MAIN := $(filter bridge/main.c,$(BRIDGE_SRC))
+BRIDGE_CORE := $(filter-out bridge/main.c,$(BRIDGE_SRC))
+TEST_SRC := $(sort $(wildcard tests/test_*.c))
+FIXTURE_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
+CMD_NAMES := $(patsubst tools/cmd_%.c,%,$(sort $(wildcard tools/cmd_*.c)))
+BENCH_NAMES := $(patsubst tools/bench_%.c,%,$(sort $(wildcard tools/bench_*.c)))
+
+LIB_OBJ := $(LIB_SRC:%.c=$(B)/%.o)
+PIC_OBJ := $(LIB_SRC:%.c=$(B)/pic/%.o)
+TOOL_OBJ := $(TOOL_SRC:%.c=$(B)/%.o)
+VPR_OBJ := $(VPR_SRC:%.c=$(B)/%.o)
+BRIDGE_CORE_OBJ := $(BRIDGE_CORE:%.c=$(B)/%.o)
+BRIDGE_MAIN_OBJ := $(BRIDGE_MAIN:%.c=$(B)/%.o)
+FIXTURE_OBJ := $(FIXTURE_SRC:%.c=$(B)/%.o)
+TEST_BIN := $(TEST_SRC:tests/%.c=$(B)/tests/%)
+
+LIBA := $(OUTLIB)/libampath.a
+LIBSO := $(OUTLIB)/libampath.so
+AMPATH := $(OUTBIN)/tools/ampath
+VPRINTER := $(if $(VPR_SRC),$(OUTBIN)/tools/ampath-vprinter)
+BRIDGE := $(if $(BRIDGE_MAIN),$(OUTBIN)/bridge/ampath-bridge)
+
+SERIAL_CFLAGS = $(shell pkg-config --cflags libserialport 2>/dev/null)
+SERIAL_LIBS = $(shell pkg-config --libs libserialport 2>/dev/null || echo -lserialport)
+CHECK_CFLAGS = $(shell pkg-config --cflags check 2>/dev/null)
+CHECK_LIBS = $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt -lpthread)
+
+BUILD_PKGS := gcc make pkg-config libserialport-dev
+TEST_PKGS := $(BUILD_PKGS) check
+CROSS_PKGS := gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
+FUZZ_PKGS := clang libclang-rt-14-dev
+
+.PHONY: all check test-run demo bench cross fuzz install uninstall clean deps-build deps-test FORCE
+.DELETE_ON_ERROR:
+
+all: deps-build $(LIBA) $(LIBSO) $(AMPATH) $(VPRINTER) $(BRIDGE)
+
+deps-build:
+	@sh tools/deps.sh $(BUILD_PKGS)
+deps-test:
+	@sh tools/deps.sh $(TEST_PKGS)
+
+# ---- library ----
+$(B)/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -c $< -o $@
+
+$(B)/pic/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -fPIC -c $< -o $@
+
+$(LIBA): $(LIB_OBJ)
+	@mkdir -p $(dir $@)
+	rm -f $@
+	$(AR) rcs $@ $^
+
+$(LIBSO): $(PIC_OBJ)
+	@mkdir -p $(dir $@)
+	$(CC) -shared -Wl,-soname,libampath.so.0 $(ALL_LDFLAGS) $^ -o $@ -lm
+
+# ---- tools/ampath: commands and benchmarks are registered by file name ----
+$(B)/gen/commands.inc: FORCE
+	@mkdir -p $(dir $@)
+	@printf '$(foreach c,$(CMD_NAMES),AMP_CMD($(c))\n)' > $@.tmp
+	@cmp -s $@.tmp $@ || mv $@.tmp $@; rm -f $@.tmp
+$(B)/gen/benches.inc: FORCE
+	@mkdir -p $(dir $@)
+	@printf '$(foreach c,$(BENCH_NAMES),AMP_BENCH($(c))\n)' > $@.tmp
+	@cmp -s $@.tmp $@ || mv $@.tmp $@; rm -f $@.tmp
+
+$(B)/tools/%.o: tools/%.c $(B)/gen/commands.inc $(B)/gen/benches.inc
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -I$(B)/gen -Itools $(SERIAL_CFLAGS) -c $< -o $@
+
+$(AMPATH): $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA) -o $@ $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
+
+$(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $(VPR_OBJ) $(LIBA) -o $@ -lutil -lm
+
+# ---- bridge ----
+$(B)/bridge/%.o: bridge/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Ibridge $(SERIAL_CFLAGS) -c $< -o $@
+
+$(OUTBIN)/bridge/ampath-bridge: $(BRIDGE_MAIN_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_LDFLAGS) $^ -o $@ $(SERIAL_LIBS) -lm
+
+# ---- tests ----
+$(B)/tests/%.o: tests/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) -Itests -Ibridge -Itools $(CHECK_CFLAGS) $(SERIAL_CFLAGS) -c $< -o $@
+
+$(B)/tests/test_%: $(B)/tests/test_%.o $(FIXTURE_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
+	$(CC) $(ALL_LDFLAGS) $^ -o $@ $(CHECK_LIBS) $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
+
+# Tests find the programs they drive through these variables.
+TEST_ENV := AMP_TOOL=$(abspath $(AMPATH)) AMP_VPRINTER=$(abspath $(OUTBIN)/tools/ampath-vprinter) \
+	AMP_BRIDGE=$(abspath $(OUTBIN)/bridge/ampath-bridge) CK_DEFAULT_TIMEOUT=600
+
+test-run: $(TEST_BIN) $(AMPATH) $(VPRINTER) $(BRIDGE)
+	@echo "== test suite ($(if $(filter 1,$(SAN)),ASan+UBSan,plain) build)"
+	@$(TEST_ENV) ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 sh tests/run.sh $(TEST_BIN)
+
+check: deps-test
+	@$(MAKE) --no-print-directory all
+	@$(MAKE) --no-print-directory test-run
+	@$(MAKE) --no-print-directory SAN=1 OPENMP=0 test-run
+
+# ---- demo, bench ----
+demo: all
+	@sh tools/demo.sh
+
+bench: all
+	$(AMPATH) bench
+
+# ---- cross build for Cortex-M4F: the library must compile freestanding-friendly ----
+CROSS_CC ?= arm-none-eabi-gcc
+CROSS_FLAGS := -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -Os -ffunction-sections -fdata-sections
+CROSS_OBJ := $(LIB_SRC:%.c=build/cross/%.o)
+build/cross/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(CROSS_CC) $(WARN) -Wno-unknown-pragmas $(CROSS_FLAGS) -Iinclude -c $< -o $@
+build/cross/libampath.a: $(CROSS_OBJ)
+	rm -f $@
+	arm-none-eabi-ar rcs $@ $^
+cross:
+	@sh tools/deps.sh $(CROSS_PKGS)
+	@$(MAKE) --no-print-directory build/cross/libampath.a
+	@arm-none-eabi-size -t build/cross/libampath.a | tail -n 1 | \
+		awk '{print "cross (Cortex-M4F): libampath.a text " $$1 " B, data " $$2 " B, bss " $$3 " B"}'
+
+# ---- fuzzing (clang libFuzzer): make fuzz FUZZ_SECONDS=60 ----
+FUZZ_SECONDS ?= 30
+FUZZ_SRC := $(sort $(wildcard tests/fuzz/fuzz_*.c))
+FUZZ_BIN := $(FUZZ_SRC:tests/fuzz/%.c=build/fuzz/%)
+build/fuzz/%: tests/fuzz/%.c $(LIB_SRC)
+	@mkdir -p $(dir $@)
+	clang -std=c99 -g -O1 -fsanitize=fuzzer,address,undefined -Iinclude $< $(LIB_SRC) -o $@ -lm
+fuzz:
+	@sh tools/deps.sh $(FUZZ_PKGS)
+	@$(MAKE) --no-print-directory $(FUZZ_BIN)
+	@for f in $(FUZZ_BIN); do mkdir -p build/fuzz/corpus-$$(basename $$f); \
+		echo "== $$f for $(FUZZ_SECONDS) s"; \
+		$$f -max_total_time=$(FUZZ_SECONDS) -max_len=65536 build/fuzz/corpus-$$(basename $$f) 2>&1 | tail -n 3 || exit 1; done
+
+# ---- install ----
+HEADERS := $(sort $(wildcard include/ampath/*.h))
+MANPAGES := $(sort $(wildcard docs/man/*.1))
+$(B)/ampath.pc: FORCE
+	@mkdir -p $(dir $@)
+	@printf 'prefix=$(PREFIX)\nlibdir=$(LIBDIR)\nincludedir=$(INCDIR)\n\nName: ampath\nDescription: print paths for additive manufacturing (volumetric covering, continuous tool paths)\nVersion: $(VERSION)\nLibs: -L$${libdir} -lampath\nLibs.private: -lm\nCflags: -I$${includedir}\n' > $@
+
+install: all $(B)/ampath.pc
+	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCDIR)/ampath $(DESTDIR)$(MANDIR)/man1
+	install -m 644 $(HEADERS) $(DESTDIR)$(INCDIR)/ampath/
+	install -m 644 $(LIBA) $(DESTDIR)$(LIBDIR)/
+	install -m 755 $(LIBSO) $(DESTDIR)$(LIBDIR)/libampath.so.$(VERSION)
+	ln -sf libampath.so.$(VERSION) $(DESTDIR)$(LIBDIR)/libampath.so.0
+	ln -sf libampath.so.0 $(DESTDIR)$(LIBDIR)/libampath.so
+	install -m 644 $(B)/ampath.pc $(DESTDIR)$(LIBDIR)/pkgconfig/
+	install -m 755 $(AMPATH) $(VPRINTER) $(BRIDGE) $(DESTDIR)$(BINDIR)/
+	$(if $(MANPAGES),install -m 644 $(MANPAGES) $(DESTDIR)$(MANDIR)/man1/)
+
+uninstall:
+	rm -rf $(DESTDIR)$(INCDIR)/ampath
+	rm -f $(DESTDIR)$(LIBDIR)/libampath.a $(DESTDIR)$(LIBDIR)/libampath.so $(DESTDIR)$(LIBDIR)/libampath.so.0 \
+		$(DESTDIR)$(LIBDIR)/libampath.so.$(VERSION) $(DESTDIR)$(LIBDIR)/pkgconfig/ampath.pc
+	rm -f $(DESTDIR)$(BINDIR)/ampath $(DESTDIR)$(BINDIR)/ampath-vprinter $(DESTDIR)$(BINDIR)/ampath-bridge
+	rm -f $(addprefix $(DESTDIR)$(MANDIR)/man1/,$(notdir $(MANPAGES)))
+
+clean:
+	rm -rf build lib/libampath.a lib/libampath.so tools/ampath tools/ampath-vprinter bridge/ampath-bridge demo
+
+-include $(shell find build -name '*.d' 2>/dev/null)

@@ -1,0 +1,120 @@
+/*
+ * ampath/paths.h — print paths with a deposition radius per vertex, and the
+ * `.amp` text format (SPEC §3).
+ *
+ * An amp_pathset is the in-memory form of a `.amp` file: paths in print order,
+ * each a polyline whose vertices carry the material deposition radius (MDR) r.
+ * It is plain data: fields may be read directly; modify it only through the
+ * functions below so that the arrays stay consistent. Not thread-safe for
+ * concurrent modification; concurrent readers are fine.
+ */
+#ifndef AMPATH_PATHS_H
+#define AMPATH_PATHS_H
+
+#include <stddef.h>
+
+#include "alloc.h"
+#include "io.h"
+#include "status.h"
+#include "vec.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** What a path is printed for. */
+typedef enum amp_role {
+    AMP_ROLE_OBJECT = 0, /**< part of the model */
+    AMP_ROLE_SUPPORT = 1 /**< support structure, removed after printing */
+} amp_role;
+
+/** One path vertex: position (mm) and deposition radius r (mm, >= 0). */
+typedef struct amp_pvert {
+    amp_vec3 p;
+    double r;
+} amp_pvert;
+
+/** One path: @p n vertices starting at index @p first of amp_pathset.verts. */
+typedef struct amp_path {
+    amp_role role;
+    size_t first;
+    size_t n;
+} amp_path;
+
+/** Paths in print order sharing one vertex array. */
+typedef struct amp_pathset {
+    const amp_allocator *alloc; /**< allocator for both arrays */
+    amp_path *paths;
+    size_t npaths, cap_paths;
+    amp_pvert *verts;
+    size_t nverts, cap_verts;
+} amp_pathset;
+
+/** Largest number of vertices accepted in one path by the reader. */
+#define AMP_PATH_MAX_VERTS 100000000UL
+
+/** Initialise an empty set that will allocate with @p a (NULL = default). */
+void amp_pathset_init(amp_pathset *ps, const amp_allocator *a);
+/** Free all memory; the set is empty (and reusable) afterwards. NULL accepted. */
+void amp_pathset_free(amp_pathset *ps);
+/** Remove all paths, keeping the memory. */
+void amp_pathset_clear(amp_pathset *ps);
+
+/**
+ * Start a new, empty path with @p role at the end of the set. Following
+ * amp_pathset_push() calls append to it. AMP_ERR_NOMEM leaves the set unchanged.
+ */
+amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err);
+
+/**
+ * Append a vertex to the last path (AMP_ERR_STATE if there is none).
+ * AMP_ERR_ARG for non-finite coordinates or a negative or non-finite radius.
+ */
+amp_status amp_pathset_push(amp_pathset *ps, amp_vec3 p, double r, amp_error *err);
+
+/** Append a whole path (copies @p n vertices). Same errors as begin + push. */
+amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, size_t n, amp_error *err);
+
+/** Append copies of all paths of @p src to @p dst. */
+amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err);
+
+/** Vertices of path @p i (no bounds check beyond an assert-free contract: i < npaths). */
+static inline amp_pvert *amp_pathset_path_verts(const amp_pathset *ps, size_t i) { return ps->verts + ps->paths[i].first; }
+
+/** Length of path @p i in mm. */
+double amp_path_length(const amp_pathset *ps, size_t i);
+/** Total length of all paths with @p role (role < 0: all paths). */
+double amp_pathset_length(const amp_pathset *ps, int role);
+/** Σ π r² L over all segments (r = mean of the segment's end radii): the deposited volume in mm³. */
+double amp_pathset_volume(const amp_pathset *ps, int role);
+/** Bounding box of all vertices (empty box when there are none). */
+amp_box3 amp_pathset_bbox(const amp_pathset *ps);
+
+/**
+ * Parse `.amp` text (SPEC §3) of @p len bytes and append its paths to @p ps.
+ * Accepts LF and CRLF, comments (`#` to end of line) anywhere, blank lines.
+ * Errors (AMP_ERR_PARSE with the 1-based line in err->line): missing or wrong
+ * header, unknown role, bad or missing vertex count, wrong number of fields,
+ * non-numeric or non-finite numbers, negative radius, fewer vertices than
+ * announced, lines over 4096 bytes. On error @p ps is left as it was before
+ * the call. The text need not be NUL-terminated.
+ */
+amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err);
+
+/** amp_read_file() + amp_pathset_parse(); the message names the file. */
+amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err);
+
+/**
+ * Write @p ps as `.amp` text through @p sink. Coordinates are written with
+ * 10 significant digits (sub-micron for parts up to 1 m). @p comment, if not
+ * NULL, is written as `# ` lines after the header (newlines allowed).
+ */
+amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err);
+
+/** Write to a file (replaced atomically: written to PATH.tmp, then renamed). */
+amp_status amp_pathset_write_file(const amp_pathset *ps, const char *path, const char *comment, amp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

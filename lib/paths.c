@@ -1,0 +1,290 @@
+/* Print paths in memory and the `.amp` text format (SPEC §3). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "ampath/paths.h"
+#include "lex.h"
+
+void amp_pathset_init(amp_pathset *ps, const amp_allocator *a)
+{
+    memset(ps, 0, sizeof *ps);
+    ps->alloc = a;
+}
+
+void amp_pathset_free(amp_pathset *ps)
+{
+    if (!ps)
+        return;
+    amp_free(ps->alloc, ps->paths);
+    amp_free(ps->alloc, ps->verts);
+    amp_pathset_init(ps, ps->alloc);
+}
+
+void amp_pathset_clear(amp_pathset *ps)
+{
+    ps->npaths = 0;
+    ps->nverts = 0;
+}
+
+amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err)
+{
+    void *p = ps->paths;
+    if (role != AMP_ROLE_OBJECT && role != AMP_ROLE_SUPPORT)
+        return amp_fail(err, AMP_ERR_ARG, 0, "unknown path role %d", (int)role);
+    if (amp_grow(ps->alloc, &p, &ps->cap_paths, ps->npaths + 1, sizeof *ps->paths) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for paths");
+    ps->paths = p;
+    ps->paths[ps->npaths].role = role;
+    ps->paths[ps->npaths].first = ps->nverts;
+    ps->paths[ps->npaths].n = 0;
+    ps->npaths++;
+    return AMP_OK;
+}
+
+amp_status amp_pathset_push(amp_pathset *ps, amp_vec3 p, double r, amp_error *err)
+{
+    void *v = ps->verts;
+    if (ps->npaths == 0)
+        return amp_fail(err, AMP_ERR_STATE, 0, "amp_pathset_push: no path begun");
+    if (!amp_v3_finite(p) || !isfinite(r) || r < 0.0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "vertex (%g %g %g) radius %g is not finite or radius negative", p.x, p.y,
+                        p.z, r);
+    if (amp_grow(ps->alloc, &v, &ps->cap_verts, ps->nverts + 1, sizeof *ps->verts) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for path vertices");
+    ps->verts = v;
+    ps->verts[ps->nverts].p = p;
+    ps->verts[ps->nverts].r = r;
+    ps->nverts++;
+    ps->paths[ps->npaths - 1].n++;
+    return AMP_OK;
+}
+
+amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, size_t n, amp_error *err)
+{
+    size_t i, np = ps->npaths, nv = ps->nverts;
+    amp_status st = amp_pathset_begin(ps, role, err);
+    for (i = 0; st == AMP_OK && i < n; i++)
+        st = amp_pathset_push(ps, v[i].p, v[i].r, err);
+    if (st != AMP_OK) {
+        ps->npaths = np;
+        ps->nverts = nv;
+    }
+    return st;
+}
+
+amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err)
+{
+    size_t i;
+    for (i = 0; i < src->npaths; i++) {
+        amp_status st = amp_pathset_add(dst, src->paths[i].role, amp_pathset_path_verts(src, i), src->paths[i].n, err);
+        if (st != AMP_OK)
+            return st;
+    }
+    return AMP_OK;
+}
+
+double amp_path_length(const amp_pathset *ps, size_t i)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    double len = 0.0;
+    size_t k;
+    for (k = 1; k < ps->paths[i].n; k++)
+        len += amp_v3_dist(v[k - 1].p, v[k].p);
+    return len;
+}
+
+double amp_pathset_length(const amp_pathset *ps, int role)
+{
+    double len = 0.0;
+    size_t i;
+    for (i = 0; i < ps->npaths; i++)
+        if (role < 0 || (int)ps->paths[i].role == role)
+            len += amp_path_length(ps, i);
+    return len;
+}
+
+double amp_pathset_volume(const amp_pathset *ps, int role)
+{
+    const double pi = 3.14159265358979323846;
+    double vol = 0.0;
+    size_t i, k;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        if (role >= 0 && (int)ps->paths[i].role != role)
+            continue;
+        for (k = 1; k < ps->paths[i].n; k++) {
+            double r = 0.5 * (v[k - 1].r + v[k].r);
+            vol += pi * r * r * amp_v3_dist(v[k - 1].p, v[k].p);
+        }
+    }
+    return vol;
+}
+
+amp_box3 amp_pathset_bbox(const amp_pathset *ps)
+{
+    amp_box3 b = amp_box3_empty();
+    size_t i;
+    for (i = 0; i < ps->nverts; i++)
+        b = amp_box3_add(b, ps->verts[i].p);
+    return b;
+}
+
+amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err)
+{
+    amp_lex lx;
+    size_t np0 = ps->npaths, nv0 = ps->nverts;
+    long remaining = 0;
+    int r;
+    amp_status st = AMP_OK;
+
+    if (!text && len)
+        return amp_fail(err, AMP_ERR_ARG, 0, "NULL text");
+    amp_lex_init(&lx, text, len, 1);
+    r = amp_lex_next(&lx, err);
+    if (r < 0)
+        return (amp_status)r;
+    if (r == 0)
+        return amp_fail(err, AMP_ERR_PARSE, 1, "line 1: empty input, expected 'ampath-paths 1'");
+    if (!amp_lex_is(&lx, 0, "ampath-paths") || lx.ntok != 2)
+        return amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected header 'ampath-paths 1'", lx.line);
+    if (!amp_lex_is(&lx, 1, "1"))
+        return amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: unsupported ampath-paths version", lx.line);
+
+    while ((r = amp_lex_next(&lx, err)) > 0) {
+        if (remaining > 0) {
+            double x[4];
+            int i;
+            if (lx.ntok != 4) {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'x y z r', found %d fields", lx.line,
+                              lx.ntok);
+                break;
+            }
+            for (i = 0; i < 4 && st == AMP_OK; i++)
+                st = amp_lex_double(&lx, i, &x[i], err);
+            if (st != AMP_OK)
+                break;
+            if (x[3] < 0.0) {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: negative radius %g", lx.line, x[3]);
+                break;
+            }
+            st = amp_pathset_push(ps, amp_v3(x[0], x[1], x[2]), x[3], err);
+            if (st != AMP_OK) {
+                if (err)
+                    err->line = lx.line;
+                break;
+            }
+            remaining--;
+            continue;
+        }
+        if (amp_lex_is(&lx, 0, "path")) {
+            amp_role role;
+            long n;
+            if (lx.ntok != 3) {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n>'", lx.line);
+                break;
+            }
+            if (amp_lex_is(&lx, 1, "object"))
+                role = AMP_ROLE_OBJECT;
+            else if (amp_lex_is(&lx, 1, "support"))
+                role = AMP_ROLE_SUPPORT;
+            else {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: unknown role (expected object or support)",
+                              lx.line);
+                break;
+            }
+            st = amp_lex_long(&lx, 2, 0, (long)AMP_PATH_MAX_VERTS, &n, err);
+            if (st != AMP_OK)
+                break;
+            st = amp_pathset_begin(ps, role, err);
+            if (st != AMP_OK)
+                break;
+            remaining = n;
+            continue;
+        }
+        st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n>'", lx.line);
+        break;
+    }
+    if (r < 0)
+        st = (amp_status)r;
+    if (st == AMP_OK && remaining > 0)
+        st = amp_fail(err, AMP_ERR_PARSE, lx.line + 1, "line %ld: end of input, %ld vertices missing in last path",
+                      lx.line + 1, remaining);
+    if (st != AMP_OK) {
+        ps->npaths = np0;
+        ps->nverts = nv0;
+    }
+    return st;
+}
+
+amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err)
+{
+    char *text;
+    size_t len;
+    amp_status st = amp_read_file(path, ps->alloc, 0, &text, &len, err);
+    if (st != AMP_OK)
+        return st;
+    st = amp_pathset_parse(ps, text, len, err);
+    amp_free(ps->alloc, text);
+    if (st != AMP_OK && err) {
+        char msg[AMP_ERROR_MSG_SIZE];
+        memcpy(msg, err->msg, sizeof msg);
+        snprintf(err->msg, sizeof err->msg, "%s: %.*s", path, (int)(sizeof msg - 64), msg);
+    }
+    return st;
+}
+
+static amp_status write_comment(const char *comment, amp_sink_fn sink, void *user)
+{
+    while (comment && *comment) {
+        const char *nl = strchr(comment, '\n');
+        size_t n = nl ? (size_t)(nl - comment) : strlen(comment);
+        amp_status st = sink(user, "# ", 2);
+        if (st == AMP_OK)
+            st = sink(user, comment, n);
+        if (st == AMP_OK)
+            st = sink(user, "\n", 1);
+        if (st != AMP_OK)
+            return st;
+        comment += n + (nl ? 1 : 0);
+    }
+    return AMP_OK;
+}
+
+amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err)
+{
+    size_t i, k;
+    amp_status st = sink(user, "ampath-paths 1\n", 15);
+    if (st == AMP_OK)
+        st = write_comment(comment, sink, user);
+    for (i = 0; st == AMP_OK && i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        st = amp_sinkf(sink, user, "path %s %lu\n", ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object",
+                       (unsigned long)ps->paths[i].n);
+        for (k = 0; st == AMP_OK && k < ps->paths[i].n; k++)
+            st = amp_sinkf(sink, user, "%.10g %.10g %.10g %.10g\n", v[k].p.x, v[k].p.y, v[k].p.z, v[k].r);
+    }
+    if (st != AMP_OK)
+        return amp_fail(err, st, 0, "writing paths failed: %s", amp_strerror(st));
+    return AMP_OK;
+}
+
+amp_status amp_pathset_write_file(const amp_pathset *ps, const char *path, const char *comment, amp_error *err)
+{
+    char tmp[1024];
+    FILE *f;
+    amp_status st;
+    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
+        return amp_fail(err, AMP_ERR_ARG, 0, "%s: path too long", path);
+    f = fopen(tmp, "wb");
+    if (!f)
+        return amp_fail(err, AMP_ERR_IO, 0, "%s: cannot create", tmp);
+    st = amp_pathset_write(ps, comment, amp_file_sink, f, err);
+    if (fclose(f) != 0 && st == AMP_OK)
+        st = amp_fail(err, AMP_ERR_IO, 0, "%s: write failed", tmp);
+    if (st == AMP_OK && rename(tmp, path) != 0)
+        st = amp_fail(err, AMP_ERR_IO, 0, "%s: cannot rename into place", path);
+    if (st != AMP_OK)
+        remove(tmp);
+    return st;
+}

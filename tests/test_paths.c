@@ -1,0 +1,196 @@
+/* .amp format and in-memory paths (SPEC §3). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "testutil.h"
+
+static amp_status parse(amp_pathset *ps, const char *text, amp_error *err)
+{
+    return amp_pathset_parse(ps, text, strlen(text), err);
+}
+
+START_TEST(roundtrip_preserves_paths_roles_and_radii)
+{
+    amp_pathset ps, back;
+    amp_buf buf;
+    amp_error err;
+    size_t i, k;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&back, NULL);
+    amp_buf_init(&buf, NULL);
+    /* a real helix-like path plus a support path */
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err), AMP_OK);
+    for (k = 0; k < 200; k++) {
+        double t = k / 199.0;
+        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20 * cos(6.283185307179586 * t), 20 * sin(6.283185307179586 * t),
+                                                      5 + 40 * t),
+                                          0.3 + 0.2 * t, &err),
+                         AMP_OK);
+    }
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_SUPPORT, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(0, 0, 0), 0.25, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(0, 0, 4.5), 0.25, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_write(&ps, "made by a test\nsecond line", amp_buf_sink, &buf, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_parse(&back, buf.data, buf.len, &err), AMP_OK);
+    ck_assert_uint_eq(back.npaths, 2);
+    ck_assert_uint_eq(back.nverts, ps.nverts);
+    ck_assert_int_eq(back.paths[1].role, AMP_ROLE_SUPPORT);
+    for (i = 0; i < ps.nverts; i++) {
+        ck_assert_near(back.verts[i].p.x, ps.verts[i].p.x, 1e-7);
+        ck_assert_near(back.verts[i].p.z, ps.verts[i].p.z, 1e-7);
+        ck_assert_near(back.verts[i].r, ps.verts[i].r, 1e-9);
+    }
+    ck_assert_near(amp_pathset_length(&back, AMP_ROLE_SUPPORT), 4.5, 1e-12);
+    amp_buf_free(&buf);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&back);
+}
+END_TEST
+
+START_TEST(parser_accepts_comments_crlf_and_blank_lines)
+{
+    amp_pathset ps;
+    amp_error err;
+    const char *text = "# leading comment\r\nampath-paths 1\r\n\r\npath object 2 # two\r\n"
+                       "0 0 0 0.5\r\n  1 0 0   0.5  \r\n# between\npath support 0\n";
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(parse(&ps, text, &err), AMP_OK);
+    ck_assert_uint_eq(ps.npaths, 2);
+    ck_assert_uint_eq(ps.paths[0].n, 2);
+    ck_assert_uint_eq(ps.paths[1].n, 0);
+    ck_assert_near(amp_pathset_length(&ps, -1), 1.0, 0);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+static const struct bad_case {
+    const char *text;
+    long line;
+    const char *needle;
+} bad_cases[] = {
+    {"", 1, "empty"},
+    {"ampath-paths 2\n", 1, "version"},
+    {"hello\n", 1, "header"},
+    {"ampath-paths 1\npath object\n", 2, "path <role>"},
+    {"ampath-paths 1\npath bridge 1\n0 0 0 1\n", 2, "role"},
+    {"ampath-paths 1\npath object -1\n", 2, "outside"},
+    {"ampath-paths 1\npath object 2\n0 0 0 0.5\n", 4, "missing"},
+    {"ampath-paths 1\npath object 1\n0 0 0\n", 3, "found 3 fields"},
+    {"ampath-paths 1\npath object 1\n0 0 0 -0.5\n", 3, "negative radius"},
+    {"ampath-paths 1\npath object 1\n0 nan 0 0.5\n", 3, "not finite"},
+    {"ampath-paths 1\npath object 1\n0 1e999 0 0.5\n", 3, "not finite"},
+    {"ampath-paths 1\npath object 1\n0 x1 0 0.5\n", 3, "not a number"},
+    {"ampath-paths 1\n0 0 0 0.5\n", 2, "path <role>"},
+    {"ampath-paths 1\npath object 99999999999999999999\n", 2, "integer"},
+};
+
+START_TEST(parser_rejects_malformed_input_with_line_numbers)
+{
+    const struct bad_case *c = &bad_cases[_i];
+    amp_pathset ps;
+    amp_error err;
+    amp_pathset_init(&ps, NULL);
+    amp_error_clear(&err);
+    ck_assert_int_eq(parse(&ps, c->text, &err), AMP_ERR_PARSE);
+    ck_assert_msg(err.line == c->line, "case %d: line %ld, expected %ld (%s)", _i, err.line, c->line, err.msg);
+    ck_assert_msg(strstr(err.msg, c->needle) != NULL, "case %d: message '%s' lacks '%s'", _i, err.msg, c->needle);
+    ck_assert_uint_eq(ps.npaths, 0);
+    ck_assert_uint_eq(ps.nverts, 0);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(failed_parse_leaves_existing_paths_untouched)
+{
+    amp_pathset ps;
+    amp_error err;
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(parse(&ps, "ampath-paths 1\npath object 1\n1 2 3 0.5\n", &err), AMP_OK);
+    ck_assert_int_eq(parse(&ps, "ampath-paths 1\npath object 1\n1 2 3 0.5\npath object 3\n1 1 1 1\n", &err),
+                     AMP_ERR_PARSE);
+    ck_assert_uint_eq(ps.npaths, 1);
+    ck_assert_uint_eq(ps.nverts, 1);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(overlong_line_and_nul_bytes_are_rejected_without_overrun)
+{
+    amp_pathset ps;
+    amp_error err;
+    size_t n = 100000;
+    char *text = malloc(n);
+    memcpy(text, "ampath-paths 1\n", 15);
+    memset(text + 15, '1', n - 15); /* not NUL-terminated on purpose */
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_parse(&ps, text, n, &err), AMP_ERR_PARSE);
+    ck_assert_int_eq(err.line, 2);
+    memcpy(text + 15, "path object 1\n0 0\0 0 1\n", 23);
+    ck_assert_int_eq(amp_pathset_parse(&ps, text, 38, &err), AMP_ERR_PARSE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "NUL"));
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(out_of_memory_is_reported_and_leaves_set_consistent)
+{
+    amp_test_failalloc fa;
+    amp_pathset ps;
+    amp_error err;
+    long budget;
+    const char *text = "ampath-paths 1\npath object 3\n0 0 0 1\n1 0 0 1\n2 0 0 1\npath support 1\n5 5 5 0\n";
+    for (budget = 0; budget < 6; budget++) {
+        amp_status st;
+        amp_test_failalloc_init(&fa, budget);
+        amp_pathset_init(&ps, &fa.a);
+        st = parse(&ps, text, &err);
+        ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
+        if (st != AMP_OK) {
+            ck_assert_uint_eq(ps.npaths, 0);
+        } else {
+            ck_assert_uint_eq(ps.npaths, 2);
+        }
+        amp_pathset_free(&ps);
+    }
+}
+END_TEST
+
+START_TEST(file_write_is_atomic_and_reads_back)
+{
+    amp_pathset ps, back;
+    amp_error err;
+    const char *file = amp_test_tmp("rt.amp");
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&back, NULL);
+    ck_assert_int_eq(parse(&ps, "ampath-paths 1\npath object 2\n0 0 0 1\n3 4 0 1\n", &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, file, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_read_file(&back, file, &err), AMP_OK);
+    ck_assert_near(amp_pathset_length(&back, -1), 5.0, 1e-12);
+    ck_assert_near(amp_pathset_volume(&back, -1), 5.0 * 3.14159265358979323846, 1e-9);
+    remove(file);
+    ck_assert_int_eq(amp_pathset_read_file(&back, file, &err), AMP_ERR_IO);
+    ck_assert_ptr_nonnull(strstr(err.msg, file));
+    amp_pathset_free(&ps);
+    amp_pathset_free(&back);
+}
+END_TEST
+
+static Suite *paths_suite(void)
+{
+    Suite *s = suite_create("paths");
+    TCase *tc = tcase_create("amp");
+    tcase_add_test(tc, roundtrip_preserves_paths_roles_and_radii);
+    tcase_add_test(tc, parser_accepts_comments_crlf_and_blank_lines);
+    tcase_add_loop_test(tc, parser_rejects_malformed_input_with_line_numbers, 0,
+                        (int)(sizeof bad_cases / sizeof bad_cases[0]));
+    tcase_add_test(tc, failed_parse_leaves_existing_paths_untouched);
+    tcase_add_test(tc, overlong_line_and_nul_bytes_are_rejected_without_overrun);
+    tcase_add_test(tc, out_of_memory_is_reported_and_leaves_set_consistent);
+    tcase_add_test(tc, file_write_is_atomic_and_reads_back);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(paths_suite)

@@ -1,0 +1,51 @@
+/* Shared test helpers (linked into every test program). */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+const char *amp_test_tmp(const char *name)
+{
+    static char buf[8][256];
+    static int next;
+    char *b = buf[next++ & 7];
+    snprintf(b, sizeof buf[0], "/tmp/ampath-test-%ld-%s", (long)getpid(), name);
+    return b;
+}
+
+static void *fa_alloc(void *user, size_t size)
+{
+    amp_test_failalloc *f = user;
+    if (f->count >= f->budget)
+        return NULL;
+    f->count++;
+    return malloc(size);
+}
+
+static void *fa_realloc(void *user, void *ptr, size_t size)
+{
+    amp_test_failalloc *f = user;
+    if (f->count >= f->budget)
+        return NULL;
+    f->count++;
+    return realloc(ptr, size);
+}
+
+static void fa_free(void *user, void *ptr)
+{
+    (void)user;
+    free(ptr);
+}
+
+void amp_test_failalloc_init(amp_test_failalloc *f, long budget)
+{
+    f->a.alloc = fa_alloc;
+    f->a.realloc = fa_realloc;
+    f->a.free = fa_free;
+    f->a.user = f;
+    f->budget = budget;
+    f->count = 0;
+}

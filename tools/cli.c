@@ -1,0 +1,267 @@
+/* Shared plumbing of the ampath commands. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+int cli_fail(const char *cmd, int code, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "ampath %s: ", cmd);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return code;
+}
+
+int cli_fail_err(const char *cmd, const amp_error *err)
+{
+    return cli_fail(cmd, CLI_USAGE, "%s", err->msg[0] ? err->msg : amp_strerror(err->status));
+}
+
+static int set_value(const char *cmd, cli_opt *o, const char *val)
+{
+    char *end;
+    switch (o->kind) {
+    case CLI_STR:
+        *(const char **)o->dst = val;
+        return CLI_OK;
+    case CLI_DOUBLE: {
+        double d;
+        errno = 0;
+        d = strtod(val, &end);
+        if (end == val || *end || !isfinite(d))
+            return cli_fail(cmd, CLI_USAGE, "--%s expects a number, got '%s'", o->name, val);
+        *(double *)o->dst = d;
+        return CLI_OK;
+    }
+    case CLI_LONG: {
+        long l;
+        errno = 0;
+        l = strtol(val, &end, 10);
+        if (end == val || *end || errno)
+            return cli_fail(cmd, CLI_USAGE, "--%s expects an integer, got '%s'", o->name, val);
+        *(long *)o->dst = l;
+        return CLI_OK;
+    }
+    case CLI_FLAG:
+        break;
+    }
+    return cli_fail(cmd, CLI_USAGE, "--%s takes no value", o->name);
+}
+
+int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
+              int *npos)
+{
+    int i, n = 0, only_pos = 0;
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!only_pos && strcmp(a, "--") == 0) {
+            only_pos = 1;
+            continue;
+        }
+        if (!only_pos && a[0] == '-' && a[1] == '-' && a[2]) {
+            const char *name = a + 2, *eq = strchr(name, '=');
+            size_t len = eq ? (size_t)(eq - name) : strlen(name);
+            cli_opt *o = opts;
+            while (o && o->name && !(strlen(o->name) == len && strncmp(o->name, name, len) == 0))
+                o++;
+            if (!o || !o->name)
+                return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see 'ampath help %s')", a, cmd);
+            o->seen = 1;
+            if (o->kind == CLI_FLAG) {
+                if (eq)
+                    return cli_fail(cmd, CLI_USAGE, "--%s takes no value", o->name);
+                *(int *)o->dst = 1;
+                continue;
+            }
+            if (!eq && i + 1 >= argc)
+                return cli_fail(cmd, CLI_USAGE, "--%s needs a value", o->name);
+            if (set_value(cmd, o, eq ? eq + 1 : argv[++i]) != CLI_OK)
+                return CLI_USAGE;
+            continue;
+        }
+        if (!only_pos && a[0] == '-' && a[1] && !(a[1] >= '0' && a[1] <= '9') && a[1] != '.') {
+            /* short options: only -o FILE is common to all commands */
+            cli_opt *o = opts;
+            if (strcmp(a, "-o") == 0) {
+                while (o && o->name && strcmp(o->name, "output") != 0)
+                    o++;
+                if (o && o->name) {
+                    if (i + 1 >= argc)
+                        return cli_fail(cmd, CLI_USAGE, "-o needs a file name");
+                    o->seen = 1;
+                    *(const char **)o->dst = argv[++i];
+                    continue;
+                }
+            }
+            return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see 'ampath help %s')", a, cmd);
+        }
+        if (n >= max_pos)
+            return cli_fail(cmd, CLI_USAGE, "unexpected argument '%s' (see 'ampath help %s')", a, cmd);
+        pos[n++] = a;
+    }
+    if (n < min_pos)
+        return cli_fail(cmd, CLI_USAGE, "missing argument (see 'ampath help %s')", cmd);
+    if (npos)
+        *npos = n;
+    return CLI_OK;
+}
+
+/* ---- JSON ---- */
+static void json_key(cli_json *j, const char *key)
+{
+    if (j->count[j->depth]++ > 0)
+        fputc(',', j->f);
+    if (key) {
+        const char *s;
+        fputc('"', j->f);
+        for (s = key; *s; s++)
+            fputc(*s, j->f);
+        fputs("\":", j->f);
+    }
+}
+
+void cli_json_begin(cli_json *j, FILE *f)
+{
+    memset(j, 0, sizeof *j);
+    j->f = f;
+    j->close[0] = '}';
+    fputc('{', f);
+}
+
+void cli_json_num(cli_json *j, const char *key, double v)
+{
+    json_key(j, key);
+    if (isfinite(v))
+        fprintf(j->f, "%.12g", v);
+    else
+        fputs("null", j->f);
+}
+
+void cli_json_int(cli_json *j, const char *key, long long v)
+{
+    json_key(j, key);
+    fprintf(j->f, "%lld", v);
+}
+
+void cli_json_bool(cli_json *j, const char *key, int v)
+{
+    json_key(j, key);
+    fputs(v ? "true" : "false", j->f);
+}
+
+void cli_json_str(cli_json *j, const char *key, const char *s)
+{
+    json_key(j, key);
+    fputc('"', j->f);
+    for (; s && *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            fprintf(j->f, "\\%c", c);
+        else if (c < 0x20)
+            fprintf(j->f, "\\u%04x", c);
+        else
+            fputc(c, j->f);
+    }
+    fputc('"', j->f);
+}
+
+static void json_open(cli_json *j, const char *key, char open, char close)
+{
+    json_key(j, key);
+    fputc(open, j->f);
+    if (j->depth + 1 < CLI_JSON_DEPTH) {
+        j->depth++;
+        j->count[j->depth] = 0;
+        j->close[j->depth] = close;
+    }
+}
+
+void cli_json_obj(cli_json *j, const char *key) { json_open(j, key, '{', '}'); }
+void cli_json_arr(cli_json *j, const char *key) { json_open(j, key, '[', ']'); }
+
+void cli_json_close(cli_json *j)
+{
+    if (j->depth > 0) {
+        fputc(j->close[j->depth], j->f);
+        j->depth--;
+    }
+}
+
+void cli_json_end(cli_json *j)
+{
+    while (j->depth > 0)
+        cli_json_close(j);
+    fputs("}\n", j->f);
+    fflush(j->f);
+}
+
+/* ---- progress ---- */
+void cli_progress_begin(cli_progress *p, const char *label)
+{
+    p->label = label;
+    p->enabled = isatty(STDERR_FILENO);
+    p->last_permille = -1;
+}
+
+void cli_progress_update(cli_progress *p, double fraction)
+{
+    int permille, i, filled;
+    if (!p->enabled)
+        return;
+    if (fraction < 0.0)
+        fraction = 0.0;
+    if (fraction > 1.0)
+        fraction = 1.0;
+    permille = (int)(fraction * 1000.0);
+    if (permille == p->last_permille)
+        return;
+    p->last_permille = permille;
+    filled = permille * 30 / 1000;
+    fprintf(stderr, "\r%-12s [", p->label);
+    for (i = 0; i < 30; i++)
+        fputc(i < filled ? '#' : ' ', stderr);
+    fprintf(stderr, "] %5.1f%%", permille / 10.0);
+    fflush(stderr);
+}
+
+void cli_progress_end(cli_progress *p)
+{
+    if (p->enabled && p->last_permille >= 0) {
+        cli_progress_update(p, 1.0);
+        fputc('\n', stderr);
+    }
+}
+
+double cli_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps)
+{
+    amp_error err;
+    amp_error_clear(&err);
+    if (amp_pathset_read_file(ps, file, &err) != AMP_OK)
+        return cli_fail_err(cmd, &err);
+    return CLI_OK;
+}
+
+int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment)
+{
+    amp_error err;
+    amp_error_clear(&err);
+    if (amp_pathset_write_file(ps, file, comment, &err) != AMP_OK)
+        return cli_fail_err(cmd, &err);
+    return CLI_OK;
+}

@@ -1,0 +1,99 @@
+/*
+ * cli.h — shared plumbing of the `ampath` commands (SPEC §4): option parsing,
+ * one-object JSON output, progress bars, error exits, common loaders.
+ *
+ * A command is a file tools/cmd_NAME.c defining
+ *     const char cmd_NAME_usage[];   (first line: one-line summary)
+ *     int cmd_NAME(int argc, char **argv);   (argv[0] is "NAME")
+ * and the Makefile registers it (tools/commands.inc). A benchmark is a file
+ * tools/bench_NAME.c defining `int bench_NAME(cli_json *j, int quick);`
+ * (registered in tools/benches.inc) that prints human lines when j == NULL.
+ * Exit codes: CLI_OK 0, CLI_FAILED 1 (a check failed), CLI_USAGE 2 (bad usage or input).
+ */
+#ifndef AMP_TOOLS_CLI_H
+#define AMP_TOOLS_CLI_H
+
+#include <stdio.h>
+
+#include "ampath/ampath.h"
+
+enum { CLI_OK = 0, CLI_FAILED = 1, CLI_USAGE = 2 };
+
+typedef enum cli_kind { CLI_FLAG, CLI_STR, CLI_DOUBLE, CLI_LONG } cli_kind;
+
+/** One option: "--name" (kind FLAG sets *(int *)dst = 1; others take the next argument or --name=value). */
+typedef struct cli_opt {
+    const char *name; /* without the leading "--" */
+    cli_kind kind;
+    void *dst;  /* int *, const char **, double * or long * */
+    int seen;   /* set by cli_parse */
+} cli_opt;
+
+/**
+ * Parse argv[1..argc-1] of command @p cmd: options anywhere, the rest are
+ * positionals stored in pos[0..*npos-1]. "--" ends options. Prints a one-line
+ * reason and returns CLI_USAGE on unknown options, missing or malformed values,
+ * or a positional count outside [min_pos, max_pos]; otherwise CLI_OK.
+ * The option table ends with an entry whose name is NULL.
+ */
+int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
+              int *npos);
+
+/** Print "ampath CMD: message" to stderr and return @p code. */
+int cli_fail(const char *cmd, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/** Report an amp_error from the library: "ampath CMD: <msg or strerror>", returns CLI_USAGE. */
+int cli_fail_err(const char *cmd, const amp_error *err);
+
+/* ---- JSON: exactly one object on stdout ---- */
+#define CLI_JSON_DEPTH 16
+typedef struct cli_json {
+    FILE *f;
+    int depth;
+    int count[CLI_JSON_DEPTH];
+    char close[CLI_JSON_DEPTH];
+} cli_json;
+
+void cli_json_begin(cli_json *j, FILE *f);
+void cli_json_num(cli_json *j, const char *key, double v); /* non-finite -> null */
+void cli_json_int(cli_json *j, const char *key, long long v);
+void cli_json_str(cli_json *j, const char *key, const char *s);
+void cli_json_bool(cli_json *j, const char *key, int v);
+void cli_json_obj(cli_json *j, const char *key); /* open a nested object (key NULL inside arrays) */
+void cli_json_arr(cli_json *j, const char *key); /* open a nested array */
+void cli_json_close(cli_json *j);                /* close the innermost object or array */
+void cli_json_end(cli_json *j);                  /* close everything and print a newline */
+
+/* ---- progress: a bar on stderr only when stderr is a terminal ---- */
+typedef struct cli_progress {
+    const char *label;
+    int enabled;
+    int last_permille;
+} cli_progress;
+
+void cli_progress_begin(cli_progress *p, const char *label);
+void cli_progress_update(cli_progress *p, double fraction);
+void cli_progress_end(cli_progress *p);
+
+/** Monotonic wall clock in seconds. */
+double cli_now(void);
+
+/* ---- loaders that print their own errors (return CLI_OK or CLI_USAGE) ---- */
+int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps);
+int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment);
+
+/* Prototypes of every registered command and benchmark (generated lists). */
+#define AMP_CMD(name)                                                                                                \
+    extern const char cmd_##name##_usage[];                                                                          \
+    int cmd_##name(int argc, char **argv);
+#include "commands.inc"
+#undef AMP_CMD
+#define AMP_BENCH(name) int bench_##name(cli_json *j, int quick);
+#include "benches.inc"
+#undef AMP_BENCH
+
+#endif

@@ -1,0 +1,26 @@
+#!/bin/sh
+# Install the Debian packages named on the command line when they are missing.
+# Root: apt-get directly; with password-less sudo: through sudo; otherwise print
+# the exact command to run and fail, so that make stops with a clear reason.
+missing=""
+for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
+done
+[ -z "$missing" ] && exit 0
+if ! command -v apt-get >/dev/null 2>&1; then
+    echo "ampath: missing packages:$missing (no apt-get here: install them with your package manager)" >&2
+    exit 1
+fi
+if [ "$(id -u)" = 0 ]; then
+    SUDO=""
+elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+    SUDO="sudo"
+else
+    echo "ampath: missing Debian packages:$missing" >&2
+    echo "run:    sudo apt-get update && sudo apt-get install -y$missing" >&2
+    exit 1
+fi
+echo "ampath: installing Debian packages:$missing" >&2
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get install -y --no-install-recommends $missing >/dev/null 2>&1 ||
+    { $SUDO apt-get update -qq && $SUDO apt-get install -y --no-install-recommends $missing; }
