@@ -1,4 +1,5 @@
 /* Triangle mesh container. STL, BVH and inside tests live in their own files. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "ampath/mesh.h"
@@ -64,4 +65,83 @@ void amp_mesh_translate(amp_mesh *m, amp_vec3 d)
     size_t i;
     for (i = 0; i < m->nverts; i++)
         m->verts[i] = amp_v3_add(m->verts[i], d);
+}
+
+double amp_mesh_volume(const amp_mesh *m)
+{
+    /* divergence theorem: sum of signed tetrahedra (origin, a, b, c) / 6 */
+    double v = 0.0;
+    size_t i;
+    for (i = 0; i < m->ntris; i++) {
+        amp_vec3 a = m->verts[m->tris[i].v[0]], b = m->verts[m->tris[i].v[1]], c = m->verts[m->tris[i].v[2]];
+        v += amp_v3_dot(a, amp_v3_cross(b, c));
+    }
+    return v / 6.0;
+}
+
+/* A directed edge (lo, hi) with the direction it was used in. */
+typedef struct edge_rec {
+    uint32_t lo, hi;
+    int dir; /* +1: lo -> hi in the triangle, -1: hi -> lo */
+} edge_rec;
+
+static int edge_cmp(const void *pa, const void *pb)
+{
+    const edge_rec *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return a->dir - b->dir;
+}
+
+amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err)
+{
+    edge_rec *e;
+    size_t i, n = 0;
+    if (!m || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_edges: NULL argument");
+    memset(out, 0, sizeof *out);
+    if (m->ntris == 0)
+        return AMP_OK;
+    e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
+    if (!e)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
+    for (i = 0; i < m->ntris; i++) {
+        const amp_tri *t = &m->tris[i];
+        int k;
+        if (t->v[0] == t->v[1] || t->v[1] == t->v[2] || t->v[0] == t->v[2]) {
+            out->degenerate++;
+            continue;
+        }
+        for (k = 0; k < 3; k++) {
+            uint32_t a = t->v[k], b = t->v[(k + 1) % 3];
+            e[n].lo = a < b ? a : b;
+            e[n].hi = a < b ? b : a;
+            e[n].dir = a < b ? 1 : -1;
+            n++;
+        }
+    }
+    qsort(e, n, sizeof *e, edge_cmp);
+    for (i = 0; i < n;) {
+        size_t j = i, pos = 0, neg = 0;
+        while (j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi) {
+            if (e[j].dir > 0)
+                pos++;
+            else
+                neg++;
+            j++;
+        }
+        out->edges++;
+        if (j - i == 1)
+            out->boundary++;
+        else if (j - i > 2)
+            out->nonmanifold++;
+        else if (pos != 1)
+            out->misoriented++;
+        i = j;
+    }
+    amp_free(m->alloc, e);
+    out->closed = out->edges > 0 && !out->boundary && !out->nonmanifold && !out->misoriented && !out->degenerate;
+    return AMP_OK;
 }
