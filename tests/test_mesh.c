@@ -3,30 +3,14 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "meshfix.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
 
-/* A torus (R, r) with nu x nv quads split in two, outward oriented: real non-convex geometry with a hole. */
 static void make_torus(amp_mesh *m, double R, double r, int nu, int nv)
 {
-    int i, j;
-    amp_error err;
-    for (i = 0; i < nu; i++)
-        for (j = 0; j < nv; j++) {
-            double u = 2 * PI * i / nu, v = 2 * PI * j / nv;
-            ck_assert_int_eq(amp_mesh_add_vertex(m, amp_v3((R + r * cos(v)) * cos(u), (R + r * cos(v)) * sin(u),
-                                                           r * sin(v)),
-                                                 NULL, &err),
-                             AMP_OK);
-        }
-    for (i = 0; i < nu; i++)
-        for (j = 0; j < nv; j++) {
-            uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j),
-                     c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
-            ck_assert_int_eq(amp_mesh_add_tri(m, a, b, c, &err), AMP_OK);
-            ck_assert_int_eq(amp_mesh_add_tri(m, a, c, d, &err), AMP_OK);
-        }
+    ck_assert_int_eq(amp_fix_torus(m, R, r, nu, nv), AMP_OK);
 }
 
 /* Binary STL bytes of n triangles given as 9 floats each, with an optional header prefix. */

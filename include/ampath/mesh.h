@@ -71,6 +71,17 @@ typedef struct amp_mesh_edge_report {
  */
 amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err);
 
+/**
+ * Make the orientation consistent: triangles are flipped so that every
+ * manifold edge is used in opposite directions by its two triangles
+ * (propagation per connected component across manifold edges); each
+ * component then keeps the orientation of the majority of its area, so a few
+ * flipped triangles are repaired while a whole inward shell (a cavity) stays
+ * inward. *flipped (may be NULL) receives the number of triangles reversed.
+ * AMP_ERR_NOMEM (mesh unchanged), AMP_ERR_LIMIT past 2^31 triangles.
+ */
+amp_status amp_mesh_orient(amp_mesh *m, size_t *flipped, amp_error *err);
+
 /* ---- STL (lib/stl.c) ---- */
 
 /** What the STL reader saw (amp_mesh_read_stl_ex()). */
