@@ -7,6 +7,7 @@
 #include "mesh.h"
 #include "bvh.h"
 #include "paths.h"
+#include "spline.h"
 #include "status.h"
 #include "vec.h"
 #include "version.h"
