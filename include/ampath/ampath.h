@@ -6,6 +6,8 @@
 #include "io.h"
 #include "mesh.h"
 #include "paths.h"
+#include "polygon.h"
+#include "slice.h"
 #include "status.h"
 #include "vec.h"
 #include "version.h"
