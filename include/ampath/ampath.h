@@ -3,10 +3,12 @@
 #define AMPATH_AMPATH_H
 
 #include "alloc.h"
+#include "bvh.h"
 #include "io.h"
 #include "mesh.h"
-#include "bvh.h"
 #include "paths.h"
+#include "polygon.h"
+#include "slice.h"
 #include "spline.h"
 #include "status.h"
 #include "vec.h"

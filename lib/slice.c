@@ -1,0 +1,223 @@
+/* Planar slicing: triangle-plane sections chained by shared mesh edges
+ * (continuous-toolpath-euler.txt §2.2 step 1). */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ampath/slice.h"
+
+typedef struct sseg {
+    uint64_t ks, ke; /* mesh edges (lo << 32 | hi) where the segment starts and ends */
+    size_t next;     /* following segment of the chain, or SIZE_MAX */
+    int used, has_prev;
+} sseg;
+
+typedef struct skey {
+    uint64_t k;
+    size_t seg;
+} skey;
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+static int cmp_key(const void *a, const void *b)
+{
+    const skey *s = a, *t = b;
+    if (s->k != t->k)
+        return s->k < t->k ? -1 : 1;
+    return s->seg < t->seg ? -1 : (s->seg > t->seg ? 1 : 0);
+}
+
+/* Section point on mesh edge @p k, computed from the edge in canonical
+ * (lo, hi) order so that both triangles sharing it get the same bits. */
+static amp_vec2 edge_point(const amp_mesh *m, uint64_t k, double z)
+{
+    amp_vec3 a = m->verts[k >> 32], b = m->verts[k & 0xffffffffu];
+    double t = (z - a.z) / (b.z - a.z);
+    return amp_v2(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y));
+}
+
+/* First index of key @p k among the sorted starts, or n. */
+static size_t find_key(const skey *s, size_t n, uint64_t k)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (s[mid].k < k)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && s[lo].k == k ? lo : n;
+}
+
+amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    sseg *seg = NULL;
+    skey *starts = NULL;
+    amp_vec2 *loop = NULL;
+    size_t nseg = 0, cap = 0, i, cap_loop = 0, pass;
+    amp_section_stats st0;
+    amp_status st = AMP_OK;
+    memset(&st0, 0, sizeof st0);
+    if (!isfinite(z))
+        return amp_fail(err, AMP_ERR_ARG, 0, "cutting height is not finite");
+    for (i = 0; i < m->ntris; i++) {
+        const uint32_t *v = m->tris[i].v;
+        /* symbolic perturbation: a vertex on the plane counts as above it */
+        int s[3], k, kin = -1, kout = -1;
+        for (k = 0; k < 3; k++)
+            s[k] = m->verts[v[k]].z >= z;
+        if (s[0] == s[1] && s[1] == s[2])
+            continue;
+        /* with the solid's outward normals, walking the triangle edges, the
+         * section leaves through the edge going from above to below and
+         * arrives through the edge going from below to above: this orders
+         * the segment with the solid on its left (outer boundaries CCW) */
+        for (k = 0; k < 3; k++) {
+            int n = (k + 1) % 3;
+            if (s[k] && !s[n])
+                kout = k;
+            if (!s[k] && s[n])
+                kin = k;
+        }
+        {
+            void *p = seg;
+            if (amp_grow(al, &p, &cap, nseg + 1, sizeof *seg) != AMP_OK) {
+                st = AMP_ERR_NOMEM;
+                goto done;
+            }
+            seg = p;
+        }
+        seg[nseg].ks = edge_key(v[kout], v[(kout + 1) % 3]);
+        seg[nseg].ke = edge_key(v[kin], v[(kin + 1) % 3]);
+        seg[nseg].next = SIZE_MAX;
+        seg[nseg].used = 0;
+        seg[nseg].has_prev = 0;
+        nseg++;
+    }
+    st0.segments = nseg;
+    if (nseg == 0)
+        goto done;
+    starts = amp_alloc(al, nseg * sizeof *starts);
+    if (!starts) {
+        st = AMP_ERR_NOMEM;
+        goto done;
+    }
+    for (i = 0; i < nseg; i++) {
+        starts[i].k = seg[i].ks;
+        starts[i].seg = i;
+    }
+    qsort(starts, nseg, sizeof *starts, cmp_key);
+    for (i = 0; i + 1 < nseg; i++)
+        if (starts[i].k == starts[i + 1].k)
+            st0.nonmanifold++;
+    /* link each segment to the one starting on the edge where it ends:
+     * topology (edge ids), not coordinates */
+    for (i = 0; i < nseg; i++) {
+        size_t j = find_key(starts, nseg, seg[i].ke);
+        if (j < nseg) {
+            seg[i].next = starts[j].seg;
+            seg[starts[j].seg].has_prev = 1;
+        }
+    }
+    /* open chains first (from segments nobody leads to), then closed loops */
+    for (pass = 0; pass < 2; pass++)
+        for (i = 0; i < nseg; i++) {
+            size_t at = i, len = 0;
+            int closed = 0;
+            if (seg[i].used || (pass == 0 && seg[i].has_prev))
+                continue;
+            while (at != SIZE_MAX && !seg[at].used) {
+                void *p = loop;
+                if (amp_grow(al, &p, &cap_loop, len + 1, sizeof *loop) != AMP_OK) {
+                    st = AMP_ERR_NOMEM;
+                    goto done;
+                }
+                loop = p;
+                seg[at].used = 1;
+                loop[len++] = edge_point(m, seg[at].ks, z);
+                at = seg[at].next;
+                if (at == i)
+                    closed = 1;
+            }
+            if (!closed) {
+                st0.open_chains++;
+                continue;
+            }
+            if ((st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
+                goto done;
+        }
+    st = amp_polyset_organize(out, err);
+done:
+    amp_free(al, seg);
+    amp_free(al, starts);
+    amp_free(al, loop);
+    if (stats)
+        *stats = st0;
+    if (st == AMP_ERR_NOMEM)
+        return amp_fail(err, st, 0, "out of memory slicing at z = %g", z);
+    return st;
+}
+
+void amp_slices_init(amp_slices *s, const amp_allocator *a)
+{
+    memset(s, 0, sizeof *s);
+    s->alloc = a;
+}
+
+void amp_slices_free(amp_slices *s)
+{
+    size_t i;
+    if (!s)
+        return;
+    for (i = 0; i < s->nlayers; i++)
+        amp_polyset_free(&s->layers[i].polys);
+    amp_free(s->alloc, s->layers);
+    amp_slices_init(s, s->alloc);
+}
+
+amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices *out, amp_error *err)
+{
+    amp_box3 b;
+    double h, h0, top;
+    size_t n, i;
+    amp_status st;
+    amp_slices_free(out);
+    if (!o || !(o->layer > 0) || !isfinite(o->layer))
+        return amp_fail(err, AMP_ERR_ARG, 0, "layer height must be positive");
+    if (!isfinite(o->first_layer))
+        return amp_fail(err, AMP_ERR_ARG, 0, "first layer height is not finite");
+    if (m->ntris == 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "mesh has no triangles");
+    h = o->layer;
+    h0 = o->first_layer > 0 ? o->first_layer : h;
+    b = amp_mesh_bbox(m);
+    top = b.max.z - b.min.z;
+    out->z0 = b.min.z;
+    /* number of layers whose cutting height lies below the top */
+    for (n = 0; (n == 0 ? 0.5 * h0 : h0 + (n - 0.5) * h) < top; n++)
+        if (n >= 1000000)
+            return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 1000000 layers (height %g, layer %g)", top, h);
+    out->layers = amp_calloc(out->alloc, n ? n : 1, sizeof *out->layers);
+    if (!out->layers)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu layers", (unsigned long)n);
+    for (i = 0; i < n; i++) {
+        amp_layer *L = &out->layers[i];
+        amp_section_stats ss;
+        L->z_cut = i == 0 ? 0.5 * h0 : h0 + (i - 0.5) * h;
+        L->z_print = i == 0 ? h0 : h0 + i * h;
+        amp_polyset_init(&L->polys, out->alloc);
+        out->nlayers = i + 1;
+        st = amp_slice_plane(m, b.min.z + L->z_cut, &L->polys, &ss, err);
+        if (st != AMP_OK)
+            return st;
+        out->open_chains += ss.open_chains;
+        out->nonmanifold += ss.nonmanifold;
+    }
+    return AMP_OK;
+}

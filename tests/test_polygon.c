@@ -1,0 +1,242 @@
+/* Polygon operations: area, containment, hull, islands, inward offset. */
+#include <math.h>
+
+#include "testutil.h"
+
+static void add_rect(amp_polyset *ps, double x0, double y0, double x1, double y1, int ccw)
+{
+    amp_vec2 p[4];
+    p[0] = amp_v2(x0, y0);
+    p[1] = amp_v2(x1, y0);
+    p[2] = amp_v2(x1, y1);
+    p[3] = amp_v2(x0, y1);
+    if (!ccw)
+        amp_ring_reverse(p, 4);
+    ck_assert_int_eq(amp_polyset_add(ps, p, 4, NULL), AMP_OK);
+}
+
+/* Two 10x10 squares joined by a neck of width w along y = 5 (x in [10, 14]). */
+static void add_dumbbell(amp_polyset *ps, double w)
+{
+    amp_vec2 p[12];
+    double a = 5 - w / 2, b = 5 + w / 2;
+    p[0] = amp_v2(0, 0);
+    p[1] = amp_v2(10, 0);
+    p[2] = amp_v2(10, a);
+    p[3] = amp_v2(14, a);
+    p[4] = amp_v2(14, 0);
+    p[5] = amp_v2(24, 0);
+    p[6] = amp_v2(24, 10);
+    p[7] = amp_v2(14, 10);
+    p[8] = amp_v2(14, b);
+    p[9] = amp_v2(10, b);
+    p[10] = amp_v2(10, 10);
+    p[11] = amp_v2(0, 10);
+    ck_assert_int_eq(amp_polyset_add(ps, p, 12, NULL), AMP_OK);
+}
+
+/*
+ * Independent checker of an inset: on a fine grid of samples, a point of the
+ * input region farther than r + band from its boundary must be inside the
+ * result, and a point outside the region or closer than r - band must not.
+ * Returns the number of disagreeing samples.
+ */
+static long inset_disagreements(const amp_polyset *in, double r, const amp_polyset *res, double step, double band)
+{
+    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL, x, y;
+    long bad = 0;
+    size_t i;
+    for (i = 0; i < in->npts; i++) {
+        x0 = fmin(x0, in->pts[i].x);
+        x1 = fmax(x1, in->pts[i].x);
+        y0 = fmin(y0, in->pts[i].y);
+        y1 = fmax(y1, in->pts[i].y);
+    }
+    for (y = y0 - 1 + 0.5 * step; y < y1 + 1; y += step)
+        for (x = x0 - 1 + 0.37 * step; x < x1 + 1; x += step) {
+            amp_vec2 q = amp_v2(x, y);
+            int inside = amp_polyset_contains(in, q, 0.0) == 1;
+            double d = amp_polyset_boundary_dist(in, q);
+            int got = amp_polyset_contains(res, q, 0.0) == 1;
+            if (inside && d > r + band && !got)
+                bad++;
+            if ((!inside || d < r - band) && got)
+                bad++;
+        }
+    return bad;
+}
+
+START_TEST(area_orientation_and_containment_of_an_l_shape)
+{
+    amp_vec2 l[6] = {{0, 0}, {4, 0}, {4, 1}, {1, 1}, {1, 3}, {0, 3}};
+    ck_assert_near(amp_ring_area(l, 6), 6.0, 1e-12);
+    ck_assert_int_eq(amp_ring_contains(l, 6, amp_v2(0.5, 2.5), 0), 1);
+    ck_assert_int_eq(amp_ring_contains(l, 6, amp_v2(2, 2), 0), 0);
+    ck_assert_int_eq(amp_ring_contains(l, 6, amp_v2(2, 1), 1e-12), -1);
+    /* a ray through a vertex is counted once (half-open rule) */
+    ck_assert_int_eq(amp_ring_contains(l, 6, amp_v2(0.5, 1), 0), 1);
+    amp_ring_reverse(l, 6);
+    ck_assert_near(amp_ring_area(l, 6), -6.0, 1e-12);
+}
+END_TEST
+
+START_TEST(organize_orients_outers_ccw_and_holes_cw_in_islands)
+{
+    amp_polyset ps;
+    size_t i;
+    amp_polyset_init(&ps, NULL);
+    add_rect(&ps, 2, 2, 4, 4, 1);     /* hole given CCW: must be turned */
+    add_rect(&ps, 0, 0, 10, 10, 0);   /* outer given CW */
+    add_rect(&ps, 20, 0, 25, 5, 1);   /* second island */
+    add_rect(&ps, 6, 6, 9, 9, 1);     /* second hole of the first island */
+    add_rect(&ps, 6.5, 6.5, 7, 7, 0); /* island inside that hole */
+    ck_assert_int_eq(amp_polyset_organize(&ps, NULL), AMP_OK);
+    ck_assert_uint_eq(ps.nislands, 3);
+    ck_assert_uint_eq(ps.nrings, 5);
+    for (i = 0; i < ps.nrings; i++) {
+        double a = amp_ring_area(amp_polyset_ring(&ps, i), ps.rings[i].n);
+        ck_assert(ps.rings[i].hole ? a < 0 : a > 0);
+        if (ps.rings[i].hole)
+            ck_assert(i > 0 && ps.rings[i - 1].island == ps.rings[i].island);
+    }
+    ck_assert_near(amp_polyset_area(&ps), 100 - 4 - 9 + 25 + 0.25, 1e-9);
+    ck_assert_int_eq(amp_polyset_contains(&ps, amp_v2(3, 3), 0), 0);
+    ck_assert_int_eq(amp_polyset_contains(&ps, amp_v2(6.7, 6.7), 0), 1);
+    amp_polyset_free(&ps);
+}
+END_TEST
+
+START_TEST(convex_hull_of_a_noisy_circle_and_interior_points)
+{
+    amp_vec2 p[400], h[400];
+    size_t n = 0, nh, i;
+    for (i = 0; i < 200; i++) {
+        double t = 6.283185307179586 * i / 200;
+        p[n++] = amp_v2(5 * cos(t), 5 * sin(t));
+        p[n++] = amp_v2(3 * cos(3 * t) * 0.9, 2 * sin(t)); /* inside */
+    }
+    ck_assert_int_eq(amp_convex_hull(p, n, NULL, h, &nh, NULL), AMP_OK);
+    ck_assert_uint_eq(nh, 200);
+    ck_assert(amp_ring_area(h, nh) > 0);
+    for (i = 0; i < nh; i++)
+        ck_assert_near(hypot(h[i].x, h[i].y), 5.0, 1e-12);
+    for (i = 0; i < n; i++)
+        ck_assert_int_ne(amp_ring_contains(h, nh, p[i], 1e-9), 0);
+}
+END_TEST
+
+START_TEST(inset_of_a_square_keeps_sharp_corners)
+{
+    amp_polyset in, out;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    add_rect(&in, 0, 0, 10, 10, 1);
+    ck_assert_int_eq(amp_polyset_inset(&in, 1.0, 0, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nrings, 1);
+    ck_assert_near(amp_polyset_area(&out), 64.0, 1e-9);
+    ck_assert_int_eq(inset_disagreements(&in, 1.0, &out, 0.1, 1e-6), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
+START_TEST(inset_splits_a_neck_narrower_than_the_extruder)
+{
+    amp_polyset in, out;
+    size_t i;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    add_dumbbell(&in, 1.5); /* neck 1.5 < 2r: the inset splits in two */
+    ck_assert_int_eq(amp_polyset_organize(&in, NULL), AMP_OK);
+    ck_assert_uint_eq(in.nislands, 1);
+    ck_assert_int_eq(amp_polyset_inset(&in, 1.0, 0.01, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 2);
+    ck_assert_uint_eq(out.nrings, 2);
+    for (i = 0; i < out.nrings; i++) {
+        double a = amp_ring_area(amp_polyset_ring(&out, i), out.rings[i].n);
+        ck_assert_msg(a >= 64.0 - 1e-9 && a < 64.5, "island area %g", a);
+    }
+    ck_assert_int_eq(inset_disagreements(&in, 1.0, &out, 0.07, 0.02), 0);
+    /* a wide neck keeps one island */
+    amp_polyset_clear(&in);
+    add_dumbbell(&in, 3.0);
+    ck_assert_int_eq(amp_polyset_inset(&in, 1.0, 0.01, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 1);
+    ck_assert_int_eq(inset_disagreements(&in, 1.0, &out, 0.07, 0.02), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
+START_TEST(inset_grows_and_merges_holes_and_drops_small_islands)
+{
+    amp_polyset in, out;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    add_rect(&in, 0, 0, 20, 12, 1);
+    add_rect(&in, 4, 4, 7, 8, 0);      /* two holes 1.5 apart: merge at r = 1 */
+    add_rect(&in, 8.5, 4, 11, 8, 0);
+    add_rect(&in, 15, 5, 15.5, 5.5, 0); /* tiny hole: grows into a rounded one */
+    add_rect(&in, 30, 0, 31.5, 1.5, 1); /* island thinner than 2r: vanishes */
+    ck_assert_int_eq(amp_polyset_organize(&in, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_inset(&in, 1.0, 0.01, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 1);
+    ck_assert_uint_eq(out.nrings, 3); /* outer + merged hole + grown tiny hole */
+    ck_assert_int_eq(inset_disagreements(&in, 1.0, &out, 0.07, 0.02), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
+START_TEST(inset_checker_rejects_a_wrong_offset)
+{
+    amp_polyset in, out;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    add_dumbbell(&in, 1.5);
+    /* computed with half the radius, judged at the full radius */
+    ck_assert_int_eq(amp_polyset_inset(&in, 0.5, 0.01, &out, NULL), AMP_OK);
+    ck_assert_int_gt(inset_disagreements(&in, 1.0, &out, 0.1, 0.02), 100);
+    ck_assert_int_eq(amp_polyset_inset(&in, -1.0, 0.01, &out, NULL), AMP_ERR_ARG);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
+START_TEST(inset_of_a_star_with_reflex_vertices_matches_sampling)
+{
+    amp_polyset in, out;
+    amp_vec2 p[40];
+    int i;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    for (i = 0; i < 40; i++) {
+        double t = 6.283185307179586 * i / 40, rr = i % 2 ? 4.0 : 9.0;
+        p[i] = amp_v2(rr * cos(t), rr * sin(t));
+    }
+    ck_assert_int_eq(amp_polyset_add(&in, p, 40, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_inset(&in, 0.8, 0.005, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 1);
+    ck_assert_int_eq(inset_disagreements(&in, 0.8, &out, 0.05, 0.01), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
+static Suite *polygon_suite(void)
+{
+    Suite *s = suite_create("polygon");
+    TCase *tc = tcase_create("core");
+    AMP_ADD_TEST(tc, area_orientation_and_containment_of_an_l_shape);
+    AMP_ADD_TEST(tc, organize_orients_outers_ccw_and_holes_cw_in_islands);
+    AMP_ADD_TEST(tc, convex_hull_of_a_noisy_circle_and_interior_points);
+    AMP_ADD_TEST(tc, inset_of_a_square_keeps_sharp_corners);
+    AMP_ADD_TEST(tc, inset_splits_a_neck_narrower_than_the_extruder);
+    AMP_ADD_TEST(tc, inset_grows_and_merges_holes_and_drops_small_islands);
+    AMP_ADD_TEST(tc, inset_checker_rejects_a_wrong_offset);
+    AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(polygon_suite)

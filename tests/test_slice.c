@@ -1,0 +1,225 @@
+/* Planar slicing of meshes into polygons with holes (paper 2 §2.2 step 1). */
+#include <math.h>
+#include <string.h>
+
+#include "fx_meshes.h"
+#include "testutil.h"
+
+#define PI 3.14159265358979323846
+
+static size_t count_holes(const amp_polyset *ps)
+{
+    size_t i, h = 0;
+    for (i = 0; i < ps->nrings; i++)
+        h += ps->rings[i].hole != 0;
+    return h;
+}
+
+/* Independent orientation check: outer rings CCW, holes CW, holes after their outer. */
+static void assert_oriented(const amp_polyset *ps)
+{
+    size_t i;
+    for (i = 0; i < ps->nrings; i++) {
+        double a = amp_ring_area(amp_polyset_ring(ps, i), ps->rings[i].n);
+        ck_assert_msg(ps->rings[i].hole ? a < 0 : a > 0, "ring %lu area %g hole %d", (unsigned long)i, a,
+                      ps->rings[i].hole);
+    }
+}
+
+START_TEST(sphere_sections_are_single_discs_with_analytic_area)
+{
+    amp_mesh m;
+    amp_polyset ps;
+    amp_section_stats ss;
+    static const double zs[] = {-8.0, -5.0, -1.0, 0.3, 4.0, 7.5};
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(1, 2, 0), 10.0, 256, 128), AMP_OK);
+    for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
+        double want = PI * (100.0 - zs[i] * zs[i]);
+        amp_polyset_clear(&ps);
+        ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
+        ck_assert_uint_eq(ps.nislands, 1);
+        ck_assert_uint_eq(ps.nrings, 1);
+        ck_assert_uint_eq(ss.open_chains, 0);
+        ck_assert_msg(fabs(amp_polyset_area(&ps) - want) < 0.01 * want, "z %g area %g want %g", zs[i],
+                      amp_polyset_area(&ps), want);
+        assert_oriented(&ps);
+    }
+    amp_polyset_clear(&ps);
+    ck_assert_int_eq(amp_slice_plane(&m, 10.5, &ps, NULL, NULL), AMP_OK);
+    ck_assert_uint_eq(ps.nrings, 0);
+    amp_polyset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(torus_sections_are_annuli_with_one_hole_and_analytic_area)
+{
+    amp_mesh m;
+    amp_polyset ps;
+    amp_section_stats ss;
+    /* z = 0 passes exactly through a ring of mesh vertices (perturbation) */
+    static const double zs[] = {-2.5, -1.0, 0.0, 1.7, 2.9};
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), 10.0, 3.0, 256, 128), AMP_OK);
+    for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
+        double w = sqrt(9.0 - zs[i] * zs[i]), want = 4 * PI * 10.0 * w;
+        amp_polyset_clear(&ps);
+        ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
+        ck_assert_uint_eq(ps.nislands, 1);
+        ck_assert_uint_eq(ps.nrings, 2);
+        ck_assert_uint_eq(count_holes(&ps), 1);
+        ck_assert_uint_eq(ss.open_chains, 0);
+        ck_assert_msg(fabs(amp_polyset_area(&ps) - want) < 0.01 * want, "z %g area %g want %g", zs[i],
+                      amp_polyset_area(&ps), want);
+        assert_oriented(&ps);
+    }
+    amp_polyset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+static const char *const plate[] = {
+    "##########......####",
+    "#........#......####",
+    "#.####...#..........",
+    "#.#..#...#....###...",
+    "#.####...#....###...",
+    "#........#..........",
+    "##########..........",
+    "....................",
+    "#####.####..........",
+    "#####.####..........",
+    NULL};
+
+static double count_cells(const char *const *rows)
+{
+    double n = 0;
+    size_t i, j;
+    for (i = 0; rows[i]; i++)
+        for (j = 0; rows[i][j]; j++)
+            n += rows[i][j] == '#';
+    return n;
+}
+
+START_TEST(voxel_plate_gives_islands_holes_and_exact_areas)
+{
+    amp_mesh m;
+    amp_polyset ps;
+    amp_section_stats ss;
+    double zs[] = {0.5, 1.0, 2.0, 2.5}; /* 1.0 and 2.0: on a layer of mesh vertices */
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 1.0), AMP_OK);
+    for (i = 0; i < 4; i++) {
+        amp_polyset_clear(&ps);
+        ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
+        /* frame (with hole) + ring island inside the hole (with its own hole) + 4 blocks */
+        ck_assert_uint_eq(ps.nislands, 6);
+        ck_assert_uint_eq(count_holes(&ps), 2);
+        ck_assert_uint_eq(ss.open_chains, 0);
+        ck_assert_near(amp_polyset_area(&ps), count_cells(plate), 1e-9);
+        assert_oriented(&ps);
+    }
+    /* the bottom face lies in the plane z = 0: treated as above, nothing cut */
+    amp_polyset_clear(&ps);
+    ck_assert_int_eq(amp_slice_plane(&m, 0.0, &ps, &ss, NULL), AMP_OK);
+    ck_assert_uint_eq(ps.nrings, 0);
+    amp_polyset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(open_mesh_is_reported_as_open_chains)
+{
+    amp_mesh m;
+    amp_polyset ps;
+    amp_section_stats ss;
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    {
+        size_t k;
+        amp_box3 b;
+        /* remove a triangle crossed by the plane z = 0.2 */
+        ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 5.0, 32, 16), AMP_OK);
+        for (k = 0; k < m.ntris; k++) {
+            b = amp_box3_empty();
+            b = amp_box3_add(b, m.verts[m.tris[k].v[0]]);
+            b = amp_box3_add(b, m.verts[m.tris[k].v[1]]);
+            b = amp_box3_add(b, m.verts[m.tris[k].v[2]]);
+            if (b.min.z < 0.2 && b.max.z > 0.2)
+                break;
+        }
+        ck_assert_uint_lt(k, m.ntris);
+        m.tris[k] = m.tris[m.ntris - 1];
+        m.ntris--;
+        ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
+        ck_assert_uint_eq(ss.open_chains, 1);
+        ck_assert_uint_eq(ps.nrings, 0);
+        /* a second, closed sphere in the same plane is still sliced */
+        ck_assert_int_eq(fx_sphere(&m, amp_v3(20, 0, 0), 5.0, 32, 16), AMP_OK);
+        ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
+        ck_assert_uint_eq(ss.open_chains, 1);
+        ck_assert_uint_eq(ps.nrings, 1);
+    }
+    amp_polyset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(layers_are_cut_at_mid_height_with_optional_first_layer)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts o;
+    amp_error err;
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(3, 4, 7), 10.0, 3.0, 64, 32), AMP_OK); /* z in [4, 10] */
+    o.layer = 0.5;
+    o.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(&m, &o, &sl, &err), AMP_OK);
+    ck_assert_uint_eq(sl.nlayers, 12);
+    ck_assert_near(sl.z0, 4.0, 1e-12);
+    for (i = 0; i < sl.nlayers; i++) {
+        ck_assert_near(sl.layers[i].z_cut, (i + 0.5) * 0.5, 1e-12);
+        ck_assert_near(sl.layers[i].z_print, (i + 1) * 0.5, 1e-12);
+        ck_assert_uint_eq(sl.layers[i].polys.nislands, 1);
+        ck_assert_uint_eq(sl.layers[i].polys.nrings, 2);
+    }
+    ck_assert_uint_eq(sl.open_chains, 0);
+    o.first_layer = 0.3;
+    ck_assert_int_eq(amp_slice_mesh(&m, &o, &sl, &err), AMP_OK);
+    ck_assert_near(sl.layers[0].z_cut, 0.15, 1e-12);
+    ck_assert_near(sl.layers[0].z_print, 0.3, 1e-12);
+    ck_assert_near(sl.layers[1].z_cut, 0.55, 1e-12);
+    ck_assert_near(sl.layers[1].z_print, 0.8, 1e-12);
+    ck_assert_uint_eq(sl.nlayers, 12);
+    o.layer = -1;
+    ck_assert_int_eq(amp_slice_mesh(&m, &o, &sl, &err), AMP_ERR_ARG);
+    ck_assert(strstr(err.msg, "layer") != NULL);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+static Suite *slice_suite(void)
+{
+    Suite *s = suite_create("slice");
+    TCase *tc = tcase_create("core");
+    AMP_ADD_TEST(tc, sphere_sections_are_single_discs_with_analytic_area);
+    AMP_ADD_TEST(tc, torus_sections_are_annuli_with_one_hole_and_analytic_area);
+    AMP_ADD_TEST(tc, voxel_plate_gives_islands_holes_and_exact_areas);
+    AMP_ADD_TEST(tc, open_mesh_is_reported_as_open_chains);
+    AMP_ADD_TEST(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(slice_suite)
