@@ -6,6 +6,7 @@
 #include "io.h"
 #include "mesh.h"
 #include "paths.h"
+#include "proto.h"
 #include "status.h"
 #include "vec.h"
 #include "version.h"
