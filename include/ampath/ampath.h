@@ -9,6 +9,7 @@
 #include "mesh.h"
 #include "paths.h"
 #include "polygon.h"
+#include "proto.h"
 #include "slice.h"
 #include "spline.h"
 #include "status.h"

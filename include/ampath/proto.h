@@ -1,0 +1,209 @@
+/*
+ * ampath/proto.h — the printer streaming protocol engine (SPEC §8, issue 10).
+ *
+ * Plain data plus step functions, no I/O, no allocation, no clock: the host
+ * feeds the bytes it read from the printer (amp_proto_feed), asks for the
+ * next framed line to write (amp_proto_next_tx) and receives events through
+ * an optional callback. Time is passed in as a millisecond counter that may
+ * wrap. The same engine runs in ampath-bridge and on a microcontroller that
+ * drives a printer over a UART (it builds with `make cross`).
+ *
+ * Marlin flavor: every job line is framed as `N<n> <cmd>*<xor>\n` (comments
+ * and surrounding blanks stripped first, XOR of every byte before `*`); the
+ * connection starts with `N0 M110 N0` once the boot banner `start` was seen
+ * or did not come. Replies understood: `ok` (plain or ADVANCED_OK
+ * `ok N<n> P<p> B<b>`), `Resend: <n>` / `rs <n>` (rewind ONCE per error
+ * burst: the requests that the lines sent ahead provoke are recognised and
+ * dropped), `Error:...`, `echo:busy: processing` (keep-alive), `wait`,
+ * ` T:` temperature reports, `start` (the printer reset: the engine stops and
+ * reports the last acknowledged line; it never continues blindly).
+ * Klipper flavor: no numbers or checksums, one `ok` per line (also after
+ * `!! error`), `// ...` information, `// Klipper state: Shutdown` stops.
+ *
+ * An "acknowledged" line is one the printer answered with `ok`, i.e. it was
+ * executed (Marlin and Klipper send `ok` after running a command). Lines are
+ * acknowledged in order, so one number (amp_proto.acked) says where a job
+ * stands.
+ *
+ * Thread-safety: an amp_proto is plain data owned by the caller; distinct
+ * objects are independent, one object must not be used by two threads at once.
+ */
+#ifndef AMPATH_PROTO_H
+#define AMPATH_PROTO_H
+
+#include <stddef.h>
+
+#include "status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Marlin's MAX_CMD_SIZE: a framed line (without its newline) must be shorter. */
+#define AMP_PROTO_LINE_MAX 96
+/** Lines kept for resending (a power of two); bounds the send-ahead window. */
+#define AMP_PROTO_RING 32
+/** Longest reply line kept (longer replies are truncated, never overrun). */
+#define AMP_PROTO_RX_MAX 160
+
+/** Firmware dialect. */
+typedef enum amp_proto_flavor {
+    AMP_PROTO_MARLIN = 0, /**< line numbers, checksums, Resend */
+    AMP_PROTO_KLIPPER = 1 /**< Klipper's pseudo-terminal: plain lines, one ok each */
+} amp_proto_flavor;
+
+/** How many lines may be sent ahead of the acknowledgements. */
+typedef enum amp_proto_window {
+    AMP_PROTO_PINGPONG = 0, /**< one line in flight */
+    AMP_PROTO_FIXED = 1,    /**< up to opts.window lines, bounded by the printer's RX buffer */
+    AMP_PROTO_ADVANCED = 2  /**< Marlin ADVANCED_OK: the command-queue size is read from `ok N P B` */
+} amp_proto_window;
+
+/** Engine states. */
+typedef enum amp_proto_state {
+    AMP_PROTO_CONNECTING = 0, /**< waiting for the boot banner (or its timeout) */
+    AMP_PROTO_SYNCING = 1,    /**< M110 sent, waiting for its ok */
+    AMP_PROTO_RUNNING = 2,    /**< streaming */
+    AMP_PROTO_STOPPED = 3     /**< reset, shutdown, fatal error or estop: nothing more is sent */
+} amp_proto_state;
+
+/** Event kinds delivered to opts.on_event. */
+typedef enum amp_proto_event_kind {
+    AMP_EV_READY = 0,    /**< handshake done, lines may be submitted */
+    AMP_EV_ACK,          /**< line `line` acknowledged */
+    AMP_EV_RESEND,       /**< rewound to line `line` (once per error burst) */
+    AMP_EV_RESEND_DUP,   /**< a resend request of the same burst, ignored */
+    AMP_EV_ERROR,        /**< `Error:` or `!!` reply (text holds it) */
+    AMP_EV_BUSY,         /**< `echo:busy:` keep-alive */
+    AMP_EV_TEMP,         /**< temperature report (text holds it) */
+    AMP_EV_INFO,         /**< `echo:`, `//` or other text */
+    AMP_EV_RESET,        /**< `start` mid-job: stopped; `line` = last acknowledged */
+    AMP_EV_SHUTDOWN,     /**< Klipper shutdown or Marlin halt: stopped; `line` = last acknowledged */
+    AMP_EV_TIMEOUT,      /**< no reply in time; Marlin: a probe line was re-sent */
+    AMP_EV_FATAL         /**< unrecoverable (resend of a line no longer kept); stopped */
+} amp_proto_event_kind;
+
+/** One event; text points into the engine and is valid during the callback only. */
+typedef struct amp_proto_event {
+    amp_proto_event_kind kind;
+    long line;        /**< line number concerned (see the kind), 0 if none */
+    const char *text; /**< the reply line, NUL-terminated ("" if none) */
+} amp_proto_event;
+
+typedef void (*amp_proto_event_fn)(void *user, const amp_proto_event *ev);
+
+/** Options; fill with amp_proto_opts_default() then adjust. */
+typedef struct amp_proto_opts {
+    amp_proto_flavor flavor;    /**< default AMP_PROTO_MARLIN */
+    amp_proto_window mode;      /**< default AMP_PROTO_FIXED */
+    int window;                 /**< max lines in flight, FIXED/Klipper (default 4 Marlin, 16 Klipper), <= AMP_PROTO_RING-1 */
+    int bufsize;                /**< printer command-queue slots (Marlin BUFSIZE, default 4) */
+    int rx_bytes;               /**< printer serial RX buffer bytes (default 128) */
+    int resend_ok;              /**< non-zero: an `ok` follows every `Resend:` and is no acknowledgement (Marlin, default 1) */
+    unsigned long boot_ms;      /**< wait this long for `start` before the handshake (default 3000) */
+    unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
+    amp_proto_event_fn on_event; /**< optional event callback */
+    void *user;                 /**< passed to on_event */
+} amp_proto_opts;
+
+/** One line kept for resending. */
+typedef struct amp_proto_slot {
+    long n;                             /**< its line number */
+    unsigned char len;                  /**< framed bytes including the newline */
+    char text[AMP_PROTO_LINE_MAX + 8];  /**< framed line */
+} amp_proto_slot;
+
+/** The engine; plain data, inspect fields freely, change them only through the functions. */
+typedef struct amp_proto {
+    amp_proto_opts o;
+    amp_proto_state state;
+    long next_n;     /**< number the next submitted line gets */
+    long send_n;     /**< next line number to transmit */
+    long top_sent;   /**< highest line number ever transmitted */
+    long acked;      /**< last acknowledged line number (0 = none) */
+    long sync_n;     /**< number used by the pending M110, -1 if none */
+    long rewind_n;   /**< target of the current error burst, -1 outside a burst */
+    long burst_left; /**< resend requests of that burst still to be ignored */
+    int skip_ok;     /**< an ok owed to a Resend is expected */
+    int probing;     /**< a probe is out after a timeout */
+    int estop;       /**< M112 pending, goes before everything */
+    int start_seen;  /**< boot banner seen while connecting */
+    int resync;      /**< the M110 must be (re)sent */
+    int qslots;      /**< command-queue size in use (learned under ADVANCED_OK) */
+    unsigned long last_rx; /**< time of the last ok/busy/temperature/start */
+    unsigned long t0;      /**< time of init or of the last link restore */
+    /* counters */
+    long n_sent, n_resent, n_rewinds, n_dups, n_errors, n_timeouts, n_busy, n_garbage;
+    size_t rxlen;
+    int rx_over; /**< current reply longer than AMP_PROTO_RX_MAX (tail dropped) */
+    char rx[AMP_PROTO_RX_MAX + 1];
+    amp_proto_slot ring[AMP_PROTO_RING];
+} amp_proto;
+
+/** Defaults for @p flavor (see the field comments). */
+void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor);
+
+/**
+ * Start an engine at time @p now_ms. Klipper starts RUNNING at once; Marlin
+ * first waits for `start` (at most opts.boot_ms), then sends `N0 M110 N0`.
+ * AMP_ERR_ARG on bad options (window or bufsize outside [1, AMP_PROTO_RING-1]).
+ */
+amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long now_ms, amp_error *err);
+
+/**
+ * Frame G-code line @p cmd (@p len bytes, no NUL needed) and queue it.
+ * Comments (`;` to the end) and blanks are stripped; if nothing is left,
+ * *lineno = 0 and nothing is queued. Otherwise *lineno is its line number
+ * (Klipper: a running count). Errors: AMP_ERR_LIMIT when the framed line
+ * would reach AMP_PROTO_LINE_MAX bytes (nothing is sent: Marlin would reject
+ * it), AMP_ERR_STATE when not ready (check amp_proto_can_submit) or stopped,
+ * AMP_ERR_PARSE on a newline or NUL inside @p cmd.
+ */
+amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lineno, amp_error *err);
+
+/** Non-zero when amp_proto_submit can take another line now. */
+int amp_proto_can_submit(const amp_proto *p);
+
+/** Number of submitted lines not yet acknowledged. */
+long amp_proto_pending(const amp_proto *p);
+
+/**
+ * Feed @p n bytes read from the printer at @p now_ms. Lines may be split
+ * anywhere across calls; CR, LF and NUL end a line. Events are delivered
+ * during the call.
+ */
+void amp_proto_feed(amp_proto *p, const char *bytes, size_t n, unsigned long now_ms);
+
+/**
+ * The next line to write, if the window allows one now: copies it into
+ * @p buf (capacity @p cap >= AMP_PROTO_LINE_MAX + 8), sets *len and returns 1;
+ * returns 0 when nothing is to be sent. Also runs the boot and reply timeouts
+ * (call it at least every amp_proto_wait_ms). The line counts as sent on return.
+ */
+int amp_proto_next_tx(amp_proto *p, unsigned long now_ms, char *buf, size_t cap, size_t *len);
+
+/** Milliseconds until the next timer of the engine fires (for poll()); -1 if none. */
+long amp_proto_wait_ms(const amp_proto *p, unsigned long now_ms);
+
+/** Emergency stop: `M112` goes out next, ahead of the window, and the engine stops. */
+void amp_proto_estop(amp_proto *p);
+
+/**
+ * The link went away and came back (USB hang-up): the partial reply is
+ * discarded and the reply timer restarts. The printer's state decides what
+ * happens next: if it reset, `start` arrives and the engine stops; if not,
+ * its pending oks arrive or the timeout probe asks it which line it expects
+ * (a resend from the last acknowledged line with M110 could run queued lines twice).
+ */
+void amp_proto_link_restored(amp_proto *p, unsigned long now_ms);
+
+/** Static name of an event kind ("ack", "resend", ...). */
+const char *amp_proto_event_name(amp_proto_event_kind k);
+
+/** XOR checksum of @p n bytes (Marlin/RepRap line checksum). */
+unsigned amp_proto_checksum(const char *s, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

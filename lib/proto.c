@@ -1,0 +1,628 @@
+/*
+ * proto.c — printer streaming protocol engine (SPEC §8, issue 10).
+ *
+ * No I/O, no allocation, no printf: the framed lines live in a fixed ring so
+ * that any line not yet acknowledged can be sent again, and reply lines are
+ * assembled in a fixed buffer. See include/ampath/proto.h for the model.
+ */
+#include "ampath/proto.h"
+
+#include <string.h>
+
+#define RING_MASK (AMP_PROTO_RING - 1)
+
+#if (AMP_PROTO_RING & (AMP_PROTO_RING - 1)) != 0
+#error "AMP_PROTO_RING must be a power of two"
+#endif
+
+static const char *const ev_names[] = {"ready", "ack",      "resend",  "resend-dup", "error", "busy",
+                                       "temp",  "info",     "reset",   "shutdown",   "timeout", "fatal"};
+
+const char *amp_proto_event_name(amp_proto_event_kind k)
+{
+    unsigned i = (unsigned)k;
+    if (i >= sizeof ev_names / sizeof ev_names[0])
+        return "unknown";
+    return ev_names[i];
+}
+
+unsigned amp_proto_checksum(const char *s, size_t n)
+{
+    unsigned cs = 0;
+    size_t i;
+    for (i = 0; i < n; i++)
+        cs ^= (unsigned char)s[i];
+    return cs & 0xffu;
+}
+
+void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
+{
+    memset(o, 0, sizeof *o);
+    o->flavor = flavor;
+    o->mode = AMP_PROTO_FIXED;
+    o->window = flavor == AMP_PROTO_KLIPPER ? 16 : 4;
+    o->bufsize = 4;
+    o->rx_bytes = 128;
+    o->resend_ok = 1;
+    o->boot_ms = 3000;
+    o->timeout_ms = 10000;
+}
+
+static void emit(amp_proto *p, amp_proto_event_kind k, long line, const char *text)
+{
+    amp_proto_event ev;
+    if (!p->o.on_event)
+        return;
+    ev.kind = k;
+    ev.line = line;
+    ev.text = text ? text : "";
+    p->o.on_event(p->o.user, &ev);
+}
+
+amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long now_ms, amp_error *err)
+{
+    if (!p || !o)
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: NULL argument");
+    if (o->window < 1 || o->window > AMP_PROTO_RING - 1 || o->bufsize < 1 || o->bufsize > AMP_PROTO_RING - 1)
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: window and bufsize must lie in [1, %d]", AMP_PROTO_RING - 1);
+    if (o->rx_bytes < AMP_PROTO_LINE_MAX)
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: rx_bytes must be at least %d", AMP_PROTO_LINE_MAX);
+    if (o->flavor != AMP_PROTO_MARLIN && o->flavor != AMP_PROTO_KLIPPER)
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: unknown flavor");
+    memset(p, 0, sizeof *p);
+    p->o = *o;
+    p->next_n = 1;
+    p->send_n = 1;
+    p->sync_n = -1;
+    p->rewind_n = -1;
+    p->qslots = o->bufsize;
+    p->last_rx = p->t0 = now_ms;
+    if (o->flavor == AMP_PROTO_KLIPPER) {
+        p->state = AMP_PROTO_RUNNING;
+        emit(p, AMP_EV_READY, 0, NULL);
+    } else {
+        p->state = AMP_PROTO_CONNECTING;
+    }
+    return AMP_OK;
+}
+
+long amp_proto_pending(const amp_proto *p)
+{
+    return p->next_n - 1 - p->acked;
+}
+
+int amp_proto_can_submit(const amp_proto *p)
+{
+    /* keep one slot spare so that a resend request for the oldest unacknowledged line can always be served */
+    return p->state == AMP_PROTO_RUNNING && !p->estop && p->next_n - 1 - p->acked < AMP_PROTO_RING - 1;
+}
+
+static size_t put_long(char *dst, long v)
+{
+    char tmp[24];
+    size_t n = 0, i;
+    unsigned long u = v < 0 ? 0UL - (unsigned long)v : (unsigned long)v;
+    do {
+        tmp[n++] = (char)('0' + (int)(u % 10));
+        u /= 10;
+    } while (u);
+    i = 0;
+    if (v < 0)
+        dst[i++] = '-';
+    while (n)
+        dst[i++] = tmp[--n];
+    return i;
+}
+
+/* Frame "N<n> <cmd>*<cs>\n" (Marlin) or "<cmd>\n" (Klipper) into slot @p s; 0 if too long. */
+static int frame(amp_proto *p, amp_proto_slot *s, long n, const char *cmd, size_t len)
+{
+    char tmp[AMP_PROTO_LINE_MAX + 40];
+    size_t k = 0;
+    if (len >= AMP_PROTO_LINE_MAX)
+        return 0;
+    if (p->o.flavor == AMP_PROTO_MARLIN) {
+        unsigned cs;
+        tmp[k++] = 'N';
+        k += put_long(tmp + k, n);
+        tmp[k++] = ' ';
+        memcpy(tmp + k, cmd, len);
+        k += len;
+        cs = amp_proto_checksum(tmp, k);
+        tmp[k++] = '*';
+        k += put_long(tmp + k, (long)cs);
+    } else {
+        memcpy(tmp, cmd, len);
+        k = len;
+    }
+    /* Marlin's MAX_CMD_SIZE counts the terminating NUL: a line of 96 or more bytes never passes */
+    if (k >= AMP_PROTO_LINE_MAX)
+        return 0;
+    tmp[k++] = '\n';
+    memcpy(s->text, tmp, k);
+    s->len = (unsigned char)k;
+    s->n = n;
+    return 1;
+}
+
+amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lineno, amp_error *err)
+{
+    size_t a = 0, b, i;
+    amp_proto_slot *s;
+    if (lineno)
+        *lineno = 0;
+    if (!p || (!cmd && len))
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: NULL argument");
+    for (i = 0; i < len; i++) {
+        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
+            return amp_fail(err, AMP_ERR_PARSE, 0, "proto: line break or NUL inside a command");
+        if (cmd[i] == ';')
+            break; /* Marlin comments run to the end of the line and are not sent (checksum is over the stripped text) */
+    }
+    b = i;
+    while (a < b && (cmd[a] == ' ' || cmd[a] == '\t'))
+        a++;
+    while (b > a && (cmd[b - 1] == ' ' || cmd[b - 1] == '\t'))
+        b--;
+    if (a == b)
+        return AMP_OK;
+    if (b - a == 4 && memcmp(cmd + a, "M112", 4) == 0) {
+        /* both firmwares act on M112 as soon as it is read, ahead of their queues */
+        amp_proto_estop(p);
+        return AMP_OK;
+    }
+    if (p->state != AMP_PROTO_RUNNING || !amp_proto_can_submit(p))
+        return amp_fail(err, AMP_ERR_STATE, 0, "proto: cannot take a line now (%s)",
+                        p->state == AMP_PROTO_STOPPED ? "stopped" : "window full or not connected");
+    s = &p->ring[p->next_n & RING_MASK];
+    if (!frame(p, s, p->next_n, cmd + a, b - a))
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "proto: line of %lu bytes exceeds the printer's %d-byte limit",
+                        (unsigned long)(b - a), AMP_PROTO_LINE_MAX - 1);
+    if (lineno)
+        *lineno = p->next_n;
+    p->next_n++;
+    return AMP_OK;
+}
+
+void amp_proto_estop(amp_proto *p)
+{
+    p->estop = 1;
+}
+
+void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
+{
+    p->rxlen = 0;
+    p->rx_over = 0;
+    p->last_rx = p->t0 = now_ms;
+    /* stale error replies of a burst may have been lost with the link: do not wait for them */
+    p->rewind_n = -1;
+    p->burst_left = 0;
+}
+
+static void stop(amp_proto *p, amp_proto_event_kind k, const char *text)
+{
+    p->state = AMP_PROTO_STOPPED;
+    emit(p, k, p->acked, text);
+}
+
+static int starts(const char *s, const char *prefix)
+{
+    return strncmp(s, prefix, strlen(prefix)) == 0;
+}
+
+/* Parse a decimal after optional blanks; returns 1 and *v on success. */
+static int parse_long(const char *s, long *v)
+{
+    long x = 0;
+    int nd = 0;
+    while (*s == ' ' || *s == ':')
+        s++;
+    while (*s >= '0' && *s <= '9' && nd < 12) {
+        x = x * 10 + (*s - '0');
+        s++;
+        nd++;
+    }
+    if (nd == 0 || nd >= 12)
+        return 0;
+    while (*s == ' ')
+        s++;
+    if (*s != '\0')
+        return 0; /* trailing garbage: a garbled number is worse than none */
+    *v = x;
+    return 1;
+}
+
+/* ADVANCED_OK: "ok N<n> P<p> B<b>"; returns 1 when N and B were both found. */
+static int parse_adv(const char *s, long *n, long *b)
+{
+    int have_n = 0, have_b = 0;
+    while (*s) {
+        if ((*s == 'N' || *s == 'B' || *s == 'P') && s[-1] == ' ') {
+            char c = *s++;
+            long x = 0;
+            int nd = 0;
+            while (*s >= '0' && *s <= '9' && nd < 12) {
+                x = x * 10 + (*s++ - '0');
+                nd++;
+            }
+            if (nd == 0)
+                return 0;
+            if (c == 'N') {
+                *n = x;
+                have_n = 1;
+            } else if (c == 'B') {
+                *b = x;
+                have_b = 1;
+            }
+        } else {
+            s++;
+        }
+    }
+    return have_n && have_b;
+}
+
+static void ack_one(amp_proto *p)
+{
+    if (p->acked < p->send_n - 1 && p->acked < p->top_sent) {
+        p->acked++;
+        if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
+            p->rewind_n = -1; /* the re-sent line went through: the burst is over */
+            p->burst_left = 0;
+        }
+        emit(p, AMP_EV_ACK, p->acked, p->rx);
+    } else {
+        p->n_garbage++; /* an ok for nothing in flight */
+        emit(p, AMP_EV_INFO, 0, p->rx);
+    }
+}
+
+static void on_ok(amp_proto *p, unsigned long now)
+{
+    long n = 0, b = 0;
+    p->last_rx = now;
+    if (p->state == AMP_PROTO_SYNCING) {
+        p->state = AMP_PROTO_RUNNING;
+        p->resync = 0;
+        p->skip_ok = 0;
+        emit(p, AMP_EV_READY, 0, p->rx);
+        return;
+    }
+    if (p->state != AMP_PROTO_RUNNING)
+        return;
+    if (p->skip_ok) {
+        /* Marlin answers each rejected line with "Resend: n" and an ok that acknowledges nothing */
+        p->skip_ok = 0;
+        return;
+    }
+    p->probing = 0;
+    ack_one(p);
+    if (p->o.mode == AMP_PROTO_ADVANCED && p->o.flavor == AMP_PROTO_MARLIN && parse_adv(p->rx + 2, &n, &b) &&
+        n >= p->acked) {
+        /* The ok is sent while its own command still holds a queue slot (B is one low), and the lines
+           acked+1..N are queued behind it: queue size = B + 1 + (N - acked). */
+        long q = b + 1 + (n - p->acked);
+        if (q < 1)
+            q = 1;
+        if (q > AMP_PROTO_RING - 1)
+            q = AMP_PROTO_RING - 1;
+        p->qslots = (int)q;
+    }
+}
+
+static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
+{
+    long stale;
+    p->last_rx = now;
+    if (with_ok && p->o.resend_ok)
+        p->skip_ok = 1;
+    if (p->state == AMP_PROTO_SYNCING) {
+        p->resync = 1; /* the M110 itself was garbled */
+        return;
+    }
+    if (p->state != AMP_PROTO_RUNNING)
+        return;
+    if (m < 1 || m > p->send_n || m > p->top_sent + 1) {
+        p->n_garbage++; /* a garbled number, or a request for a line never sent: ignore */
+        emit(p, AMP_EV_INFO, m, p->rx);
+        return;
+    }
+    if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
+        stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
+        return;
+    }
+    /* lines from m on were not received, so they cannot have been executed */
+    if (p->acked >= m)
+        p->acked = m - 1;
+    if (p->probing) {
+        /* The link was silent without busy: the printer is idle, so every line it received (< m) has run;
+           oks lost on the way are made up for here. */
+        p->probing = 0;
+        while (p->acked < m - 1) {
+            p->acked++;
+            emit(p, AMP_EV_ACK, p->acked, p->rx);
+        }
+        p->rewind_n = -1;
+        p->burst_left = 0;
+        if (m < p->send_n) {
+            p->send_n = m;
+            p->n_rewinds++;
+            emit(p, AMP_EV_RESEND, m, p->rx);
+        }
+        return;
+    }
+    if (p->rewind_n == m && p->burst_left > 0) {
+        /* After an error Marlin drops its receive buffer, so each line sent ahead provokes another
+           request for the same line: rewind once per burst, not once per error. */
+        p->burst_left--;
+        p->n_dups++;
+        emit(p, AMP_EV_RESEND_DUP, m, p->rx);
+        return;
+    }
+    if (m == p->send_n) {
+        /* nothing to rewind: the printer asks for the line we are about to send */
+        p->rewind_n = -1;
+        p->burst_left = 0;
+        return;
+    }
+    stale = p->send_n - 1 - m; /* lines m+1.. already on their way, each may provoke one more request */
+    p->rewind_n = m;
+    p->burst_left = stale > 0 ? stale : 0;
+    p->send_n = m;
+    p->n_rewinds++;
+    emit(p, AMP_EV_RESEND, m, p->rx);
+}
+
+static int has_temp(const char *s)
+{
+    return strstr(s, " T:") != NULL || starts(s, "T:") || starts(s, "B:");
+}
+
+static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
+{
+    long m;
+    if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
+        on_ok(p, now);
+        if (has_temp(s))
+            emit(p, AMP_EV_TEMP, 0, s);
+        return;
+    }
+    if (starts(s, "Resend:") || starts(s, "resend:")) {
+        if (parse_long(s + 7, &m))
+            on_resend(p, m, 1, now);
+        else {
+            if (p->o.resend_ok && p->state == AMP_PROTO_RUNNING)
+                p->skip_ok = 1; /* its ok still comes */
+            p->n_garbage++;
+        }
+        return;
+    }
+    if (starts(s, "rs ")) {
+        if (parse_long(s + 3, &m))
+            on_resend(p, m, 0, now);
+        else
+            p->n_garbage++;
+        return;
+    }
+    if (starts(s, "start") && (s[5] == '\0' || s[5] == ' ')) {
+        p->last_rx = now;
+        if (p->state == AMP_PROTO_CONNECTING) {
+            p->start_seen = 1;
+        } else if (p->state == AMP_PROTO_SYNCING) {
+            p->resync = 1; /* the banner came late and our M110 went to a booting printer */
+        } else if (p->state == AMP_PROTO_RUNNING) {
+            if (p->next_n == 1) {
+                p->state = AMP_PROTO_SYNCING;
+                p->resync = 1;
+            } else {
+                /* the printer lost its queue and position: never continue blindly */
+                stop(p, AMP_EV_RESET, s);
+            }
+        }
+        return;
+    }
+    if (starts(s, "Error:") || starts(s, "error:")) {
+        p->n_errors++;
+        emit(p, AMP_EV_ERROR, 0, s);
+        if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "Printer stopped"))
+            stop(p, AMP_EV_SHUTDOWN, s);
+        return;
+    }
+    if (starts(s, "echo:busy:") || starts(s, "busy:")) {
+        p->last_rx = now;
+        p->n_busy++;
+        emit(p, AMP_EV_BUSY, 0, s);
+        return;
+    }
+    if (strcmp(s, "wait") == 0)
+        return; /* idle printer with an empty queue: says nothing about our lines, and keeps nothing alive */
+    if (has_temp(s)) {
+        p->last_rx = now; /* M109/M190 report every second while heating */
+        emit(p, AMP_EV_TEMP, 0, s);
+        return;
+    }
+    if (!starts(s, "echo:") && !starts(s, "//"))
+        p->n_garbage++;
+    emit(p, AMP_EV_INFO, 0, s);
+}
+
+static void handle_klipper(amp_proto *p, const char *s, unsigned long now)
+{
+    if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
+        p->last_rx = now;
+        if (p->state == AMP_PROTO_RUNNING)
+            ack_one(p);
+        return;
+    }
+    if (starts(s, "!!")) {
+        /* the failed command still gets its ok */
+        p->n_errors++;
+        emit(p, AMP_EV_ERROR, 0, s);
+        return;
+    }
+    if (starts(s, "// Klipper state: Shutdown")) {
+        if (p->state != AMP_PROTO_STOPPED)
+            stop(p, AMP_EV_SHUTDOWN, s);
+        return;
+    }
+    if (has_temp(s)) {
+        p->last_rx = now;
+        emit(p, AMP_EV_TEMP, 0, s);
+        return;
+    }
+    emit(p, AMP_EV_INFO, 0, s);
+}
+
+static void handle_line(amp_proto *p, unsigned long now)
+{
+    const char *s = p->rx;
+    while (*s == ' ' && s[1] == ' ')
+        s++;
+    if (p->o.flavor == AMP_PROTO_MARLIN)
+        handle_marlin(p, s, now);
+    else
+        handle_klipper(p, s, now);
+}
+
+void amp_proto_feed(amp_proto *p, const char *bytes, size_t n, unsigned long now_ms)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        char c = bytes[i];
+        if (c == '\n' || c == '\r' || c == '\0') {
+            if (p->rxlen > 0) {
+                p->rx[p->rxlen] = '\0';
+                handle_line(p, now_ms);
+            }
+            p->rxlen = 0;
+            p->rx_over = 0;
+        } else if (p->rxlen < AMP_PROTO_RX_MAX) {
+            p->rx[p->rxlen++] = c;
+        } else {
+            p->rx_over = 1;
+        }
+    }
+}
+
+/* May line p->send_n go out now? */
+static int window_allows(const amp_proto *p)
+{
+    long inflight = p->send_n - 1 - p->acked, k, bytes;
+    long lim;
+    if (p->o.mode == AMP_PROTO_PINGPONG)
+        return inflight < 1;
+    if (p->o.flavor == AMP_PROTO_KLIPPER)
+        return inflight < p->o.window; /* Klipper stops reading at 20 pending lines */
+    lim = p->o.mode == AMP_PROTO_ADVANCED ? AMP_PROTO_RING - 1 : p->o.window;
+    if (inflight >= lim)
+        return 0;
+    /* The oldest qslots lines sit in the command queue (ok comes after execution); the rest wait in the
+       serial RX buffer, which must not overflow: Marlin has no flow control. */
+    bytes = p->ring[p->send_n & RING_MASK].len;
+    for (k = p->acked + 1 + p->qslots; k < p->send_n; k++)
+        bytes += p->ring[k & RING_MASK].len;
+    return inflight < p->qslots || bytes <= p->o.rx_bytes;
+}
+
+static int copy_out(const char *src, size_t n, char *buf, size_t cap, size_t *len)
+{
+    if (n > cap)
+        return 0;
+    memcpy(buf, src, n);
+    *len = n;
+    return 1;
+}
+
+int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, size_t *len)
+{
+    amp_proto_slot *s;
+    if (p->estop) {
+        p->estop = 0;
+        if (p->state != AMP_PROTO_STOPPED)
+            stop(p, AMP_EV_SHUTDOWN, "emergency stop");
+        return copy_out("M112\n", 5, buf, cap, len);
+    }
+    if (p->state == AMP_PROTO_STOPPED)
+        return 0;
+    if (p->state == AMP_PROTO_CONNECTING) {
+        if (!p->start_seen && now - p->t0 < p->o.boot_ms)
+            return 0;
+        p->state = AMP_PROTO_SYNCING;
+        p->resync = 1;
+    }
+    if (p->state == AMP_PROTO_SYNCING) {
+        amp_proto_slot tmp;
+        if (!p->resync && now - p->last_rx >= p->o.timeout_ms) {
+            p->n_timeouts++;
+            emit(p, AMP_EV_TIMEOUT, 0, "no answer to M110");
+            p->resync = 1;
+        }
+        if (!p->resync)
+            return 0;
+        p->resync = 0;
+        p->sync_n = p->next_n - 1;
+        p->last_rx = now;
+        {
+            /* "N<k> M110 N<k>": the printer expects N<k+1> next */
+            char cmd[32];
+            size_t k = 0;
+            memcpy(cmd, "M110 N", 6);
+            k = 6 + put_long(cmd + 6, p->sync_n);
+            frame(p, &tmp, p->sync_n, cmd, k);
+        }
+        return copy_out(tmp.text, tmp.len, buf, cap, len);
+    }
+    /* RUNNING */
+    if (p->send_n - 1 > p->acked && now - p->last_rx >= p->o.timeout_ms) {
+        p->n_timeouts++;
+        p->last_rx = now;
+        if (p->o.flavor == AMP_PROTO_KLIPPER) {
+            emit(p, AMP_EV_TIMEOUT, p->acked + 1, "no reply");
+            return 0;
+        }
+        /* Probe: send the newest line again. The line numbers make this safe: the printer either runs it
+           (it was lost) or answers with Resend: <the line it expects>. */
+        p->probing = 1;
+        p->skip_ok = 0;
+        p->rewind_n = -1;
+        p->burst_left = 0;
+        emit(p, AMP_EV_TIMEOUT, p->send_n - 1, "no reply, probing");
+        s = &p->ring[(p->send_n - 1) & RING_MASK];
+        p->n_resent++;
+        return copy_out(s->text, s->len, buf, cap, len);
+    }
+    if (p->probing || p->send_n >= p->next_n || !window_allows(p))
+        return 0;
+    s = &p->ring[p->send_n & RING_MASK];
+    if (!copy_out(s->text, s->len, buf, cap, len))
+        return 0;
+    if (p->send_n <= p->top_sent)
+        p->n_resent++;
+    else
+        p->n_sent++;
+    if (p->send_n > p->top_sent)
+        p->top_sent = p->send_n;
+    if (p->send_n - 1 == p->acked)
+        p->last_rx = now; /* the reply clock starts with the first line in flight */
+    p->send_n++;
+    return 1;
+}
+
+long amp_proto_wait_ms(const amp_proto *p, unsigned long now)
+{
+    unsigned long el;
+    if (p->estop)
+        return 0;
+    if (p->state == AMP_PROTO_STOPPED)
+        return -1;
+    if (p->state == AMP_PROTO_CONNECTING) {
+        el = now - p->t0;
+        return p->start_seen || el >= p->o.boot_ms ? 0 : (long)(p->o.boot_ms - el);
+    }
+    if (p->state == AMP_PROTO_SYNCING || p->send_n - 1 > p->acked) {
+        if (p->resync)
+            return 0;
+        el = now - p->last_rx;
+        return el >= p->o.timeout_ms ? 0 : (long)(p->o.timeout_ms - el);
+    }
+    return -1;
+}

@@ -1,0 +1,605 @@
+/* Protocol engine (lib/proto.c, SPEC §8): scripted byte streams, no I/O. */
+#include <stdio.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#define MAXEV 512
+
+typedef struct rec {
+    int n;
+    amp_proto_event_kind kind[MAXEV];
+    long line[MAXEV];
+} rec;
+
+static void on_ev(void *user, const amp_proto_event *ev)
+{
+    rec *r = user;
+    if (r->n < MAXEV) {
+        r->kind[r->n] = ev->kind;
+        r->line[r->n] = ev->line;
+        r->n++;
+    }
+}
+
+static int count(const rec *r, amp_proto_event_kind k)
+{
+    int i, c = 0;
+    for (i = 0; i < r->n; i++)
+        c += r->kind[i] == k;
+    return c;
+}
+
+/* Feed a string byte by byte (replies are split anywhere by the serial link). */
+static void feed1(amp_proto *p, const char *s, unsigned long now)
+{
+    while (*s)
+        amp_proto_feed(p, s++, 1, now);
+}
+
+/* Next line out as a C string ("" if none). */
+static const char *tx(amp_proto *p, unsigned long now)
+{
+    static char buf[AMP_PROTO_LINE_MAX + 8];
+    size_t len = 0;
+    if (!amp_proto_next_tx(p, now, buf, sizeof buf, &len))
+        return "";
+    buf[len] = '\0';
+    return buf;
+}
+
+/* Line number of a framed Marlin line, -1 if none. */
+static long num(const char *line)
+{
+    long n;
+    if (sscanf(line, "N%ld", &n) != 1)
+        return -1;
+    return n;
+}
+
+/* Independent check of a framed line: N prefix, XOR over the bytes before the last '*', newline. */
+static int frame_ok(const char *line)
+{
+    const char *star = strrchr(line, '*');
+    unsigned cs = 0, want;
+    const char *q;
+    if (!star || line[0] != 'N' || line[strlen(line) - 1] != '\n')
+        return 0;
+    for (q = line; q < star; q++)
+        cs ^= (unsigned char)*q;
+    return sscanf(star + 1, "%u", &want) == 1 && want == cs;
+}
+
+/* A Marlin engine past the handshake. */
+static void start_marlin(amp_proto *p, rec *r, amp_proto_window mode, int window)
+{
+    amp_proto_opts o;
+    amp_error err;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.mode = mode;
+    o.window = window;
+    o.timeout_ms = 1000;
+    o.on_event = on_ev;
+    o.user = r;
+    memset(r, 0, sizeof *r);
+    ck_assert_int_eq(amp_proto_init(p, &o, 0, &err), AMP_OK);
+    feed1(p, "start\n", 10);
+    ck_assert_str_eq(tx(p, 10), "N0 M110 N0*125\n");
+    feed1(p, "ok\n", 20);
+    ck_assert_int_eq(p->state, AMP_PROTO_RUNNING);
+}
+
+static void submit_moves(amp_proto *p, int n)
+{
+    int i;
+    char cmd[64];
+    long ln;
+    for (i = 0; i < n; i++) {
+        snprintf(cmd, sizeof cmd, "G1 X%d.5 Y%d E0.0%d ; move %d", i, 2 * i, i % 10, i);
+        ck_assert_int_eq(amp_proto_submit(p, cmd, strlen(cmd), &ln, NULL), AMP_OK);
+        ck_assert_int_eq(ln, p->next_n - 1);
+    }
+}
+
+START_TEST(checksum_matches_reprap_reference_values)
+{
+    ck_assert_uint_eq(amp_proto_checksum("N0 M110 N0", 10), 125);
+    ck_assert_uint_eq(amp_proto_checksum("N1 G28", 6), 18);
+    ck_assert_uint_eq(amp_proto_checksum("N2 G1 X10 Y20 F3000", 19), 77);
+}
+END_TEST
+
+START_TEST(framing_strips_comments_and_rejects_overlong_lines_before_sending)
+{
+    amp_proto p;
+    rec r;
+    amp_error err;
+    long ln;
+    char big[200];
+    const char *l;
+    start_marlin(&p, &r, AMP_PROTO_PINGPONG, 1);
+    ck_assert_int_eq(amp_proto_submit(&p, "  G28 X Y   ; home\t", 19, &ln, &err), AMP_OK);
+    ck_assert_int_eq(ln, 1);
+    ck_assert_int_eq(amp_proto_submit(&p, "; only a comment", 16, &ln, &err), AMP_OK);
+    ck_assert_int_eq(ln, 0);
+    l = tx(&p, 30);
+    ck_assert_str_eq(l, "N1 G28 X Y*19\n");
+    ck_assert(frame_ok(l));
+    /* 96 bytes framed never pass Marlin's MAX_CMD_SIZE: refused, nothing queued */
+    memset(big, 'X', sizeof big);
+    memcpy(big, "M117 ", 5);
+    ck_assert_int_eq(amp_proto_submit(&p, big, 90, &ln, &err), AMP_ERR_LIMIT);
+    ck_assert_ptr_nonnull(strstr(err.msg, "limit"));
+    ck_assert_int_eq(p.next_n, 2);
+    /* around the limit: accepted exactly when the framed line (computed here independently) is < 96 bytes */
+    {
+        size_t n;
+        int accepted = 0, rejected = 0;
+        for (n = 80; n < 95; n++) {
+            char framed[256];
+            int flen;
+            long want_n = p.next_n;
+            amp_status st;
+            flen = snprintf(framed, sizeof framed, "N%ld %.*s", want_n, (int)n, big);
+            flen += snprintf(framed + flen, sizeof framed - (size_t)flen, "*%u",
+                             amp_proto_checksum(framed, (size_t)flen));
+            st = amp_proto_submit(&p, big, n, &ln, &err);
+            if (flen < 96) {
+                ck_assert_int_eq(st, AMP_OK);
+                ck_assert_int_eq(p.ring[want_n % AMP_PROTO_RING].len, flen + 1);
+                accepted++;
+            } else {
+                ck_assert_int_eq(st, AMP_ERR_LIMIT);
+                ck_assert_int_eq(p.next_n, want_n);
+                rejected++;
+            }
+        }
+        ck_assert_int_gt(accepted, 0);
+        ck_assert_int_gt(rejected, 0);
+    }
+    ck_assert_int_eq(amp_proto_submit(&p, "G1\nX1", 5, &ln, &err), AMP_ERR_PARSE);
+}
+END_TEST
+
+START_TEST(handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.boot_ms = 2000;
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 5000, NULL), AMP_OK);
+    ck_assert_str_eq(tx(&p, 5100), "");
+    ck_assert_int_eq(amp_proto_wait_ms(&p, 5100), 1900);
+    ck_assert(!amp_proto_can_submit(&p));
+    /* no banner in time: M110 goes out; then the printer finishes booting and says start */
+    ck_assert_str_eq(tx(&p, 7000), "N0 M110 N0*125\n");
+    feed1(&p, "echo: External Reset\nMarlin 2.1.2\nstart\necho:SD init fail\n", 7500);
+    ck_assert_str_eq(tx(&p, 7500), "N0 M110 N0*125\n");
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    feed1(&p, "ok\n", 7600);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(count(&r, AMP_EV_READY), 1);
+    ck_assert_int_eq(count(&r, AMP_EV_RESET), 0);
+    ck_assert(amp_proto_can_submit(&p));
+}
+END_TEST
+
+START_TEST(pingpong_sends_one_line_per_ok_split_byte_by_byte)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_marlin(&p, &r, AMP_PROTO_PINGPONG, 1);
+    submit_moves(&p, 5);
+    for (i = 1; i <= 5; i++) {
+        const char *l = tx(&p, 100);
+        ck_assert_int_eq(num(l), i);
+        ck_assert(frame_ok(l));
+        ck_assert_str_eq(tx(&p, 100), "");
+        feed1(&p, " T:20.0 /0.0 B:20.0 /0.0\n", 100);
+        ck_assert_int_eq(p.acked, i - 1);
+        feed1(&p, "ok\r\n", 100);
+        ck_assert_int_eq(p.acked, i);
+    }
+    ck_assert_int_eq(amp_proto_pending(&p), 0);
+    ck_assert_int_eq(count(&r, AMP_EV_TEMP), 5);
+}
+END_TEST
+
+/* Send-ahead window of 4, line 1 fails its checksum; Marlin drops its RX buffer and answers each
+   line in transit with another Resend: 1. Exactly one rewind, lines 1..4 go out again in order. */
+static void one_rewind_case(const char *err1, const char *err_stale, int resend_ok, const char *okline)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    p.o.resend_ok = resend_ok;
+    submit_moves(&p, 8);
+    for (i = 1; i <= 4; i++)
+        ck_assert_int_eq(num(tx(&p, 100)), i);
+    ck_assert_str_eq(tx(&p, 100), "");
+    feed1(&p, err1, 110);
+    ck_assert_int_eq(p.n_rewinds, 1);
+    /* the engine resends at once, while the stale replies are still arriving */
+    ck_assert_int_eq(num(tx(&p, 110)), 1);
+    ck_assert_int_eq(num(tx(&p, 110)), 2);
+    feed1(&p, err_stale, 111); /* for line 2 */
+    ck_assert_int_eq(num(tx(&p, 111)), 3);
+    feed1(&p, err_stale, 112); /* for line 3 */
+    feed1(&p, err_stale, 113); /* for line 4 */
+    ck_assert_int_eq(num(tx(&p, 113)), 4);
+    ck_assert_int_eq(p.n_rewinds, 1);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND_DUP), 3);
+    ck_assert_int_eq(p.acked, 0);
+    for (i = 1; i <= 8; i++) {
+        feed1(&p, okline, 200 + (unsigned long)i);
+        ck_assert_int_eq(p.acked, i);
+        while (*tx(&p, 200 + (unsigned long)i))
+            ;
+    }
+    ck_assert_int_eq(p.n_rewinds, 1);
+    ck_assert_int_eq(p.n_resent, 4);
+    ck_assert_int_eq(p.n_sent, 8);
+}
+
+START_TEST(checksum_error_with_send_ahead_rewinds_once_marlin21)
+{
+    one_rewind_case("Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n",
+                    "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok\n", 1, "ok\n");
+}
+END_TEST
+
+START_TEST(checksum_error_with_send_ahead_rewinds_once_advanced_ok_dialect)
+{
+    one_rewind_case("Error:checksum mismatch, Last Line: 0\nResend: 1\nok N0 P15 B3\n",
+                    "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok N0 P15 B3\n", 1,
+                    "ok\n");
+}
+END_TEST
+
+START_TEST(checksum_error_with_send_ahead_rewinds_once_bare_resend)
+{
+    one_rewind_case("Error:checksum mismatch, Last Line: 0\nResend: 1\n",
+                    "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\n", 0, "ok\n");
+}
+END_TEST
+
+START_TEST(checksum_error_with_send_ahead_rewinds_once_rs_form)
+{
+    one_rewind_case("rs 1\n", "rs 1\n", 1, "ok\n");
+}
+END_TEST
+
+START_TEST(second_failure_of_the_resent_line_is_honoured_after_the_burst)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 3);
+    submit_moves(&p, 3);
+    for (i = 1; i <= 3; i++)
+        ck_assert_int_eq(num(tx(&p, 100)), i);
+    feed1(&p, "Resend: 2\nok\n", 101); /* line 2 bad; line 1 is in the queue */
+    feed1(&p, "Resend: 2\nok\n", 102); /* stale, for line 3 */
+    ck_assert_int_eq(p.n_rewinds, 1);
+    ck_assert_int_eq(num(tx(&p, 102)), 2);
+    feed1(&p, "Resend: 2\nok\n", 103); /* the re-sent line 2 was garbled too: a new rewind */
+    ck_assert_int_eq(p.n_rewinds, 2);
+    ck_assert_int_eq(num(tx(&p, 103)), 2);
+    ck_assert_int_eq(num(tx(&p, 103)), 3);
+    feed1(&p, "ok\nok\nok\n", 104);
+    ck_assert_int_eq(p.acked, 3);
+}
+END_TEST
+
+START_TEST(lost_ok_is_recovered_by_a_probe_without_running_a_line_twice)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 2);
+    submit_moves(&p, 3);
+    ck_assert_int_eq(num(tx(&p, 100)), 1);
+    ck_assert_int_eq(num(tx(&p, 100)), 2);
+    feed1(&p, "ok\n", 150); /* the ok of line 2 is lost on the wire */
+    ck_assert_int_eq(num(tx(&p, 150)), 3);
+    feed1(&p, "ok\n", 160); /* line 2's? no: counted in order, the engine believes 2 */
+    ck_assert_int_eq(p.acked, 2);
+    ck_assert_str_eq(tx(&p, 500), "");
+    ck_assert_int_eq(amp_proto_wait_ms(&p, 500), 660);
+    /* silence: the probe re-sends the newest line; Marlin already has it and asks for 4 */
+    ck_assert_int_eq(num(tx(&p, 1200)), 3);
+    ck_assert_int_eq(count(&r, AMP_EV_TIMEOUT), 1);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 3\nResend: 4\nok\n", 1210);
+    ck_assert_int_eq(p.acked, 3);
+    ck_assert_int_eq(amp_proto_pending(&p), 0);
+    ck_assert_str_eq(tx(&p, 1300), "");
+    for (i = 0; i < r.n; i++)
+        ck_assert(r.kind[i] != AMP_EV_ACK || r.line[i] <= 3);
+}
+END_TEST
+
+START_TEST(lost_line_in_pingpong_is_sent_again_after_the_timeout)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_PINGPONG, 1);
+    submit_moves(&p, 2);
+    ck_assert_int_eq(num(tx(&p, 100)), 1);
+    ck_assert_str_eq(tx(&p, 900), "");
+    ck_assert_int_eq(num(tx(&p, 1100)), 1); /* never arrived: the probe runs it */
+    feed1(&p, "ok\n", 1150);
+    ck_assert_int_eq(p.acked, 1);
+    ck_assert_int_eq(num(tx(&p, 1150)), 2);
+}
+END_TEST
+
+START_TEST(busy_keepalive_prevents_timeouts_for_ninety_seconds)
+{
+    amp_proto p;
+    rec r;
+    unsigned long t;
+    start_marlin(&p, &r, AMP_PROTO_PINGPONG, 1);
+    submit_moves(&p, 2);
+    ck_assert_int_eq(num(tx(&p, 100)), 1);
+    for (t = 600; t < 90600; t += 600) {
+        feed1(&p, "echo:busy: processing\n", t);
+        ck_assert_str_eq(tx(&p, t + 500), "");
+    }
+    ck_assert_int_eq(count(&r, AMP_EV_TIMEOUT), 0);
+    ck_assert_int_eq(count(&r, AMP_EV_BUSY), 150);
+    /* wait does not keep the link alive */
+    feed1(&p, "wait\n", 91000);
+    ck_assert_int_eq(num(tx(&p, 91300)), 1);
+    ck_assert_int_eq(count(&r, AMP_EV_TIMEOUT), 1);
+}
+END_TEST
+
+START_TEST(reset_mid_job_stops_and_reports_the_last_acknowledged_line)
+{
+    amp_proto p;
+    rec r;
+    amp_error err;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 100))
+        ;
+    feed1(&p, "ok\nok\nst", 110);
+    feed1(&p, "art\necho:Marlin\n", 120);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_RESET), 1);
+    ck_assert_int_eq(r.line[r.n - 2], 2);
+    ck_assert_int_eq(p.acked, 2);
+    ck_assert_str_eq(tx(&p, 5000), "");
+    ck_assert_int_eq(amp_proto_submit(&p, "G1 X1", 5, NULL, &err), AMP_ERR_STATE);
+}
+END_TEST
+
+START_TEST(advanced_ok_learns_the_queue_size_and_bounds_the_rx_bytes)
+{
+    amp_proto p;
+    rec r;
+    int sent = 0;
+    start_marlin(&p, &r, AMP_PROTO_ADVANCED, 4);
+    submit_moves(&p, 30);
+    while (*tx(&p, 100))
+        sent++;
+    /* default guess 4 slots + as many lines as fit in 128 RX bytes (about 22 bytes each) */
+    ck_assert_int_eq(sent, 9);
+    /* the printer reports BUFSIZE 16: line 1 ran, lines 2..9 queued (N9), B = 16 - 9 = 7 */
+    feed1(&p, "ok N9 P15 B7\n", 110);
+    ck_assert_int_eq(p.qslots, 16);
+    while (*tx(&p, 110))
+        sent++;
+    /* 16 lines in the queue, then only what fits the 128-byte RX buffer */
+    {
+        long k, bytes = 0;
+        for (k = p.acked + 1 + 16; k < p.send_n; k++)
+            bytes += p.ring[k % AMP_PROTO_RING].len;
+        ck_assert_int_le(bytes, 128);
+        ck_assert_int_gt(bytes + p.ring[p.send_n % AMP_PROTO_RING].len, 128);
+        ck_assert_int_gt(p.send_n - 1 - p.acked, 16);
+    }
+    ck_assert_int_eq(sent, 21);
+}
+END_TEST
+
+START_TEST(garbled_and_overlong_replies_are_ignored_safely)
+{
+    amp_proto p;
+    rec r;
+    char junk[600];
+    start_marlin(&p, &r, AMP_PROTO_PINGPONG, 1);
+    submit_moves(&p, 2);
+    ck_assert_int_eq(num(tx(&p, 100)), 1);
+    memset(junk, 'Z', sizeof junk - 2);
+    junk[sizeof junk - 2] = '\n';
+    junk[sizeof junk - 1] = '\0';
+    feed1(&p, junk, 101);
+    feed1(&p, "o\xfbk\nResend: 1x\nrs\nokay\n\x01\x02\n", 102);
+    ck_assert_int_eq(p.acked, 0);
+    ck_assert_int_eq(p.n_rewinds, 0);
+    ck_assert_int_gt(p.n_garbage, 2);
+    feed1(&p, "ok\n", 103);
+    ck_assert_int_eq(p.acked, 0); /* the ok owed to the garbled "Resend:" is not an acknowledgement */
+    feed1(&p, "ok\n", 104);
+    ck_assert_int_eq(p.acked, 1);
+    /* a resend request for a line never sent is garbage, not a rewind */
+    feed1(&p, "rs 77\n", 105);
+    ck_assert_int_eq(p.n_rewinds, 0);
+}
+END_TEST
+
+START_TEST(klipper_has_no_numbers_acks_errors_and_stops_on_shutdown)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    int i;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    submit_moves(&p, 20);
+    ck_assert_str_eq(tx(&p, 1), "G1 X0.5 Y0 E0.00\n");
+    for (i = 1; i < 16; i++)
+        ck_assert(*tx(&p, 1));
+    ck_assert_str_eq(tx(&p, 1), ""); /* window 16 < Klipper's 20 pending lines */
+    feed1(&p, "// probe: open\n!! Move out of range: 0.5 0 0 [0.000]\nok\nok\n", 2);
+    ck_assert_int_eq(p.acked, 2);
+    ck_assert_int_eq(count(&r, AMP_EV_ERROR), 1);
+    /* M112 jumps the queue */
+    ck_assert_int_eq(amp_proto_submit(&p, "M112", 4, NULL, NULL), AMP_OK);
+    ck_assert_str_eq(tx(&p, 3), "M112\n");
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_str_eq(tx(&p, 3), "");
+    feed1(&p, "// Klipper state: Shutdown\n", 4);
+    ck_assert_int_eq(count(&r, AMP_EV_SHUTDOWN), 1);
+}
+END_TEST
+
+START_TEST(klipper_shutdown_reports_the_last_acknowledged_line)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.on_event = on_ev;
+    o.user = &r;
+    amp_proto_init(&p, &o, 0, NULL);
+    submit_moves(&p, 5);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "ok\nok\nok\n!! Lost communication with MCU 'mcu'\n// Klipper state: Shutdown\n", 2);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(r.kind[r.n - 1], AMP_EV_SHUTDOWN);
+    ck_assert_int_eq(r.line[r.n - 1], 3);
+}
+END_TEST
+
+START_TEST(init_rejects_bad_options)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_error err;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.window = AMP_PROTO_RING;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, &err), AMP_ERR_ARG);
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.rx_bytes = 10;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, &err), AMP_ERR_ARG);
+    ck_assert_str_eq(amp_proto_event_name(AMP_EV_RESEND), "resend");
+}
+END_TEST
+
+/* A minimal in-test Marlin with a noisy host->printer link: the engine must deliver every line
+   exactly once and in order (an independent check of the resend logic, not the engine's own counters). */
+static unsigned long rng_state = 12345;
+static unsigned rnd(void)
+{
+    rng_state = rng_state * 6364136223846793005UL + 1442695040888963407UL;
+    return (unsigned)(rng_state >> 33);
+}
+
+START_TEST(noisy_link_delivers_every_line_exactly_once_in_order)
+{
+    amp_proto p;
+    rec r;
+    long last_n = 0, executed = 0, k;
+    int flushed = 0;
+    unsigned long now = 100;
+    char out[4096];
+    size_t outlen = 0;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    r.n = 0;
+    for (k = 0; k < 3000 || amp_proto_pending(&p) > 0; now += 1) {
+        char line[AMP_PROTO_LINE_MAX + 8];
+        size_t len;
+        ck_assert_int_lt((long)now, 400000);
+        while (k < 3000 && amp_proto_can_submit(&p)) {
+            char cmd[40];
+            snprintf(cmd, sizeof cmd, "G1 X%ld Y%ld", k, k % 17);
+            ck_assert_int_eq(amp_proto_submit(&p, cmd, strlen(cmd), NULL, NULL), AMP_OK);
+            k++;
+        }
+        /* the printer consumes whatever the host sends at once (queue never full) */
+        while (amp_proto_next_tx(&p, now, line, sizeof line, &len)) {
+            long n;
+            unsigned cs = 0, want;
+            char *star;
+            size_t i;
+            line[len - 1] = '\0';
+            if (rnd() % 100 < 5)
+                line[rnd() % (len - 1)] ^= (char)(1 << (rnd() % 7)); /* corrupt one byte */
+            if (flushed > 0) {
+                flushed--; /* dropped with the RX buffer after an error */
+                continue;
+            }
+            star = strrchr(line, '*');
+            for (i = 0; star && line + i < star; i++)
+                cs ^= (unsigned char)line[i];
+            if (!star || sscanf(line, "N%ld", &n) != 1 || sscanf(star + 1, "%u", &want) != 1 || want != cs) {
+                outlen += (size_t)snprintf(out + outlen, sizeof out - outlen, "Error:checksum mismatch\nResend: %ld\nok\n",
+                                           last_n + 1);
+                flushed = (int)(rnd() % 2);
+                continue;
+            }
+            if (n != last_n + 1) {
+                outlen += (size_t)snprintf(out + outlen, sizeof out - outlen, "Error:Line Number is not Last Line "
+                                           "Number+1, Last Line: %ld\nResend: %ld\nok\n", last_n, last_n + 1);
+                continue;
+            }
+            last_n = n;
+            executed++;
+            ck_assert(strstr(line, " G1 X") != NULL);
+            outlen += (size_t)snprintf(out + outlen, sizeof out - outlen, "ok\n");
+        }
+        amp_proto_feed(&p, out, outlen, now);
+        outlen = 0;
+    }
+    ck_assert_int_eq(executed, 3000);
+    ck_assert_int_eq(last_n, 3000);
+    ck_assert_int_eq(p.acked, 3000);
+    ck_assert_int_gt(p.n_rewinds, 10);
+    /* rewinds stay close to the number of corrupted lines: one per burst, not one per error */
+    ck_assert_int_lt(p.n_rewinds, p.n_sent / 10);
+}
+END_TEST
+
+static Suite *proto_suite(void)
+{
+    Suite *s = suite_create("proto");
+    TCase *tc = tcase_create("core");
+    AMP_ADD_TEST(tc, checksum_matches_reprap_reference_values);
+    AMP_ADD_TEST(tc, framing_strips_comments_and_rejects_overlong_lines_before_sending);
+    AMP_ADD_TEST(tc, handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it);
+    AMP_ADD_TEST(tc, pingpong_sends_one_line_per_ok_split_byte_by_byte);
+    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin21);
+    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_advanced_ok_dialect);
+    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_bare_resend);
+    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_rs_form);
+    AMP_ADD_TEST(tc, second_failure_of_the_resent_line_is_honoured_after_the_burst);
+    AMP_ADD_TEST(tc, lost_ok_is_recovered_by_a_probe_without_running_a_line_twice);
+    AMP_ADD_TEST(tc, lost_line_in_pingpong_is_sent_again_after_the_timeout);
+    AMP_ADD_TEST(tc, busy_keepalive_prevents_timeouts_for_ninety_seconds);
+    AMP_ADD_TEST(tc, reset_mid_job_stops_and_reports_the_last_acknowledged_line);
+    AMP_ADD_TEST(tc, advanced_ok_learns_the_queue_size_and_bounds_the_rx_bytes);
+    AMP_ADD_TEST(tc, garbled_and_overlong_replies_are_ignored_safely);
+    AMP_ADD_TEST(tc, klipper_has_no_numbers_acks_errors_and_stops_on_shutdown);
+    AMP_ADD_TEST(tc, klipper_shutdown_reports_the_last_acknowledged_line);
+    AMP_ADD_TEST(tc, init_rejects_bad_options);
+    AMP_ADD_TEST(tc, noisy_link_delivers_every_line_exactly_once_in_order);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(proto_suite)
