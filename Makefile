@@ -18,6 +18,12 @@ MANDIR ?= $(PREFIX)/share/man
 OPENMP ?= 1
 CFLAGS ?= -O2 -g
 SAN ?= 0
+V ?= 0
+ifeq ($(V),1)
+Q :=
+else
+Q := @
+endif
 
 # Build directory: the plain build in build/, the sanitizer build in build/san.
 ifeq ($(SAN),1)
@@ -79,6 +85,7 @@ FUZZ_PKGS := clang libclang-rt-14-dev
 
 .PHONY: all check test-run demo bench cross fuzz install uninstall clean deps-build deps-test FORCE
 .DELETE_ON_ERROR:
+.SECONDARY:
 
 all: deps-build $(LIBA) $(LIBSO) $(AMPATH) $(VPRINTER) $(BRIDGE)
 
@@ -90,20 +97,23 @@ deps-test:
 # ---- library ----
 $(B)/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -c $< -o $@
+	@echo '  CC      $<'
+	$(Q)$(CC) $(ALL_CFLAGS) -c $< -o $@
 
 $(B)/pic/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -fPIC -c $< -o $@
+	$(Q)$(CC) $(ALL_CFLAGS) -fPIC -c $< -o $@
 
 $(LIBA): $(LIB_OBJ)
 	@mkdir -p $(dir $@)
-	rm -f $@
-	$(AR) rcs $@ $^
+	@echo '  AR      $@'
+	$(Q)rm -f $@
+	$(Q)$(AR) rcs $@ $^
 
 $(LIBSO): $(PIC_OBJ)
 	@mkdir -p $(dir $@)
-	$(CC) -shared -Wl,-soname,libampath.so.0 $(ALL_LDFLAGS) $^ -o $@ -lm
+	@echo '  LD      $@'
+	$(Q)$(CC) -shared -Wl,-soname,libampath.so.0 $(ALL_LDFLAGS) $^ -o $@ -lm
 
 # ---- tools/ampath: commands and benchmarks are registered by file name ----
 $(B)/gen/commands.inc: FORCE
@@ -117,32 +127,39 @@ $(B)/gen/benches.inc: FORCE
 
 $(B)/tools/%.o: tools/%.c $(B)/gen/commands.inc $(B)/gen/benches.inc
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -I$(B)/gen -Itools $(SERIAL_CFLAGS) -c $< -o $@
+	@echo '  CC      $<'
+	$(Q)$(CC) $(ALL_CFLAGS) -I$(B)/gen -Itools $(SERIAL_CFLAGS) -c $< -o $@
 
 $(AMPATH): $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA) -o $@ $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
+	@echo '  LD      $@'
+	$(Q)$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA) -o $@ $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
 
 $(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(LIBA)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $(VPR_OBJ) $(LIBA) -o $@ -lutil -lm
+	@echo '  LD      $@'
+	$(Q)$(CC) $(ALL_LDFLAGS) $(VPR_OBJ) $(LIBA) -o $@ -lutil -lm
 
 # ---- bridge ----
 $(B)/bridge/%.o: bridge/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Ibridge $(SERIAL_CFLAGS) -c $< -o $@
+	@echo '  CC      $<'
+	$(Q)$(CC) $(ALL_CFLAGS) -Ibridge $(SERIAL_CFLAGS) -c $< -o $@
 
 $(OUTBIN)/bridge/ampath-bridge: $(BRIDGE_MAIN_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_LDFLAGS) $^ -o $@ $(SERIAL_LIBS) -lm
+	@echo '  LD      $@'
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ -o $@ $(SERIAL_LIBS) -lm
 
 # ---- tests ----
 $(B)/tests/%.o: tests/%.c
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -Itests -Ibridge -Itools $(CHECK_CFLAGS) $(SERIAL_CFLAGS) -c $< -o $@
+	@echo '  CC      $<'
+	$(Q)$(CC) $(ALL_CFLAGS) -Itests -Ibridge -Itools $(CHECK_CFLAGS) $(SERIAL_CFLAGS) -c $< -o $@
 
 $(B)/tests/test_%: $(B)/tests/test_%.o $(FIXTURE_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
-	$(CC) $(ALL_LDFLAGS) $^ -o $@ $(CHECK_LIBS) $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
+	@echo '  LD      $@'
+	$(Q)$(CC) $(ALL_LDFLAGS) $^ -o $@ $(CHECK_LIBS) $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
 
 # Tests find the programs they drive through these variables.
 TEST_ENV := AMP_TOOL=$(abspath $(AMPATH)) AMP_VPRINTER=$(abspath $(OUTBIN)/tools/ampath-vprinter) \
@@ -170,10 +187,11 @@ CROSS_FLAGS := -mcpu=cortex-m4 -mthumb -mfpu=fpv4-sp-d16 -mfloat-abi=hard -Os -f
 CROSS_OBJ := $(LIB_SRC:%.c=build/cross/%.o)
 build/cross/%.o: %.c
 	@mkdir -p $(dir $@)
-	$(CROSS_CC) $(WARN) -Wno-unknown-pragmas $(CROSS_FLAGS) -Iinclude -c $< -o $@
+	@echo '  CC(arm) $<'
+	$(Q)$(CROSS_CC) $(WARN) -Wno-unknown-pragmas $(CROSS_FLAGS) -Iinclude -c $< -o $@
 build/cross/libampath.a: $(CROSS_OBJ)
-	rm -f $@
-	arm-none-eabi-ar rcs $@ $^
+	$(Q)rm -f $@
+	$(Q)arm-none-eabi-ar rcs $@ $^
 cross:
 	@sh tools/deps.sh $(CROSS_PKGS)
 	@$(MAKE) --no-print-directory build/cross/libampath.a
