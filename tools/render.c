@@ -209,7 +209,8 @@ static void raster_seg(void *user, const double a[5], const double b[5])
             if (depth <= r->depth[idx])
                 continue;
             r->depth[idx] = (float)depth;
-            shade = 0.45 + 0.55 * q;
+            /* a few shading levels: smooth enough to read the tubes, and far better compressed */
+            shade = 0.45 + 0.55 * floor(q * 8 + 0.5) / 8;
             r->rgb[3 * idx] = (unsigned char)(r->col[0] * shade);
             r->rgb[3 * idx + 1] = (unsigned char)(r->col[1] * shade);
             r->rgb[3 * idx + 2] = (unsigned char)(r->col[2] * shade);
@@ -326,45 +327,76 @@ static void put_sym(bitw *b, unsigned s)
         bw_code(b, 0xc0 + (s - 280), 8);
 }
 
-/* A match of @p len (3..258) at distance 1: a run of the previous byte. */
-static void put_run(bitw *b, unsigned len)
+static const unsigned short DIST_BASE[30] = {1,   2,   3,   4,   5,   7,    9,    13,   17,   25,
+                                             33,  49,  65,  97,  129, 193,  257,  385,  513,  769,
+                                             1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+static const unsigned char DIST_EXTRA[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6,
+                                             6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+
+/* A match of @p len (3..258) at distance @p dist (1..32768), RFC 1951 §3.2.5. */
+static void put_match(bitw *b, unsigned len, unsigned dist)
 {
     static const unsigned short base[] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
                                           31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
     static const unsigned char extra[] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
                                           2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
-    int i = 28;
+    int i = 28, d = 29;
     while (base[i] > len)
         i--;
     put_sym(b, 257 + (unsigned)i);
     if (extra[i])
         bw_bits(b, len - base[i], extra[i]);
-    bw_code(b, 0, 5); /* distance code 0 = distance 1 */
+    while (DIST_BASE[d] > dist)
+        d--;
+    bw_code(b, (unsigned)d, 5); /* fixed distance codes are 5 bits */
+    if (DIST_EXTRA[d])
+        bw_bits(b, dist - DIST_BASE[d], DIST_EXTRA[d]);
 }
 
 /*
- * zlib stream of @p data: one fixed-Huffman deflate block where runs of a
- * repeated byte become distance-1 matches. With the PNG "Up" filter the
- * background and repeated rows are runs of zeros, which is most of a preview.
+ * zlib stream of @p data: one fixed-Huffman deflate block. Instead of a
+ * general LZ77 search, each position tries a few distances that pay off in
+ * pictures: the previous byte and pixel (runs, flat colour) and the same
+ * place one or two rows above (@p row bytes per row, filter byte included).
  */
-static void deflate_rle(bitw *b, const unsigned char *data, size_t n)
+static void deflate_rle(bitw *b, const unsigned char *data, size_t n, size_t row)
 {
-    size_t i = 0;
+    size_t cand[7], ncand = 0, i = 0, k;
     unsigned long s1 = 1, s2 = 0;
-    size_t k;
+    size_t try_d[7];
+    try_d[0] = 1;
+    try_d[1] = 3;
+    try_d[2] = 6;
+    try_d[3] = row;
+    try_d[4] = row - 3;
+    try_d[5] = row + 3;
+    try_d[6] = 2 * row;
+    for (k = 0; k < 7; k++)
+        if (try_d[k] >= 1 && try_d[k] <= 32768)
+            cand[ncand++] = try_d[k];
     bw_byte(b, 0x78); /* CM 8, 32K window */
     bw_byte(b, 0x01); /* FCHECK: 0x7801 % 31 == 0 */
     bw_bits(b, 1, 1); /* BFINAL */
     bw_bits(b, 1, 2); /* BTYPE 01: fixed Huffman */
     while (i < n) {
-        size_t run = 0;
-        put_sym(b, data[i]);
-        i++;
-        while (i + run < n && data[i + run] == data[i - 1] && run < 258)
-            run++;
-        if (run >= 3) {
-            put_run(b, (unsigned)run);
-            i += run;
+        size_t best = 0, bestd = 0, c;
+        for (c = 0; c < ncand; c++) {
+            size_t d = cand[c], len = 0;
+            if (d > i)
+                continue;
+            while (i + len < n && len < 258 && data[i + len] == data[i + len - d])
+                len++;
+            if (len > best) {
+                best = len;
+                bestd = d;
+            }
+        }
+        if (best >= 3) {
+            put_match(b, (unsigned)best, (unsigned)bestd);
+            i += best;
+        } else {
+            put_sym(b, data[i]);
+            i++;
         }
     }
     put_sym(b, 256);
@@ -420,7 +452,7 @@ static int write_png(FILE *f, const raster *r, size_t *bytes)
             o[1 + x] = (unsigned char)(cur[x] - (prev ? prev[x] : 0));
     }
     memset(&b, 0, sizeof b);
-    deflate_rle(&b, filt, n);
+    deflate_rle(&b, filt, n, stride + 1);
     free(filt);
     if (b.oom) {
         free(b.buf);
@@ -458,6 +490,9 @@ static int write_png(FILE *f, const raster *r, size_t *bytes)
     return rc;
 }
 
+/* Size of a font pixel in the legend: the 3x5 font at 3 px per dot fits 1600 px pictures. */
+static int legend_unit(int width) { return width >= 1200 ? 3 : width >= 700 ? 2 : 1; }
+
 static void legend_common(int width, int height, int *lx, int *ly)
 {
     *lx = 16;
@@ -473,6 +508,7 @@ int render_png(const amp_pathset *ps, int width, FILE *out, render_stats *st)
     int k, lx, ly, rc;
     char line[256];
     static const unsigned char bg[3] = {250, 250, 247}, frame[3] = {210, 210, 205};
+    int u = legend_unit(width);
     memset(st, 0, sizeof *st);
     r.w = width;
     r.h = width / 2 + LEGEND_H;
@@ -497,28 +533,28 @@ int render_png(const amp_pathset *ps, int width, FILE *out, render_stats *st)
             path_colour(ps, i, r.col);
             st->drawn += walk_path(ps, i, &v[k], raster_seg, &r);
         }
-        text(&r, (int)v[k].x0 + 12, 10, 3, k == 0 ? "isometric view" : "top view");
+        text(&r, (int)v[k].x0 + 4 * u, 10, u, k == 0 ? "isometric view" : "top view");
     }
     fill_rect(&r, r.w / 2, 0, 1, r.h - LEGEND_H, frame);
     fill_rect(&r, 0, r.h - LEGEND_H, r.w, 1, frame);
-    /* legend: the print-order ramp, the support swatch and the counts */
+    /* legend: the counts, the print-order ramp, the support swatch (sized by the picture width) */
     legend_common(r.w, r.h, &lx, &ly);
     summary(ps, line, sizeof line, &support);
-    text(&r, lx, ly, 3, line);
-    text(&r, lx, ly + 30, 3, "print order: first");
-    for (k = 0; k < 300; k++) {
+    text(&r, lx, ly, u, line);
+    text(&r, lx, ly + 10 * u, u, "print order: first");
+    for (k = 0; k < 100 * u; k++) {
         unsigned char c[3];
-        ramp(k / 299.0, c);
-        fill_rect(&r, lx + 230 + k, ly + 26, 1, 24, c);
+        ramp(k / (100.0 * u - 1), c);
+        fill_rect(&r, lx + 77 * u + k, ly + 9 * u, 1, 7 * u, c);
     }
-    text(&r, lx + 540, ly + 30, 3, "last");
+    text(&r, lx + 180 * u, ly + 10 * u, u, "last");
     {
         static const unsigned char grey[3] = {150, 150, 150};
-        fill_rect(&r, lx + 620, ly + 26, 30, 24, grey);
+        fill_rect(&r, lx + 200 * u, ly + 9 * u, 10 * u, 7 * u, grey);
         snprintf(line, sizeof line, "support (%lu)", (unsigned long)support);
-        text(&r, lx + 660, ly + 30, 3, line);
+        text(&r, lx + 213 * u, ly + 10 * u, u, line);
     }
-    text(&r, lx, ly + 64, 2, "tube width follows the material deposition radius");
+    text(&r, lx, ly + 21 * u, u > 1 ? u - 1 : 1, "tube width follows the material deposition radius");
     rc = write_png(out, &r, &st->bytes);
     st->width = r.w;
     st->height = r.h;
@@ -600,8 +636,9 @@ int render_svg(const amp_pathset *ps, int width, FILE *out, render_stats *st)
             h - LEGEND_H);
     legend_common(width, h, &lx, &ly);
     summary(ps, line, sizeof line, &support);
-    fprintf(out, "<g font-family=\"sans-serif\" font-size=\"15\" fill=\"#282828\">\n");
-    fprintf(out, "<text x=\"%d\" y=\"%d\">%s</text>\n", lx, ly + 14, line);
+    fprintf(out, "<g font-family=\"sans-serif\" font-size=\"15\" fill=\"#282828\" transform=\"translate(%d %d) scale(%g)\">\n",
+            lx, ly, legend_unit(width) / 3.0);
+    fprintf(out, "<text x=\"0\" y=\"14\">%s</text>\n", line);
     fprintf(out, "<defs><linearGradient id=\"order\">");
     for (k = 0; k <= 4; k++) {
         unsigned char c[3];
@@ -609,13 +646,12 @@ int render_svg(const amp_pathset *ps, int width, FILE *out, render_stats *st)
         fprintf(out, "<stop offset=\"%d%%\" stop-color=\"#%02x%02x%02x\"/>", k * 25, c[0], c[1], c[2]);
     }
     fprintf(out, "</linearGradient></defs>\n");
-    fprintf(out, "<text x=\"%d\" y=\"%d\">print order: first</text>\n", lx, ly + 44);
-    fprintf(out, "<rect x=\"%d\" y=\"%d\" width=\"300\" height=\"24\" fill=\"url(#order)\"/>\n", lx + 150, ly + 26);
-    fprintf(out, "<text x=\"%d\" y=\"%d\">last</text>\n", lx + 460, ly + 44);
-    fprintf(out, "<rect x=\"%d\" y=\"%d\" width=\"30\" height=\"24\" fill=\"#969696\"/>\n", lx + 520, ly + 26);
-    fprintf(out, "<text x=\"%d\" y=\"%d\">support (%lu)</text>\n", lx + 560, ly + 44, (unsigned long)support);
-    fprintf(out, "<text x=\"%d\" y=\"%d\">tube width follows the material deposition radius</text>\n", lx,
-            ly + 78);
+    fprintf(out, "<text x=\"0\" y=\"44\">print order: first</text>\n");
+    fprintf(out, "<rect x=\"150\" y=\"26\" width=\"300\" height=\"24\" fill=\"url(#order)\"/>\n");
+    fprintf(out, "<text x=\"460\" y=\"44\">last</text>\n");
+    fprintf(out, "<rect x=\"520\" y=\"26\" width=\"30\" height=\"24\" fill=\"#969696\"/>\n");
+    fprintf(out, "<text x=\"560\" y=\"44\">support (%lu)</text>\n", (unsigned long)support);
+    fprintf(out, "<text x=\"0\" y=\"78\">tube width follows the material deposition radius</text>\n");
     fputs("</g>\n</svg>\n", out);
     st->width = width;
     st->height = h;
