@@ -1,9 +1,11 @@
 /* G-code writer (SPEC §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "fixture_geom.h"
+#include "fixture_tool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -723,6 +725,59 @@ START_TEST(sink_failure_stops_the_writer)
 }
 END_TEST
 
+START_TEST(gcode_command_writes_file_and_reports_json)
+{
+    amp_pathset ps;
+    const char *in = amp_test_tmp("cli.amp"), *out = amp_test_tmp("cli.gcode"), *start = amp_test_tmp("start.gcode");
+    char args[2048], json[4096];
+    FILE *f;
+    gsim s;
+    size_t n;
+    char *text;
+    int rc;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 2, 2, 24, 0.3);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    f = fopen(start, "w");
+    fputs("G28\nM109 S199\n", f);
+    fclose(f);
+    snprintf(args, sizeof args, "gcode %s --flavor klipper --feed 25 --start %s --json -o %s", in, start, out);
+    rc = amp_test_run_tool(args, json, sizeof json);
+    ck_assert_msg(rc != -2, "AMP_TOOL not set");
+    ck_assert_int_eq(rc, 0);
+    ck_assert_ptr_nonnull(strstr(json, "\"flavor\":\"klipper\""));
+    ck_assert_ptr_nonnull(strstr(json, "\"relative_e\":true"));
+    ck_assert_ptr_nonnull(strstr(json, "\"segments\":96"));
+    ck_assert_ptr_nonnull(strstr(json, "\"time_s\":"));
+    f = fopen(out, "rb");
+    ck_assert_ptr_nonnull(f);
+    text = calloc(1, 1 << 20);
+    n = fread(text, 1, (1 << 20) - 1, f);
+    fclose(f);
+    ck_assert_uint_gt(n, 1000);
+    ck_assert_ptr_nonnull(strstr(text, "\nM109 S199\n"));
+    ck_assert_ptr_nonnull(strstr(text, " F1500"));
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    gsim_free(&s);
+    free(text);
+    /* bad usage and bad input: exit 2, no output written */
+    remove(out);
+    snprintf(args, sizeof args, "gcode %s --flavor reprap -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --filament 0 -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, amp_test_tmp("nope"), out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s -o %s", amp_test_tmp("nope.amp"), out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_ptr_null(fopen(out, "rb"));
+    remove(in);
+    remove(start);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *gcode_suite(void)
 {
     Suite *s = suite_create("gcode");
@@ -739,6 +794,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
     tcase_add_test(tc, bad_input_gives_clear_errors);
     tcase_add_test(tc, sink_failure_stops_the_writer);
+    tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     suite_add_tcase(s, tc);
     return s;
 }
