@@ -1,7 +1,10 @@
+#define _POSIX_C_SOURCE 200809L /* popen, truncate */
 /* Triangle meshes: STL reading and writing, welding, topology, built-in models. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "meshfix.h"
 #include "testutil.h"
@@ -464,6 +467,53 @@ START_TEST(twisted_bridge_has_the_documented_size_and_volume)
 }
 END_TEST
 
+
+/* Run "$AMP_TOOL args" and capture stdout; returns the exit status (or -1 when AMP_TOOL is unset). */
+static int run_tool(const char *args, char *out, size_t cap)
+{
+    const char *tool = getenv("AMP_TOOL");
+    char cmd[1024];
+    FILE *p;
+    size_t n;
+    int rc;
+    if (!tool)
+        return -1;
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>/dev/null", tool, args);
+    p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    n = fread(out, 1, cap - 1, p);
+    out[n] = '\0';
+    rc = pclose(p);
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+START_TEST(cli_info_reports_mesh_closedness_and_volume)
+{
+    amp_mesh m;
+    amp_error err;
+    char out[4096], args[600];
+    const char *f = amp_test_tmp("info-torus.stl");
+    if (!getenv("AMP_TOOL"))
+        return; /* run through make check, which sets AMP_TOOL */
+    amp_mesh_init(&m, NULL);
+    make_torus(&m, 20, 5, 24, 12);
+    m.tris[0] = m.tris[--m.ntris]; /* one hole: not closed */
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 0, &err), AMP_OK);
+    snprintf(args, sizeof args, "info '%s' --json", f);
+    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"kind\":\"mesh\"") && strstr(out, "\"format\":\"ascii\"") &&
+                      strstr(out, "\"triangles\":575") && strstr(out, "\"closed\":false") &&
+                      strstr(out, "\"boundary_edges\":3"),
+                  "unexpected: %s", out);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
+    /* a truncated binary STL: exit status 2 */
+    ck_assert_int_eq(truncate(f, 84 + 50 * 10), 0);
+    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    remove(f);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *mesh_suite(void)
 {
     Suite *s = suite_create("mesh");
@@ -478,6 +528,7 @@ static Suite *mesh_suite(void)
     AMP_ADD_TEST(tc, weld_with_tolerance_merges_near_vertices_and_drops_collapsed);
     AMP_ADD_TEST(tc, edge_checker_flags_holes_and_flipped_triangles);
     AMP_ADD_TEST(tc, stl_reader_survives_allocation_failures);
+    AMP_ADD_TEST(tc, cli_info_reports_mesh_closedness_and_volume);
     suite_add_tcase(s, tc);
     tc = tcase_create("models");
     tcase_set_timeout(tc, 120);
