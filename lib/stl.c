@@ -454,26 +454,25 @@ amp_status amp_mesh_write_stl(const amp_mesh *m, int binary, amp_sink_fn sink, v
     return binary ? write_binary(m, sink, user, err) : write_ascii(m, sink, user, err);
 }
 
+typedef struct stl_file_ctx {
+    const amp_mesh *m;
+    int binary;
+} stl_file_ctx;
+
+static amp_status stl_file_writer(void *vctx, amp_sink_fn sink, void *user, amp_error *err)
+{
+    const stl_file_ctx *c = vctx;
+    return amp_mesh_write_stl(c->m, c->binary, sink, user, err);
+}
+
 amp_status amp_mesh_write_stl_file(const amp_mesh *m, const char *path, int binary, amp_error *err)
 {
-    char tmp[1024];
-    FILE *f;
-    amp_status st;
+    stl_file_ctx c;
     if (!m || !path)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_write_stl_file: NULL argument");
-    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
-        return amp_fail(err, AMP_ERR_ARG, 0, "%s: path too long", path);
-    f = fopen(tmp, "wb");
-    if (!f)
-        return amp_fail(err, AMP_ERR_IO, 0, "%s: cannot create", tmp);
-    st = amp_mesh_write_stl(m, binary, amp_file_sink, f, err);
-    if (fclose(f) != 0 && st == AMP_OK)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: write failed", tmp);
-    if (st == AMP_OK && rename(tmp, path) != 0)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: cannot rename into place", path);
-    if (st != AMP_OK)
-        remove(tmp);
-    return st;
+    c.m = m;
+    c.binary = binary;
+    return amp_write_file_atomic(path, stl_file_writer, &c, err);
 }
 
 /* -------------------------------------------------------- tolerance weld */
