@@ -12,9 +12,49 @@ const char cmd_model_usage[] =
     "             torus-quarter  paper Fig. 4 torus quarter (major 1, minor 0.2) scaled x50:\n"
     "                            major radius 50 mm, minor 10 mm, resting on z = 0\n"
     "             vase           paper Fig. 18: revolved wall 60 mm high, radii 9..30 mm, wall 3..12 mm\n"
-    "  -o FILE    output; FILE ending in .stl asks for the mesh of the model (meshes come from\n"
-    "             the mesh module; in a build without it this exits 2), anything else gets .spl\n"
-    "  --json     print {\"model\", \"file\", \"kind\", \"control_points\", \"bbox\"} on stdout\n";
+    "  meshes (-o FILE.stl): helix (boundary of the same solid, within 0.05 mm), twisted-bridge\n"
+    "             (paper Fig. 15), crocodile-like (organic shape with thin limbs); see docs/mesh.md\n"
+    "  -o FILE    output; FILE ending in .stl writes the mesh of the model (binary STL),\n"
+    "             anything else the trivariate as .spl\n"
+    "  --tol T    mesh models: largest distance to the exact surface, mm (default 0.05)\n"
+    "  --json     print {\"model\", \"file\", \"kind\", counts, \"bbox\"} on stdout\n";
+
+static void json_bbox(cli_json *j, amp_box3 b)
+{
+    cli_json_arr(j, "bbox");
+    cli_json_num(j, NULL, b.min.x);
+    cli_json_num(j, NULL, b.min.y);
+    cli_json_num(j, NULL, b.min.z);
+    cli_json_num(j, NULL, b.max.x);
+    cli_json_num(j, NULL, b.max.y);
+    cli_json_num(j, NULL, b.max.z);
+    cli_json_close(j);
+}
+
+static int write_mesh_model(const char *name, const char *out, double tol, int json)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_error_clear(&err);
+    amp_mesh_init(&m, NULL);
+    if (amp_mesh_model(name, tol, &m, &err) != AMP_OK || amp_mesh_write_stl_file(&m, out, 1, &err) != AMP_OK) {
+        amp_mesh_free(&m);
+        return cli_fail_err("model", &err);
+    }
+    if (json) {
+        cli_json j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "model", name);
+        cli_json_str(&j, "file", out);
+        cli_json_str(&j, "kind", "mesh");
+        cli_json_int(&j, "triangles", (long long)m.ntris);
+        cli_json_int(&j, "vertices", (long long)m.nverts);
+        json_bbox(&j, amp_mesh_bbox(&m));
+        cli_json_end(&j);
+    }
+    amp_mesh_free(&m);
+    return CLI_OK;
+}
 
 static int ends_with(const char *s, const char *suffix)
 {
@@ -26,18 +66,18 @@ int cmd_model(int argc, char **argv)
 {
     const char *pos[1], *out = NULL;
     int json = 0, npos = 0, rc;
+    double tol = 0.0;
     amp_spline s;
     amp_error err;
     FILE *f;
-    cli_opt opts[] = {{"output", CLI_STR, &out, 0}, {"json", CLI_FLAG, &json, 0}, {NULL, CLI_FLAG, NULL, 0}};
+    cli_opt opts[] = {{"output", CLI_STR, &out, 0}, {"json", CLI_FLAG, &json, 0}, {"tol", CLI_DOUBLE, &tol, 0}, {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("model", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
     if (!out)
         return cli_fail("model", CLI_USAGE, "-o FILE is required (.spl or .stl)");
     if (ends_with(out, ".stl") || ends_with(out, ".STL"))
-        /* the mesh models (amp_mesh_model + amp_mesh_write_stl_file) live on the mesh branch */
-        return cli_fail("model", CLI_USAGE, "mesh models: not in this build");
+        return write_mesh_model(pos[0], out, tol, json);
     amp_error_clear(&err);
     if (amp_trivariate_model(pos[0], NULL, &s, &err) != AMP_OK)
         return cli_fail_err("model", &err);
@@ -58,13 +98,7 @@ int cmd_model(int argc, char **argv)
         cli_json_str(&j, "file", out);
         cli_json_str(&j, "kind", "trivariate");
         cli_json_int(&j, "control_points", (long long)s.ncp);
-        cli_json_arr(&j, "bbox");
-        cli_json_num(&j, NULL, b.min.x);
-        cli_json_num(&j, NULL, b.min.y);
-        cli_json_num(&j, NULL, b.min.z);
-        cli_json_num(&j, NULL, b.max.x);
-        cli_json_num(&j, NULL, b.max.y);
-        cli_json_num(&j, NULL, b.max.z);
+        json_bbox(&j, b);
         cli_json_end(&j);
     }
     amp_spline_free(&s);
