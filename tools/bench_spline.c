@@ -97,7 +97,10 @@ typedef struct result {
 static int run_case(int dim, size_t count_per_dir, size_t grid_per_dir, int quick, result *r)
 {
     amp_spline s;
-    int order[3] = {4, 4, 4}, d, threads = 1;
+    int order[3] = {4, 4, 4}, d;
+#ifdef _OPENMP
+    int threads = 1;
+#endif
     size_t count[3], ng[3] = {1, 1, 1}, tot = 1, i, reps, rep;
     double *g[3] = {NULL, NULL, NULL}, *par = NULL, t0;
     amp_vec3 *out = NULL;
