@@ -82,8 +82,8 @@ static double nearest(const seggrid *g, amp_vec3 p)
     cell_of(g, p, c);
     for (r = 0; r <= rmax; r++) {
         int x, y, z;
-        /* every cell of ring r + 1 is at least r*h away from p (p lies in its cell) */
-        if (best2 < HUGE_VAL && sqrt(best2) <= r * g->h)
+        /* rings 0..r-1 are done; every cell of ring r or beyond is at least (r-1)*h away (p lies in its cell) */
+        if (r > 0 && best2 < HUGE_VAL && sqrt(best2) <= (r - 1) * g->h)
             break;
         for (z = c[2] - r; z <= c[2] + r; z++)
             for (y = c[1] - r; y <= c[1] + r; y++)

@@ -2,7 +2,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
+#include "checkers.h"
 
 int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
 {

@@ -5,7 +5,7 @@
  */
 #include <string.h>
 
-#include "check.h"
+#include "checkers.h"
 
 const char cmd_check_usage[] =
     "verify paths independently: coverage of a trivariate within eps (sampled); exit 1 on a failure\n"

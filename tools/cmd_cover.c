@@ -2,7 +2,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "check.h"
+#include "checkers.h"
 #include "cli.h"
 
 const char cmd_cover_usage[] =

@@ -1,11 +1,11 @@
 /*
- * check.h — the independent checkers behind `ampath check` (tools/check_*.c).
+ * checkers.h — the independent checkers behind `ampath check` (tools/check_*.c).
  * Each returns a CLI exit code: CLI_OK (0) pass, CLI_FAILED (1) a violation,
  * CLI_USAGE (2) bad input; with @p j non-NULL it adds its figures to that JSON
  * object instead of printing a human summary.
  */
-#ifndef AMP_TOOLS_CHECK_H
-#define AMP_TOOLS_CHECK_H
+#ifndef AMP_TOOLS_CHECKERS_H
+#define AMP_TOOLS_CHECKERS_H
 
 #include "cli.h"
 
