@@ -238,8 +238,12 @@ size_t amp_spl_span(const double *U, int k, size_t n, double t, size_t hint)
     return lo;
 }
 
-/* NURBS Book A2.2: the k non-zero basis functions on span i. Denominators are >= U[i+1]-U[i] > 0. */
-void amp_spl_basis(const double *U, size_t i, int k, double t, double *N)
+/*
+ * NURBS Book A2.2: the k non-zero basis functions on span i. Denominators are
+ * >= U[i+1]-U[i] > 0. @p inv (may be NULL) holds their reciprocals
+ * inv[j*AMP_SPLINE_MAX_ORDER + r], precomputed per span by batched callers.
+ */
+static void basis_inv(const double *U, size_t i, int k, double t, const double *inv, double *N)
 {
     double left[AMP_SPLINE_MAX_ORDER], right[AMP_SPLINE_MAX_ORDER];
     int j, r;
@@ -249,13 +253,15 @@ void amp_spl_basis(const double *U, size_t i, int k, double t, double *N)
         left[j] = t - U[i + 1 - (size_t)j];
         right[j] = U[i + (size_t)j] - t;
         for (r = 0; r < j; r++) {
-            double tmp = N[r] / (right[r + 1] + left[j - r]);
+            double tmp = inv ? N[r] * inv[j * AMP_SPLINE_MAX_ORDER + r] : N[r] / (right[r + 1] + left[j - r]);
             N[r] = saved + right[r + 1] * tmp;
             saved = left[j - r] * tmp;
         }
         N[j] = saved;
     }
 }
+
+void amp_spl_basis(const double *U, size_t i, int k, double t, double *N) { basis_inv(U, i, k, t, NULL, N); }
 
 /*
  * NURBS Book A2.3: basis functions and their derivatives up to @p nd on span i;
@@ -511,7 +517,7 @@ static inline int curve_block(const amp_spline *s, const double *par, size_t n, 
         memset(inv, 0, sizeof inv);
         amp_spline_domain(s, 0, &lo, &hi);
         for (i = 0; i < n; i++) {
-            double t = par[i], x = 0, y = 0, z = 0, left[AMP_SPLINE_MAX_ORDER], right[AMP_SPLINE_MAX_ORDER];
+            double t = par[i], x = 0, y = 0, z = 0;
             const double *p;
             double Nb[AMP_SPLINE_MAX_ORDER];
             if (isnan(t)) {
@@ -559,18 +565,7 @@ static inline int curve_block(const amp_spline *s, const double *par, size_t n, 
                                 Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
                 continue;
             }
-            Nb[0] = 1.0;
-            for (j = 1; j < k; j++) {
-                double saved = 0.0;
-                left[j] = t - U[cur + 1 - (size_t)j];
-                right[j] = U[cur + (size_t)j] - t;
-                for (r = 0; r < j; r++) {
-                    double tmp = Nb[r] * inv[j * AMP_SPLINE_MAX_ORDER + r];
-                    Nb[r] = saved + right[r + 1] * tmp;
-                    saved = left[j - r] * tmp;
-                }
-                Nb[j] = saved;
-            }
+            basis_inv(U, cur, k, t, inv, Nb);
             p = s->cp + 4 * (cur + 1 - (size_t)k);
             for (a = 0; a < k; a++, p += 4) {
                 x += Nb[a] * p[0];
