@@ -786,6 +786,33 @@ START_TEST(cli_model_and_eval_print_full_precision_points)
 }
 END_TEST
 
+START_TEST(parser_out_of_memory_is_reported_without_leaks)
+{
+    amp_test_failalloc fa;
+    amp_spline v, *list;
+    amp_buf buf;
+    size_t n;
+    long budget;
+    amp_buf_init(&buf, NULL);
+    ck_assert_int_eq(amp_trivariate_model("vase", NULL, &v, NULL), AMP_OK);
+    ck_assert_int_eq(amp_spline_write(&v, 1, amp_buf_sink, &buf, NULL), AMP_OK);
+    ck_assert_int_eq(amp_spline_write(&v, 0, amp_buf_sink, &buf, NULL), AMP_OK);
+    for (budget = 0; budget < 12; budget++) {
+        amp_status st;
+        amp_test_failalloc_init(&fa, budget);
+        st = amp_spline_parse(buf.data, buf.len, &fa.a, &list, &n, NULL);
+        ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
+        if (st == AMP_OK) {
+            ck_assert_uint_eq(n, 2);
+            amp_spline_list_free(&fa.a, list, n);
+        } else
+            ck_assert_ptr_null(list);
+    }
+    amp_buf_free(&buf);
+    amp_spline_free(&v);
+}
+END_TEST
+
 static Suite *spline_suite(void)
 {
     Suite *s = suite_create("spline");
@@ -805,6 +832,7 @@ static Suite *spline_suite(void)
     tcase_add_loop_test(tc, malformed_spl_is_rejected_with_line_numbers, 0,
                         (int)(sizeof bad_cases / sizeof bad_cases[0]));
     tcase_add_test(tc, bad_arguments_get_errors_not_undefined_behaviour);
+    tcase_add_test(tc, parser_out_of_memory_is_reported_without_leaks);
     tcase_add_test(tc, helix_model_is_within_0_05_mm_of_the_swept_disc);
     tcase_add_test(tc, torus_quarter_and_vase_are_exact_revolutions);
     tcase_add_test(tc, cli_model_and_eval_print_full_precision_points);
