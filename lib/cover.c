@@ -21,6 +21,8 @@ void amp_cover_opts_default(amp_cover_opts *o)
     o->chord_tol = 0.0;
     o->cells = 16;
     o->max_depth = 24;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 typedef struct ctx {
@@ -381,6 +383,9 @@ static amp_status cover_surface(ctx *c, double w, const unsigned char *mask)
     if (st == AMP_OK)
         st = emit_curve(c, w, c->hi[c->e0], A);
     amp_spline_free(&S.s);
+    /* surfaces come in increasing w (in-order recursion): w itself measures progress */
+    if (c->o.progress)
+        c->o.progress(c->o.progress_user, (w - c->lo[c->d]) / (c->hi[c->d] - c->lo[c->d]));
     return st;
 }
 

@@ -49,6 +49,19 @@ START_TEST(arclen_covering_of_the_builtin_models_is_within_eps)
 }
 END_TEST
 
+typedef struct prog {
+    double last;
+    int calls, monotone;
+} prog;
+
+static void on_progress(void *user, double f)
+{
+    prog *p = user;
+    p->monotone &= f >= p->last && f <= 1.0;
+    p->last = f;
+    p->calls++;
+}
+
 START_TEST(every_vertex_lies_in_the_torus_quarter)
 {
     amp_spline v;
@@ -60,7 +73,15 @@ START_TEST(every_vertex_lies_in_the_torus_quarter)
     amp_cover_opts_default(&o);
     o.eps = 2;
     o.dir = 1; /* the paper's Fig. 4(f): v-isoparametric surfaces */
-    ck_assert_double_le(cover_gap(&v, &o, &st, &ps), 2.0);
+    {
+        prog pr = {0, 0, 1};
+        o.progress = on_progress;
+        o.progress_user = &pr;
+        ck_assert_double_le(cover_gap(&v, &o, &st, &ps), 2.0);
+        ck_assert_int_eq((size_t)pr.calls, st.surfaces);
+        ck_assert(pr.monotone);
+        ck_assert_near(pr.last, 1.0, 0);
+    }
     for (i = 0; i < ps.nverts; i++) {
         amp_vec3 p = ps.verts[i].p;
         ck_assert_double_le(hypot(hypot(p.x, p.y) - 50, p.z - 10), 10 + 1e-9);

@@ -23,6 +23,8 @@ const char cmd_cover_usage[] =
     "  --json          {surfaces, curves, vertices, length_mm, coverage_gap_mm, over_coverage, volume_mm3,\n"
     "                   deposited_mm3, time_s, depth_limited}\n";
 
+static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
 int cmd_cover(int argc, char **argv)
 {
     const char *pos[1], *out = NULL, *dir = "w", *measure = "arclen";
@@ -37,6 +39,7 @@ int cmd_cover(int argc, char **argv)
     amp_error err;
     double t0, t1;
     char comment[200];
+    cli_progress bar;
     cli_opt opts[] = {{"eps", CLI_DOUBLE, &eps, 0},        {"dir", CLI_STR, &dir, 0},
                       {"min-depth", CLI_LONG, &m, 0},      {"measure", CLI_STR, &measure, 0},
                       {"radius", CLI_DOUBLE, &radius, 0},  {"chord-tol", CLI_DOUBLE, &chord, 0},
@@ -70,8 +73,13 @@ int cmd_cover(int argc, char **argv)
         return rc;
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
+    cli_progress_begin(&bar, "cover");
+    o.progress = progress;
+    o.progress_user = &bar;
     t0 = cli_now();
-    if (amp_cover_trivariate(&v, &o, &ps, &st, &err) != AMP_OK) {
+    rc = amp_cover_trivariate(&v, &o, &ps, &st, &err);
+    cli_progress_end(&bar);
+    if (rc != AMP_OK) {
         amp_spline_free(&v);
         amp_pathset_free(&ps);
         return cli_fail_err("cover", &err);

@@ -57,9 +57,13 @@ typedef struct amp_cover_opts {
     double chord_tol;          /**< polyline deviation from the curve (mm); <= 0 means eps / 20 */
     int cells;                 /**< trimming cells per parametric direction (1..64); <= 0 means 16 */
     int max_depth;             /**< recursion limit per level; <= 0 means 24 */
+    /** Optional progress report: called from the calling thread with the fraction of the
+     *  covering direction done (0..1), after each covering surface. NULL = none. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;       /**< passed to progress */
 } amp_cover_opts;
 
-/** Defaults: eps 1 mm, dir w, m 0, arc-length measure, radius 0.5 mm, δ = eps/20, 16 cells. */
+/** Defaults: eps 1 mm, dir w, m 0, arc-length measure, radius 0.5 mm, δ = eps/20, 16 cells, no progress. */
 void amp_cover_opts_default(amp_cover_opts *o);
 
 typedef struct amp_cover_stats {
