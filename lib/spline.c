@@ -238,8 +238,12 @@ size_t amp_spl_span(const double *U, int k, size_t n, double t, size_t hint)
     return lo;
 }
 
-/* NURBS Book A2.2: the k non-zero basis functions on span i. Denominators are >= U[i+1]-U[i] > 0. */
-void amp_spl_basis(const double *U, size_t i, int k, double t, double *N)
+/*
+ * NURBS Book A2.2: the k non-zero basis functions on span i. Denominators are
+ * >= U[i+1]-U[i] > 0. @p inv (may be NULL) holds their reciprocals
+ * inv[j*AMP_SPLINE_MAX_ORDER + r], precomputed per span by batched callers.
+ */
+static void basis_inv(const double *U, size_t i, int k, double t, const double *inv, double *N)
 {
     double left[AMP_SPLINE_MAX_ORDER], right[AMP_SPLINE_MAX_ORDER];
     int j, r;
@@ -249,13 +253,15 @@ void amp_spl_basis(const double *U, size_t i, int k, double t, double *N)
         left[j] = t - U[i + 1 - (size_t)j];
         right[j] = U[i + (size_t)j] - t;
         for (r = 0; r < j; r++) {
-            double tmp = N[r] / (right[r + 1] + left[j - r]);
+            double tmp = inv ? N[r] * inv[j * AMP_SPLINE_MAX_ORDER + r] : N[r] / (right[r + 1] + left[j - r]);
             N[r] = saved + right[r + 1] * tmp;
             saved = left[j - r] * tmp;
         }
         N[j] = saved;
     }
 }
+
+void amp_spl_basis(const double *U, size_t i, int k, double t, double *N) { basis_inv(U, i, k, t, NULL, N); }
 
 /*
  * NURBS Book A2.3: basis functions and their derivatives up to @p nd on span i;
@@ -491,6 +497,86 @@ amp_status amp_spline_eval_partial(const amp_spline *s, const double *par, const
 
 /* ---- batched evaluation ---- */
 
+/*
+ * Points of a polynomial curve at a list of parameters. The reciprocals of the
+ * knot differences of Cox-de Boor (NURBS Book A2.2) depend only on the span, so
+ * they are computed once per span and the per-point basis needs no division:
+ * same recurrence, same stability.
+ */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline int curve_block(const amp_spline *s, const double *par, size_t n, amp_vec3 *out, const int k)
+{
+    size_t i, span0 = 0;
+    int bad = 0;
+    const double *U = s->knots[0];
+        double inv[AMP_SPLINE_MAX_ORDER * AMP_SPLINE_MAX_ORDER], lo, hi;
+        int a, j, r;
+        size_t cur = (size_t)-1, nc = s->count[0];
+        memset(inv, 0, sizeof inv);
+        amp_spline_domain(s, 0, &lo, &hi);
+        for (i = 0; i < n; i++) {
+            double t = par[i], x = 0, y = 0, z = 0;
+            const double *p;
+            double Nb[AMP_SPLINE_MAX_ORDER];
+            if (isnan(t)) {
+                bad = 1;
+                out[i] = amp_v3(NAN, NAN, NAN);
+                continue;
+            }
+            t = t < lo ? lo : (t > hi ? hi : t);
+            if (cur == (size_t)-1 || !(U[cur] <= t && t < U[cur + 1])) {
+                span0 = amp_spl_span(U, k, nc, t, span0);
+                if (span0 != cur) {
+                    cur = span0;
+                    for (j = 1; j < k; j++)
+                        for (r = 0; r < j; r++)
+                            inv[j * AMP_SPLINE_MAX_ORDER + r] =
+                                1.0 / (U[cur + 1 + (size_t)r] - U[cur + 1 + (size_t)r - (size_t)j]);
+                }
+            }
+            if (k == 4) {
+                /* the cubic recurrence written out (compilers at -O2 do not unroll it) */
+                const double *I = inv, *u = U + cur;
+                double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
+                double n0, n1, n2, tmp, sv;
+                tmp = I[AMP_SPLINE_MAX_ORDER];
+                n0 = r1 * tmp;
+                n1 = l1 * tmp;
+                tmp = n0 * I[2 * AMP_SPLINE_MAX_ORDER];
+                n0 = r1 * tmp;
+                sv = l2 * tmp;
+                tmp = n1 * I[2 * AMP_SPLINE_MAX_ORDER + 1];
+                n1 = sv + r2 * tmp;
+                n2 = l1 * tmp;
+                tmp = n0 * I[3 * AMP_SPLINE_MAX_ORDER];
+                Nb[0] = r1 * tmp;
+                sv = l3 * tmp;
+                tmp = n1 * I[3 * AMP_SPLINE_MAX_ORDER + 1];
+                Nb[1] = sv + r2 * tmp;
+                sv = l2 * tmp;
+                tmp = n2 * I[3 * AMP_SPLINE_MAX_ORDER + 2];
+                Nb[2] = sv + r3 * tmp;
+                Nb[3] = l1 * tmp;
+                p = s->cp + 4 * (cur - 3);
+                out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
+                                Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
+                                Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+                continue;
+            }
+            basis_inv(U, cur, k, t, inv, Nb);
+            p = s->cp + 4 * (cur + 1 - (size_t)k);
+            for (a = 0; a < k; a++, p += 4) {
+                x += Nb[a] * p[0];
+                y += Nb[a] * p[1];
+                z += Nb[a] * p[2];
+            }
+            out[i] = amp_v3(x, y, z);
+        }
+        return bad;
+}
+
 /* One block of a parameter list, sequential, reusing the previous span as a hint. */
 static int eval_block(const amp_spline *s, const double *par, size_t n, amp_vec3 *out)
 {
@@ -500,29 +586,17 @@ static int eval_block(const amp_spline *s, const double *par, size_t n, amp_vec3
     for (d = dim; d < AMP_SPLINE_MAX_DIM; d++)
         N[d][0] = 1.0;
     if (dim == 1 && !s->rational) {
-        /* the common case of a polynomial curve: no tensor loops */
-        const double *U = s->knots[0];
-        int k = s->order[0], a;
-        for (i = 0; i < n; i++) {
-            double t = par[i], x = 0, y = 0, z = 0;
-            const double *p;
-            if (isnan(t)) {
-                bad = 1;
-                out[i] = amp_v3(NAN, NAN, NAN);
-                continue;
-            }
-            t = amp_spl_clamp(s, 0, t);
-            span[0] = amp_spl_span(U, k, s->count[0], t, span[0]);
-            amp_spl_basis(U, span[0], k, t, N[0]);
-            p = s->cp + 4 * (span[0] + 1 - (size_t)k);
-            for (a = 0; a < k; a++, p += 4) {
-                x += N[0][a] * p[0];
-                y += N[0][a] * p[1];
-                z += N[0][a] * p[2];
-            }
-            out[i] = amp_v3(x, y, z);
+        /* constant orders let the compiler unroll the recurrence (cubic is the common case) */
+        switch (s->order[0]) {
+        case 2:
+            return curve_block(s, par, n, out, 2);
+        case 3:
+            return curve_block(s, par, n, out, 3);
+        case 4:
+            return curve_block(s, par, n, out, 4);
+        default:
+            return curve_block(s, par, n, out, s->order[0]);
         }
-        return bad;
     }
     for (i = 0; i < n; i++) {
         const double *q = par + i * (size_t)dim;

@@ -69,9 +69,10 @@ int cmd_eval(int argc, char **argv)
     }
     s = &list[object];
     if (!parse_deriv(deriv, s->dim, k)) {
+        int dim = s->dim;
         amp_spline_list_free(NULL, list, n);
         return cli_fail("eval", CLI_USAGE, "--derivative '%s': expected 0..%d or a word over the %d direction(s)",
-                        deriv, AMP_SPLINE_MAX_DERIV, s->dim);
+                        deriv, AMP_SPLINE_MAX_DERIV, dim);
     }
     if (json) {
         cli_json_begin(&j, stdout);

@@ -4,6 +4,7 @@
 
 #include "alloc.h"
 #include "bvh.h"
+#include "cover.h"
 #include "gcode.h"
 #include "io.h"
 #include "mesh.h"
