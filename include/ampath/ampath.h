@@ -7,6 +7,8 @@
 #include "mesh.h"
 #include "paths.h"
 #include "polygon.h"
+#include "complex2.h"
+#include "euler.h"
 #include "slice.h"
 #include "status.h"
 #include "vec.h"
