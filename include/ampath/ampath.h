@@ -5,6 +5,7 @@
 #include "alloc.h"
 #include "io.h"
 #include "mesh.h"
+#include "bvh.h"
 #include "paths.h"
 #include "polygon.h"
 #include "complex2.h"

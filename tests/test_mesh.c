@@ -1,0 +1,357 @@
+/* Triangle meshes: STL reading and writing, welding, topology, built-in models. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "meshfix.h"
+#include "testutil.h"
+
+#define PI 3.14159265358979323846
+
+static void make_torus(amp_mesh *m, double R, double r, int nu, int nv)
+{
+    ck_assert_int_eq(amp_fix_torus(m, R, r, nu, nv), AMP_OK);
+}
+
+/* Binary STL bytes of n triangles given as 9 floats each, with an optional header prefix. */
+static size_t make_binary(unsigned char *out, const char *header, const float *xyz, uint32_t n, uint32_t count)
+{
+    uint32_t i;
+    memset(out, 0, 84);
+    if (header)
+        memcpy(out, header, strlen(header));
+    out[80] = (unsigned char)count;
+    out[81] = (unsigned char)(count >> 8);
+    out[82] = (unsigned char)(count >> 16);
+    out[83] = (unsigned char)(count >> 24);
+    for (i = 0; i < n; i++) {
+        unsigned char *t = out + 84 + 50 * i;
+        memset(t, 0, 50);
+        memcpy(t + 12, xyz + 9 * i, 36); /* the test machine is little-endian like STL */
+    }
+    return 84 + 50 * (size_t)n;
+}
+
+static const float tet[] = {0, 0, 0, 0, 1, 0, 1, 0, 0, /* */ 0, 0, 0, 1, 0, 0, 0, 0, 1,
+                            0, 0, 0, 0, 0, 1, 0, 1, 0, /* */ 1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+START_TEST(binary_stl_is_welded_and_closed)
+{
+    unsigned char buf[84 + 50 * 4];
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    size_t len = make_binary(buf, "tetra", tet, 4, 4);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, len, &st, &err), AMP_OK);
+    ck_assert_int_eq(st.binary, 1);
+    ck_assert_uint_eq(st.triangles, 4);
+    ck_assert_uint_eq(m.nverts, 4);
+    ck_assert_uint_eq(m.ntris, 4);
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_int_eq(er.closed, 1);
+    ck_assert_uint_eq(er.edges, 6);
+    ck_assert_near(amp_mesh_volume(&m), 1.0 / 6.0, 1e-12);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(binary_stl_starting_with_solid_is_read_as_binary)
+{
+    unsigned char buf[84 + 50 * 4];
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_error err;
+    size_t len = make_binary(buf, "solid exported by a CAD tool", tet, 4, 4);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, len, &st, &err), AMP_OK);
+    ck_assert_int_eq(st.binary, 1);
+    ck_assert_uint_eq(m.ntris, 4);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(ascii_stl_with_crlf_and_uppercase_is_read)
+{
+    const char *text = "solid t\r\n"
+                       "  FACET NORMAL 0 0 -1\r\n    outer loop\r\n vertex 0 0 0\r\n vertex 0 1 0\r\n vertex 1 0 0\r\n"
+                       "  endloop\r\n endfacet\r\n"
+                       "facet normal 0 -1 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\nendfacet\n"
+                       "facet normal -1 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0 1\nvertex 0 1 0\nendloop\nendfacet\n"
+                       "facet normal 1 1 1\nouter loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\nendfacet\n"
+                       "endsolid t\r\n";
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, text, strlen(text), &st, &err), AMP_OK);
+    ck_assert_int_eq(st.binary, 0);
+    ck_assert_uint_eq(m.nverts, 4);
+    ck_assert_uint_eq(m.ntris, 4);
+    ck_assert_near(amp_mesh_volume(&m), 1.0 / 6.0, 1e-12);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(degenerate_triangles_are_dropped_and_counted)
+{
+    float t[9 * 6];
+    unsigned char buf[84 + 50 * 6];
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_error err;
+    static const float zero_area[] = {0, 0, 0, 1, 1, 1, 2, 2, 2, /* collinear */ 3, 3, 3, 3, 3, 3, 4, 5, 6};
+    memcpy(t, tet, sizeof tet);
+    memcpy(t + 36, zero_area, sizeof zero_area);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, make_binary(buf, NULL, t, 6, 6), &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.triangles, 6);
+    ck_assert_uint_eq(st.degenerate, 2);
+    ck_assert_uint_eq(m.ntris, 4);
+    ck_assert_uint_eq(m.nverts, 4); /* no vertex of a dropped triangle is kept */
+    amp_mesh_free(&m);
+}
+END_TEST
+
+static void expect_bad(const void *data, size_t len, long line, long offset, const char *needle)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_status st;
+    amp_mesh_init(&m, NULL);
+    amp_error_clear(&err);
+    st = amp_mesh_read_stl(&m, data, len, &err);
+    ck_assert_msg(st == AMP_ERR_PARSE || st == AMP_ERR_GEOMETRY, "status %d for case '%s'", st, needle);
+    ck_assert_msg(strstr(err.msg, needle) != NULL, "message '%s' lacks '%s'", err.msg, needle);
+    if (line >= 0)
+        ck_assert_int_eq(err.line, line);
+    if (offset >= 0)
+        ck_assert_int_eq(err.offset, offset);
+    ck_assert_uint_eq(m.ntris, 0);
+    ck_assert_uint_eq(m.nverts, 0);
+    amp_mesh_free(&m);
+}
+
+static void expect_bad_text(const char *text, long line, const char *needle)
+{
+    expect_bad(text, strlen(text), line, -1, needle);
+}
+
+START_TEST(malformed_binary_stl_is_rejected_with_offsets)
+{
+    unsigned char buf[84 + 50 * 4];
+    float t[36];
+    size_t len = make_binary(buf, NULL, tet, 4, 4);
+    expect_bad(buf, 0, -1, 0, "empty");
+    expect_bad(buf, 50, -1, 50, "truncated");
+    /* count larger than the file */
+    make_binary(buf, NULL, tet, 4, 1000000);
+    expect_bad(buf, len, -1, 80, "announces 1000000");
+    /* truncated in the last triangle */
+    make_binary(buf, NULL, tet, 4, 4);
+    expect_bad(buf, len - 7, -1, 80, "announces 4");
+    /* NaN and Inf coordinates, with the byte offset of the bad float */
+    memcpy(t, tet, sizeof t);
+    t[9 * 2 + 4] = (float)NAN;
+    make_binary(buf, NULL, t, 4, 4);
+    expect_bad(buf, len, -1, 84 + 50 * 2 + 12 + 16, "not finite");
+    t[9 * 2 + 4] = (float)INFINITY;
+    make_binary(buf, NULL, t, 4, 4);
+    expect_bad(buf, len, -1, 84 + 50 * 2 + 12 + 16, "not finite");
+    /* zero triangles */
+    make_binary(buf, NULL, tet, 0, 0);
+    expect_bad(buf, 84, -1, 80, "no triangles");
+    /* every triangle degenerate */
+    memset(t, 0, sizeof t);
+    make_binary(buf, NULL, t, 4, 4);
+    expect_bad(buf, len, -1, -1, "zero area");
+}
+END_TEST
+
+START_TEST(malformed_ascii_stl_is_rejected_with_lines)
+{
+    static char giant[9000];
+    expect_bad_text("solid x\nendsolid x\n", -1, "no triangles");
+    expect_bad_text("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0\n", 5, "vertex x y z");
+    expect_bad_text("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 nan\nvertex 0 1 0\n", 5,
+               "not finite");
+    expect_bad_text("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n", 5, "ends inside");
+    expect_bad_text("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+               "endfacet\n", 8, "without 'endsolid'");
+    expect_bad_text("solid x\nfacet 0 0 1\n", 2, "facet normal");
+    expect_bad_text("solid x\nbanana\n", 2, "expected 'facet'");
+    memcpy(giant, "solid ", 6);
+    memset(giant + 6, 'a', sizeof giant - 6);
+    expect_bad(giant, sizeof giant, 1, -1, "longer than");
+    /* not "solid" and too short to be binary */
+    expect_bad("hello world", 11, -1, 11, "truncated");
+}
+END_TEST
+
+START_TEST(stl_roundtrip_binary_and_ascii_preserves_torus)
+{
+    amp_mesh m, back;
+    amp_buf buf;
+    amp_error err;
+    amp_mesh_edge_report er;
+    int binary;
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    make_torus(&m, 20, 5, 48, 24);
+    for (binary = 0; binary <= 1; binary++) {
+        amp_buf_init(&buf, NULL);
+        amp_mesh_init(&back, NULL);
+        ck_assert_int_eq(amp_mesh_write_stl(&m, binary, amp_buf_sink, &buf, &err), AMP_OK);
+        if (binary)
+            ck_assert_uint_eq(buf.len, 84 + 50 * m.ntris);
+        ck_assert_int_eq(amp_mesh_read_stl(&back, buf.data, buf.len, &err), AMP_OK);
+        ck_assert_uint_eq(back.ntris, m.ntris);
+        ck_assert_uint_eq(back.nverts, m.nverts);
+        ck_assert_int_eq(amp_mesh_edges(&back, &er, &err), AMP_OK);
+        ck_assert_int_eq(er.closed, 1);
+        for (i = 0; i < m.ntris; i++) {
+            int k;
+            for (k = 0; k < 3; k++)
+                ck_assert_near(amp_v3_dist(back.verts[back.tris[i].v[k]], m.verts[m.tris[i].v[k]]), 0,
+                               binary ? 1e-5 : 0);
+        }
+        ck_assert_near(amp_mesh_volume(&back), amp_mesh_volume(&m), binary ? 1e-3 : 1e-9);
+        amp_mesh_free(&back);
+        amp_buf_free(&buf);
+    }
+    /* the analytic torus volume 2 pi^2 R r^2 within the tessellation error */
+    ck_assert_near(amp_mesh_volume(&m), 2 * PI * PI * 20 * 25, 0.03 * 2 * PI * PI * 20 * 25);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, amp_test_tmp("torus.stl"), 1, &err), AMP_OK);
+    amp_mesh_init(&back, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_file(&back, amp_test_tmp("torus.stl"), &err), AMP_OK);
+    ck_assert_uint_eq(back.ntris, m.ntris);
+    amp_mesh_free(&back);
+    remove(amp_test_tmp("torus.stl"));
+    ck_assert_int_eq(amp_mesh_read_stl_file(&back, amp_test_tmp("missing.stl"), &err), AMP_ERR_IO);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(weld_with_tolerance_merges_near_vertices_and_drops_collapsed)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_mesh_edge_report er;
+    size_t i, n;
+    amp_mesh_init(&m, NULL);
+    make_torus(&m, 20, 5, 24, 12);
+    n = m.ntris;
+    /* unshare every triangle corner with a small jitter: an STL from a sloppy exporter */
+    {
+        amp_mesh s;
+        amp_mesh_init(&s, NULL);
+        for (i = 0; i < m.ntris; i++) {
+            uint32_t idx[3];
+            int k;
+            for (k = 0; k < 3; k++) {
+                amp_vec3 p = m.verts[m.tris[i].v[k]];
+                double j = 1e-5 * (double)((i * 3 + (size_t)k) % 7) / 7.0;
+                ck_assert_int_eq(amp_mesh_add_vertex(&s, amp_v3(p.x + j, p.y - j, p.z + j), &idx[k], &err), AMP_OK);
+            }
+            ck_assert_int_eq(amp_mesh_add_tri(&s, idx[0], idx[1], idx[2], &err), AMP_OK);
+        }
+        /* plus one sliver whose corners are within the tolerance: it must collapse */
+        {
+            uint32_t a, b, c;
+            ck_assert_int_eq(amp_mesh_add_vertex(&s, amp_v3(100, 0, 0), &a, &err), AMP_OK);
+            ck_assert_int_eq(amp_mesh_add_vertex(&s, amp_v3(100, 1e-6, 0), &b, &err), AMP_OK);
+            ck_assert_int_eq(amp_mesh_add_vertex(&s, amp_v3(100, 0, 0.5), &c, &err), AMP_OK);
+            ck_assert_int_eq(amp_mesh_add_tri(&s, a, b, c, &err), AMP_OK);
+        }
+        ck_assert_int_eq(amp_mesh_edges(&s, &er, &err), AMP_OK);
+        ck_assert_int_eq(er.closed, 0);
+        ck_assert_int_eq(amp_mesh_weld(&s, -1, &err), AMP_ERR_ARG);
+        ck_assert_int_eq(amp_mesh_weld(&s, 1e-4, &err), AMP_OK);
+        ck_assert_uint_eq(s.ntris, n);
+        ck_assert_uint_eq(s.nverts, m.nverts);
+        ck_assert_int_eq(amp_mesh_edges(&s, &er, &err), AMP_OK);
+        ck_assert_int_eq(er.closed, 1);
+        ck_assert_near(amp_mesh_volume(&s), amp_mesh_volume(&m), 1e-2);
+        amp_mesh_free(&s);
+    }
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(edge_checker_flags_holes_and_flipped_triangles)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_mesh_edge_report er;
+    uint32_t t;
+    amp_mesh_init(&m, NULL);
+    make_torus(&m, 20, 5, 24, 12);
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_int_eq(er.closed, 1);
+    ck_assert_uint_eq(er.edges, 3 * 24 * 12);
+    ck_assert_msg(amp_mesh_volume(&m) > 0, "outward torus has positive volume");
+    /* flip one triangle: three misoriented edges, no longer closed */
+    t = m.tris[10].v[0];
+    m.tris[10].v[0] = m.tris[10].v[1];
+    m.tris[10].v[1] = t;
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_int_eq(er.closed, 0);
+    ck_assert_uint_eq(er.misoriented, 3);
+    /* delete one triangle (a hole): three boundary edges */
+    m.tris[10] = m.tris[--m.ntris];
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_uint_eq(er.boundary, 3);
+    ck_assert_uint_eq(er.misoriented, 0);
+    ck_assert_int_eq(er.closed, 0);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(stl_reader_survives_allocation_failures)
+{
+    amp_mesh m, src;
+    amp_buf buf;
+    amp_error err;
+    long budget;
+    amp_mesh_init(&src, NULL);
+    amp_buf_init(&buf, NULL);
+    make_torus(&src, 20, 5, 24, 12);
+    ck_assert_int_eq(amp_mesh_write_stl(&src, 1, amp_buf_sink, &buf, &err), AMP_OK);
+    for (budget = 0; budget < 40; budget++) {
+        amp_test_failalloc fa;
+        amp_status st;
+        amp_test_failalloc_init(&fa, budget);
+        amp_mesh_init(&m, &fa.a);
+        st = amp_mesh_read_stl(&m, buf.data, buf.len, &err);
+        ck_assert_msg(st == AMP_OK || st == AMP_ERR_NOMEM, "status %d", st);
+        if (st == AMP_OK)
+            ck_assert_uint_eq(m.ntris, src.ntris);
+        else
+            ck_assert_uint_eq(m.ntris, 0);
+        amp_mesh_free(&m);
+    }
+    amp_buf_free(&buf);
+    amp_mesh_free(&src);
+}
+END_TEST
+
+static Suite *mesh_suite(void)
+{
+    Suite *s = suite_create("mesh");
+    TCase *tc = tcase_create("stl");
+    AMP_ADD_TEST(tc, binary_stl_is_welded_and_closed);
+    AMP_ADD_TEST(tc, binary_stl_starting_with_solid_is_read_as_binary);
+    AMP_ADD_TEST(tc, ascii_stl_with_crlf_and_uppercase_is_read);
+    AMP_ADD_TEST(tc, degenerate_triangles_are_dropped_and_counted);
+    AMP_ADD_TEST(tc, malformed_binary_stl_is_rejected_with_offsets);
+    AMP_ADD_TEST(tc, malformed_ascii_stl_is_rejected_with_lines);
+    AMP_ADD_TEST(tc, stl_roundtrip_binary_and_ascii_preserves_torus);
+    AMP_ADD_TEST(tc, weld_with_tolerance_merges_near_vertices_and_drops_collapsed);
+    AMP_ADD_TEST(tc, edge_checker_flags_holes_and_flipped_triangles);
+    AMP_ADD_TEST(tc, stl_reader_survives_allocation_failures);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(mesh_suite)
