@@ -30,6 +30,14 @@ void amp_polyset_clear(amp_polyset *ps)
     ps->nislands = 0;
 }
 
+/* Equal up to rounding (1e-12 relative): a section passing within 1e-16 of a
+ * mesh vertex gives such pairs, and the direction of the tiny edge between
+ * them would be noise for every later offset. */
+static int near_equal(amp_vec2 a, amp_vec2 b)
+{
+    return fabs(a.x - b.x) <= 1e-12 * (1.0 + fabs(a.x)) && fabs(a.y - b.y) <= 1e-12 * (1.0 + fabs(a.y));
+}
+
 amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_error *err)
 {
     size_t i, start = ps->npts, m = 0;
@@ -47,11 +55,11 @@ amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_err
     ps->rings = v;
     for (i = 0; i < n; i++) {
         amp_vec2 q = p[i];
-        if (m && ps->pts[start + m - 1].x == q.x && ps->pts[start + m - 1].y == q.y)
+        if (m && near_equal(ps->pts[start + m - 1], q))
             continue; /* consecutive duplicate (e.g. a section through a mesh vertex) */
         ps->pts[start + m++] = q;
     }
-    while (m > 1 && ps->pts[start].x == ps->pts[start + m - 1].x && ps->pts[start].y == ps->pts[start + m - 1].y)
+    while (m > 1 && near_equal(ps->pts[start], ps->pts[start + m - 1]))
         m--; /* repeated closing point */
     if (m < 3)
         return AMP_OK;

@@ -10,6 +10,7 @@
 #include "polygon.h"
 #include "complex2.h"
 #include "euler.h"
+#include "contpath.h"
 #include "slice.h"
 #include "status.h"
 #include "vec.h"

@@ -61,7 +61,7 @@ void amp_polyset_free(amp_polyset *ps);
 void amp_polyset_clear(amp_polyset *ps);
 /**
  * Append a ring of @p n points (copied). A repeated closing point is dropped,
- * as are consecutive duplicates; rings left with fewer than 3 points are
+ * as are consecutive duplicates (equal within 1e-12 relative); rings left with fewer than 3 points are
  * silently skipped. AMP_ERR_ARG on non-finite points, AMP_ERR_NOMEM.
  */
 amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_error *err);

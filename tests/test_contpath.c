@@ -1,0 +1,208 @@
+/* Continuous strokes per island (paper 2 §2.2 steps 5-6, §4). */
+#include <math.h>
+#include <string.h>
+
+#include "fx_meshes.h"
+#include "testutil.h"
+
+/* Check every infill stroke of one layer section independently: one closed
+ * stroke per region, no crossing, no edge twice, inside the island. */
+static void check_section(const amp_mesh *m, double z, double r, amp_grid_kind kind, size_t want_regions)
+{
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_cx2 khat;
+    amp_polyset P, isl, R, reg;
+    amp_pathset ps;
+    amp_error err;
+    size_t k, q, regions = 0, i;
+    amp_slices_init(&sl, NULL);
+    amp_cx2_init(&khat, NULL);
+    amp_polyset_init(&P, NULL);
+    amp_polyset_init(&isl, NULL);
+    amp_polyset_init(&R, NULL);
+    amp_polyset_init(&reg, NULL);
+    amp_pathset_init(&ps, NULL);
+    memset(&st, 0, sizeof st);
+    so.layer = 0.5;
+    so.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(m, &so, &sl, &err), AMP_OK);
+    amp_contpath_opts_default(&o, r);
+    o.grid = kind;
+    ck_assert_msg(amp_contpath_complex(&sl, &o, &khat, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_int_eq(amp_slice_plane(m, z, &P, NULL, &err), AMP_OK);
+    for (k = 0; k < P.nislands; k++) {
+        amp_polyset_clear(&isl);
+        for (i = 0; i < P.nrings; i++)
+            if (P.rings[i].island == (long)k)
+                ck_assert_int_eq(amp_polyset_add(&isl, amp_polyset_ring(&P, i), P.rings[i].n, &err), AMP_OK);
+        ck_assert_int_eq(amp_polyset_organize(&isl, &err), AMP_OK);
+        ck_assert_int_eq(amp_polyset_inset(&isl, 3 * r, 0, &R, &err), AMP_OK);
+        for (q = 0; q < R.nislands; q++) {
+            size_t before = ps.npaths, strokes_before = st.strokes;
+            amp_stroke_report rep;
+            amp_polyset_clear(&reg);
+            for (i = 0; i < R.nrings; i++)
+                if (R.rings[i].island == (long)q)
+                    ck_assert_int_eq(amp_polyset_add(&reg, amp_polyset_ring(&R, i), R.rings[i].n, &err), AMP_OK);
+            ck_assert_int_eq(amp_polyset_organize(&reg, &err), AMP_OK);
+            ck_assert_msg(amp_contpath_region(&khat, &reg, z, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+            ck_assert_uint_eq(st.strokes - strokes_before, 1); /* exactly one stroke per region */
+            ck_assert_uint_eq(ps.npaths - before, 1);
+            {
+                const amp_pvert *v = amp_pathset_path_verts(&ps, before);
+                size_t n = ps.paths[before].n;
+                amp_vec2 *pts = amp_alloc(NULL, n * sizeof *pts);
+                for (i = 0; i < n; i++)
+                    pts[i] = amp_v2(v[i].p.x, v[i].p.y);
+                ck_assert_msg(amp_stroke_check(pts, n, &isl, 1e-9, &rep, &err) == AMP_OK, "z %g: %s", z, err.msg);
+                ck_assert(rep.closed);
+                ck_assert_uint_gt(rep.segments, 10);
+                /* and within the clipping region R̃ itself */
+                ck_assert_msg(amp_stroke_check(pts, n, &reg, 1e-7, &rep, &err) == AMP_OK, "%s", err.msg);
+                amp_free(NULL, pts);
+            }
+            regions++;
+        }
+    }
+    ck_assert_uint_eq(regions, want_regions);
+    ck_assert_uint_eq(st.odd_vertices, 0); /* every vertex even after patching */
+    ck_assert_uint_eq(st.multi_stroke, 0);
+    ck_assert_uint_gt(st.free_ends, 0);
+    ck_assert_uint_eq(st.free_ends % 2, 0); /* handshake lemma */
+    ck_assert_msg(st.dropped_length <= 0.03 * st.infill_length, "dropped %g of %g mm", st.dropped_length,
+                  st.infill_length);
+    amp_pathset_free(&ps);
+    amp_polyset_free(&P);
+    amp_polyset_free(&isl);
+    amp_polyset_free(&R);
+    amp_polyset_free(&reg);
+    amp_cx2_free(&khat);
+    amp_slices_free(&sl);
+}
+
+START_TEST(torus_sections_get_one_crossing_free_stroke)
+{
+    amp_mesh m;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 3), 10.0, 3.0, 96, 48), AMP_OK);
+    check_section(&m, 3.0, 0.4, AMP_GRID_SQUARE, 1);
+    check_section(&m, 1.2, 0.4, AMP_GRID_HEX, 1);
+    check_section(&m, 4.5, 0.3, AMP_GRID_TRI, 1);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+/* block with a hole, joined by a 2 mm neck to a second block, and a
+ * separate island (2 mm voxels) */
+static const char *const plate[] = {
+    "##########............####",
+    "##########....######..####",
+    "##....####....######..####",
+    "##....##############..####",
+    "##....####....######..####",
+    "##########....######..####",
+    "##########............####",
+    NULL};
+
+START_TEST(plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region)
+{
+    amp_mesh m;
+    amp_mesh_init(&m, NULL);
+    /* the neck (2 mm) is narrower than 6r = 2.4 mm: R̃ splits it, so the two
+     * islands give three regions, each with its own single stroke */
+    ck_assert_int_eq(fx_voxel_picture(&m, plate, 2, 2.0), AMP_OK);
+    check_section(&m, 1.0, 0.4, AMP_GRID_SQUARE, 3);
+    check_section(&m, 2.0, 0.4, AMP_GRID_HEX, 3); /* plane through mesh vertices */
+    check_section(&m, 3.0, 0.35, AMP_GRID_TRI, 3);
+    check_section(&m, 3.0, 0.3, AMP_GRID_TRI, 2); /* 6r = 1.8 mm: the neck carries infill */
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(all_layers_of_a_sphere_and_torus_pair)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_pathset ps;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 3), 10.0, 3.0, 64, 32), AMP_OK);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(22, 0, 4), 4.0, 48, 24), AMP_OK);
+    so.layer = 0.5;
+    so.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
+    amp_contpath_opts_default(&o, 0.4);
+    ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_uint_eq(st.layers, sl.nlayers);
+    ck_assert_uint_gt(st.islands, sl.nlayers); /* two bodies on most layers */
+    ck_assert_uint_eq(st.strokes, st.islands);
+    ck_assert_uint_eq(st.multi_stroke, 0);
+    ck_assert_uint_eq(st.odd_vertices, 0);
+    ck_assert_uint_eq(ps.npaths, st.strokes + st.perimeter_loops);
+    ck_assert_uint_eq(st.travel_moves, ps.npaths - 1);
+    ck_assert(st.printed_length > st.infill_length && st.infill_length > 0);
+    ck_assert_near(st.printed_length, amp_pathset_length(&ps, AMP_ROLE_OBJECT), 1e-6);
+    /* Remark 2.1: stretches printed separately as support */
+    amp_pathset_clear(&ps);
+    o.support_stretches = 1;
+    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_uint_gt(st.support_paths, 0);
+    ck_assert_near(st.support_length, amp_pathset_length(&ps, AMP_ROLE_SUPPORT), 1e-6);
+    ck_assert_near(st.unprinted_length, 0, 0);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
+{
+    amp_polyset sq;
+    amp_stroke_report rep;
+    amp_error err;
+    amp_vec2 box[4] = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
+    amp_vec2 bowtie[5] = {{1, 1}, {9, 9}, {9, 1}, {1, 9}, {1, 1}};
+    amp_vec2 twice[6] = {{1, 1}, {5, 1}, {5, 5}, {1, 1}, {5, 1}, {1, 1}};
+    amp_vec2 escape[4] = {{1, 1}, {12, 1}, {1, 5}, {1, 1}};
+    /* figure eight touching at (5,5): the passes cross there */
+    amp_vec2 eight[7] = {{5, 5}, {8, 8}, {8, 2}, {5, 5}, {2, 8}, {2, 2}, {5, 5}};
+    /* two loops touching at (5,5) without crossing */
+    amp_vec2 touch[7] = {{5, 5}, {8, 2}, {8, 8}, {5, 5}, {2, 8}, {2, 2}, {5, 5}};
+    amp_polyset_init(&sq, NULL);
+    ck_assert_int_eq(amp_polyset_add(&sq, box, 4, NULL), AMP_OK);
+    ck_assert_int_eq(amp_stroke_check(bowtie, 5, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_uint_eq(rep.crossings, 1);
+    ck_assert_int_eq(amp_stroke_check(twice, 6, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_uint_gt(rep.repeated_edges, 0);
+    ck_assert_int_eq(amp_stroke_check(escape, 4, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_uint_gt(rep.outside, 0);
+    ck_assert_int_eq(amp_stroke_check(eight, 7, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_uint_eq(rep.crossings, 1);
+    ck_assert_msg(amp_stroke_check(touch, 7, &sq, 0, &rep, &err) == AMP_OK, "%s", err.msg);
+    ck_assert(rep.closed);
+    amp_polyset_free(&sq);
+}
+END_TEST
+
+static Suite *contpath_suite(void)
+{
+    Suite *s = suite_create("contpath");
+    TCase *tc = tcase_create("core");
+    tcase_set_timeout(tc, 120);
+    AMP_ADD_TEST(tc, torus_sections_get_one_crossing_free_stroke);
+    AMP_ADD_TEST(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
+    AMP_ADD_TEST(tc, all_layers_of_a_sphere_and_torus_pair);
+    AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(contpath_suite)
