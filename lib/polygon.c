@@ -598,6 +598,29 @@ static int egrid_closer(const egrid *g, amp_vec2 q, double lim)
     return 0;
 }
 
+/* Copy ring p into out without the vertices closer than tol to the segment
+ * joining their kept predecessor and their successor. Returns the count. */
+static size_t simplify_ring(const amp_vec2 *p, size_t n, double tol, amp_vec2 *out)
+{
+    size_t i, m = 0, pass;
+    for (i = 0; i < n; i++) {
+        /* pop while the last kept point is nearly on the chord to p[i] */
+        while (m >= 2 && seg_dist2(out[m - 1], out[m - 2], p[i]) < tol * tol)
+            m--;
+        out[m++] = p[i];
+    }
+    /* the closing corner(s) */
+    for (pass = 0; pass < 2 && m >= 3; pass++) {
+        if (seg_dist2(out[m - 1], out[m - 2], out[0]) < tol * tol)
+            m--;
+        else if (seg_dist2(out[0], out[m - 1], out[1]) < tol * tol) {
+            memmove(out, out + 1, (m - 1) * sizeof *out);
+            m--;
+        }
+    }
+    return m;
+}
+
 typedef struct piece {
     size_t na, nb;
     int used;
@@ -609,7 +632,7 @@ static int cmp_piece(const void *a, const void *b)
     return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
 }
 
-amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
 {
     inset_ctx c;
     egrid g;
@@ -619,8 +642,6 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
     size_t i, j, k, npc = 0, cap_pc = 0, cap_loop = 0;
     double dstep, lim;
     amp_status st = AMP_OK;
-    if (!(r > 0) || !isfinite(r))
-        return amp_fail(err, AMP_ERR_ARG, 0, "inset radius must be positive, got %g", r);
     amp_polyset_clear(out);
     if (in->nrings == 0)
         return AMP_OK;
@@ -746,5 +767,32 @@ done:
     egrid_free(&g, c.al);
     if (st == AMP_ERR_NOMEM)
         return amp_fail(err, st, 0, "out of memory computing the inset");
+    return st;
+}
+
+amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+{
+    amp_polyset simp;
+    amp_vec2 *tmp;
+    size_t i;
+    amp_status st = AMP_OK;
+    if (!(r > 0) || !isfinite(r))
+        return amp_fail(err, AMP_ERR_ARG, 0, "inset radius must be positive, got %g", r);
+    /* rings freed of vertices within r/10^4 of the chord of their neighbours:
+     * float noise of STL coordinates would otherwise give micro-arcs whose
+     * crossings are below rounding; the offset is computed for this ring */
+    amp_polyset_init(&simp, out->alloc);
+    tmp = amp_alloc(out->alloc, (in->npts + 1) * sizeof *tmp);
+    if (!tmp)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory computing the inset");
+    for (i = 0; i < in->nrings && st == AMP_OK; i++) {
+        size_t n = simplify_ring(amp_polyset_ring(in, i), in->rings[i].n, 1e-4 * r, tmp);
+        if (n >= 3)
+            st = amp_polyset_add(&simp, tmp, n, err);
+    }
+    amp_free(out->alloc, tmp);
+    if (st == AMP_OK)
+        st = inset_core(&simp, r, arc_tol, out, err);
+    amp_polyset_free(&simp);
     return st;
 }

@@ -109,7 +109,8 @@ amp_status amp_convex_hull(const amp_vec2 *pts, size_t n, const amp_allocator *a
  * region bounded by the rings of @p in (even-odd rule): the set of points of
  * the region at distance >= r from its boundary (§2.2 step 5, R̃_j).
  *
- * Method (see docs/slice.md): every ring is offset to its interior side,
+ * Method (see docs/slice.md): rings are first freed of vertices closer than
+ * r/10^4 to the chord of their neighbours (float noise); every ring is offset to its interior side,
  * with circular arcs (circumscribed polylines, @p arc_tol maximal sagitta,
  * 0 = r/100) around reflex vertices; all raw offset segments are split at
  * their mutual intersections (each intersection computed once and shared by
