@@ -1,8 +1,10 @@
 /* Continuous strokes per island (paper 2 §2.2 steps 5-6, §4). */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "fx_meshes.h"
+#include "fx_tool.h"
 #include "testutil.h"
 
 /* Check every infill stroke of one layer section independently: one closed
@@ -192,6 +194,41 @@ START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
 }
 END_TEST
 
+START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
+{
+    amp_mesh m;
+    amp_error err;
+    char args[768], out[4096];
+    const char *stl = amp_test_tmp("plate.stl"), *amp = amp_test_tmp("plate.amp");
+    FILE *f;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 2.0), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --radius 0.4 --continuous -o %s --json", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    /* 12 layers x 3 regions (the neck splits R̃), one stroke each */
+    ck_assert_msg(strstr(out, "\"layers\":12,\"islands\":36,\"strokes\":36,\"multi_stroke_islands\":0") != NULL, "%s",
+                  out);
+    ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", amp, stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"ok\":true") != NULL, "%s", out);
+    /* a crossing path appended: the check fails with exit 1 */
+    f = fopen(amp, "a");
+    ck_assert(f != NULL);
+    fprintf(f, "path object 5\n1 1 0.5 0.4\n9 9 0.5 0.4\n9 1 0.5 0.4\n1 9 0.5 0.4\n1 1 0.5 0.4\n");
+    fclose(f);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
+    ck_assert_msg(strstr(out, "\"crossings\":1") != NULL, "%s", out);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --grid octagon", stl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    remove(stl);
+    remove(amp);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -201,6 +238,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
     AMP_ADD_TEST(tc, all_layers_of_a_sphere_and_torus_pair);
     AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
+    AMP_ADD_TEST(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
     suite_add_tcase(s, tc);
     return s;
 }

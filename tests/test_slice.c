@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "fx_meshes.h"
+#include "fx_tool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -213,30 +214,6 @@ START_TEST(layers_are_cut_at_mid_height_with_optional_first_layer)
 }
 END_TEST
 
-/* Run "$AMP_TOOL args" capturing up to @p cap bytes of stdout; returns the exit status. */
-static int run_tool(const char *args, char *out, size_t cap)
-{
-    char cmd[1024];
-    const char *tool = getenv("AMP_TOOL");
-    FILE *p;
-    size_t n = 0;
-    int st;
-    ck_assert_msg(tool != NULL, "AMP_TOOL not set");
-    snprintf(cmd, sizeof cmd, "%s %s 2>/dev/null", tool, args);
-    p = popen(cmd, "r");
-    ck_assert(p != NULL);
-    if (out) {
-        n = fread(out, 1, cap - 1, p);
-        out[n] = 0;
-    } else {
-        char buf[256];
-        while (fread(buf, 1, sizeof buf, p) > 0)
-            ;
-    }
-    st = pclose(p);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
 START_TEST(cli_writes_closed_oriented_polygons_per_layer)
 {
     amp_mesh m;
@@ -250,7 +227,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
     ck_assert_int_eq(fx_torus(&m, amp_v3(5, 5, 9), 10.0, 3.0, 96, 48), AMP_OK); /* z in [6, 12] */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --polygons -o %s --json", stl, amp);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"layers\":12,\"polygons\":24,\"islands\":12,\"holes\":12") != NULL, "%s", out);
     ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
     ck_assert_uint_eq(ps.npaths, 24);
@@ -267,7 +244,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);
     }
     snprintf(args, sizeof args, "slice %s --layer 0.5 --z 3 -o %s", stl, svg);
-    ck_assert_int_eq(run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     {
         FILE *f = fopen(svg, "r");
         char head[64] = {0};
@@ -277,14 +254,14 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert(strstr(head, "<?xml") == head);
     }
     snprintf(args, sizeof args, "slice %s --polygons", stl);
-    ck_assert_int_eq(run_tool(args, NULL, 0), 2); /* --layer missing */
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2); /* --layer missing */
     snprintf(args, sizeof args, "slice %s.missing --layer 0.5", stl);
-    ck_assert_int_eq(run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid tri --json", stl);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"euler\":true") != NULL, "%s", out);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid pentagon", stl);
-    ck_assert_int_eq(run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     remove(stl);
     remove(amp);
     remove(svg);
