@@ -251,6 +251,22 @@ static amp_status ring_path(rgraph *g, const amp_polyset *R, const fend *fi, con
     return AMP_OK;
 }
 
+/* A node where edge AB crosses a ring (hit @p h), recorded as a free end. */
+static amp_status free_end(rgraph *g, amp_vec2 A, amp_vec2 B, const hit *h, size_t *id)
+{
+    void *q = g->fe;
+    if (g_vert(g, amp_v2(A.x + h->t * (B.x - A.x), A.y + h->t * (B.y - A.y)), id) != AMP_OK)
+        return AMP_ERR_NOMEM;
+    if (amp_grow(g->al, &q, &g->cap_fe, g->nfe + 1, sizeof *g->fe) != AMP_OK)
+        return AMP_ERR_NOMEM;
+    g->fe = q;
+    g->fe[g->nfe].node = *id;
+    g->fe[g->nfe].ring = h->ring;
+    g->fe[g->nfe].pos = h->pos;
+    g->nfe++;
+    return AMP_OK;
+}
+
 /* Step 5 clipping: the parts of the K̂ edges inside the region, with a node
  * of degree 1 (a free end) where an edge leaves the region. */
 static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, const amp_polyset *R, rgraph *g,
@@ -343,22 +359,10 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
             } else if (prevnode != NONE)
                 u = prevnode;
             else {
-                if (g_vert(g, amp_v2(A.x + t0 * (B.x - A.x), A.y + t0 * (B.y - A.y)), &u) != AMP_OK) {
+                if (free_end(g, A, B, &h[j - 1], &u) != AMP_OK) {
                     st = AMP_ERR_NOMEM;
                     goto done;
                 }
-                {
-                    void *q = g->fe;
-                    if (amp_grow(al, &q, &g->cap_fe, g->nfe + 1, sizeof *g->fe) != AMP_OK) {
-                        st = AMP_ERR_NOMEM;
-                        goto done;
-                    }
-                    g->fe = q;
-                }
-                g->fe[g->nfe].node = u;
-                g->fe[g->nfe].ring = h[j - 1].ring;
-                g->fe[g->nfe].pos = h[j - 1].pos;
-                g->nfe++;
             }
             if (j == nh) {
                 if (node[b] == NONE && g_vert(g, B, &node[b]) != AMP_OK) {
@@ -367,22 +371,10 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
                 }
                 v = node[b];
             } else {
-                if (g_vert(g, amp_v2(A.x + t1 * (B.x - A.x), A.y + t1 * (B.y - A.y)), &v) != AMP_OK) {
+                if (free_end(g, A, B, &h[j], &v) != AMP_OK) {
                     st = AMP_ERR_NOMEM;
                     goto done;
                 }
-                {
-                    void *q = g->fe;
-                    if (amp_grow(al, &q, &g->cap_fe, g->nfe + 1, sizeof *g->fe) != AMP_OK) {
-                        st = AMP_ERR_NOMEM;
-                        goto done;
-                    }
-                    g->fe = q;
-                }
-                g->fe[g->nfe].node = v;
-                g->fe[g->nfe].ring = h[j].ring;
-                g->fe[g->nfe].pos = h[j].pos;
-                g->nfe++;
             }
             if (g_edge(g, u, v) != AMP_OK) {
                 st = AMP_ERR_NOMEM;
@@ -777,20 +769,6 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
     return rc;
 }
 
-/* Copy island @p k of @p P (outer ring and its holes) into @p out. */
-static amp_status island_copy(const amp_polyset *P, size_t k, amp_polyset *out, amp_error *err)
-{
-    size_t r;
-    amp_status st = AMP_OK;
-    amp_polyset_clear(out);
-    for (r = 0; r < P->nrings && st == AMP_OK; r++)
-        if (P->rings[r].island == (long)k)
-            st = amp_polyset_add(out, amp_polyset_ring(P, r), P->rings[r].n, err);
-    if (st == AMP_OK)
-        st = amp_polyset_organize(out, err);
-    return st;
-}
-
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err)
 {
@@ -813,7 +791,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         const amp_layer *L = &sl->layers[li];
         s0.layers++;
         for (k = 0; k < L->polys.nislands && rc == AMP_OK; k++) {
-            if ((rc = island_copy(&L->polys, k, &isl, err)) != AMP_OK)
+            if ((rc = amp_polyset_island(&L->polys, k, &isl, err)) != AMP_OK)
                 break;
             if (o->perimeters) {
                 /* the perimeter bead's centre line: inset by r */
@@ -832,7 +810,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
             if (rc == AMP_OK)
                 rc = amp_polyset_inset(&isl, 3 * o->radius, 0, &ins, err);
             for (q = 0; q < ins.nislands && rc == AMP_OK; q++) {
-                if ((rc = island_copy(&ins, q, &reg, err)) != AMP_OK)
+                if ((rc = amp_polyset_island(&ins, q, &reg, err)) != AMP_OK)
                     break;
                 rc = region_run(&khat, ke, nke, &reg, L->z_print, o, out, &s0, err);
             }
@@ -857,4 +835,20 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     if (st)
         *st = s0;
     return rc;
+}
+
+amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    amp_stroke_report *rep, amp_error *err)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, k;
+    amp_vec2 *p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
+    amp_status st;
+    if (!p)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+    for (k = 0; k < n; k++)
+        p[k] = amp_v2(v[k].p.x, v[k].p.y);
+    st = amp_stroke_check(p, n, region, tol, rep, err);
+    amp_free(ps->alloc, p);
+    return st;
 }

@@ -796,3 +796,16 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
     amp_polyset_free(&simp);
     return st;
 }
+
+amp_status amp_polyset_island(const amp_polyset *P, size_t k, amp_polyset *out, amp_error *err)
+{
+    size_t r;
+    amp_status st = AMP_OK;
+    amp_polyset_clear(out);
+    for (r = 0; r < P->nrings && st == AMP_OK; r++)
+        if (P->rings[r].island == (long)k)
+            st = amp_polyset_add(out, amp_polyset_ring(P, r), P->rings[r].n, err);
+    if (st == AMP_OK)
+        st = amp_polyset_organize(out, err);
+    return st;
+}

@@ -19,7 +19,7 @@ static void check_section(const amp_mesh *m, double z, double r, amp_grid_kind k
     amp_polyset P, isl, R, reg;
     amp_pathset ps;
     amp_error err;
-    size_t k, q, regions = 0, i;
+    size_t k, q, regions = 0;
     amp_slices_init(&sl, NULL);
     amp_cx2_init(&khat, NULL);
     amp_polyset_init(&P, NULL);
@@ -36,36 +36,21 @@ static void check_section(const amp_mesh *m, double z, double r, amp_grid_kind k
     ck_assert_msg(amp_contpath_complex(&sl, &o, &khat, &err) == AMP_OK, "%s", err.msg);
     ck_assert_int_eq(amp_slice_plane(m, z, &P, NULL, &err), AMP_OK);
     for (k = 0; k < P.nislands; k++) {
-        amp_polyset_clear(&isl);
-        for (i = 0; i < P.nrings; i++)
-            if (P.rings[i].island == (long)k)
-                ck_assert_int_eq(amp_polyset_add(&isl, amp_polyset_ring(&P, i), P.rings[i].n, &err), AMP_OK);
-        ck_assert_int_eq(amp_polyset_organize(&isl, &err), AMP_OK);
+        ck_assert_int_eq(amp_polyset_island(&P, k, &isl, &err), AMP_OK);
         ck_assert_int_eq(amp_polyset_inset(&isl, 3 * r, 0, &R, &err), AMP_OK);
         for (q = 0; q < R.nislands; q++) {
             size_t before = ps.npaths, strokes_before = st.strokes;
             amp_stroke_report rep;
-            amp_polyset_clear(&reg);
-            for (i = 0; i < R.nrings; i++)
-                if (R.rings[i].island == (long)q)
-                    ck_assert_int_eq(amp_polyset_add(&reg, amp_polyset_ring(&R, i), R.rings[i].n, &err), AMP_OK);
-            ck_assert_int_eq(amp_polyset_organize(&reg, &err), AMP_OK);
+            ck_assert_int_eq(amp_polyset_island(&R, q, &reg, &err), AMP_OK);
             ck_assert_msg(amp_contpath_region(&khat, &reg, z, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
             ck_assert_uint_eq(st.strokes - strokes_before, 1); /* exactly one stroke per region */
             ck_assert_uint_eq(ps.npaths - before, 1);
-            {
-                const amp_pvert *v = amp_pathset_path_verts(&ps, before);
-                size_t n = ps.paths[before].n;
-                amp_vec2 *pts = amp_alloc(NULL, n * sizeof *pts);
-                for (i = 0; i < n; i++)
-                    pts[i] = amp_v2(v[i].p.x, v[i].p.y);
-                ck_assert_msg(amp_stroke_check(pts, n, &isl, 1e-9, &rep, &err) == AMP_OK, "z %g: %s", z, err.msg);
-                ck_assert(rep.closed);
-                ck_assert_uint_gt(rep.segments, 10);
-                /* and within the clipping region R̃ itself */
-                ck_assert_msg(amp_stroke_check(pts, n, &reg, 1e-7, &rep, &err) == AMP_OK, "%s", err.msg);
-                amp_free(NULL, pts);
-            }
+            ck_assert_msg(amp_pathset_stroke_check(&ps, before, &isl, 1e-9, &rep, &err) == AMP_OK, "z %g: %s", z,
+                          err.msg);
+            ck_assert(rep.closed);
+            ck_assert_uint_gt(rep.segments, 10);
+            /* and within the clipping region R̃ itself */
+            ck_assert_msg(amp_pathset_stroke_check(&ps, before, &reg, 1e-7, &rep, &err) == AMP_OK, "%s", err.msg);
             regions++;
         }
     }

@@ -6,32 +6,29 @@
 
 #define PI 3.14159265358979323846
 
+/* Add neighbour o of v (given edge a-b) to nb[] once. */
+static void add_nb(uint32_t *nb, size_t *n, uint32_t v, uint32_t a, uint32_t b)
+{
+    uint32_t o = a == v ? b : a;
+    size_t i;
+    if (a != v && b != v)
+        return;
+    for (i = 0; i < *n && nb[i] != o; i++)
+        ;
+    if (i == *n && *n < 256)
+        nb[(*n)++] = o;
+}
+
 /* Degree of vertex v in the 1-skeleton, counted here by brute force. */
 static size_t degree_of(const amp_cx2 *k, uint32_t v)
 {
     uint32_t nb[256];
-    size_t n = 0, f, h, i, j;
+    size_t n = 0, f, h, j;
     for (f = 0; f < k->nf; f++)
-        for (h = k->fstart[f]; h < k->fstart[f + 1]; h++) {
-            uint32_t a = k->fidx[h], b = k->fidx[h + 1 < k->fstart[f + 1] ? h + 1 : k->fstart[f]], o;
-            if (a != v && b != v)
-                continue;
-            o = a == v ? b : a;
-            for (i = 0; i < n && nb[i] != o; i++)
-                ;
-            if (i == n && n < 256)
-                nb[n++] = o;
-        }
-    for (j = 0; j < k->nxe; j++) {
-        uint32_t a = k->xedge[2 * j], b = k->xedge[2 * j + 1], o;
-        if (a != v && b != v)
-            continue;
-        o = a == v ? b : a;
-        for (i = 0; i < n && nb[i] != o; i++)
-            ;
-        if (i == n && n < 256)
-            nb[n++] = o;
-    }
+        for (h = k->fstart[f]; h < k->fstart[f + 1]; h++)
+            add_nb(nb, &n, v, k->fidx[h], k->fidx[h + 1 < k->fstart[f + 1] ? h + 1 : k->fstart[f]]);
+    for (j = 0; j < k->nxe; j++)
+        add_nb(nb, &n, v, k->xedge[2 * j], k->xedge[2 * j + 1]);
     return n;
 }
 

@@ -87,7 +87,7 @@ int bench_slice(cli_json *j, int quick)
     amp_polyset isl, ins;
     rect_stats rs;
     double t0, t_slice, t_cont, t_rect, area = 0, spacing;
-    size_t li, k, r, perims = 0;
+    size_t li, k, perims = 0;
     int rc = CLI_OK, nu = quick ? 64 : 224, nv = quick ? 32 : 224;
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
@@ -114,12 +114,7 @@ int bench_slice(cli_json *j, int quick)
     t0 = cli_now();
     for (li = 0; li < sl.nlayers && rc == CLI_OK; li++)
         for (k = 0; k < sl.layers[li].polys.nislands; k++) {
-            amp_polyset_clear(&isl);
-            for (r = 0; r < sl.layers[li].polys.nrings; r++)
-                if (sl.layers[li].polys.rings[r].island == (long)k)
-                    amp_polyset_add(&isl, amp_polyset_ring(&sl.layers[li].polys, r), sl.layers[li].polys.rings[r].n,
-                                    NULL);
-            amp_polyset_organize(&isl, NULL);
+            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
             amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);
             area += amp_polyset_area(&ins);
         }
@@ -128,12 +123,7 @@ int bench_slice(cli_json *j, int quick)
         amp_vec2 last = amp_v2(0, 0);
         int have = 0;
         for (k = 0; k < sl.layers[li].polys.nislands; k++) {
-            amp_polyset_clear(&isl);
-            for (r = 0; r < sl.layers[li].polys.nrings; r++)
-                if (sl.layers[li].polys.rings[r].island == (long)k)
-                    amp_polyset_add(&isl, amp_polyset_ring(&sl.layers[li].polys, r), sl.layers[li].polys.rings[r].n,
-                                    NULL);
-            amp_polyset_organize(&isl, NULL);
+            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
             amp_polyset_inset(&isl, o.radius, 0, &ins, NULL);
             perims += ins.nrings;
             amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);

@@ -32,7 +32,7 @@ int check_stroke(int argc, char **argv)
     amp_pathset ps;
     amp_mesh m;
     amp_slices sl;
-    size_t i, k, segs = 0, cross = 0, reps = 0, outside = 0, failed = 0, nolayer = 0, flipped;
+    size_t i, segs = 0, cross = 0, reps = 0, outside = 0, failed = 0, nolayer = 0, flipped;
     cli_opt opts[] = {{"mesh", CLI_STR, &mesh, 0},      {"layer", CLI_DOUBLE, &layer, 0},
                       {"first-layer", CLI_DOUBLE, &first, 0}, {"tol", CLI_DOUBLE, &tol, 0},
                       {"json", CLI_FLAG, &json, 0},     {NULL, CLI_FLAG, NULL, 0}};
@@ -51,30 +51,26 @@ int check_stroke(int argc, char **argv)
         rc = slicetool_load("check", mesh, layer, first, &m, &sl, &flipped);
     for (i = 0; i < ps.npaths && rc == CLI_OK; i++) {
         const amp_pvert *v = amp_pathset_path_verts(&ps, i);
-        size_t n = ps.paths[i].n;
-        amp_vec2 *p = amp_alloc(NULL, (n + 1) * sizeof *p);
         amp_stroke_report rep;
         const amp_polyset *region = NULL;
-        if (!p) {
-            rc = cli_fail("check", CLI_USAGE, "out of memory");
-            break;
-        }
-        for (k = 0; k < n; k++)
-            p[k] = amp_v2(v[k].p.x, v[k].p.y);
-        if (mesh && n) {
+        amp_status st;
+        if (mesh && ps.paths[i].n) {
             long li = layer_at(&sl, v[0].p.z);
             if (li < 0)
                 nolayer++;
             else
                 region = &sl.layers[li].polys;
         }
-        if (amp_stroke_check(p, n, region, tol, &rep, NULL) != AMP_OK)
-            failed++;
+        st = amp_pathset_stroke_check(&ps, i, region, tol, &rep, NULL);
+        if (st == AMP_ERR_NOMEM) {
+            rc = cli_fail("check", CLI_USAGE, "out of memory");
+            break;
+        }
+        failed += st != AMP_OK;
         segs += rep.segments;
         cross += rep.crossings;
         reps += rep.repeated_edges;
         outside += rep.outside;
-        amp_free(NULL, p);
     }
     if (rc == CLI_OK) {
         int ok = failed == 0 && nolayer == 0;

@@ -126,7 +126,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     amp_pathset ps;
     amp_contpath_stats st;
     amp_error err;
-    size_t i, k, crossings = 0, repeats = 0;
+    size_t i, crossings = 0, repeats = 0;
     int rc = CLI_OK;
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
@@ -135,19 +135,13 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         return cli_fail_err("slice", &err);
     }
     for (i = 0; i < ps.npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
-        amp_vec2 *p = amp_alloc(NULL, (ps.paths[i].n + 1) * sizeof *p);
         amp_stroke_report rep;
-        if (!p) {
+        if (amp_pathset_stroke_check(&ps, i, NULL, 0, &rep, &err) == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
-            return cli_fail("slice", CLI_USAGE, "out of memory");
+            return cli_fail_err("slice", &err);
         }
-        for (k = 0; k < ps.paths[i].n; k++)
-            p[k] = amp_v2(v[k].p.x, v[k].p.y);
-        amp_stroke_check(p, ps.paths[i].n, NULL, 0, &rep, NULL);
         crossings += rep.crossings;
         repeats += rep.repeated_edges;
-        amp_free(NULL, p);
     }
     if (out) {
         char comment[200];

@@ -110,6 +110,13 @@ typedef struct amp_stroke_report {
 amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err);
 
+/**
+ * amp_stroke_check() on path @p i of @p ps (its x, y; z is ignored). A
+ * scratch copy is allocated with the set's allocator (AMP_ERR_NOMEM).
+ */
+amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    amp_stroke_report *rep, amp_error *err);
+
 #ifdef __cplusplus
 }
 #endif

@@ -77,6 +77,12 @@ static inline const amp_vec2 *amp_polyset_ring(const amp_polyset *ps, size_t i) 
  */
 amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err);
 
+/**
+ * Copy island @p k of an organised set @p P (its outer ring and holes) into
+ * @p out (cleared first), organised. AMP_ERR_NOMEM.
+ */
+amp_status amp_polyset_island(const amp_polyset *P, size_t k, amp_polyset *out, amp_error *err);
+
 /** Signed area of a ring (shoelace): > 0 counter-clockwise. */
 double amp_ring_area(const amp_vec2 *p, size_t n);
 /** Reverse a ring in place. */
