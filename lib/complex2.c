@@ -152,7 +152,8 @@ static ekey *edge_list(const amp_cx2 *k, int free_edges, size_t *n)
         e[k->nfidx + i].h = AMP_CX2_NONE;
         e[k->nfidx + i].fwd = 0;
     }
-    qsort(e, m, sizeof *e, cmp_ekey);
+    if (m > 1)
+        qsort(e, m, sizeof *e, cmp_ekey);
     *n = m;
     return e;
 }
@@ -448,7 +449,8 @@ amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell,
         amp_free(k->alloc, keys);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the grid");
     }
-    qsort(keys, nkeys, sizeof *keys, cmp_lkey);
+    if (nkeys > 1)
+        qsort(keys, nkeys, sizeof *keys, cmp_lkey);
     for (i = 0; i < nkeys && st == AMP_OK; i++) {
         uint32_t id = (uint32_t)k->nv - 1;
         if (i == 0 || keys[i].x != keys[i - 1].x || keys[i].y != keys[i - 1].y)

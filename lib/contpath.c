@@ -43,7 +43,8 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the hull");
     }
     for (i = 0, n = 0; i < sl->nlayers; i++) {
-        memcpy(pts + n, sl->layers[i].polys.pts, sl->layers[i].polys.npts * sizeof *pts);
+        if (sl->layers[i].polys.npts)
+            memcpy(pts + n, sl->layers[i].polys.pts, sl->layers[i].polys.npts * sizeof *pts);
         n += sl->layers[i].polys.npts;
     }
     amp_cx2_init(&k, al);
@@ -157,7 +158,8 @@ static amp_status khat_edges(const amp_cx2 *k, const amp_allocator *al, uint64_t
         uint64_t a = k->xedge[2 * i], b = k->xedge[2 * i + 1];
         e[m++] = a < b ? (a << 32) | b : (b << 32) | a;
     }
-    qsort(e, m, sizeof *e, cmp_u64);
+    if (m > 1)
+        qsort(e, m, sizeof *e, cmp_u64);
     for (i = 0; i < m; i++)
         if (i == 0 || e[i] != e[i - 1])
             e[w++] = e[i];
@@ -338,7 +340,8 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
             if (!in[a] || !in[b])
                 continue;
         }
-        qsort(h, nh, sizeof *h, cmp_hit);
+        if (nh > 1)
+            qsort(h, nh, sizeof *h, cmp_hit);
         /* walk the pieces; piece j runs from hit j-1 (or A) to hit j (or B) */
         prevnode = NONE;
         for (j = 0; j <= nh; j++) {
@@ -467,7 +470,8 @@ static amp_status euler_tours(rgraph *g, double z, double rad, amp_pathset *out,
     }
     for (v = 0; v < g->nv; v++) {
         size_t d = start[v + 1] - start[v], j;
-        qsort(rot + start[v], d, sizeof *rot, cmp_rot);
+        if (d > 1)
+            qsort(rot + start[v], d, sizeof *rot, cmp_rot);
         for (j = 0; j + 1 < d; j += 2) {
             partner[rot[start[v] + j].end] = rot[start[v] + j + 1].end;
             partner[rot[start[v] + j + 1].end] = rot[start[v] + j].end;
@@ -572,7 +576,8 @@ static amp_status region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     rc = clip_region(khat, ke, nke, R, &g, err);
     if (rc != AMP_OK)
         goto done;
-    qsort(g.fe, g.nfe, sizeof *g.fe, cmp_fend);
+    if (g.nfe > 1)
+        qsort(g.fe, g.nfe, sizeof *g.fe, cmp_fend);
     st->free_ends += g.nfe;
     uf = amp_alloc(g.al, (g.nv + 1) * sizeof *uf);
     if (!uf) {

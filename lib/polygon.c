@@ -288,7 +288,8 @@ amp_status amp_convex_hull(const amp_vec2 *pts, size_t n, const amp_allocator *a
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the convex hull");
     }
     memcpy(s, pts, n * sizeof *s);
-    qsort(s, n, sizeof *s, cmp_pt);
+    if (n > 1)
+        qsort(s, n, sizeof *s, cmp_pt);
     /* Andrew's monotone chain: lower hull then upper hull, dropping
      * collinear points (orient <= 0) */
     for (i = 0; i < n; i++) {
@@ -665,7 +666,8 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
     }
     /* 2. all mutual crossings (sweep over x) */
     if (st == AMP_OK)
-        qsort(c.seg, c.nseg, sizeof *c.seg, cmp_seg_x);
+        if (c.nseg > 1)
+            qsort(c.seg, c.nseg, sizeof *c.seg, cmp_seg_x);
     for (i = 0; i < c.nseg && st == AMP_OK; i++) {
         double xmax = fmax(c.seg[i].a.x, c.seg[i].b.x);
         double ylo = fmin(c.seg[i].a.y, c.seg[i].b.y), yhi = fmax(c.seg[i].a.y, c.seg[i].b.y);
@@ -681,7 +683,8 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
         st = egrid_build(&g, in, r, c.al);
     if (st != AMP_OK)
         goto done;
-    qsort(c.spl, c.nspl, sizeof *c.spl, cmp_split);
+    if (c.nspl > 1)
+        qsort(c.spl, c.nspl, sizeof *c.spl, cmp_split);
     /* 3. split into pieces and keep those on the offset boundary {d = r} */
     lim = r * (1.0 - 1e-9);
     for (i = 0, k = 0; i < c.nseg; i++) {
@@ -715,7 +718,8 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
         }
     }
     /* 4. stitch pieces into rings by node ids */
-    qsort(pc, npc, sizeof *pc, cmp_piece);
+    if (npc > 1)
+        qsort(pc, npc, sizeof *pc, cmp_piece);
     first = amp_alloc(c.al, (c.nnode + 1) * sizeof *first);
     if (!first) {
         st = AMP_ERR_NOMEM;

@@ -116,7 +116,8 @@ amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *re
         vk[i].y = pts[i].y;
         vk[i].i = i;
     }
-    qsort(vk, n, sizeof *vk, cmp_vkey);
+    if (n > 1)
+        qsort(vk, n, sizeof *vk, cmp_vkey);
     for (i = 0; i < n; i++) {
         if (i && (vk[i].x != vk[i - 1].x || vk[i].y != vk[i - 1].y))
             nid++;
@@ -135,12 +136,14 @@ amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *re
         ns++;
     }
     r.segments = ns;
-    qsort(ek, ns, sizeof *ek, cmp_ekey2);
+    if (ns > 1)
+        qsort(ek, ns, sizeof *ek, cmp_ekey2);
     for (i = 1; i < ns; i++)
         if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b)
             r.repeated_edges++;
     /* segment pairs, swept over x */
-    qsort(sg, ns, sizeof *sg, cmp_seg2);
+    if (ns > 1)
+        qsort(sg, ns, sizeof *sg, cmp_seg2);
     for (i = 0; i < ns; i++) {
         double xmax = fmax(sg[i].a.x, sg[i].b.x);
         for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
@@ -168,7 +171,8 @@ amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *re
         ps[np].out = atan2(pts[b + 1].y - pts[i].y, pts[b + 1].x - pts[i].x);
         np++;
     }
-    qsort(ps, np, sizeof *ps, cmp_pass);
+    if (np > 1)
+        qsort(ps, np, sizeof *ps, cmp_pass);
     for (i = 0; i < np; i++)
         for (j = i + 1; j < np && ps[j].v == ps[i].v; j++) {
             int c1 = in_arc(ps[i].in, ps[i].out, ps[j].in), c2 = in_arc(ps[i].in, ps[i].out, ps[j].out);

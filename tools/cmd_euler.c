@@ -100,7 +100,8 @@ int cmd_euler(int argc, char **argv)
         goto done;
     }
     for (i = 0, npts = 0; i < sl.nlayers; i++) {
-        memcpy(pts + npts, sl.layers[i].polys.pts, sl.layers[i].polys.npts * sizeof *pts);
+        if (sl.layers[i].polys.npts)
+            memcpy(pts + npts, sl.layers[i].polys.pts, sl.layers[i].polys.npts * sizeof *pts);
         npts += sl.layers[i].polys.npts;
     }
     eo.offset = opts[4].seen ? offset : cell / 5;
