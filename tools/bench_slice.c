@@ -132,7 +132,13 @@ int bench_slice(cli_json *j, int quick)
     }
     t_rect = cli_now() - t0;
     if (rc == CLI_OK) {
-        size_t starts_c = ps.npaths, starts_r = rs.starts + perims;
+        size_t starts_c = ps.npaths, starts_r = rs.starts + perims, q;
+        double travel_c = 0; /* within layers, as for the baseline */
+        for (q = 1; q < ps.npaths; q++) {
+            amp_pvert a = amp_pathset_path_verts(&ps, q - 1)[ps.paths[q - 1].n - 1], c = amp_pathset_path_verts(&ps, q)[0];
+            if (a.p.z == c.p.z)
+                travel_c += amp_v3_dist(a.p, c.p);
+        }
         if (j) {
             cli_json_int(j, "triangles", (long long)m.ntris);
             cli_json_int(j, "layers", (long long)sl.nlayers);
@@ -146,7 +152,8 @@ int bench_slice(cli_json *j, int quick)
             cli_json_num(j, "continuous_infill_mm", st.infill_length);
             cli_json_num(j, "rectilinear_infill_mm", rs.length);
             cli_json_num(j, "rectilinear_spacing_mm", spacing);
-            cli_json_num(j, "continuous_travel_mm", st.travel_length);
+            cli_json_num(j, "continuous_travel_mm", travel_c);
+            cli_json_num(j, "travel_ratio", travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
             cli_json_num(j, "rectilinear_travel_mm", rs.travel);
             cli_json_num(j, "rectilinear_s", t_rect);
         } else {
@@ -157,9 +164,8 @@ int bench_slice(cli_json *j, int quick)
                    "mm)\n",
                    (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
                    st.infill_length, rs.length, spacing);
-            printf("travel within layers: continuous %.0f mm (incl. between layers) vs rectilinear %.0f mm (within layers "
-                   "only)\n",
-                   st.travel_length, rs.travel);
+            printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, rs.travel,
+                   travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
         }
     }
     amp_polyset_free(&isl);
