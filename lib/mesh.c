@@ -97,23 +97,20 @@ static int edge_cmp(const void *pa, const void *pb)
     return a->dir - b->dir;
 }
 
-amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err)
+/*
+ * The 3 directed edges of every non-degenerate triangle into e (room for
+ * 3 ntris), sorted so that the uses of one undirected edge are adjacent.
+ * Returns the count; *degenerate (if not NULL) counts skipped triangles.
+ */
+static size_t collect_edges(const amp_tri *tris, size_t ntris, edge_rec *e, size_t *degenerate)
 {
-    edge_rec *e;
     size_t i, n = 0;
-    if (!m || !out)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_edges: NULL argument");
-    memset(out, 0, sizeof *out);
-    if (m->ntris == 0)
-        return AMP_OK;
-    e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
-    if (!e)
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
-    for (i = 0; i < m->ntris; i++) {
-        const amp_tri *t = &m->tris[i];
+    for (i = 0; i < ntris; i++) {
+        const amp_tri *t = &tris[i];
         int k;
         if (t->v[0] == t->v[1] || t->v[1] == t->v[2] || t->v[0] == t->v[2]) {
-            out->degenerate++;
+            if (degenerate)
+                (*degenerate)++;
             continue;
         }
         for (k = 0; k < 3; k++) {
@@ -126,6 +123,22 @@ amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_erro
         }
     }
     qsort(e, n, sizeof *e, edge_cmp);
+    return n;
+}
+
+amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err)
+{
+    edge_rec *e;
+    size_t i, n = 0;
+    if (!m || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_edges: NULL argument");
+    memset(out, 0, sizeof *out);
+    if (m->ntris == 0)
+        return AMP_OK;
+    e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
+    if (!e)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
+    n = collect_edges(m->tris, m->ntris, e, &out->degenerate);
     for (i = 0; i < n;) {
         size_t j = i, pos = 0, neg = 0;
         while (j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi) {
@@ -162,6 +175,7 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
     uint32_t *nb = NULL, *queue = NULL;
     unsigned char *rel = NULL, *flip = NULL, *seen = NULL;
     size_t i, n = 0, nflip = 0;
+    amp_status st = AMP_OK;
     if (flipped)
         *flipped = 0;
     if (ntris == 0)
@@ -175,30 +189,11 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
     seen = amp_calloc(al, ntris, 1);
     queue = amp_calloc(al, ntris, sizeof *queue);
     if (!e || !nb || !rel || !flip || !seen || !queue) {
-        amp_free(al, e);
-        amp_free(al, nb);
-        amp_free(al, rel);
-        amp_free(al, flip);
-        amp_free(al, seen);
-        amp_free(al, queue);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory orienting triangles");
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory orienting triangles");
+        goto done; /* one exit that frees every temporary */
     }
     memset(nb, 0xff, ntris * 3 * sizeof *nb);
-    for (i = 0; i < ntris; i++) {
-        const amp_tri *t = &tris[i];
-        int k;
-        if (t->v[0] == t->v[1] || t->v[1] == t->v[2] || t->v[0] == t->v[2])
-            continue;
-        for (k = 0; k < 3; k++) {
-            uint32_t a = t->v[k], b = t->v[(k + 1) % 3];
-            e[n].lo = a < b ? a : b;
-            e[n].hi = a < b ? b : a;
-            e[n].dir = a < b ? 1 : -1;
-            e[n].tri = (uint32_t)i;
-            n++;
-        }
-    }
-    qsort(e, n, sizeof *e, edge_cmp);
+    n = collect_edges(tris, ntris, e, NULL);
     /* adjacency across manifold edges only: rel = 1 when the neighbour must be flipped relative to us */
     for (i = 0; i + 1 < n; i++) {
         if (e[i].lo == e[i + 1].lo && e[i].hi == e[i + 1].hi &&
@@ -260,15 +255,16 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
             }
         }
     }
+done:
     amp_free(al, e);
     amp_free(al, nb);
     amp_free(al, rel);
     amp_free(al, flip);
     amp_free(al, seen);
     amp_free(al, queue);
-    if (flipped)
+    if (flipped && st == AMP_OK)
         *flipped = nflip;
-    return AMP_OK;
+    return st;
 }
 
 amp_status amp_mesh_orient(amp_mesh *m, size_t *flipped, amp_error *err)

@@ -13,9 +13,11 @@
 
 #include "ampath/mesh.h"
 #include "lex.h"
+#include "mesh_internal.h"
 
 /* ---------------------------------------------------------------- hashing */
 
+/* Exact-position table: slots hold vertex indices into m->verts (WELD_EMPTY = free). */
 static uint64_t mix64(uint64_t h)
 {
     h ^= h >> 33;
@@ -39,18 +41,11 @@ static uint64_t hash_point(amp_vec3 p)
     return mix64(dbits(p.x) ^ mix64(dbits(p.y) ^ mix64(dbits(p.z))));
 }
 
-/* Exact-position table: slots hold vertex indices into m->verts (UINT32_MAX = empty). */
-typedef struct weld_table {
-    const amp_allocator *alloc;
-    uint32_t *slot;
-    size_t cap, used; /* cap is a power of two */
-} weld_table;
+static int same_point(amp_vec3 a, amp_vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
 #define WELD_EMPTY 0xffffffffu
 
-static int same_point(amp_vec3 a, amp_vec3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
-
-static amp_status weld_resize(weld_table *t, const amp_mesh *m, size_t cap)
+static amp_status weld_resize(amp_weld_table *t, const amp_mesh *m, size_t cap)
 {
     uint32_t *s = amp_calloc(t->alloc, cap, sizeof *s);
     size_t i;
@@ -73,8 +68,19 @@ static amp_status weld_resize(weld_table *t, const amp_mesh *m, size_t cap)
     return AMP_OK;
 }
 
-/* Index of a vertex at exactly @p p, adding it to @p m when new. */
-static amp_status weld_vertex(weld_table *t, amp_mesh *m, amp_vec3 p, uint32_t *out, amp_error *err)
+void amp_weld_init(amp_weld_table *t, const amp_allocator *a)
+{
+    memset(t, 0, sizeof *t);
+    t->alloc = a;
+}
+
+void amp_weld_free(amp_weld_table *t)
+{
+    amp_free(t->alloc, t->slot);
+    amp_weld_init(t, t->alloc);
+}
+
+amp_status amp_weld_vertex(amp_weld_table *t, amp_mesh *m, amp_vec3 p, uint32_t *out, amp_error *err)
 {
     size_t h;
     amp_status st;
@@ -100,7 +106,7 @@ static amp_status weld_vertex(weld_table *t, amp_mesh *m, amp_vec3 p, uint32_t *
 
 typedef struct stl_reader {
     amp_mesh *m;
-    weld_table wt;
+    amp_weld_table wt;
     size_t triangles, degenerate;
 } stl_reader;
 
@@ -129,7 +135,7 @@ static amp_status add_triangle(stl_reader *r, const amp_vec3 *p, amp_error *err)
         return AMP_OK;
     }
     for (k = 0; k < 3; k++)
-        if ((st = weld_vertex(&r->wt, r->m, p[k], &idx[k], err)) != AMP_OK)
+        if ((st = amp_weld_vertex(&r->wt, r->m, p[k], &idx[k], err)) != AMP_OK)
             return st;
     return amp_mesh_add_tri(r->m, idx[0], idx[1], idx[2], err);
 }
@@ -301,13 +307,13 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
     binary = !starts_solid(d, len) || (len >= 84 && (uint64_t)len == 84 + 50 * (uint64_t)le32(d + 80));
     memset(&r, 0, sizeof r);
     r.m = m;
-    r.wt.alloc = m->alloc;
+    amp_weld_init(&r.wt, m->alloc);
     nv0 = m->nverts;
     nt0 = m->ntris;
     st = binary ? read_binary(&r, d, len, err) : read_ascii(&r, (const char *)d, len, err);
     if (st == AMP_OK && m->ntris == nt0)
         st = amp_fail(err, AMP_ERR_GEOMETRY, 0, "all %lu STL triangles have zero area", (unsigned long)r.triangles);
-    amp_free(m->alloc, r.wt.slot);
+    amp_weld_free(&r.wt);
     if (st != AMP_OK) {
         m->nverts = nv0;
         m->ntris = nt0;
@@ -448,26 +454,25 @@ amp_status amp_mesh_write_stl(const amp_mesh *m, int binary, amp_sink_fn sink, v
     return binary ? write_binary(m, sink, user, err) : write_ascii(m, sink, user, err);
 }
 
+typedef struct stl_file_ctx {
+    const amp_mesh *m;
+    int binary;
+} stl_file_ctx;
+
+static amp_status stl_file_writer(void *vctx, amp_sink_fn sink, void *user, amp_error *err)
+{
+    const stl_file_ctx *c = vctx;
+    return amp_mesh_write_stl(c->m, c->binary, sink, user, err);
+}
+
 amp_status amp_mesh_write_stl_file(const amp_mesh *m, const char *path, int binary, amp_error *err)
 {
-    char tmp[1024];
-    FILE *f;
-    amp_status st;
+    stl_file_ctx c;
     if (!m || !path)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_write_stl_file: NULL argument");
-    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
-        return amp_fail(err, AMP_ERR_ARG, 0, "%s: path too long", path);
-    f = fopen(tmp, "wb");
-    if (!f)
-        return amp_fail(err, AMP_ERR_IO, 0, "%s: cannot create", tmp);
-    st = amp_mesh_write_stl(m, binary, amp_file_sink, f, err);
-    if (fclose(f) != 0 && st == AMP_OK)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: write failed", tmp);
-    if (st == AMP_OK && rename(tmp, path) != 0)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: cannot rename into place", path);
-    if (st != AMP_OK)
-        remove(tmp);
-    return st;
+    c.m = m;
+    c.binary = binary;
+    return amp_write_file_atomic(path, stl_file_writer, &c, err);
 }
 
 /* -------------------------------------------------------- tolerance weld */

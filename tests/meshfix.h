@@ -21,3 +21,19 @@ double amp_fix_rand(unsigned long long *s);
 double amp_fix_torus_sdf(amp_vec3 p, double R, double r);
 
 #endif
+
+/** Distance from @p p to the surface of @p m, brute force over every triangle (independent of the BVH). */
+double amp_fix_mesh_dist(const amp_mesh *m, amp_vec3 p);
+
+/**
+ * The helix solid of SPEC §4, computed independently of lib/meshmodels.c:
+ * the point c(t) + u N(t) + v B(t) (N, B: unit normal-plane frame, N towards
+ * the axis), with z0 = 5π/√(π²+1) so that the lowest point is at z = 0.
+ */
+amp_vec3 amp_fix_helix_point(double t, double u, double v);
+
+/** Distance from @p p to the helix centre line c(t), t in [0, 1]; *tc receives the closest t. */
+double amp_fix_helix_axis_dist(amp_vec3 p, double *tc);
+
+/** Number of connected components of the triangles of @p m (through shared vertices). */
+size_t amp_fix_components(const amp_mesh *m);

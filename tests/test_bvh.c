@@ -1,5 +1,6 @@
 /* BVH: rays, closest points, winding-number inside tests, polyline clipping. */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "meshfix.h"
@@ -65,28 +66,7 @@ START_TEST(ray_through_torus_hits_four_times_alternating)
 }
 END_TEST
 
-/* Independent closest distance: plane projection when inside the triangle, else the nearest edge. */
-static double brute_dist(const amp_mesh *m, amp_vec3 p)
-{
-    double best = HUGE_VAL;
-    size_t i;
-    for (i = 0; i < m->ntris; i++) {
-        amp_vec3 a = m->verts[m->tris[i].v[0]], b = m->verts[m->tris[i].v[1]], c = m->verts[m->tris[i].v[2]];
-        amp_vec3 n = amp_v3_normalize(amp_v3_cross(amp_v3_sub(b, a), amp_v3_sub(c, a)));
-        double h = amp_v3_dot(amp_v3_sub(p, a), n), d2;
-        amp_vec3 q = amp_v3_madd(p, n, -h);
-        /* inside test by same-side signs of the three edge normals */
-        int in = amp_v3_dot(amp_v3_cross(amp_v3_sub(b, a), amp_v3_sub(q, a)), n) >= 0 &&
-                 amp_v3_dot(amp_v3_cross(amp_v3_sub(c, b), amp_v3_sub(q, b)), n) >= 0 &&
-                 amp_v3_dot(amp_v3_cross(amp_v3_sub(a, c), amp_v3_sub(q, c)), n) >= 0;
-        if (in)
-            d2 = h * h;
-        else
-            d2 = fmin(amp_v3_seg_dist2(p, a, b, NULL), fmin(amp_v3_seg_dist2(p, b, c, NULL), amp_v3_seg_dist2(p, c, a, NULL)));
-        best = fmin(best, d2);
-    }
-    return sqrt(best);
-}
+static double brute_dist(const amp_mesh *m, amp_vec3 p) { return amp_fix_mesh_dist(m, p); }
 
 START_TEST(closest_point_matches_brute_force)
 {
@@ -322,6 +302,61 @@ START_TEST(clip_circle_in_torus_with_missing_triangle_stays_whole)
 }
 END_TEST
 
+
+/*
+ * A curve of a helix-following field (paper Fig. 13: a square cross-section
+ * field around the helix) that weaves in and out of the disc: offset
+ * (u, v) = (7 sin 5πt, 1) in the normal-plane frame, t in [-0.05, 1.05].
+ * Exactly, the point is inside iff t in [0, 1] and u² + v² < 25.
+ */
+START_TEST(clip_helix_field_curve_to_helix_mesh)
+{
+    amp_mesh m;
+    amp_bvh *b;
+    amp_pathset ps;
+    amp_pvert *c;
+    amp_error err;
+    size_t n = 3001, i, k, expect = 0;
+    int was_in = 0;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    b = build(&m);
+    c = malloc(n * sizeof *c);
+    for (i = 0; i < n; i++) {
+        double t = -0.05 + 1.1 * (double)i / (double)(n - 1), u = 7 * sin(5 * 3.14159265358979323846 * t);
+        int in = t >= 0 && t <= 1 && u * u + 1 < 25;
+        c[i].p = amp_fix_helix_point(t, u, 1);
+        c[i].r = 0.5;
+        expect += in && !was_in;
+        was_in = in;
+    }
+    ck_assert_int_eq(amp_bvh_clip_polyline(b, c, n, 0.0, AMP_ROLE_OBJECT, &ps, &err), AMP_OK);
+    ck_assert_uint_eq(ps.npaths, expect);
+    ck_assert_uint_ge(expect, 5);
+    for (i = 0; i < ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
+        size_t nv = ps.paths[i].n;
+        for (k = 0; k < nv; k++) {
+            double t;
+            /* inside the mesh, hence inside the exact solid up to the mesh tolerance (0.05 mm, test_mesh.c) */
+            ck_assert_msg(amp_bvh_winding_exact(b, v[k].p) > 0.5 || amp_fix_mesh_dist(&m, v[k].p) < 1e-9,
+                          "vertex outside the mesh");
+            ck_assert_msg(amp_fix_helix_axis_dist(v[k].p, &t) <= 5 + 0.05, "vertex %g outside the helix solid",
+                          amp_fix_helix_axis_dist(v[k].p, &t) - 5);
+        }
+        /* both ends are cut points on the surface */
+        ck_assert_msg(amp_fix_mesh_dist(&m, v[0].p) <= 1e-9, "start %g from the surface", amp_fix_mesh_dist(&m, v[0].p));
+        ck_assert_msg(amp_fix_mesh_dist(&m, v[nv - 1].p) <= 1e-9, "end %g from the surface",
+                      amp_fix_mesh_dist(&m, v[nv - 1].p));
+    }
+    free(c);
+    amp_bvh_free(b);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(bvh_rejects_empty_and_degenerate_meshes)
 {
     amp_mesh m;
@@ -353,6 +388,7 @@ static Suite *bvh_suite(void)
     AMP_ADD_TEST(tc, concurrent_queries_match_serial);
     AMP_ADD_TEST(tc, clip_straight_line_through_torus_gives_two_exact_pieces);
     AMP_ADD_TEST(tc, clip_circle_in_torus_with_missing_triangle_stays_whole);
+    AMP_ADD_TEST(tc, clip_helix_field_curve_to_helix_mesh);
     AMP_ADD_TEST(tc, bvh_rejects_empty_and_degenerate_meshes);
     suite_add_tcase(s, tc);
     return s;

@@ -1,7 +1,10 @@
+#define _POSIX_C_SOURCE 200809L /* popen, truncate */
 /* Triangle meshes: STL reading and writing, welding, topology, built-in models. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "meshfix.h"
 #include "testutil.h"
@@ -336,6 +339,181 @@ START_TEST(stl_reader_survives_allocation_failures)
 }
 END_TEST
 
+
+START_TEST(every_model_is_closed_outward_single_and_on_the_plate)
+{
+    size_t i;
+    ck_assert_uint_eq(amp_mesh_model_count(), 3);
+    ck_assert_ptr_null(amp_mesh_model_name(3));
+    for (i = 0; i < amp_mesh_model_count(); i++) {
+        amp_mesh m;
+        amp_error err;
+        amp_mesh_edge_report er;
+        amp_box3 b;
+        amp_mesh_init(&m, NULL);
+        ck_assert_int_eq(amp_mesh_model(amp_mesh_model_name(i), 0, &m, &err), AMP_OK);
+        ck_assert_ptr_nonnull(amp_mesh_model_summary(i));
+        ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+        ck_assert_msg(er.closed, "%s: boundary %lu nonmanifold %lu misoriented %lu degenerate %lu",
+                      amp_mesh_model_name(i), (unsigned long)er.boundary, (unsigned long)er.nonmanifold,
+                      (unsigned long)er.misoriented, (unsigned long)er.degenerate);
+        ck_assert_msg(amp_mesh_volume(&m) > 0, "%s has negative volume", amp_mesh_model_name(i));
+        ck_assert_uint_eq(amp_fix_components(&m), 1);
+        b = amp_mesh_bbox(&m);
+        ck_assert_near(b.min.z, 0, 1e-12);
+        amp_mesh_free(&m);
+    }
+}
+END_TEST
+
+START_TEST(model_errors_are_reported)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_model("teapot", 0, &m, &err), AMP_ERR_ARG);
+    ck_assert(strstr(err.msg, "teapot") != NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", -1, &m, &err), AMP_ERR_RANGE);
+    ck_assert_int_eq(amp_mesh_model("helix", NAN, &m, &err), AMP_ERR_RANGE);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_ERR_ARG); /* not empty */
+    amp_mesh_free(&m);
+}
+END_TEST
+
+/*
+ * Two-sided deviation between a helix mesh and the exact helix solid:
+ * mesh -> exact (points on every side triangle: corners, edge midpoints,
+ * centroid, measured as | |p - axis| - 5 |) and exact -> mesh (samples of
+ * the true tube and caps, BVH distance). Cap triangles lie in the exact cap
+ * planes (checked separately), so they only enter the second direction.
+ */
+static double helix_deviation(const amp_mesh *m)
+{
+    amp_bvh *b = NULL;
+    amp_error err;
+    double worst = 0;
+    size_t i;
+    int k;
+    unsigned long long s = 2024;
+    for (i = 0; i < m->ntris; i++) {
+        amp_vec3 p[3];
+        double w[7][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {.5, .5, 0}, {0, .5, .5}, {.5, 0, .5}, {1 / 3., 1 / 3., 1 / 3.}};
+        int c, on_cap = 0;
+        for (c = 0; c < 3; c++) {
+            p[c] = m->verts[m->tris[i].v[c]];
+            on_cap += amp_fix_helix_axis_dist(p[c], NULL) < 1e-6; /* a cap centre */
+        }
+        if (on_cap)
+            continue;
+        for (k = 0; k < 7; k++) {
+            amp_vec3 q = amp_v3_add(amp_v3_scale(p[0], w[k][0]), amp_v3_add(amp_v3_scale(p[1], w[k][1]), amp_v3_scale(p[2], w[k][2])));
+            worst = fmax(worst, fabs(amp_fix_helix_axis_dist(q, NULL) - 5));
+        }
+    }
+    ck_assert_int_eq(amp_bvh_build(&b, m, &err), AMP_OK);
+    for (k = 0; k < 4000; k++) {
+        double t = amp_fix_rand(&s), th = 2 * PI * amp_fix_rand(&s), rho = k % 4 == 0 ? 5 * sqrt(amp_fix_rand(&s)) : 5;
+        amp_vec3 q;
+        if (k % 4 == 0)
+            t = k % 8 == 0 ? 0 : 1; /* a cap point */
+        q = amp_fix_helix_point(t, rho * cos(th), rho * sin(th));
+        worst = fmax(worst, amp_bvh_closest(b, q, NULL, NULL));
+    }
+    amp_bvh_free(b);
+    return worst;
+}
+
+START_TEST(helix_mesh_is_within_0_05_mm_of_the_exact_solid)
+{
+    amp_mesh m, coarse;
+    amp_error err;
+    double arc = 40 * sqrt(PI * PI + 1), dev;
+    amp_box3 b;
+    amp_mesh_init(&m, NULL);
+    amp_mesh_init(&coarse, NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    dev = helix_deviation(&m);
+    fprintf(stderr, "helix mesh: %lu triangles, two-sided deviation %.4f mm\n", (unsigned long)m.ntris, dev);
+    ck_assert_msg(dev <= 0.05, "helix deviates %g mm", dev);
+    /* the checker is not blind: a 1 mm tessellation fails it */
+    ck_assert_int_eq(amp_mesh_model("helix", 1.0, &coarse, &err), AMP_OK);
+    ck_assert_msg(helix_deviation(&coarse) > 0.05, "coarse helix deviates only %g", helix_deviation(&coarse));
+    /* volume of a disc swept along a curve = area x arc length (no self-overlap) */
+    ck_assert_near(amp_mesh_volume(&m), PI * 25 * arc, 0.01 * PI * 25 * arc);
+    ck_assert_msg(amp_mesh_volume(&m) < PI * 25 * arc, "inscribed mesh must be smaller");
+    b = amp_mesh_bbox(&m);
+    ck_assert_near(b.max.z, 40 + 2 * 5 * PI / sqrt(PI * PI + 1), 0.05);
+    ck_assert_near(b.max.x, 25, 0.05);
+    amp_mesh_free(&m);
+    amp_mesh_free(&coarse);
+}
+END_TEST
+
+START_TEST(twisted_bridge_has_the_documented_size_and_volume)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_box3 b;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_model("twisted-bridge", 0, &m, &err), AMP_OK);
+    /* sections perpendicular to x of constant area 16 x 6: Cavalieri gives 16 * 6 * 80 */
+    ck_assert_near(amp_mesh_volume(&m), 16 * 6 * 80, 0.005 * 16 * 6 * 80);
+    b = amp_mesh_bbox(&m);
+    ck_assert_near(b.min.x, 0, 1e-12);
+    ck_assert_near(b.max.x, 80, 1e-12);
+    ck_assert_near(b.max.y, sqrt(8 * 8 + 3 * 3), 0.01); /* the section's half-diagonal at some twist angle */
+    amp_mesh_free(&m);
+}
+END_TEST
+
+
+/* Run "$AMP_TOOL args" and capture stdout; returns the exit status (or -1 when AMP_TOOL is unset). */
+static int run_tool(const char *args, char *out, size_t cap)
+{
+    const char *tool = getenv("AMP_TOOL");
+    char cmd[1024];
+    FILE *p;
+    size_t n;
+    int rc;
+    if (!tool)
+        return -1;
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>/dev/null", tool, args);
+    p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    n = fread(out, 1, cap - 1, p);
+    out[n] = '\0';
+    rc = pclose(p);
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+START_TEST(cli_info_reports_mesh_closedness_and_volume)
+{
+    amp_mesh m;
+    amp_error err;
+    char out[4096], args[600];
+    const char *f = amp_test_tmp("info-torus.stl");
+    if (!getenv("AMP_TOOL"))
+        return; /* run through make check, which sets AMP_TOOL */
+    amp_mesh_init(&m, NULL);
+    make_torus(&m, 20, 5, 24, 12);
+    m.tris[0] = m.tris[--m.ntris]; /* one hole: not closed */
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 0, &err), AMP_OK);
+    snprintf(args, sizeof args, "info '%s' --json", f);
+    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"kind\":\"mesh\"") && strstr(out, "\"format\":\"ascii\"") &&
+                      strstr(out, "\"triangles\":575") && strstr(out, "\"closed\":false") &&
+                      strstr(out, "\"boundary_edges\":3"),
+                  "unexpected: %s", out);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
+    /* a truncated binary STL: exit status 2 */
+    ck_assert_int_eq(truncate(f, 84 + 50 * 10), 0);
+    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    remove(f);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *mesh_suite(void)
 {
     Suite *s = suite_create("mesh");
@@ -350,6 +528,14 @@ static Suite *mesh_suite(void)
     AMP_ADD_TEST(tc, weld_with_tolerance_merges_near_vertices_and_drops_collapsed);
     AMP_ADD_TEST(tc, edge_checker_flags_holes_and_flipped_triangles);
     AMP_ADD_TEST(tc, stl_reader_survives_allocation_failures);
+    AMP_ADD_TEST(tc, cli_info_reports_mesh_closedness_and_volume);
+    suite_add_tcase(s, tc);
+    tc = tcase_create("models");
+    tcase_set_timeout(tc, 120);
+    AMP_ADD_TEST(tc, every_model_is_closed_outward_single_and_on_the_plate);
+    AMP_ADD_TEST(tc, model_errors_are_reported);
+    AMP_ADD_TEST(tc, helix_mesh_is_within_0_05_mm_of_the_exact_solid);
+    AMP_ADD_TEST(tc, twisted_bridge_has_the_documented_size_and_volume);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -146,6 +146,39 @@ amp_status amp_mesh_write_stl_file(const amp_mesh *m, const char *path, int bina
  */
 amp_status amp_mesh_weld(amp_mesh *m, double tol, amp_error *err);
 
+/* ---- built-in meshes (lib/meshmodels.c) ---- */
+
+/** Default tolerance of amp_mesh_model(): the boundary is within 0.05 mm of the exact shape (SPEC §4). */
+#define AMP_MESH_MODEL_TOL 0.05
+
+/**
+ * Build the built-in mesh @p name into the empty mesh @p m (SPEC §4
+ * `ampath model NAME -o FILE.stl`):
+ * - "helix": the boundary of the helix solid (a disc of radius 5 swept along
+ *   c(t) = (20 cos 2πt, 20 sin 2πt, z0 + 40 t), t in [0, 1], in the plane
+ *   normal to c'(t), flat end caps, lowest point at z = 0); every point of
+ *   the mesh is within @p tol of the exact boundary and vice versa.
+ * - "twisted-bridge": an arched beam (span 80 mm along x, section 16 x 6 mm
+ *   centred on z = 14 sin(πx/80), turning a quarter turn about x from end to
+ *   end), ends on z = 0 (paper Fig. 15); vertices lie on the exact sweep.
+ * - "crocodile-like": an organic shape (body, head, curved tail, four thin
+ *   legs of radius about 2 mm), blended implicit surface polygonised by
+ *   marching tetrahedra with a grid step of 16 tol clamped to [0.4, 2] mm.
+ * Every model is closed, consistently oriented outward (positive volume)
+ * and rests on z = 0. @p tol is in mm, 0 means AMP_MESH_MODEL_TOL.
+ * Errors: AMP_ERR_ARG (unknown name, NULL, non-empty mesh), AMP_ERR_RANGE
+ * (tol outside [0.005, 1]), AMP_ERR_NOMEM (the mesh is left empty).
+ * Reentrant.
+ */
+amp_status amp_mesh_model(const char *name, double tol, amp_mesh *m, amp_error *err);
+
+/** Number of built-in mesh models. */
+size_t amp_mesh_model_count(void);
+/** Name of model @p i (NULL when i is out of range); static string. */
+const char *amp_mesh_model_name(size_t i);
+/** One-line description of model @p i (NULL when out of range); static string. */
+const char *amp_mesh_model_summary(size_t i);
+
 #ifdef __cplusplus
 }
 #endif
