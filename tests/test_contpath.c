@@ -150,6 +150,44 @@ START_TEST(all_layers_of_a_sphere_and_torus_pair)
 }
 END_TEST
 
+START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
+{
+    static const char *const names[] = {"helix", "twisted-bridge"};
+    size_t n, i;
+    for (n = 0; n < 2; n++) {
+        amp_mesh m;
+        amp_slices sl;
+        amp_slice_opts so;
+        amp_contpath_opts o;
+        amp_contpath_stats st;
+        amp_pathset ps;
+        amp_error err;
+        amp_mesh_init(&m, NULL);
+        amp_slices_init(&sl, NULL);
+        amp_pathset_init(&ps, NULL);
+        ck_assert_msg(amp_mesh_model(names[n], 0, &m, &err) == AMP_OK, "%s", err.msg);
+        so.layer = 1.0;
+        so.first_layer = 0.4;
+        ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
+        ck_assert_uint_eq(sl.open_chains, 0);
+        amp_contpath_opts_default(&o, 0.5);
+        ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+        ck_assert_uint_gt(st.islands, sl.nlayers / 2);
+        ck_assert_uint_eq(st.strokes, st.islands);
+        ck_assert_uint_eq(st.multi_stroke, 0);
+        ck_assert_uint_eq(st.odd_vertices, 0);
+        ck_assert_msg(st.dropped_length <= 0.05 * st.infill_length, "%s: dropped %g of %g mm", names[n],
+                      st.dropped_length, st.infill_length);
+        for (i = 0; i < ps.npaths; i++)
+            ck_assert_msg(amp_pathset_stroke_check(&ps, i, NULL, 0, NULL, &err) == AMP_OK, "%s path %lu: %s", names[n],
+                          (unsigned long)i, err.msg);
+        amp_pathset_free(&ps);
+        amp_slices_free(&sl);
+        amp_mesh_free(&m);
+    }
+}
+END_TEST
+
 START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
 {
     amp_polyset sq;
@@ -222,6 +260,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, torus_sections_get_one_crossing_free_stroke);
     AMP_ADD_TEST(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
     AMP_ADD_TEST(tc, all_layers_of_a_sphere_and_torus_pair);
+    AMP_ADD_TEST(tc, built_in_models_get_one_crossing_free_stroke_per_island);
     AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
     AMP_ADD_TEST(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
     suite_add_tcase(s, tc);
