@@ -278,6 +278,8 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
     double bx0 = HUGE_VAL, by0 = HUGE_VAL, bx1 = -HUGE_VAL, by1 = -HUGE_VAL;
     size_t *node = NULL, i, r, s, nh, caph = 0, *deg = NULL;
     signed char *in = NULL;
+    amp_vec2 *kv = NULL;
+    double eps;
     hit *h = NULL;
     amp_status st = AMP_OK;
     for (i = 0; i < R->npts; i++) {
@@ -288,25 +290,37 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
     }
     node = amp_alloc(al, (k->nv + 1) * sizeof *node);
     in = amp_alloc(al, k->nv + 1);
-    if (!node || !in) {
+    kv = amp_alloc(al, (k->nv + 1) * sizeof *kv);
+    if (!node || !in || !kv) {
         st = AMP_ERR_NOMEM;
         goto done;
     }
+    eps = 1e-9 * (1.0 + fmax(bx1 - bx0, by1 - by0));
     for (i = 0; i < k->nv; i++) {
         amp_vec2 q = k->v[i];
+        int tries;
         node[i] = NONE;
+        /* a lattice vertex on a ring (CAD parts aligned with the lattice) is
+         * moved off it by a few eps along a fixed oblique direction, so that
+         * no vertex and no edge of K̂ lies on the boundary of the region */
+        for (tries = 0; tries < 8 && q.x >= bx0 - eps && q.x <= bx1 + eps && q.y >= by0 - eps && q.y <= by1 + eps &&
+                        amp_polyset_contains(R, q, eps) < 0;
+             tries++)
+            q = amp_v2(q.x + 2.2 * eps * 0.6, q.y + 2.2 * eps * 0.8);
+        kv[i] = q;
         in[i] = q.x >= bx0 && q.x <= bx1 && q.y >= by0 && q.y <= by1 && amp_polyset_contains(R, q, 0.0) == 1;
     }
     for (i = 0; i < nke && st == AMP_OK; i++) {
         size_t a = (size_t)(ke[i] >> 32), b = (size_t)(ke[i] & 0xffffffffu), j;
-        amp_vec2 A = k->v[a], B = k->v[b];
+        amp_vec2 A = kv[a], B = kv[b];
         size_t prevnode;
         if (fmax(A.x, B.x) < bx0 || fmin(A.x, B.x) > bx1 || fmax(A.y, B.y) < by0 || fmin(A.y, B.y) > by1)
             continue;
         nh = 0;
         /* crossings with every ring edge; a ring vertex exactly on the K̂
          * edge counts as lying on its positive side (symbolic perturbation),
-         * so a crossing through it is found exactly once */
+         * so a crossing through it is found exactly once; a point exactly on
+         * a ring is outside the region throughout */
         for (r = 0; r < R->nrings; r++) {
             const amp_vec2 *p = amp_polyset_ring(R, r);
             size_t n = R->rings[r].n;
@@ -320,7 +334,9 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
                 d2 = amp_v2_orient(P, Q, B);
                 d3 = amp_v2_orient(A, B, P);
                 d4 = amp_v2_orient(A, B, Q);
-                if ((d1 >= 0) == (d2 >= 0) || (d3 >= 0) == (d4 >= 0) || d1 == d2 || d3 == d4)
+                /* an end of the K̂ edge on the ring counts as outside (d <= 0),
+                 * like the inside test of the vertices and pieces */
+                if ((d1 > 0) == (d2 > 0) || (d3 >= 0) == (d4 >= 0) || d1 == d2 || d3 == d4)
                     continue;
                 {
                     void *q = h;
@@ -404,6 +420,7 @@ static amp_status clip_region(const amp_cx2 *k, const uint64_t *ke, size_t nke, 
 done:
     amp_free(al, node);
     amp_free(al, in);
+    amp_free(al, kv);
     amp_free(al, h);
     amp_free(al, deg);
     if (st == AMP_ERR_NOMEM)

@@ -109,6 +109,32 @@ START_TEST(plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region)
 }
 END_TEST
 
+/* a perforated plate: 15 holes, more rings than the exhaustive pairing
+ * search takes (greedy choice per ring); the lattice lines fall exactly on
+ * the inset's straight edges (vertices on the boundary are nudged off) */
+static const char *const sieve[] = {
+    "#################",
+    "#..#..#..#..#..##",
+    "#..#..#..#..#..##",
+    "#################",
+    "#..#..#..#..#..##",
+    "#..#..#..#..#..##",
+    "#################",
+    "#..#..#..#..#..##",
+    "#..#..#..#..#..##",
+    "#################",
+    NULL};
+
+START_TEST(perforated_plate_with_many_holes_gets_one_stroke)
+{
+    amp_mesh m;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_voxel_picture(&m, sieve, 1, 3.0), AMP_OK);
+    check_section(&m, 1.5, 0.25, AMP_GRID_SQUARE, 1);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(all_layers_of_a_sphere_and_torus_pair)
 {
     amp_mesh m;
@@ -259,6 +285,7 @@ static Suite *contpath_suite(void)
     tcase_set_timeout(tc, 120);
     AMP_ADD_TEST(tc, torus_sections_get_one_crossing_free_stroke);
     AMP_ADD_TEST(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
+    AMP_ADD_TEST(tc, perforated_plate_with_many_holes_gets_one_stroke);
     AMP_ADD_TEST(tc, all_layers_of_a_sphere_and_torus_pair);
     AMP_ADD_TEST(tc, built_in_models_get_one_crossing_free_stroke_per_island);
     AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
