@@ -30,6 +30,14 @@ void amp_polyset_clear(amp_polyset *ps)
     ps->nislands = 0;
 }
 
+/* Equal up to rounding (1e-12 relative): a section passing within 1e-16 of a
+ * mesh vertex gives such pairs, and the direction of the tiny edge between
+ * them would be noise for every later offset. */
+static int near_equal(amp_vec2 a, amp_vec2 b)
+{
+    return fabs(a.x - b.x) <= 1e-12 * (1.0 + fabs(a.x)) && fabs(a.y - b.y) <= 1e-12 * (1.0 + fabs(a.y));
+}
+
 amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_error *err)
 {
     size_t i, start = ps->npts, m = 0;
@@ -47,11 +55,11 @@ amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_err
     ps->rings = v;
     for (i = 0; i < n; i++) {
         amp_vec2 q = p[i];
-        if (m && ps->pts[start + m - 1].x == q.x && ps->pts[start + m - 1].y == q.y)
+        if (m && near_equal(ps->pts[start + m - 1], q))
             continue; /* consecutive duplicate (e.g. a section through a mesh vertex) */
         ps->pts[start + m++] = q;
     }
-    while (m > 1 && ps->pts[start].x == ps->pts[start + m - 1].x && ps->pts[start].y == ps->pts[start + m - 1].y)
+    while (m > 1 && near_equal(ps->pts[start], ps->pts[start + m - 1]))
         m--; /* repeated closing point */
     if (m < 3)
         return AMP_OK;
@@ -280,7 +288,8 @@ amp_status amp_convex_hull(const amp_vec2 *pts, size_t n, const amp_allocator *a
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the convex hull");
     }
     memcpy(s, pts, n * sizeof *s);
-    qsort(s, n, sizeof *s, cmp_pt);
+    if (n > 1)
+        qsort(s, n, sizeof *s, cmp_pt);
     /* Andrew's monotone chain: lower hull then upper hull, dropping
      * collinear points (orient <= 0) */
     for (i = 0; i < n; i++) {
@@ -590,6 +599,29 @@ static int egrid_closer(const egrid *g, amp_vec2 q, double lim)
     return 0;
 }
 
+/* Copy ring p into out without the vertices closer than tol to the segment
+ * joining their kept predecessor and their successor. Returns the count. */
+static size_t simplify_ring(const amp_vec2 *p, size_t n, double tol, amp_vec2 *out)
+{
+    size_t i, m = 0, pass;
+    for (i = 0; i < n; i++) {
+        /* pop while the last kept point is nearly on the chord to p[i] */
+        while (m >= 2 && seg_dist2(out[m - 1], out[m - 2], p[i]) < tol * tol)
+            m--;
+        out[m++] = p[i];
+    }
+    /* the closing corner(s) */
+    for (pass = 0; pass < 2 && m >= 3; pass++) {
+        if (seg_dist2(out[m - 1], out[m - 2], out[0]) < tol * tol)
+            m--;
+        else if (seg_dist2(out[0], out[m - 1], out[1]) < tol * tol) {
+            memmove(out, out + 1, (m - 1) * sizeof *out);
+            m--;
+        }
+    }
+    return m;
+}
+
 typedef struct piece {
     size_t na, nb;
     int used;
@@ -601,7 +633,7 @@ static int cmp_piece(const void *a, const void *b)
     return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
 }
 
-amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
 {
     inset_ctx c;
     egrid g;
@@ -611,8 +643,6 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
     size_t i, j, k, npc = 0, cap_pc = 0, cap_loop = 0;
     double dstep, lim;
     amp_status st = AMP_OK;
-    if (!(r > 0) || !isfinite(r))
-        return amp_fail(err, AMP_ERR_ARG, 0, "inset radius must be positive, got %g", r);
     amp_polyset_clear(out);
     if (in->nrings == 0)
         return AMP_OK;
@@ -636,7 +666,8 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
     }
     /* 2. all mutual crossings (sweep over x) */
     if (st == AMP_OK)
-        qsort(c.seg, c.nseg, sizeof *c.seg, cmp_seg_x);
+        if (c.nseg > 1)
+            qsort(c.seg, c.nseg, sizeof *c.seg, cmp_seg_x);
     for (i = 0; i < c.nseg && st == AMP_OK; i++) {
         double xmax = fmax(c.seg[i].a.x, c.seg[i].b.x);
         double ylo = fmin(c.seg[i].a.y, c.seg[i].b.y), yhi = fmax(c.seg[i].a.y, c.seg[i].b.y);
@@ -652,7 +683,8 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
         st = egrid_build(&g, in, r, c.al);
     if (st != AMP_OK)
         goto done;
-    qsort(c.spl, c.nspl, sizeof *c.spl, cmp_split);
+    if (c.nspl > 1)
+        qsort(c.spl, c.nspl, sizeof *c.spl, cmp_split);
     /* 3. split into pieces and keep those on the offset boundary {d = r} */
     lim = r * (1.0 - 1e-9);
     for (i = 0, k = 0; i < c.nseg; i++) {
@@ -686,7 +718,8 @@ amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, am
         }
     }
     /* 4. stitch pieces into rings by node ids */
-    qsort(pc, npc, sizeof *pc, cmp_piece);
+    if (npc > 1)
+        qsort(pc, npc, sizeof *pc, cmp_piece);
     first = amp_alloc(c.al, (c.nnode + 1) * sizeof *first);
     if (!first) {
         st = AMP_ERR_NOMEM;
@@ -738,5 +771,45 @@ done:
     egrid_free(&g, c.al);
     if (st == AMP_ERR_NOMEM)
         return amp_fail(err, st, 0, "out of memory computing the inset");
+    return st;
+}
+
+amp_status amp_polyset_inset(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+{
+    amp_polyset simp;
+    amp_vec2 *tmp;
+    size_t i;
+    amp_status st = AMP_OK;
+    if (!(r > 0) || !isfinite(r))
+        return amp_fail(err, AMP_ERR_ARG, 0, "inset radius must be positive, got %g", r);
+    /* rings freed of vertices within r/10^4 of the chord of their neighbours:
+     * float noise of STL coordinates would otherwise give micro-arcs whose
+     * crossings are below rounding; the offset is computed for this ring */
+    amp_polyset_init(&simp, out->alloc);
+    tmp = amp_alloc(out->alloc, (in->npts + 1) * sizeof *tmp);
+    if (!tmp)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory computing the inset");
+    for (i = 0; i < in->nrings && st == AMP_OK; i++) {
+        size_t n = simplify_ring(amp_polyset_ring(in, i), in->rings[i].n, 1e-4 * r, tmp);
+        if (n >= 3)
+            st = amp_polyset_add(&simp, tmp, n, err);
+    }
+    amp_free(out->alloc, tmp);
+    if (st == AMP_OK)
+        st = inset_core(&simp, r, arc_tol, out, err);
+    amp_polyset_free(&simp);
+    return st;
+}
+
+amp_status amp_polyset_island(const amp_polyset *P, size_t k, amp_polyset *out, amp_error *err)
+{
+    size_t r;
+    amp_status st = AMP_OK;
+    amp_polyset_clear(out);
+    for (r = 0; r < P->nrings && st == AMP_OK; r++)
+        if (P->rings[r].island == (long)k)
+            st = amp_polyset_add(out, amp_polyset_ring(P, r), P->rings[r].n, err);
+    if (st == AMP_OK)
+        st = amp_polyset_organize(out, err);
     return st;
 }

@@ -112,7 +112,8 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
         starts[i].k = seg[i].ks;
         starts[i].seg = i;
     }
-    qsort(starts, nseg, sizeof *starts, cmp_key);
+    if (nseg > 1)
+        qsort(starts, nseg, sizeof *starts, cmp_key);
     for (i = 0; i + 1 < nseg; i++)
         if (starts[i].k == starts[i + 1].k)
             st0.nonmanifold++;

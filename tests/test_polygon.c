@@ -223,6 +223,35 @@ START_TEST(inset_of_a_star_with_reflex_vertices_matches_sampling)
 }
 END_TEST
 
+START_TEST(inset_survives_near_duplicate_points_from_a_section_through_vertices)
+{
+    /* an annulus whose hole ring repeats points within 1e-16 (as a plane
+     * passing 1e-16 above a ring of mesh vertices gives): the tiny edges
+     * must not disturb the offset */
+    amp_polyset in, out;
+    amp_vec2 o[64], h[128];
+    int k;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    for (k = 0; k < 64; k++) {
+        double t = 6.283185307179586 * k / 64;
+        o[k] = amp_v2(13 * cos(t), 13 * sin(t));
+        h[127 - 2 * k] = amp_v2(7 * cos(t), 7 * sin(t));
+        h[126 - 2 * k] = amp_v2(7 * cos(t) + 3e-16, 7 * sin(t) - 5e-16);
+    }
+    ck_assert_int_eq(amp_polyset_add(&in, o, 64, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_add(&in, h, 128, NULL), AMP_OK);
+    ck_assert_uint_eq(in.rings[1].n, 64);
+    ck_assert_int_eq(amp_polyset_organize(&in, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_inset(&in, 1.2, 0.01, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 1);
+    ck_assert_uint_eq(out.nrings, 2);
+    ck_assert_int_eq(inset_disagreements(&in, 1.2, &out, 0.1, 0.03), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
 static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
@@ -235,6 +264,7 @@ static Suite *polygon_suite(void)
     AMP_ADD_TEST(tc, inset_grows_and_merges_holes_and_drops_small_islands);
     AMP_ADD_TEST(tc, inset_checker_rejects_a_wrong_offset);
     AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
+    AMP_ADD_TEST(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -1,8 +1,13 @@
 /* Planar slicing of meshes into polygons with holes (paper 2 §2.2 step 1). */
+#define _POSIX_C_SOURCE 200809L
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/wait.h>
 #include <string.h>
 
 #include "fx_meshes.h"
+#include "fx_tool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -209,6 +214,62 @@ START_TEST(layers_are_cut_at_mid_height_with_optional_first_layer)
 }
 END_TEST
 
+START_TEST(cli_writes_closed_oriented_polygons_per_layer)
+{
+    amp_mesh m;
+    amp_pathset ps;
+    amp_error err;
+    char args[512], out[8192];
+    const char *stl = amp_test_tmp("torus.stl"), *amp = amp_test_tmp("torus.amp"), *svg = amp_test_tmp("torus.svg");
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(5, 5, 9), 10.0, 3.0, 96, 48), AMP_OK); /* z in [6, 12] */
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --polygons -o %s --json", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"layers\":12,\"polygons\":24,\"islands\":12,\"holes\":12") != NULL, "%s", out);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    ck_assert_uint_eq(ps.npaths, 24);
+    for (i = 0; i < ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
+        size_t n = ps.paths[i].n, k;
+        double a = 0;
+        ck_assert_uint_gt(n, 4);
+        ck_assert(v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y); /* closed */
+        ck_assert_near(v[0].p.z, (i / 2 + 0.5) * 0.5, 1e-6);               /* cut height above the plate */
+        ck_assert_near(v[0].r, 0.5, 1e-9);
+        for (k = 0; k + 1 < n; k++)
+            a += v[k].p.x * v[k + 1].p.y - v[k + 1].p.x * v[k].p.y;
+        ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);
+    }
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --z 3 -o %s", stl, svg);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    {
+        FILE *f = fopen(svg, "r");
+        char head[64] = {0};
+        ck_assert(f != NULL);
+        ck_assert(fread(head, 1, sizeof head - 1, f) > 0);
+        fclose(f);
+        ck_assert(strstr(head, "<?xml") == head);
+    }
+    snprintf(args, sizeof args, "slice %s --polygons", stl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2); /* --layer missing */
+    snprintf(args, sizeof args, "slice %s.missing --layer 0.5", stl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid tri --json", stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"euler\":true") != NULL, "%s", out);
+    snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid pentagon", stl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    remove(stl);
+    remove(amp);
+    remove(svg);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -218,6 +279,7 @@ static Suite *slice_suite(void)
     AMP_ADD_TEST(tc, voxel_plate_gives_islands_holes_and_exact_areas);
     AMP_ADD_TEST(tc, open_mesh_is_reported_as_open_chains);
     AMP_ADD_TEST(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
+    AMP_ADD_TEST(tc, cli_writes_closed_oriented_polygons_per_layer);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -5,6 +5,7 @@
  */
 #include <string.h>
 
+#include "check_stroke.h"
 #include "checkers.h"
 
 const char cmd_check_usage[] =
@@ -19,6 +20,12 @@ const char cmd_check_usage[] =
 
 int cmd_check(int argc, char **argv)
 {
+    int k;
+    for (k = 1; k < argc && strncmp(argv[k], "--trivariate", 12) != 0; k++)
+        ;
+    if (k == argc)
+        return check_stroke(argc, argv);
+    {
     const char *pos[1], *tri = NULL;
     double eps = 0;
     long samples = 20000, seed = 1;
@@ -31,7 +38,7 @@ int cmd_check(int argc, char **argv)
     if (rc != CLI_OK)
         return rc;
     if (!tri)
-        return cli_fail("check", CLI_USAGE, "this build checks coverage only: give --trivariate F");
+        return check_stroke(argc, argv);
     if (opts[1].seen && !(eps > 0))
         return cli_fail("check", CLI_USAGE, "--eps must be positive");
     if (samples < 1 || samples > 100000000L)
@@ -45,4 +52,5 @@ int cmd_check(int argc, char **argv)
         cli_json_end(&j);
     }
     return rc;
+}
 }

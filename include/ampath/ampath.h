@@ -4,7 +4,10 @@
 
 #include "alloc.h"
 #include "bvh.h"
+#include "complex2.h"
+#include "contpath.h"
 #include "cover.h"
+#include "euler.h"
 #include "gcode.h"
 #include "io.h"
 #include "mesh.h"

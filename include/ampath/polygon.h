@@ -61,7 +61,7 @@ void amp_polyset_free(amp_polyset *ps);
 void amp_polyset_clear(amp_polyset *ps);
 /**
  * Append a ring of @p n points (copied). A repeated closing point is dropped,
- * as are consecutive duplicates; rings left with fewer than 3 points are
+ * as are consecutive duplicates (equal within 1e-12 relative); rings left with fewer than 3 points are
  * silently skipped. AMP_ERR_ARG on non-finite points, AMP_ERR_NOMEM.
  */
 amp_status amp_polyset_add(amp_polyset *ps, const amp_vec2 *p, size_t n, amp_error *err);
@@ -76,6 +76,12 @@ static inline const amp_vec2 *amp_polyset_ring(const amp_polyset *ps, size_t i) 
  * other (touching is tolerated). AMP_ERR_NOMEM only.
  */
 amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err);
+
+/**
+ * Copy island @p k of an organised set @p P (its outer ring and holes) into
+ * @p out (cleared first), organised. AMP_ERR_NOMEM.
+ */
+amp_status amp_polyset_island(const amp_polyset *P, size_t k, amp_polyset *out, amp_error *err);
 
 /** Signed area of a ring (shoelace): > 0 counter-clockwise. */
 double amp_ring_area(const amp_vec2 *p, size_t n);
@@ -109,7 +115,8 @@ amp_status amp_convex_hull(const amp_vec2 *pts, size_t n, const amp_allocator *a
  * region bounded by the rings of @p in (even-odd rule): the set of points of
  * the region at distance >= r from its boundary (§2.2 step 5, R̃_j).
  *
- * Method (see docs/slice.md): every ring is offset to its interior side,
+ * Method (see docs/slice.md): rings are first freed of vertices closer than
+ * r/10^4 to the chord of their neighbours (float noise); every ring is offset to its interior side,
  * with circular arcs (circumscribed polylines, @p arc_tol maximal sagitta,
  * 0 = r/100) around reflex vertices; all raw offset segments are split at
  * their mutual intersections (each intersection computed once and shared by

@@ -1,0 +1,123 @@
+/*
+ * ampath/contpath.h — continuous tool paths per layer from the Euler
+ * transformed lattice (continuous-toolpath-euler.txt §2.2 steps 2-6, §4),
+ * and an independent checker of the strokes.
+ *
+ * Per layer and per island P of the layer:
+ *   - perimeter loops: the rings of the inset of P by r (one closed path each);
+ *   - the infill region R̃ = inset of P by 3r (inside the perimeter bead and at
+ *     one bead radius from it); for every connected part R̃_j of it:
+ *     clip the 1-skeleton of K̂ (step 5), join the free-edge end points of
+ *     each ring of R̃_j in alternating pairs by paths along the ring (of the two
+ *     pairings the one that connects the pieces, then the longer), and trace
+ *     one closed Euler tour without crossovers (§4: the tour is assembled from
+ *     non-crossing cycles through each vertex, merged pairwise at shared
+ *     vertices — the cycle tree — by re-pairing two adjacent transitions).
+ *   - optionally (Remark 2.1) the unprinted stretches of the rings of R̃_j as
+ *     separate support paths.
+ * K is a lattice covering the convex hull of all layers (steps 2-3) and K̂ its
+ * Euler transformation with mitered offset δ (default r): every vertex of K̂
+ * inside R̃ has even degree because the rim cells of K lie outside R̃.
+ * Functions are reentrant; inputs are only read.
+ */
+#ifndef AMPATH_CONTPATH_H
+#define AMPATH_CONTPATH_H
+
+#include <stddef.h>
+
+#include "complex2.h"
+#include "paths.h"
+#include "polygon.h"
+#include "slice.h"
+#include "status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct amp_contpath_opts {
+    double radius;         /**< extruder (deposition) radius r > 0, mm */
+    double cell;           /**< lattice cell size of K (<= 0: 10 r) */
+    amp_grid_kind grid;    /**< lattice of K */
+    double offset;         /**< mitered offset δ of K̂ (<= 0: r) */
+    int perimeters;        /**< 1: print the perimeter loop(s) of each island */
+    int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
+} amp_contpath_opts;
+
+/** Fill @p o with the defaults for radius @p r (square grid, perimeters on). */
+void amp_contpath_opts_default(amp_contpath_opts *o, double r);
+
+typedef struct amp_contpath_stats {
+    size_t layers;
+    size_t islands;          /**< infill regions R̃_j that received a stroke */
+    size_t strokes;          /**< infill strokes (one per region when all goes well) */
+    size_t multi_stroke;     /**< regions that needed more than one stroke */
+    size_t perimeter_loops;  /**< perimeter paths */
+    size_t support_paths;    /**< Remark 2.1 stretches printed */
+    size_t travel_moves;     /**< moves between consecutive paths */
+    size_t free_ends;        /**< free-edge end points patched (Σ m) */
+    size_t odd_vertices;     /**< odd vertices left after patching (0 expected) */
+    double printed_length;   /**< mm, all object paths */
+    double infill_length;    /**< mm, strokes only */
+    double travel_length;    /**< mm, straight moves between paths (3-D) */
+    double support_length;   /**< mm, Remark 2.1 stretches printed */
+    double unprinted_length; /**< mm, ring stretches of R̃ left unprinted */
+    double dropped_length;   /**< mm, small clipped pieces dropped because no pairing joins them (see docs) */
+} amp_contpath_stats;
+
+/**
+ * Steps 2-4: convex hull of all layers' rings, lattice K of it, K̂ = T(K)
+ * into @p khat (emptied first). AMP_ERR_ARG (bad options), AMP_ERR_GEOMETRY
+ * (no polygon), AMP_ERR_NOMEM.
+ */
+amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o, amp_cx2 *khat, amp_error *err);
+
+/**
+ * Steps 5 + §4 for one connected region @p region (organised, one island:
+ * outer ring and holes): appends the stroke(s) over @p khat clipped to the
+ * region as closed object paths at height @p z with radius o->radius, and
+ * the Remark 2.1 stretches when asked. Updates @p st. AMP_ERR_NOMEM.
+ */
+amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, double z,
+                               const amp_contpath_opts *o, amp_pathset *out, amp_contpath_stats *st,
+                               amp_error *err);
+
+/**
+ * All layers: perimeters and one stroke per infill region, in print order,
+ * at each layer's printing height z_print. @p out is appended to.
+ */
+amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
+                               amp_contpath_stats *st, amp_error *err);
+
+/** Findings of amp_stroke_check(). */
+typedef struct amp_stroke_report {
+    size_t segments;       /**< non-degenerate segments checked */
+    size_t crossings;      /**< pairs of segments crossing, and crossing passes through a shared vertex */
+    size_t repeated_edges; /**< segments printed more than once (same end points, either direction) */
+    size_t outside;        /**< vertices or segment midpoints outside the region (beyond tol) */
+    int closed;            /**< 1 when the last point equals the first */
+} amp_stroke_report;
+
+/**
+ * Independent checker of one stroke (a polyline of @p n points): no two
+ * segments cross (proper crossings, and at a vertex visited several times the
+ * passes must not interleave in the cyclic order of their directions), no
+ * segment is printed twice, and, if @p region is not NULL, every vertex and
+ * segment midpoint lies in the region or within @p tol of it. Fills @p rep
+ * (optional) and returns AMP_ERR_CHECK with a reason on any violation,
+ * AMP_ERR_NOMEM, else AMP_OK. Shares no code with the stroke builder.
+ */
+amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
+                            amp_stroke_report *rep, amp_error *err);
+
+/**
+ * amp_stroke_check() on path @p i of @p ps (its x, y; z is ignored). A
+ * scratch copy is allocated with the set's allocator (AMP_ERR_NOMEM).
+ */
+amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    amp_stroke_report *rep, amp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,64 @@
+/*
+ * ampath/euler.h — the Euler transformation of planar 2-complexes
+ * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2).
+ *
+ * K̂ = T(K) consists of
+ *   Class 1: the mitered offset f̂ of every 2-cell f of K (offset distance δ);
+ *   Class 2: for every edge e = ab, the trapezium between the offset copies of
+ *            e in its two faces (a boundary edge: between e itself and its
+ *            copy);
+ *   Class 3: for every vertex v, the cell of its copies in the faces around v
+ *            (a boundary vertex also includes v itself).
+ * When no 2-cell has two adjacent boundary edges and no offset changes
+ * combinatorially, every vertex of the 1-skeleton of K̂ has degree 4.
+ * With combinatorial changes allowed (§3), a mitered offset may lose edges
+ * (their end copies merge; Lemma 3.1: degree 2π+4-m), and a Class 2 cell
+ * whose edge collapses on both sides becomes a free 1-cell. The generalized
+ * transformation T(T(K)) (Def. 3.2) makes the 1-skeleton Euler even when
+ * cells have adjacent boundary edges (Fig. 11).
+ * Functions are reentrant; inputs are only read.
+ */
+#ifndef AMPATH_EULER_H
+#define AMPATH_EULER_H
+
+#include "complex2.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct amp_euler_opts {
+    double offset;     /**< mitered offset distance δ > 0 (same unit as K) */
+    int combinatorial; /**< 1: allow mitered offsets to drop edges of convex cells (§3) */
+} amp_euler_opts;
+
+typedef struct amp_euler_stats {
+    size_t collapsed_edges;  /**< offset edges dropped by combinatorial changes (Σπ) */
+    size_t collapsed_class2; /**< Class 2 cells collapsed to a free edge (Σm) */
+} amp_euler_stats;
+
+/**
+ * Euler transformation K̂ = T(@p k) into @p out (emptied first, built on
+ * return). @p k must be a pure complex (no free edges) with CCW faces.
+ * Errors: AMP_ERR_ARG (bad offset, free edges in K), AMP_ERR_GEOMETRY when a
+ * mitered offset is invalid (edge reversed without combinatorial changes
+ * allowed, non-convex cell needing a change, or a cell vanishing), with the
+ * face index in the message; AMP_ERR_NOMEM. @p st is optional.
+ */
+amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                               amp_error *err);
+
+/**
+ * Generalized Euler transformation (Def. 3.2): T(T(K)). The first pass uses
+ * @p o; the second uses an offset small enough for the cells of T(K) (a
+ * quarter of min(δ, shortest edge, smallest 2·area/perimeter), halved until
+ * valid) without combinatorial changes. If the first pass collapses a Class
+ * 2 cell to an edge (Lemma 3.3 case), AMP_ERR_UNSUPPORTED: the local repair
+ * of Lemma 3.3 is not implemented.
+ */
+amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

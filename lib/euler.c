@@ -1,0 +1,313 @@
+/* The Euler transformation of planar 2-complexes
+ * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ampath/euler.h"
+
+/* Intersection of the lines p + s*d and q + t*e; 0 when (nearly) parallel. */
+static int line_meet(amp_vec2 p, amp_vec2 d, amp_vec2 q, amp_vec2 e, amp_vec2 *out)
+{
+    double den = d.x * e.y - d.y * e.x, s;
+    if (fabs(den) < 1e-14)
+        return 0;
+    s = ((q.x - p.x) * e.y - (q.y - p.y) * e.x) / den;
+    *out = amp_v2(p.x + s * d.x, p.y + s * d.y);
+    return 1;
+}
+
+typedef struct face_off {
+    amp_vec2 *pt;   /* offset polygon vertices (nalive) */
+    size_t *alive;  /* surviving edge indices, increasing */
+    size_t nalive;
+    size_t *corner; /* corner k -> offset vertex index */
+    amp_vec2 *dir, *base; /* unit direction and shifted point of each edge */
+} face_off;
+
+/*
+ * Mitered offset of face f by delta (Class 1 cell, §1.3). Without
+ * combinatorial changes every edge must keep its direction. With them (§3),
+ * for convex cells an edge whose offset reverses is dropped and its
+ * neighbours' offset lines are intersected instead, repeatedly, as long as
+ * at least 3 edges remain ("we can reduce at most n-3 edges").
+ */
+static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb, face_off *fo, amp_error *err)
+{
+    size_t a = k->fstart[f], n = k->fstart[f + 1] - a, j, i;
+    int convex = 1;
+    for (i = 0; i < n; i++) {
+        amp_vec2 p = k->v[k->fidx[a + i]], q = k->v[k->fidx[a + (i + 1) % n]];
+        double dx = q.x - p.x, dy = q.y - p.y, l = hypot(dx, dy);
+        if (l == 0)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "2-cell %lu has a zero-length edge", (unsigned long)f);
+        fo->dir[i] = amp_v2(dx / l, dy / l);
+        fo->base[i] = amp_v2(p.x - delta * dy / l, p.y + delta * dx / l); /* shifted to the left (inside) */
+        fo->alive[i] = i;
+        if (amp_v2_orient(p, q, k->v[k->fidx[a + (i + 2) % n]]) < 0)
+            convex = 0;
+    }
+    fo->nalive = n;
+    for (;;) {
+        size_t worst = n, m = fo->nalive;
+        double wt = 0;
+        for (j = 0; j < m; j++) {
+            size_t e0 = fo->alive[j], e1 = fo->alive[(j + 1) % m];
+            if (line_meet(fo->base[e0], fo->dir[e0], fo->base[e1], fo->dir[e1], &fo->pt[j]))
+                continue;
+            /* a straight angle (e.g. a boundary vertex of a Class 3 cell lying
+             * on the segment of its neighbours): the miter is the corner
+             * shifted along the common normal */
+            if (fo->dir[e0].x * fo->dir[e1].x + fo->dir[e0].y * fo->dir[e1].y > 0)
+                fo->pt[j] = fo->base[e1];
+            else
+                return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu degenerates (parallel edges)",
+                                delta, (unsigned long)f);
+        }
+        /* an offset edge runs from the vertex before it to the vertex after it */
+        for (j = 0; j < m; j++) {
+            size_t e = fo->alive[j];
+            amp_vec2 s = fo->pt[(j + m - 1) % m], t = fo->pt[j];
+            double len = (t.x - s.x) * fo->dir[e].x + (t.y - s.y) * fo->dir[e].y;
+            if (len <= 1e-12 * (1 + delta) && (worst == n || len < wt)) {
+                worst = j;
+                wt = len;
+            }
+        }
+        if (worst == n)
+            break;
+        if (!comb)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                            "mitered offset %g of 2-cell %lu changes combinatorially (edge %lu collapses)", delta,
+                            (unsigned long)f, (unsigned long)fo->alive[worst]);
+        if (!convex)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "combinatorial change in non-convex 2-cell %lu", (unsigned long)f);
+        if (m <= 3)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g makes 2-cell %lu vanish (topological change)",
+                            delta, (unsigned long)f);
+        memmove(fo->alive + worst, fo->alive + worst + 1, (m - worst - 1) * sizeof *fo->alive);
+        fo->nalive--;
+    }
+    /* corners alive[j]+1 .. alive[j+1] (cyclic) all map to vertex j: the
+     * end copies of the dropped edges merge (Lemma 3.1) */
+    for (j = 0; j < fo->nalive; j++) {
+        size_t e0 = fo->alive[j], e1 = fo->alive[(j + 1) % fo->nalive], c = (e0 + 1) % n;
+        for (;;) {
+            fo->corner[c] = j;
+            if (c == e1)
+                break;
+            c = (c + 1) % n;
+        }
+    }
+    if (amp_ring_area(fo->pt, fo->nalive) <= 0)
+        return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu is inverted", delta,
+                        (unsigned long)f);
+    return AMP_OK;
+}
+
+/* Add a cell after removing cyclically repeated consecutive vertices;
+ * two remaining vertices make a free 1-cell (a collapsed Class 2 cell). */
+static amp_status add_cell(amp_cx2 *out, uint32_t *v, size_t n, int cls, int *collapsed, amp_error *err)
+{
+    size_t i, m = 0;
+    *collapsed = 0;
+    for (i = 0; i < n; i++)
+        if (m == 0 || v[m - 1] != v[i])
+            v[m++] = v[i];
+    while (m > 1 && v[m - 1] == v[0])
+        m--;
+    if (m >= 3)
+        return amp_cx2_add_face(out, v, m, cls, err);
+    if (m == 2) {
+        *collapsed = 1;
+        return amp_cx2_add_edge(out, v[0], v[1], err);
+    }
+    return AMP_OK;
+}
+
+amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                               amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    amp_euler_stats s0;
+    face_off fo;
+    uint32_t *cmap = NULL, *bmap = NULL, *loop = NULL;
+    size_t *vstart = NULL, *vhe = NULL;
+    unsigned char *seen = NULL;
+    size_t f, h, maxn = 3, i, v;
+    amp_status rc = AMP_OK;
+    int col;
+    memset(&s0, 0, sizeof s0);
+    memset(&fo, 0, sizeof fo);
+    amp_cx2_free(out);
+    if (!o || !(o->offset > 0) || !isfinite(o->offset))
+        return amp_fail(err, AMP_ERR_ARG, 0, "Euler transformation needs a positive offset");
+    if (k->nxe)
+        return amp_fail(err, AMP_ERR_ARG, 0, "input complex is not pure (%lu free edges)", (unsigned long)k->nxe);
+    if (!k->built || (k->nf && !k->he_twin))
+        return amp_fail(err, AMP_ERR_STATE, 0, "input complex topology not built (amp_cx2_build)");
+    for (f = 0; f < k->nf; f++)
+        if (amp_cx2_face_size(k, f) > maxn)
+            maxn = amp_cx2_face_size(k, f);
+    fo.pt = amp_alloc(al, maxn * sizeof *fo.pt);
+    fo.alive = amp_alloc(al, maxn * sizeof *fo.alive);
+    fo.corner = amp_alloc(al, maxn * sizeof *fo.corner);
+    fo.dir = amp_alloc(al, maxn * sizeof *fo.dir);
+    fo.base = amp_alloc(al, maxn * sizeof *fo.base);
+    cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *cmap);
+    bmap = amp_alloc(al, (k->nv + 1) * sizeof *bmap);
+    loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *loop);
+    vstart = amp_calloc(al, k->nv + 2, sizeof *vstart);
+    vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *vhe);
+    seen = amp_calloc(al, k->nfidx + 1, 1);
+    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !cmap || !bmap || !loop || !vstart || !vhe ||
+        !seen) {
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Euler transformation");
+        goto done;
+    }
+    /* Class 1: mitered offsets; cmap[h] = copy of the corner of half-edge h */
+    for (f = 0; f < k->nf && rc == AMP_OK; f++) {
+        size_t a = k->fstart[f], n = k->fstart[f + 1] - a, j;
+        uint32_t base = (uint32_t)out->nv;
+        if ((rc = miter_face(k, f, o->offset, o->combinatorial, &fo, err)) != AMP_OK)
+            break;
+        s0.collapsed_edges += n - fo.nalive;
+        for (j = 0; j < fo.nalive && rc == AMP_OK; j++)
+            rc = amp_cx2_add_vertex(out, fo.pt[j], NULL, err);
+        for (j = 0; j < n; j++)
+            cmap[a + j] = base + (uint32_t)fo.corner[j];
+        for (j = 0; j < fo.nalive; j++)
+            loop[j] = base + (uint32_t)j;
+        if (rc == AMP_OK)
+            rc = amp_cx2_add_face(out, loop, fo.nalive, AMP_CELL_CLASS1, err);
+    }
+    /* boundary vertices of K stay as vertices of K̂ */
+    for (v = 0; v < k->nv; v++)
+        bmap[v] = UINT32_MAX;
+    for (h = 0; h < k->nfidx && rc == AMP_OK; h++)
+        if (k->he_twin[h] == AMP_CX2_NONE) {
+            uint32_t ends[2];
+            int e;
+            ends[0] = k->fidx[h];
+            ends[1] = k->fidx[amp_cx2_he_next(k, h)];
+            for (e = 0; e < 2 && rc == AMP_OK; e++)
+                if (bmap[ends[e]] == UINT32_MAX)
+                    rc = amp_cx2_add_vertex(out, k->v[ends[e]], &bmap[ends[e]], err);
+        }
+    /* Class 2: one trapezium per edge */
+    for (h = 0; h < k->nfidx && rc == AMP_OK; h++) {
+        size_t t = k->he_twin[h], hn = amp_cx2_he_next(k, h);
+        if (t != AMP_CX2_NONE && t < h)
+            continue;
+        if (t != AMP_CX2_NONE) {
+            loop[0] = cmap[amp_cx2_he_next(k, t)]; /* a in g */
+            loop[1] = cmap[t];                     /* b in g */
+        } else {
+            loop[0] = bmap[k->fidx[h]];
+            loop[1] = bmap[k->fidx[hn]];
+        }
+        loop[2] = cmap[hn]; /* b in f */
+        loop[3] = cmap[h];  /* a in f */
+        rc = add_cell(out, loop, 4, AMP_CELL_CLASS2, &col, err);
+        s0.collapsed_class2 += (size_t)col;
+    }
+    /* Class 3: the copies of each vertex around it, CCW (outgoing half-edges
+     * advance by twin(prev(h))); a boundary fan starts at v itself */
+    for (h = 0; h < k->nfidx; h++)
+        vstart[k->fidx[h] + 2]++;
+    for (v = 0; v < k->nv; v++)
+        vstart[v + 2] += vstart[v + 1];
+    for (h = 0; h < k->nfidx; h++)
+        vhe[vstart[k->fidx[h] + 1]++] = h;
+    for (v = 0; v < k->nv && rc == AMP_OK; v++) {
+        int pass;
+        for (pass = 0; pass < 2 && rc == AMP_OK; pass++)
+            for (i = vstart[v]; i < vstart[v + 1] && rc == AMP_OK; i++) {
+                size_t hh = vhe[i], m = 0;
+                if (seen[hh] || (pass == 0 && k->he_twin[hh] != AMP_CX2_NONE))
+                    continue;
+                if (pass == 0)
+                    loop[m++] = bmap[v];
+                for (;;) {
+                    size_t p;
+                    seen[hh] = 1;
+                    loop[m++] = cmap[hh];
+                    p = k->he_twin[amp_cx2_he_prev(k, hh)];
+                    if (p == AMP_CX2_NONE || seen[p] || m > k->nfidx)
+                        break;
+                    hh = p;
+                }
+                if (m >= 3)
+                    rc = add_cell(out, loop, m, AMP_CELL_CLASS3, &col, err);
+            }
+    }
+    if (rc == AMP_OK)
+        rc = amp_cx2_build(out, err);
+done:
+    amp_free(al, fo.pt);
+    amp_free(al, fo.alive);
+    amp_free(al, fo.corner);
+    amp_free(al, fo.dir);
+    amp_free(al, fo.base);
+    amp_free(al, cmap);
+    amp_free(al, bmap);
+    amp_free(al, loop);
+    amp_free(al, vstart);
+    amp_free(al, vhe);
+    amp_free(al, seen);
+    if (st)
+        *st = s0;
+    return rc;
+}
+
+/* A quarter of the smallest feature of k: shortest edge and 2*area/perimeter. */
+static double feature_size(const amp_cx2 *k)
+{
+    double best = HUGE_VAL;
+    size_t f, j;
+    for (f = 0; f < k->nf; f++) {
+        size_t a = k->fstart[f], n = k->fstart[f + 1] - a;
+        double per = 0, area = 0;
+        for (j = 0; j < n; j++) {
+            amp_vec2 p = k->v[k->fidx[a + j]], q = k->v[k->fidx[a + (j + 1) % n]];
+            double l = hypot(q.x - p.x, q.y - p.y);
+            per += l;
+            area += p.x * q.y - q.x * p.y;
+            if (l < best)
+                best = l;
+        }
+        if (per > 0 && area / per < best)
+            best = area / per; /* 0.5*area2/per*2 = 2*area/perimeter */
+    }
+    return best;
+}
+
+amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err)
+{
+    amp_cx2 mid;
+    amp_euler_stats st;
+    amp_euler_opts o2;
+    amp_status rc;
+    int tries;
+    amp_cx2_init(&mid, out->alloc);
+    /* Def. 3.2: apply the transformation twice */
+    rc = amp_euler_transform(k, o, &mid, &st, err);
+    if (rc == AMP_OK && st.collapsed_class2)
+        rc = amp_fail(err, AMP_ERR_UNSUPPORTED, 0,
+                      "%lu Class 2 cells collapsed to edges: the local repair of Lemma 3.3 is not implemented",
+                      (unsigned long)st.collapsed_class2);
+    if (rc != AMP_OK) {
+        amp_cx2_free(&mid);
+        return rc;
+    }
+    o2.combinatorial = 0;
+    o2.offset = 0.25 * fmin(o->offset, feature_size(&mid));
+    for (tries = 0; tries < 8; tries++) {
+        rc = amp_euler_transform(&mid, &o2, out, NULL, err);
+        if (rc != AMP_ERR_GEOMETRY)
+            break;
+        o2.offset *= 0.5;
+    }
+    amp_cx2_free(&mid);
+    return rc;
+}

@@ -1,0 +1,177 @@
+/* Benchmark (SPEC §7): slicing + continuous paths on a ~100k-triangle mesh,
+ * against a plain per-layer rectilinear infill made by the same tool
+ * (extrusion starts, travel). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+/* A bumpy torus (R 30, r 9 mm) with nu x nv quads: 2 nu nv triangles. */
+static int make_mesh(amp_mesh *m, int nu, int nv)
+{
+    int i, j;
+    const double tau = 6.283185307179586;
+    for (i = 0; i < nu; i++)
+        for (j = 0; j < nv; j++) {
+            double u = tau * i / nu, v = tau * j / nv, rr = 9 + 1.5 * sin(5 * u), rho = 30 + rr * cos(v);
+            if (amp_mesh_add_vertex(m, amp_v3(rho * cos(u), rho * sin(u), 12 + rr * sin(v)), NULL, NULL) != AMP_OK)
+                return -1;
+        }
+    for (i = 0; i < nu; i++)
+        for (j = 0; j < nv; j++) {
+            uint32_t a = (uint32_t)(i * nv + j), b = (uint32_t)(((i + 1) % nu) * nv + j);
+            uint32_t c = (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv), d = (uint32_t)(i * nv + (j + 1) % nv);
+            if (amp_mesh_add_tri(m, a, b, c, NULL) != AMP_OK || amp_mesh_add_tri(m, a, c, d, NULL) != AMP_OK)
+                return -1;
+        }
+    return 0;
+}
+
+typedef struct rect_stats {
+    size_t starts;
+    double length, travel;
+} rect_stats;
+
+/* Plain rectilinear infill of one region: scan lines every @p s (alternating
+ * direction), every interval its own extrusion; travel from the end of one
+ * interval to the start of the next. */
+static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *have, rect_stats *rs)
+{
+    double y0 = HUGE_VAL, y1 = -HUGE_VAL, y, xs[4096];
+    size_t i, k;
+    int line = 0;
+    for (i = 0; i < R->npts; i++) {
+        y0 = fmin(y0, R->pts[i].y);
+        y1 = fmax(y1, R->pts[i].y);
+    }
+    for (y = y0 + 0.5 * s; y < y1; y += s, line++) {
+        size_t nx = 0;
+        for (i = 0; i < R->nrings; i++) {
+            const amp_vec2 *p = amp_polyset_ring(R, i);
+            size_t n = R->rings[i].n;
+            for (k = 0; k < n && nx < 4096; k++) {
+                amp_vec2 a = p[k], b = p[(k + 1) % n];
+                if ((a.y > y) != (b.y > y))
+                    xs[nx++] = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+            }
+        }
+        /* insertion sort: few crossings per line */
+        for (i = 1; i < nx; i++)
+            for (k = i; k > 0 && xs[k - 1] > xs[k]; k--) {
+                double t = xs[k];
+                xs[k] = xs[k - 1];
+                xs[k - 1] = t;
+            }
+        for (i = 0; i + 1 < nx; i += 2) {
+            size_t q = line % 2 ? nx - 2 - i : i;
+            amp_vec2 a = amp_v2(line % 2 ? xs[q + 1] : xs[q], y), b = amp_v2(line % 2 ? xs[q] : xs[q + 1], y);
+            if (*have)
+                rs->travel += hypot(a.x - last->x, a.y - last->y);
+            rs->starts++;
+            rs->length += fabs(b.x - a.x);
+            *last = b;
+            *have = 1;
+        }
+    }
+}
+
+int bench_slice(cli_json *j, int quick)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_pathset ps;
+    amp_polyset isl, ins;
+    rect_stats rs;
+    double t0, t_slice, t_cont, t_rect, area = 0, spacing;
+    size_t li, k, perims = 0;
+    int rc = CLI_OK, nu = quick ? 64 : 224, nv = quick ? 32 : 224;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_polyset_init(&isl, NULL);
+    amp_polyset_init(&ins, NULL);
+    memset(&rs, 0, sizeof rs);
+    if (make_mesh(&m, nu, nv) != 0)
+        return CLI_FAILED;
+    so.layer = quick ? 1.0 : 0.2;
+    so.first_layer = 0;
+    amp_contpath_opts_default(&o, 0.25);
+    o.cell = 4.0;
+    t0 = cli_now();
+    if (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK)
+        rc = CLI_FAILED;
+    t_slice = cli_now() - t0;
+    t0 = cli_now();
+    if (rc == CLI_OK && amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK)
+        rc = CLI_FAILED;
+    t_cont = cli_now() - t0;
+    /* baseline: same perimeters and infill regions, rectilinear lines at the
+     * spacing that prints the same infill length */
+    t0 = cli_now();
+    for (li = 0; li < sl.nlayers && rc == CLI_OK; li++)
+        for (k = 0; k < sl.layers[li].polys.nislands; k++) {
+            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
+            amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);
+            area += amp_polyset_area(&ins);
+        }
+    spacing = rc == CLI_OK && st.infill_length > 0 ? area / st.infill_length : 1.0;
+    for (li = 0; li < sl.nlayers && rc == CLI_OK; li++) {
+        amp_vec2 last = amp_v2(0, 0);
+        int have = 0;
+        for (k = 0; k < sl.layers[li].polys.nislands; k++) {
+            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
+            amp_polyset_inset(&isl, o.radius, 0, &ins, NULL);
+            perims += ins.nrings;
+            amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);
+            rectilinear(&ins, spacing, &last, &have, &rs);
+        }
+    }
+    t_rect = cli_now() - t0;
+    if (rc == CLI_OK) {
+        size_t starts_c = ps.npaths, starts_r = rs.starts + perims, q;
+        double travel_c = 0; /* within layers, as for the baseline */
+        for (q = 1; q < ps.npaths; q++) {
+            amp_pvert a = amp_pathset_path_verts(&ps, q - 1)[ps.paths[q - 1].n - 1], c = amp_pathset_path_verts(&ps, q)[0];
+            if (a.p.z == c.p.z)
+                travel_c += amp_v3_dist(a.p, c.p);
+        }
+        if (j) {
+            cli_json_int(j, "triangles", (long long)m.ntris);
+            cli_json_int(j, "layers", (long long)sl.nlayers);
+            cli_json_num(j, "slice_s", t_slice);
+            cli_json_num(j, "continuous_s", t_cont);
+            cli_json_int(j, "islands", (long long)st.islands);
+            cli_json_int(j, "strokes", (long long)st.strokes);
+            cli_json_int(j, "continuous_extrusion_starts", (long long)starts_c);
+            cli_json_int(j, "rectilinear_extrusion_starts", (long long)starts_r);
+            cli_json_num(j, "starts_ratio", (double)starts_c / (double)(starts_r ? starts_r : 1));
+            cli_json_num(j, "continuous_infill_mm", st.infill_length);
+            cli_json_num(j, "rectilinear_infill_mm", rs.length);
+            cli_json_num(j, "rectilinear_spacing_mm", spacing);
+            cli_json_num(j, "continuous_travel_mm", travel_c);
+            cli_json_num(j, "travel_ratio", travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+            cli_json_num(j, "rectilinear_travel_mm", rs.travel);
+            cli_json_num(j, "rectilinear_s", t_rect);
+        } else {
+            printf("%lu triangles, %lu layers: slice %.3f s, continuous paths %.3f s (%lu islands, %lu strokes)\n",
+                   (unsigned long)m.ntris, (unsigned long)sl.nlayers, t_slice, t_cont, (unsigned long)st.islands,
+                   (unsigned long)st.strokes);
+            printf("extrusion starts: continuous %lu vs rectilinear %lu (%.3fx); infill %.0f vs %.0f mm (spacing %.2f "
+                   "mm)\n",
+                   (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
+                   st.infill_length, rs.length, spacing);
+            printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, rs.travel,
+                   travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+        }
+    }
+    amp_polyset_free(&isl);
+    amp_polyset_free(&ins);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+    return rc;
+}

@@ -1,0 +1,291 @@
+/* ampath slice MESH.stl --layer H --polygons — planar layers (paper 2 §2.2 step 1, SPEC §4). */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "slicetool.h"
+#include "svg.h"
+
+const char cmd_slice_usage[] =
+    "slice a mesh into layers of polygons with holes (.amp closed paths or an SVG of one layer)\n"
+    "usage: ampath slice MESH.stl --layer H [--first-layer H0] [--polygons|--continuous] [-o OUT.amp|OUT.svg]\n"
+    "       [--json]\n"
+    "  --layer H          layer height in mm (required); layer i is cut at z = (i + 1/2) H above the\n"
+    "                     plate (mesh lowest point = 0) and printed at z = (i + 1) H\n"
+    "  --first-layer H0   height of the first layer in mm (default: H); layer 0 is cut at H0/2,\n"
+    "                     layer i >= 1 at H0 + (i - 1/2) H\n"
+    "  --polygons         write each layer's polygons (the default product): one closed path per\n"
+    "                     ring (last vertex repeats the first) at the cutting height, outer\n"
+    "                     boundaries counter-clockwise, holes clockwise, islands in order\n"
+    "  --continuous       continuous tool paths (paper 2): per island a perimeter loop at r, then one\n"
+    "                     closed stroke over the Euler lattice clipped to the inset by 3r, printed at\n"
+    "                     z = (i + 1) H with radius r on every vertex\n"
+    "  --cell S           lattice cell size of --continuous in mm (default 10 r)\n"
+    "  --grid KIND        lattice of --continuous: square (default), tri or hex\n"
+    "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
+    "  --no-perimeter     --continuous without the perimeter loops\n"
+    "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
+    "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
+    "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
+    "  --z Z              draw the layer cut nearest to height Z mm instead\n"
+    "  --radius R         deposition radius written on every vertex, and the inset drawn in\n"
+    "                     the SVG, in mm (default 0.5)\n"
+    "  --json             print the figures as one JSON object (layers, polygons, islands, holes,\n"
+    "                     area per layer, open chains of an open mesh, time; with --continuous:\n"
+    "                     strokes, travel moves, printed/travel/support lengths, crossings)\n"
+    "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
+    "(open_chains) with a warning on stderr.\n";
+
+static int ends_with(const char *s, const char *suf)
+{
+    size_t n = strlen(s), m = strlen(suf);
+    return n >= m && strcmp(s + n - m, suf) == 0;
+}
+
+static int write_amp(const char *file, const amp_slices *sl, double radius, double layer)
+{
+    amp_pathset ps;
+    amp_error err;
+    size_t i, r, k;
+    char comment[200];
+    int rc;
+    amp_pathset_init(&ps, NULL);
+    amp_error_clear(&err);
+    for (i = 0; i < sl->nlayers; i++) {
+        const amp_polyset *P = &sl->layers[i].polys;
+        for (r = 0; r < P->nrings; r++) {
+            const amp_vec2 *p = amp_polyset_ring(P, r);
+            size_t n = P->rings[r].n;
+            if (amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err) != AMP_OK)
+                goto fail;
+            /* closed path: the last vertex repeats the first (SPEC §4) */
+            for (k = 0; k <= n; k++)
+                if (amp_pathset_push(&ps, amp_v3(p[k % n].x, p[k % n].y, sl->layers[i].z_cut), radius, &err) !=
+                    AMP_OK)
+                    goto fail;
+        }
+    }
+    snprintf(comment, sizeof comment,
+             "ampath slice --polygons: %lu layers of height %g mm; outer rings CCW, holes CW; z = cutting height",
+             (unsigned long)sl->nlayers, layer);
+    rc = cli_save_paths("slice", file, &ps, comment);
+    amp_pathset_free(&ps);
+    return rc;
+fail:
+    amp_pathset_free(&ps);
+    return cli_fail_err("slice", &err);
+}
+
+static int write_svg(const char *file, const amp_slices *sl, long li, double radius)
+{
+    svg_doc s;
+    double x0, y0, x1, y1;
+    amp_polyset inset;
+    amp_error err;
+    char line[160];
+    const amp_layer *L = &sl->layers[li];
+    amp_polyset_init(&inset, NULL);
+    amp_error_clear(&err);
+    slicetool_bbox(sl, &x0, &y0, &x1, &y1);
+    if (amp_polyset_inset(&L->polys, radius, 0, &inset, &err) != AMP_OK)
+        return cli_fail_err("slice", &err);
+    if (svg_open(&s, file, x0, y0, x1, y1) != 0) {
+        amp_polyset_free(&inset);
+        return cli_fail("slice", CLI_USAGE, "cannot write '%s'", file);
+    }
+    svg_polyset(&s, &L->polys, "#d9c8f0", "#5b2a86", 1.5);
+    svg_polyset(&s, &inset, "none", "#c0392b", 1.0);
+    snprintf(line, sizeof line, "layer %ld: cut z = %.4g mm, %lu islands, %lu rings, area %.4g mm2", li, L->z_cut,
+             (unsigned long)L->polys.nislands, (unsigned long)L->polys.nrings, amp_polyset_area(&L->polys));
+    svg_text(&s, 0, line);
+    snprintf(line, sizeof line, "red: inset by r = %.4g mm (%lu islands)", radius, (unsigned long)inset.nislands);
+    svg_text(&s, 1, line);
+    amp_polyset_free(&inset);
+    if (svg_close(&s) != 0)
+        return cli_fail("slice", CLI_USAGE, "writing '%s' failed", file);
+    return CLI_OK;
+}
+
+static amp_grid_kind grid_kind(const char *g, int *ok)
+{
+    *ok = 1;
+    if (strcmp(g, "square") == 0)
+        return AMP_GRID_SQUARE;
+    if (strcmp(g, "tri") == 0)
+        return AMP_GRID_TRI;
+    if (strcmp(g, "hex") == 0)
+        return AMP_GRID_HEX;
+    *ok = 0;
+    return AMP_GRID_SQUARE;
+}
+
+/* --continuous: build, self-check (crossings, repeated edges) and report. */
+static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
+                          int json, double t0)
+{
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_error err;
+    size_t i, crossings = 0, repeats = 0;
+    int rc = CLI_OK;
+    amp_pathset_init(&ps, NULL);
+    amp_error_clear(&err);
+    if (amp_contpath_layers(sl, o, &ps, &st, &err) != AMP_OK) {
+        amp_pathset_free(&ps);
+        return cli_fail_err("slice", &err);
+    }
+    for (i = 0; i < ps.npaths; i++) {
+        amp_stroke_report rep;
+        if (amp_pathset_stroke_check(&ps, i, NULL, 0, &rep, &err) == AMP_ERR_NOMEM) {
+            amp_pathset_free(&ps);
+            return cli_fail_err("slice", &err);
+        }
+        crossings += rep.crossings;
+        repeats += rep.repeated_edges;
+    }
+    if (out) {
+        char comment[200];
+        snprintf(comment, sizeof comment,
+                 "ampath slice --continuous: %lu layers, %lu strokes, %lu perimeter loops, radius %g mm",
+                 (unsigned long)st.layers, (unsigned long)st.strokes, (unsigned long)st.perimeter_loops, o->radius);
+        rc = cli_save_paths("slice", out, &ps, comment);
+    }
+    if (rc == CLI_OK && json) {
+        cli_json j;
+        cli_json_begin(&j, stdout);
+        cli_json_int(&j, "layers", (long long)st.layers);
+        cli_json_int(&j, "islands", (long long)st.islands);
+        cli_json_int(&j, "strokes", (long long)st.strokes);
+        cli_json_int(&j, "multi_stroke_islands", (long long)st.multi_stroke);
+        cli_json_int(&j, "perimeter_loops", (long long)st.perimeter_loops);
+        cli_json_int(&j, "support_paths", (long long)st.support_paths);
+        cli_json_int(&j, "paths", (long long)ps.npaths);
+        cli_json_int(&j, "travel_moves", (long long)st.travel_moves);
+        cli_json_num(&j, "printed_length_mm", st.printed_length);
+        cli_json_num(&j, "infill_length_mm", st.infill_length);
+        cli_json_num(&j, "travel_length_mm", st.travel_length);
+        cli_json_num(&j, "support_length_mm", st.support_length);
+        cli_json_num(&j, "unprinted_ring_length_mm", st.unprinted_length);
+        cli_json_num(&j, "dropped_length_mm", st.dropped_length);
+        cli_json_int(&j, "free_ends", (long long)st.free_ends);
+        cli_json_int(&j, "odd_vertices", (long long)st.odd_vertices);
+        cli_json_int(&j, "crossings", (long long)crossings);
+        cli_json_int(&j, "repeated_edges", (long long)repeats);
+        cli_json_num(&j, "radius", o->radius);
+        cli_json_num(&j, "time_s", cli_now() - t0);
+        cli_json_end(&j);
+    } else if (rc == CLI_OK)
+        printf("%s: %lu layers, %lu islands, %lu strokes, %lu travel moves, printed %.1f mm, travel %.1f mm%s%s\n",
+               file, (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.strokes,
+               (unsigned long)st.travel_moves, st.printed_length, st.travel_length, out ? " -> " : "",
+               out ? out : "");
+    amp_pathset_free(&ps);
+    return rc;
+}
+
+int cmd_slice(int argc, char **argv)
+{
+    double layer = 0, first = 0, radius = 0.5, z = 0, t0 = cli_now();
+    long index = -1;
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, npos = 0, rc, ok;
+    double cell = 0, offset = 0;
+    const char *pos[1], *out = NULL, *grid = "square";
+    amp_contpath_opts co;
+    amp_mesh m;
+    amp_slices sl;
+    size_t i, r, rings = 0, holes = 0, islands = 0, flipped = 0;
+    cli_opt opts[] = {{"layer", CLI_DOUBLE, &layer, 0},      {"first-layer", CLI_DOUBLE, &first, 0},
+                      {"polygons", CLI_FLAG, &polygons, 0},  {"output", CLI_STR, &out, 0},
+                      {"layer-index", CLI_LONG, &index, 0},  {"z", CLI_DOUBLE, &z, 0},
+                      {"radius", CLI_DOUBLE, &radius, 0},    {"json", CLI_FLAG, &json, 0},
+                      {"continuous", CLI_FLAG, &continuous, 0}, {"cell", CLI_DOUBLE, &cell, 0},
+                      {"grid", CLI_STR, &grid, 0},          {"offset", CLI_DOUBLE, &offset, 0},
+                      {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
+                      {NULL, CLI_FLAG, NULL, 0}};
+    rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
+    if (rc != CLI_OK)
+        return rc;
+    if (!opts[0].seen)
+        return cli_fail("slice", CLI_USAGE, "--layer H is required");
+    if (!(radius > 0) || !isfinite(radius))
+        return cli_fail("slice", CLI_USAGE, "--radius must be positive");
+    if (continuous && polygons)
+        return cli_fail("slice", CLI_USAGE, "--polygons and --continuous exclude each other");
+    amp_contpath_opts_default(&co, radius);
+    co.grid = grid_kind(grid, &ok);
+    if (!ok)
+        return cli_fail("slice", CLI_USAGE, "--grid must be square, tri or hex, not '%s'", grid);
+    if ((opts[9].seen && (!(cell > 0) || !isfinite(cell))) || (opts[11].seen && (!(offset > 0) || !isfinite(offset))))
+        return cli_fail("slice", CLI_USAGE, "--cell and --offset must be positive");
+    if (opts[9].seen)
+        co.cell = cell;
+    if (opts[11].seen)
+        co.offset = offset;
+    co.perimeters = !noperim;
+    co.support_stretches = stretches;
+    if (continuous && out && ends_with(out, ".svg"))
+        return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    rc = slicetool_load("slice", pos[0], layer, first, &m, &sl, &flipped);
+    if (rc == CLI_OK && sl.open_chains)
+        fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
+                (unsigned long)sl.open_chains);
+    if (rc == CLI_OK && continuous) {
+        rc = run_continuous(pos[0], out, &sl, &co, json, t0);
+        goto done;
+    }
+    if (rc == CLI_OK && out) {
+        if (ends_with(out, ".svg")) {
+            long li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
+            rc = li < 0 ? CLI_USAGE : write_svg(out, &sl, li, radius);
+        } else
+            rc = write_amp(out, &sl, radius, layer);
+    }
+    if (rc != CLI_OK)
+        goto done;
+    for (i = 0; i < sl.nlayers; i++) {
+        rings += sl.layers[i].polys.nrings;
+        islands += sl.layers[i].polys.nislands;
+        for (r = 0; r < sl.layers[i].polys.nrings; r++)
+            holes += sl.layers[i].polys.rings[r].hole != 0;
+    }
+    if (json) {
+        cli_json j;
+        cli_json_begin(&j, stdout);
+        cli_json_int(&j, "layers", (long long)sl.nlayers);
+        cli_json_int(&j, "polygons", (long long)rings);
+        cli_json_int(&j, "islands", (long long)islands);
+        cli_json_int(&j, "holes", (long long)holes);
+        cli_json_int(&j, "open_chains", (long long)sl.open_chains);
+        cli_json_int(&j, "nonmanifold", (long long)sl.nonmanifold);
+        cli_json_int(&j, "flipped_triangles", (long long)flipped);
+        cli_json_int(&j, "triangles", (long long)m.ntris);
+        cli_json_num(&j, "layer_height", layer);
+        cli_json_num(&j, "first_layer", first > 0 ? first : layer);
+        cli_json_num(&j, "time_s", cli_now() - t0);
+        cli_json_arr(&j, "per_layer");
+        for (i = 0; i < sl.nlayers; i++) {
+            size_t nh = 0;
+            for (r = 0; r < sl.layers[i].polys.nrings; r++)
+                nh += sl.layers[i].polys.rings[r].hole != 0;
+            cli_json_obj(&j, NULL);
+            cli_json_int(&j, "index", (long long)i);
+            cli_json_num(&j, "z_cut", sl.layers[i].z_cut);
+            cli_json_num(&j, "z_print", sl.layers[i].z_print);
+            cli_json_int(&j, "islands", (long long)sl.layers[i].polys.nislands);
+            cli_json_int(&j, "polygons", (long long)sl.layers[i].polys.nrings);
+            cli_json_int(&j, "holes", (long long)nh);
+            cli_json_num(&j, "area_mm2", amp_polyset_area(&sl.layers[i].polys));
+            cli_json_close(&j);
+        }
+        cli_json_close(&j);
+        cli_json_end(&j);
+    } else
+        printf("%s: %lu layers, %lu polygons (%lu islands, %lu holes)%s%s\n", pos[0], (unsigned long)sl.nlayers,
+               (unsigned long)rings, (unsigned long)islands, (unsigned long)holes, out ? " -> " : "", out ? out : "");
+done:
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+    return rc;
+}

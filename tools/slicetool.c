@@ -1,0 +1,66 @@
+/* Shared steps of `ampath slice` and `ampath euler`. */
+#include <math.h>
+
+#include "slicetool.h"
+
+int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
+                   size_t *flipped)
+{
+    amp_error err;
+    amp_slice_opts o;
+    amp_error_clear(&err);
+    if (!(layer > 0) || !isfinite(layer))
+        return cli_fail(cmd, CLI_USAGE, "--layer must be a positive height in mm");
+    if (first < 0 || !isfinite(first))
+        return cli_fail(cmd, CLI_USAGE, "--first-layer must be a positive height in mm");
+    if (amp_mesh_read_stl_file(m, file, &err) != AMP_OK)
+        return cli_fail_err(cmd, &err);
+    /* the slicer chains segments by their direction: orientation must agree */
+    if (amp_mesh_orient(m, flipped, &err) != AMP_OK)
+        return cli_fail_err(cmd, &err);
+    o.layer = layer;
+    o.first_layer = first;
+    if (amp_slice_mesh(m, &o, sl, &err) != AMP_OK)
+        return cli_fail_err(cmd, &err);
+    return CLI_OK;
+}
+
+long slicetool_pick(const char *cmd, const amp_slices *sl, long index, int have_z, double z)
+{
+    size_t i, best = 0;
+    if (sl->nlayers == 0) {
+        cli_fail(cmd, CLI_USAGE, "the mesh gives no layer");
+        return -1;
+    }
+    if (index >= 0) {
+        if ((size_t)index >= sl->nlayers) {
+            cli_fail(cmd, CLI_USAGE, "--layer-index %ld out of range (0..%lu)", index, (unsigned long)sl->nlayers - 1);
+            return -1;
+        }
+        return index;
+    }
+    if (!have_z)
+        return (long)(sl->nlayers / 2);
+    for (i = 1; i < sl->nlayers; i++)
+        if (fabs(sl->layers[i].z_cut - z) < fabs(sl->layers[best].z_cut - z))
+            best = i;
+    return (long)best;
+}
+
+int slicetool_bbox(const amp_slices *sl, double *x0, double *y0, double *x1, double *y1)
+{
+    size_t i, k;
+    int any = 0;
+    *x0 = *y0 = HUGE_VAL;
+    *x1 = *y1 = -HUGE_VAL;
+    for (i = 0; i < sl->nlayers; i++)
+        for (k = 0; k < sl->layers[i].polys.npts; k++) {
+            amp_vec2 p = sl->layers[i].polys.pts[k];
+            *x0 = fmin(*x0, p.x);
+            *y0 = fmin(*y0, p.y);
+            *x1 = fmax(*x1, p.x);
+            *y1 = fmax(*y1, p.y);
+            any = 1;
+        }
+    return any;
+}

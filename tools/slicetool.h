@@ -1,0 +1,27 @@
+/* slicetool.h — shared steps of `ampath slice` and `ampath euler`: load an
+ * STL, repair its orientation, slice it, pick a layer. */
+#ifndef AMP_TOOLS_SLICETOOL_H
+#define AMP_TOOLS_SLICETOOL_H
+
+#include "cli.h"
+
+/**
+ * Read @p file, make its orientation consistent (amp_mesh_orient) and slice
+ * it with layer height @p layer and first layer @p first (<= 0: same).
+ * Prints its own error; returns CLI_OK or CLI_USAGE. *flipped receives the
+ * number of triangles turned.
+ */
+int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
+                   size_t *flipped);
+
+/**
+ * Layer to draw: @p index if >= 0, else the layer whose cutting height is
+ * nearest to @p z (plate coordinates) when @p have_z, else the middle layer.
+ * Returns -1 (after printing a reason) when out of range.
+ */
+long slicetool_pick(const char *cmd, const amp_slices *sl, long index, int have_z, double z);
+
+/** Bounding box (x, y) of every ring of every layer; 0 when there is none. */
+int slicetool_bbox(const amp_slices *sl, double *x0, double *y0, double *x1, double *y1);
+
+#endif
