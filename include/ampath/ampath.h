@@ -6,6 +6,7 @@
 #include "io.h"
 #include "mesh.h"
 #include "bvh.h"
+#include "field.h"
 #include "paths.h"
 #include "status.h"
 #include "vec.h"
