@@ -1,5 +1,7 @@
 /* Direction-field covering of meshes (paper §4.2): spacing, clipping, coverage gap. */
 #include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "meshfix.h"
@@ -180,6 +182,38 @@ START_TEST(field_errors_are_reported)
 }
 END_TEST
 
+
+START_TEST(cli_field_reports_figures_and_writes_paths)
+{
+    amp_mesh m;
+    amp_error err;
+    amp_pathset ps;
+    char out[4096], args[700];
+    const char *stl = amp_test_tmp("field-helix.stl"), *amp = amp_test_tmp("field-helix.amp");
+    if (!getenv("AMP_TOOL"))
+        return; /* run through make check, which sets AMP_TOOL */
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "field '%s' --field helix-square --spacing 2 --samples 500 --json -o '%s'", stl, amp);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"curves\":36") && strstr(out, "\"coverage_gap_mm\":") &&
+                      strstr(out, "\"grid\":[6,6]"),
+                  "unexpected: %s", out);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    ck_assert_uint_gt(ps.npaths, 10);
+    snprintf(args, sizeof args, "field '%s' --field helix-square --pattern spiral", stl);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "field '%s' --field nothing", stl);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 2);
+    remove(stl);
+    remove(amp);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *field_suite(void)
 {
     Suite *s = suite_create("field");
@@ -191,6 +225,7 @@ static Suite *field_suite(void)
     AMP_ADD_TEST(tc, gap_checker_fails_when_paths_are_missing);
     AMP_ADD_TEST(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     AMP_ADD_TEST(tc, field_errors_are_reported);
+    AMP_ADD_TEST(tc, cli_field_reports_figures_and_writes_paths);
     suite_add_tcase(s, tc);
     return s;
 }
