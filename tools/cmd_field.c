@@ -55,6 +55,7 @@ int cmd_field(int argc, char **argv)
     amp_pathset_init(&ps, NULL);
     if (amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
         amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err) != AMP_OK) {
+        amp_bvh_free(b);
         amp_mesh_free(&m);
         return cli_fail_err("field", &err);
     }
