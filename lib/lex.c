@@ -16,7 +16,7 @@ void amp_lex_init(amp_lex *lx, const char *buf, size_t len, int strip_comments)
 
 static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
-int amp_lex_next(amp_lex *lx, amp_error *err)
+int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *err)
 {
     while (lx->pos < lx->len) {
         size_t start = lx->pos, end, i;
@@ -24,9 +24,6 @@ int amp_lex_next(amp_lex *lx, amp_error *err)
         end = nl ? (size_t)(nl - lx->buf) : lx->len;
         lx->pos = nl ? end + 1 : lx->len;
         lx->line++;
-        if (end - start > AMP_LEX_MAX_LINE)
-            return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: longer than %d bytes", lx->line,
-                            AMP_LEX_MAX_LINE);
         if (memchr(lx->buf + start, '\0', end - start))
             return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: NUL byte in text", lx->line);
         if (lx->strip_comments) {
@@ -34,28 +31,50 @@ int amp_lex_next(amp_lex *lx, amp_error *err)
             if (h)
                 end = (size_t)(h - lx->buf);
         }
-        lx->ntok = 0;
-        i = start;
-        while (i < end) {
-            size_t t;
-            while (i < end && is_space(lx->buf[i]))
-                i++;
-            if (i >= end)
-                break;
-            t = i;
-            while (i < end && !is_space(lx->buf[i]))
-                i++;
-            if (lx->ntok == AMP_LEX_MAX_TOKENS)
-                return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: more than %d fields", lx->line,
-                                AMP_LEX_MAX_TOKENS);
-            lx->tok[lx->ntok] = lx->buf + t;
-            lx->toklen[lx->ntok] = i - t;
-            lx->ntok++;
-        }
-        if (lx->ntok > 0)
+        for (i = start; i < end && is_space(lx->buf[i]); i++)
+            ;
+        if (i < end) {
+            *line = lx->buf + start;
+            *len = end - start;
             return 1;
+        }
     }
     return 0;
+}
+
+int amp_lex_split(amp_lex *lx, const char *line, size_t len, amp_error *err)
+{
+    size_t i = 0;
+    lx->ntok = 0;
+    while (i < len) {
+        size_t t;
+        while (i < len && is_space(line[i]))
+            i++;
+        if (i >= len)
+            break;
+        t = i;
+        while (i < len && !is_space(line[i]))
+            i++;
+        if (lx->ntok == AMP_LEX_MAX_TOKENS)
+            return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: more than %d fields", lx->line,
+                            AMP_LEX_MAX_TOKENS);
+        lx->tok[lx->ntok] = line + t;
+        lx->toklen[lx->ntok] = i - t;
+        lx->ntok++;
+    }
+    return lx->ntok > 0;
+}
+
+int amp_lex_next(amp_lex *lx, amp_error *err)
+{
+    const char *line;
+    size_t len;
+    int r = amp_lex_next_line(lx, &line, &len, err);
+    if (r <= 0)
+        return r;
+    if (len > AMP_LEX_MAX_LINE)
+        return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: longer than %d bytes", lx->line, AMP_LEX_MAX_LINE);
+    return amp_lex_split(lx, line, len, err);
 }
 
 int amp_lex_is(const amp_lex *lx, int i, const char *s)

@@ -35,6 +35,17 @@ void amp_lex_init(amp_lex *lx, const char *buf, size_t len, int strip_comments);
  */
 int amp_lex_next(amp_lex *lx, amp_error *err);
 
+/**
+ * Advance to the next line with at least one token and return it unsplit in
+ * *line / *len (comment stripped when asked; no length or field limit, for
+ * long numeric lines such as .spl knot vectors). Returns 1, 0 at end of input,
+ * or a negative amp_status (NUL byte). Tokens are not set; see amp_lex_split().
+ */
+int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *err);
+
+/** Split @p line into the tokens of @p lx (as amp_lex_next does). Returns 1, or a negative status (too many fields). */
+int amp_lex_split(amp_lex *lx, const char *line, size_t len, amp_error *err);
+
 /** Non-zero when token @p i equals the C string @p s. */
 int amp_lex_is(const amp_lex *lx, int i, const char *s);
 

@@ -3,11 +3,13 @@
 #define AMPATH_AMPATH_H
 
 #include "alloc.h"
+#include "cover.h"
 #include "io.h"
 #include "mesh.h"
 #include "bvh.h"
 #include "field.h"
 #include "paths.h"
+#include "spline.h"
 #include "status.h"
 #include "vec.h"
 #include "version.h"

@@ -1,0 +1,115 @@
+/*
+ * ampath/cover.h — covering a trivariate by print paths (paper 1 §4.1,
+ * Algorithm 1 CoverVolumeWithSurfaces, the Appendix, and Elber & Cohen's
+ * adaptive iso-curve covering of surfaces) and an independent measurement of
+ * the coverage gap.
+ *
+ * Error budget. A volume point p is within ε of a path when it is within ε_s of
+ * a covering surface point q, q within ε_c of a covering curve point, and that
+ * point within δ (the chordal tolerance) of the polyline. We use
+ * ε_s = ε_c = (ε − δ) / 2 and δ = chord_tol (default ε/20), so both recursions
+ * stop when the measured "distance between neighbours" is at most ε − δ:
+ *  - AMP_COVER_ARCLEN (default): the Appendix's bound. Lemma A.2 on the
+ *    control net of the slab between two neighbours, per trimming cell, bounds
+ *    the arc length L of every isoparametric curve joining them; L ≤ ε − δ
+ *    gives every point of such a curve within (ε − δ)/2 of an end (Lemma A.1).
+ *    This is sound: the measured gap is always ≤ ε.
+ *  - AMP_COVER_ISO: the paper's Δ_iso, the distance between corresponding
+ *    points of the two neighbours, evaluated on a sample grid of each trimming
+ *    cell (corners, edge midpoints, centre). As the paper shows (Fig. 5) this
+ *    does not guarantee coverage when the isoparametric curves between the
+ *    neighbours bulge; the minimal depth m (min_depth) forces extra levels.
+ *
+ * Trimming (the domain D^t of Algorithm 1, line 13) is represented by a
+ * uniform grid of `cells` × `cells` parameter cells per surface: a cell is kept
+ * when the measure exceeds the threshold there. The recursion only refines
+ * cells that the parent kept, which is the paper's "common trimmed portion"
+ * (equivalent for the monotone arc-length measure). Curves are drawn over whole
+ * cells, so they may extend a little beyond the exact D^t — never outside the
+ * volume, since they are isoparametric curves of V.
+ *
+ * Thread-safety: functions only read their inputs; no global state.
+ */
+#ifndef AMPATH_COVER_H
+#define AMPATH_COVER_H
+
+#include <stddef.h>
+
+#include "paths.h"
+#include "spline.h"
+#include "status.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum amp_cover_measure {
+    AMP_COVER_ARCLEN = 0, /**< Appendix Lemma A.1/A.2 control-polygon arc-length bound (sound) */
+    AMP_COVER_ISO = 1     /**< paper's iso-distance Δ_iso (sampled; may leave the Fig. 5 gap) */
+} amp_cover_measure;
+
+typedef struct amp_cover_opts {
+    double eps;                /**< largest allowed distance from a volume point to a path (mm), > 0 */
+    int dir;                   /**< direction whose iso-surfaces cover the volume (0 u, 1 v, 2 w = paper) */
+    int min_depth;             /**< Algorithm 1's m: levels subdivided regardless of the measure (>= 0) */
+    amp_cover_measure measure; /**< see above */
+    double radius;             /**< nominal deposition radius written on every vertex (mm), > 0 */
+    double chord_tol;          /**< polyline deviation from the curve (mm); <= 0 means eps / 20 */
+    int cells;                 /**< trimming cells per parametric direction (1..64); <= 0 means 16 */
+    int max_depth;             /**< recursion limit per level; <= 0 means 24 */
+    /** Optional progress report: called from the calling thread with the fraction of the
+     *  covering direction done (0..1), after each covering surface. NULL = none. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;       /**< passed to progress */
+} amp_cover_opts;
+
+/** Defaults: eps 1 mm, dir w, m 0, arc-length measure, radius 0.5 mm, δ = eps/20, 16 cells, no progress. */
+void amp_cover_opts_default(amp_cover_opts *o);
+
+typedef struct amp_cover_stats {
+    size_t surfaces;      /**< covering (trimmed) iso-surfaces, boundaries included */
+    size_t curves;        /**< covering iso-curve pieces (each a path) */
+    size_t vertices;      /**< polyline vertices written */
+    double length;        /**< total path length (mm) */
+    int depth_limited;    /**< non-zero when max_depth stopped a recursion (coverage not guaranteed) */
+} amp_cover_stats;
+
+/**
+ * Cover the trivariate @p v (dim 3) by paths appended to @p out (role object,
+ * radius opts->radius on every vertex), in the order surfaces were produced
+ * (low to high parameter of opts->dir). @p stats may be NULL.
+ * Errors: AMP_ERR_ARG (not a trivariate, bad options), AMP_ERR_NOMEM (paths
+ * already appended stay in @p out).
+ */
+amp_status amp_cover_trivariate(const amp_spline *v, const amp_cover_opts *opts, amp_pathset *out,
+                                amp_cover_stats *stats, amp_error *err);
+
+/** Figures of an independent coverage measurement. */
+typedef struct amp_cover_gap {
+    double gap;         /**< largest distance from a sample of the volume to the nearest path (mm) */
+    amp_vec3 worst;     /**< the sample that attains it */
+    double worst_par[3];/**< its parameters */
+    size_t samples;     /**< samples taken */
+    double volume;      /**< volume of the trivariate (mm^3, Gauss quadrature of |det J|) */
+    double deposited;   /**< sum of pi r^2 L over the paths (mm^3) */
+} amp_cover_gap;
+
+/**
+ * Measure how well the paths of @p ps cover the trivariate @p v, independently of
+ * how they were made: @p samples points (at least 1000) are drawn, half uniformly in
+ * parameter space and half uniformly in space (rejection sampling of parameters with
+ * acceptance |det J| / max |det J|, which is uniform in space for a regular V), plus
+ * the 8 corners; for each the exact distance to the nearest path segment is found
+ * with a uniform grid. @p seed makes the sampling reproducible.
+ * Errors: AMP_ERR_ARG (not a trivariate, no path), AMP_ERR_NOMEM.
+ */
+amp_status amp_cover_measure_gap(const amp_spline *v, const amp_pathset *ps, size_t samples, unsigned long seed,
+                                 amp_cover_gap *out, amp_error *err);
+
+/** Volume of a trivariate: Gauss–Legendre quadrature (3 points per direction per cell of a 12^3 grid). */
+double amp_trivariate_volume(const amp_spline *v);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,301 @@
+/* Volumetric covering (include/ampath/cover.h): Algorithm 1 + Elber-Cohen curves, checked by the independent gap measurement. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+#include "testutil.h"
+
+static double cover_gap(const amp_spline *v, const amp_cover_opts *o, amp_cover_stats *st, amp_pathset *keep)
+{
+    amp_pathset ps;
+    amp_cover_gap g;
+    amp_error err;
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_cover_trivariate(v, o, &ps, st, &err), AMP_OK);
+    ck_assert_int_eq(amp_cover_measure_gap(v, &ps, 6000, 7, &g, &err), AMP_OK);
+    if (keep)
+        *keep = ps;
+    else
+        amp_pathset_free(&ps);
+    return g.gap;
+}
+
+START_TEST(arclen_covering_of_the_builtin_models_is_within_eps)
+{
+    static const struct {
+        const char *name;
+        double eps;
+    } cases[] = {{"helix", 2}, {"torus-quarter", 2}, {"vase", 2}, {"vase", 1}};
+    size_t i;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        amp_spline v;
+        amp_cover_opts o;
+        amp_cover_stats st;
+        double gap;
+        ck_assert_int_eq(amp_trivariate_model(cases[i].name, NULL, &v, NULL), AMP_OK);
+        amp_cover_opts_default(&o);
+        o.eps = cases[i].eps;
+        gap = cover_gap(&v, &o, &st, NULL);
+        ck_assert_msg(gap <= o.eps, "%s eps %g: gap %g", cases[i].name, o.eps, gap);
+        ck_assert_msg(gap > 0.25 * o.eps, "%s eps %g: gap %g suspiciously small", cases[i].name, o.eps, gap);
+        ck_assert_int_eq(st.depth_limited, 0);
+        ck_assert_uint_ge(st.surfaces, 3);
+        ck_assert_uint_ge(st.curves, st.surfaces);
+        amp_spline_free(&v);
+    }
+}
+END_TEST
+
+typedef struct prog {
+    double last;
+    int calls, monotone;
+} prog;
+
+static void on_progress(void *user, double f)
+{
+    prog *p = user;
+    p->monotone &= f >= p->last && f <= 1.0;
+    p->last = f;
+    p->calls++;
+}
+
+START_TEST(every_vertex_lies_in_the_torus_quarter)
+{
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    amp_pathset ps;
+    size_t i;
+    ck_assert_int_eq(amp_trivariate_model("torus-quarter", NULL, &v, NULL), AMP_OK);
+    amp_cover_opts_default(&o);
+    o.eps = 2;
+    o.dir = 1; /* the paper's Fig. 4(f): v-isoparametric surfaces */
+    {
+        prog pr = {0, 0, 1};
+        o.progress = on_progress;
+        o.progress_user = &pr;
+        ck_assert_double_le(cover_gap(&v, &o, &st, &ps), 2.0);
+        ck_assert_int_eq((size_t)pr.calls, st.surfaces);
+        ck_assert(pr.monotone);
+        ck_assert_near(pr.last, 1.0, 0);
+    }
+    for (i = 0; i < ps.nverts; i++) {
+        amp_vec3 p = ps.verts[i].p;
+        ck_assert_double_le(hypot(hypot(p.x, p.y) - 50, p.z - 10), 10 + 1e-9);
+        ck_assert(p.x >= -1e-9 && p.y >= -1e-9);
+        ck_assert_near(ps.verts[i].r, 0.5, 0);
+    }
+    ck_assert_near(st.length, amp_pathset_length(&ps, -1), 1e-6 * st.length);
+    amp_pathset_free(&ps);
+    amp_spline_free(&v);
+}
+END_TEST
+
+/* Paper Fig. 5: two close surfaces (1 mm apart) whose w-isocurves bulge 7.5 mm sideways in between. */
+static void bulge(amp_spline *v)
+{
+    int k[3] = {2, 2, 3};
+    size_t n[3] = {2, 2, 3}, i, j, l;
+    ck_assert_int_eq(amp_spline_create(v, NULL, 3, k, n, 0, NULL), AMP_OK);
+    for (l = 0; l < 3; l++)
+        for (j = 0; j < 2; j++)
+            for (i = 0; i < 2; i++)
+                amp_spline_cp_set(v, amp_spline_index(v, i, j, l),
+                                  amp_v3(10.0 * i + (l == 1 ? 15 : 0), 10.0 * j, l == 0 ? 0 : (l == 1 ? 0.5 : 1)), 1);
+}
+
+START_TEST(arclen_measure_closes_the_fig5_gap_that_iso_distance_leaves)
+{
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    double gap_iso, gap_iso_m, gap_arc;
+    bulge(&v);
+    amp_cover_opts_default(&o);
+    o.eps = 2;
+    o.measure = AMP_COVER_ISO;
+    gap_iso = cover_gap(&v, &o, &st, NULL);
+    ck_assert_uint_eq(st.surfaces, 2); /* Δ_iso <= eps everywhere: Algorithm 1 stops at once */
+    ck_assert_msg(gap_iso > 5.0, "iso-distance gap %g", gap_iso);
+    o.min_depth = 3;
+    gap_iso_m = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(gap_iso_m <= o.eps, "iso with m = 3: gap %g", gap_iso_m);
+    o.min_depth = 0;
+    o.measure = AMP_COVER_ARCLEN;
+    gap_arc = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(gap_arc <= o.eps, "arc-length gap %g", gap_arc);
+    ck_assert_uint_gt(st.surfaces, 2);
+    amp_spline_free(&v);
+}
+END_TEST
+
+START_TEST(periodic_direction_needs_the_minimal_depth_with_iso_distance)
+{
+    /* the vase around its axis: V(u, 0, w) = V(u, 1, w), so Δ_iso between the two boundary surfaces is 0 */
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    double g0, g2, ga;
+    ck_assert_int_eq(amp_trivariate_model("vase", NULL, &v, NULL), AMP_OK);
+    amp_cover_opts_default(&o);
+    o.eps = 2;
+    o.dir = 1;
+    o.measure = AMP_COVER_ISO;
+    g0 = cover_gap(&v, &o, &st, NULL);
+    ck_assert_uint_eq(st.surfaces, 2);
+    ck_assert_msg(g0 > 10, "m = 0 gap %g", g0);
+    o.min_depth = 2;
+    g2 = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(g2 <= o.eps, "m = 2 gap %g", g2);
+    o.min_depth = 0;
+    o.measure = AMP_COVER_ARCLEN; /* the arc-length bound needs no m */
+    ga = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(ga <= o.eps, "arc-length gap %g", ga);
+    amp_spline_free(&v);
+}
+END_TEST
+
+START_TEST(gap_measurement_fails_on_a_thinned_covering)
+{
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    amp_pathset ps, thin;
+    amp_cover_gap g;
+    size_t i;
+    ck_assert_int_eq(amp_trivariate_model("vase", NULL, &v, NULL), AMP_OK);
+    amp_cover_opts_default(&o);
+    o.eps = 2;
+    ck_assert_double_le(cover_gap(&v, &o, &st, &ps), 2.0);
+    /* keep one path in four: the independent measurement must notice */
+    amp_pathset_init(&thin, NULL);
+    for (i = 0; i < ps.npaths; i += 4)
+        ck_assert_int_eq(amp_pathset_add(&thin, AMP_ROLE_OBJECT, amp_pathset_path_verts(&ps, i), ps.paths[i].n, NULL),
+                         AMP_OK);
+    ck_assert_int_eq(amp_cover_measure_gap(&v, &thin, 6000, 3, &g, NULL), AMP_OK);
+    ck_assert_msg(g.gap > o.eps, "thinned covering gap %g", g.gap);
+    ck_assert_near(g.volume, amp_trivariate_volume(&v), 1e-9 * g.volume);
+    amp_pathset_free(&thin);
+    amp_pathset_free(&ps);
+    amp_spline_free(&v);
+}
+END_TEST
+
+START_TEST(volume_and_gap_measurement_agree_with_closed_forms)
+{
+    /* torus quarter: volume = (pi r^2)(2 pi R)/4; a single path on the centre circle leaves gap 10 (the surface) */
+    amp_spline v;
+    amp_pathset ps;
+    amp_cover_gap g;
+    int i;
+    const double PI = 3.14159265358979323846;
+    ck_assert_int_eq(amp_trivariate_model("torus-quarter", NULL, &v, NULL), AMP_OK);
+    ck_assert_near(amp_trivariate_volume(&v), PI * 100 * 2 * PI * 50 / 4, 1e-3);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (i = 0; i <= 2000; i++)
+        amp_pathset_push(&ps, amp_v3(50 * cos(PI / 2 * i / 2000), 50 * sin(PI / 2 * i / 2000), 10), 0.5, NULL);
+    ck_assert_int_eq(amp_cover_measure_gap(&v, &ps, 4000, 5, &g, NULL), AMP_OK);
+    ck_assert_near(g.gap, 10.0, 1e-3); /* the corners of the parameter box lie on the boundary */
+    amp_pathset_free(&ps);
+    amp_spline_free(&v);
+}
+END_TEST
+
+START_TEST(bad_input_is_rejected)
+{
+    amp_spline v;
+    amp_cover_opts o;
+    amp_pathset ps;
+    amp_error err;
+    int k[2] = {2, 2};
+    size_t n[2] = {2, 2};
+    amp_cover_gap g;
+    amp_pathset_init(&ps, NULL);
+    amp_cover_opts_default(&o);
+    ck_assert_int_eq(amp_spline_create(&v, NULL, 2, k, n, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_cover_trivariate(&v, &o, &ps, NULL, &err), AMP_ERR_ARG);
+    amp_spline_free(&v);
+    ck_assert_int_eq(amp_trivariate_model("vase", NULL, &v, NULL), AMP_OK);
+    o.eps = 0;
+    ck_assert_int_eq(amp_cover_trivariate(&v, &o, &ps, NULL, &err), AMP_ERR_ARG);
+    o.eps = 1;
+    o.dir = 3;
+    ck_assert_int_eq(amp_cover_trivariate(&v, &o, &ps, NULL, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_cover_measure_gap(&v, &ps, 1000, 1, &g, &err), AMP_ERR_ARG); /* no paths */
+    ck_assert_uint_eq(ps.npaths, 0);
+    amp_spline_free(&v);
+}
+END_TEST
+
+static int run(const char *args, char *out, size_t cap)
+{
+    char cmd[1024];
+    FILE *p;
+    size_t n;
+    int rc;
+    ck_assert_ptr_nonnull(getenv("AMP_TOOL"));
+    snprintf(cmd, sizeof cmd, "%s %s 2>&1", getenv("AMP_TOOL"), args);
+    p = popen(cmd, "r");
+    ck_assert_ptr_nonnull(p);
+    n = fread(out, 1, cap - 1, p);
+    out[n] = '\0';
+    rc = pclose(p);
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+}
+
+START_TEST(cli_cover_and_check_report_and_fail_properly)
+{
+    char args[1024], out[8192];
+    const char *amp = amp_test_tmp("vase.amp"), *thin = amp_test_tmp("thin.amp");
+    amp_pathset ps, t;
+    size_t i;
+    snprintf(args, sizeof args, "cover vase --eps 2 --samples 3000 --json -o %s", amp);
+    ck_assert_int_eq(run(args, out, sizeof out), 0);
+    ck_assert_ptr_nonnull(strstr(out, "\"curves\":"));
+    ck_assert_ptr_nonnull(strstr(out, "\"coverage_gap_mm\":"));
+    ck_assert_ptr_nonnull(strstr(out, "\"over_coverage\":"));
+    ck_assert_int_eq(out[0], '{');
+    snprintf(args, sizeof args, "check %s --trivariate vase --samples 3000", amp);
+    ck_assert_int_eq(run(args, out, sizeof out), 0);
+    ck_assert_ptr_nonnull(strstr(out, "eps 2.0000 mm from path file"));
+    /* a thinned file fails the check with exit 1 */
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&t, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, NULL), AMP_OK);
+    for (i = 0; i < ps.npaths; i += 3)
+        amp_pathset_add(&t, AMP_ROLE_OBJECT, amp_pathset_path_verts(&ps, i), ps.paths[i].n, NULL);
+    ck_assert_int_eq(amp_pathset_write_file(&t, thin, NULL, NULL), AMP_OK);
+    snprintf(args, sizeof args, "check %s --trivariate vase --eps 2 --samples 3000 --json", thin);
+    ck_assert_int_eq(run(args, out, sizeof out), 1);
+    ck_assert_ptr_nonnull(strstr(out, "\"ok\":false"));
+    ck_assert_int_eq(run("cover vase --eps -1 -o /dev/null", out, sizeof out), 2);
+    ck_assert_int_eq(run("cover vase --eps 1 --dir q -o /dev/null", out, sizeof out), 2);
+    ck_assert_int_eq(run("cover nothing.spl --eps 1 -o /dev/null", out, sizeof out), 2);
+    remove(amp);
+    remove(thin);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&t);
+}
+END_TEST
+
+static Suite *cover_suite(void)
+{
+    Suite *s = suite_create("cover");
+    TCase *tc = tcase_create("cover");
+    tcase_add_test(tc, arclen_covering_of_the_builtin_models_is_within_eps);
+    tcase_add_test(tc, every_vertex_lies_in_the_torus_quarter);
+    tcase_add_test(tc, arclen_measure_closes_the_fig5_gap_that_iso_distance_leaves);
+    tcase_add_test(tc, periodic_direction_needs_the_minimal_depth_with_iso_distance);
+    tcase_add_test(tc, gap_measurement_fails_on_a_thinned_covering);
+    tcase_add_test(tc, volume_and_gap_measurement_agree_with_closed_forms);
+    tcase_add_test(tc, bad_input_is_rejected);
+    tcase_add_test(tc, cli_cover_and_check_report_and_fail_properly);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(cover_suite)

@@ -1,0 +1,121 @@
+/* ampath check --trivariate: independent ε-coverage measurement of a volumetric covering (issue 4). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "checkers.h"
+
+int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
+{
+    amp_error err;
+    amp_spline *list;
+    size_t n, i;
+    const char *const *names = amp_trivariate_model_names();
+    amp_error_clear(&err);
+    for (i = 0; names[i]; i++)
+        if (strcmp(names[i], what) == 0) {
+            if (amp_trivariate_model(what, NULL, out, &err) != AMP_OK)
+                return cli_fail_err(cmd, &err);
+            return CLI_OK;
+        }
+    if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
+        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
+    for (i = 0; i < n && list[i].dim != 3; i++)
+        ;
+    if (i == n) {
+        amp_spline_list_free(NULL, list, n);
+        return cli_fail(cmd, CLI_USAGE, "%s: no trivariate in the file", what);
+    }
+    *out = list[i];
+    amp_spline_init(&list[i]);
+    amp_spline_list_free(NULL, list, n);
+    return CLI_OK;
+}
+
+/* The eps recorded by `ampath cover` in a comment of the path file, or 0. */
+static double eps_from_comment(const char *file)
+{
+    char *data, *p;
+    size_t len;
+    double eps = 0;
+    if (amp_read_file(file, NULL, 0, &data, &len, NULL) != AMP_OK)
+        return 0;
+    for (p = data; (p = strstr(p, "# ampath cover")) != NULL; p++) {
+        char *e = strstr(p, " eps "), *nl = strchr(p, '\n');
+        if (e && (!nl || e < nl)) {
+            eps = strtod(e + 5, NULL);
+            break;
+        }
+    }
+    amp_free(NULL, data);
+    return eps > 0 ? eps : 0;
+}
+
+int check_trivariate(const char *paths_file, const char *spl_file, double eps, long samples, unsigned long seed,
+                     cli_json *j)
+{
+    amp_spline v;
+    amp_pathset ps;
+    amp_cover_gap g;
+    amp_error err;
+    int rc;
+    const char *eps_from = "--eps";
+    amp_pathset_init(&ps, NULL);
+    rc = cli_load_paths("check", paths_file, &ps);
+    if (rc != CLI_OK)
+        return rc;
+    rc = cli_load_trivariate("check", spl_file, &v);
+    if (rc != CLI_OK) {
+        amp_pathset_free(&ps);
+        return rc;
+    }
+    if (!(eps > 0)) {
+        size_t i;
+        eps = eps_from_comment(paths_file);
+        eps_from = "path file";
+        if (!(eps > 0)) {
+            eps_from = "largest radius";
+            for (i = 0; i < ps.nverts; i++)
+                eps = ps.verts[i].r > eps ? ps.verts[i].r : eps;
+        }
+    }
+    amp_error_clear(&err);
+    if (amp_cover_measure_gap(&v, &ps, samples > 0 ? (size_t)samples : 20000, seed, &g, &err) != AMP_OK) {
+        amp_spline_free(&v);
+        amp_pathset_free(&ps);
+        return cli_fail_err("check", &err);
+    }
+    rc = g.gap <= eps ? CLI_OK : CLI_FAILED;
+    if (j) {
+        cli_json_obj(j, "trivariate_coverage");
+        cli_json_bool(j, "ok", rc == CLI_OK);
+        cli_json_num(j, "eps", eps);
+        cli_json_str(j, "eps_from", eps_from);
+        cli_json_num(j, "coverage_gap_mm", g.gap);
+        cli_json_int(j, "samples", (long long)g.samples);
+        cli_json_arr(j, "worst_point");
+        cli_json_num(j, NULL, g.worst.x);
+        cli_json_num(j, NULL, g.worst.y);
+        cli_json_num(j, NULL, g.worst.z);
+        cli_json_close(j);
+        cli_json_arr(j, "worst_parameters");
+        cli_json_num(j, NULL, g.worst_par[0]);
+        cli_json_num(j, NULL, g.worst_par[1]);
+        cli_json_num(j, NULL, g.worst_par[2]);
+        cli_json_close(j);
+        cli_json_num(j, "volume_mm3", g.volume);
+        cli_json_num(j, "deposited_mm3", g.deposited);
+        cli_json_num(j, "over_coverage", g.volume > 0 ? g.deposited / g.volume : 0);
+        cli_json_close(j);
+    } else {
+        printf("coverage: largest distance to a path %.4f mm over %lu samples (eps %.4f mm from %s): %s\n", g.gap,
+               (unsigned long)g.samples, eps, eps_from, rc == CLI_OK ? "ok" : "FAILED");
+        printf("worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n", g.worst.x,
+               g.worst.y, g.worst.z, g.worst_par[0], g.worst_par[1], g.worst_par[2],
+               g.volume > 0 ? g.deposited / g.volume : 0);
+    }
+    if (rc != CLI_OK)
+        fprintf(stderr, "ampath check: coverage gap %.4f mm exceeds eps %.4f mm\n", g.gap, eps);
+    amp_spline_free(&v);
+    amp_pathset_free(&ps);
+    return rc;
+}
