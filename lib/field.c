@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "ampath/field.h"
+#include "ampath/spline.h"
 
 #define PI 3.14159265358979323846
 
@@ -87,6 +88,26 @@ amp_status amp_field_builtin(amp_field *f, const char *name, amp_box3 box, amp_e
         return st;
     }
     return amp_fail(err, AMP_ERR_ARG, 0, "unknown field '%s' (helix-square, box)", name);
+}
+
+/* A trivariate spline as a field: its parameter box, curves along dir. */
+static amp_status eval_spline(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
+{
+    return amp_spline_eval((const amp_spline *)f->user, uvw, out, err);
+}
+
+amp_status amp_field_from_spline(amp_field *f, const amp_spline *s, int dir, amp_error *err)
+{
+    double lo[3], hi[3];
+    int d;
+    if (!f || !s)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_field_from_spline: NULL argument");
+    if (s->dim != 3)
+        return amp_fail(err, AMP_ERR_ARG, 0, "a direction field must be a trivariate (this spline has %d directions)",
+                        s->dim);
+    for (d = 0; d < 3; d++)
+        amp_spline_domain(s, d, &lo[d], &hi[d]);
+    return amp_field_custom(f, eval_spline, s, lo, hi, dir, err);
 }
 
 void amp_field_opts_default(amp_field_opts *o)

@@ -214,6 +214,84 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
 }
 END_TEST
 
+
+START_TEST(trivariate_field_on_its_own_solid_keeps_every_curve_whole)
+{
+    /* the helix trivariate (SPEC §4) as the field over the helix mesh: its curves lie inside the solid */
+    amp_mesh m;
+    amp_bvh *b;
+    amp_spline sp;
+    amp_field f;
+    amp_field_opts o;
+    amp_field_stats st;
+    amp_pathset ps;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_spline_init(&sp);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &sp, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_from_spline(&f, &sp, 2, &err), AMP_OK);
+    amp_field_opts_default(&o);
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.grid_a, 10); /* the disc's diameter, 10 mm, at S = 1 */
+    ck_assert_uint_eq(st.pieces, st.curves);
+    ck_assert_near(st.length_after, st.length_before, 1e-9 * st.length_before);
+    /* a surface is not a field */
+    {
+        amp_spline *list = NULL;
+        size_t n = 0;
+        const char *txt = "ampath-spline 1\nkind surface\nrational 0\norder 2 2\ncount 2 2\nknots 0 0 1 1\n"
+                          "knots 0 0 1 1\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n";
+        ck_assert_int_eq(amp_spline_parse(txt, strlen(txt), NULL, &list, &n, &err), AMP_OK);
+        ck_assert_int_eq(amp_field_from_spline(&f, &list[0], 2, &err), AMP_ERR_ARG);
+        amp_spline_list_free(NULL, list, n);
+    }
+    amp_spline_free(&sp);
+    amp_bvh_free(b);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(field_route_and_trivariate_route_both_cover_the_helix)
+{
+    /*
+     * Paper §4.1 (Algorithm 1 on the helix trivariate, eps = S sqrt(2)/2) against
+     * §4.2 (helix-square field clipped to the helix mesh, spacing S): both gaps,
+     * measured by the same sampler on the mesh, stay within eps (the field route
+     * away from the surface, see docs/mesh.md); the field route needs less path.
+     */
+    cover_run r;
+    amp_spline sp;
+    amp_cover_opts co;
+    amp_cover_stats cs;
+    amp_pathset pt;
+    amp_error err;
+    double eps = sqrt(2.0) / 2, g_field, g_tri;
+    cover(&r, "helix", "helix-square", 1.0, AMP_PATTERN_GRID, 0);
+    amp_spline_init(&sp);
+    amp_pathset_init(&pt, NULL);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &sp, &err), AMP_OK);
+    amp_cover_opts_default(&co);
+    co.eps = eps;
+    co.radius = eps;
+    ck_assert_int_eq(amp_cover_trivariate(&sp, &co, &pt, &cs, &err), AMP_OK);
+    g_field = gap(&r, 1.0);
+    ck_assert_int_eq(amp_coverage_gap(&pt, r.b, 2500, 7, 0.0, &g_tri, NULL, &err), AMP_OK);
+    ck_assert_msg(g_field <= eps + 0.01, "field route gap %g", g_field);
+    ck_assert_msg(g_tri <= eps + 0.01, "trivariate route gap %g", g_tri);
+    ck_assert_msg(r.st.length_after < amp_pathset_length(&pt, -1), "field %g mm vs trivariate %g mm",
+                  r.st.length_after, amp_pathset_length(&pt, -1));
+    fprintf(stderr, "helix S=1: field route %.0f mm, gap %.3f (interior); trivariate route %.0f mm, gap %.3f\n",
+            r.st.length_after, g_field, amp_pathset_length(&pt, -1), g_tri);
+    amp_pathset_free(&pt);
+    amp_spline_free(&sp);
+    release(&r);
+}
+END_TEST
+
 static Suite *field_suite(void)
 {
     Suite *s = suite_create("field");
@@ -226,6 +304,8 @@ static Suite *field_suite(void)
     AMP_ADD_TEST(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     AMP_ADD_TEST(tc, field_errors_are_reported);
     AMP_ADD_TEST(tc, cli_field_reports_figures_and_writes_paths);
+    AMP_ADD_TEST(tc, trivariate_field_on_its_own_solid_keeps_every_curve_whole);
+    AMP_ADD_TEST(tc, field_route_and_trivariate_route_both_cover_the_helix);
     suite_add_tcase(s, tc);
     return s;
 }

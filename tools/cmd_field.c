@@ -1,13 +1,16 @@
 /* ampath field MESH.stl --field NAME --spacing S — paper §4.2: direction-field curves clipped to a mesh. */
 #include <string.h>
 
-#include "cli.h"
+#include "checkers.h"
 
 const char cmd_field_usage[] =
     "cover a mesh with the curves of a direction field, clipped to the mesh (paper 4.2)\n"
     "usage: ampath field MESH.stl --field NAME --spacing S [options] [-o PATHS.amp] [--json]\n"
-    "  --field NAME      built-in field: helix-square (12 mm square swept along the SPEC helix; contains the\n"
-    "                    helix model) or box (lines parallel to x over the mesh's bounding box); required\n"
+    "  --field F         built-in field: helix-square (12 mm square swept along the SPEC helix; contains the\n"
+    "                    helix model) or box (lines parallel to x over the mesh's bounding box); or a\n"
+    "                    trivariate: a .spl file (its first trivariate) or a built-in trivariate name\n"
+    "                    (helix, torus-quarter, vase); required\n"
+    "  --dir D           for a trivariate field: the direction of the curves, u, v or w (default w)\n"
     "  --spacing S       distance between neighbouring curves, mm (default 1)\n"
     "  --pattern P       grid (square lattice, covering radius S*sqrt(2)/2) or hex (honeycomb, S/sqrt(3));\n"
     "                    default grid\n"
@@ -24,7 +27,7 @@ const char cmd_field_usage[] =
 
 int cmd_field(int argc, char **argv)
 {
-    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL;
+    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w";
     double spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
     double gap_all = -1, gap_in = -1, mean = -1;
     long samples = 10000;
@@ -32,6 +35,8 @@ int cmd_field(int argc, char **argv)
     amp_mesh m;
     amp_bvh *b = NULL;
     amp_field f;
+    amp_spline spl;
+    int builtin;
     amp_field_opts o;
     amp_field_stats st;
     amp_pathset ps;
@@ -40,7 +45,8 @@ int cmd_field(int argc, char **argv)
                       {"pattern", CLI_STR, &pattern, 0}, {"step", CLI_DOUBLE, &step, 0},
                       {"min-len", CLI_DOUBLE, &min_len, 0}, {"radius", CLI_DOUBLE, &radius, 0},
                       {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
-                      {"json", CLI_FLAG, &json, 0},      {NULL, CLI_FLAG, NULL, 0}};
+                      {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
+                      {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
@@ -50,13 +56,21 @@ int cmd_field(int argc, char **argv)
         return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", pattern);
     if (samples < 0)
         return cli_fail("field", CLI_USAGE, "--samples must be >= 0");
+    if (strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
+        return cli_fail("field", CLI_USAGE, "--dir must be u, v or w, not '%s'", dir);
+    builtin = strcmp(field, "helix-square") == 0 || strcmp(field, "box") == 0;
+    amp_spline_init(&spl);
+    if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
+        return CLI_USAGE;
     amp_error_clear(&err);
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
     if (amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
-        amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err) != AMP_OK) {
+        (builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
+                 : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
         amp_bvh_free(b);
         amp_mesh_free(&m);
+        amp_spline_free(&spl);
         return cli_fail_err("field", &err);
     }
     amp_field_opts_default(&o);
@@ -125,5 +139,6 @@ int cmd_field(int argc, char **argv)
     amp_bvh_free(b);
     amp_pathset_free(&ps);
     amp_mesh_free(&m);
+    amp_spline_free(&spl);
     return rc;
 }

@@ -59,6 +59,16 @@ const char *const *amp_field_names(void);
 amp_status amp_field_custom(amp_field *f, amp_field_eval_fn eval, const void *user, const double lo[3],
                             const double hi[3], int dir, amp_error *err);
 
+struct amp_spline;
+
+/**
+ * A trivariate spline (paper §4.2: "a trivariate that specifies the external
+ * direction field") as a field over its parameter domain, curves along
+ * @p dir (0 u, 1 v, 2 w). The spline is referenced, not copied: it must
+ * outlive @p f. AMP_ERR_ARG when it is not a trivariate or dir is out of range.
+ */
+amp_status amp_field_from_spline(amp_field *f, const struct amp_spline *s, int dir, amp_error *err);
+
 /** Sampling pattern of the curves across the field. */
 typedef enum amp_pattern {
     AMP_PATTERN_GRID = 0, /**< square grid, spacing S: covering radius S·√2/2 */
