@@ -203,6 +203,24 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
                   "unexpected: %s", out);
     ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
     ck_assert_uint_gt(ps.npaths, 10);
+    /* the independent checker: passes with eps S (the boundary bound), fails with eps 0.5 S */
+    snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 2 --samples 2000 --json", amp, stl);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"vertices_outside\":0") && strstr(out, "\"ok\":true"), "unexpected: %s", out);
+    snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 1 --samples 2000", amp, stl);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 1);
+    /* ... and fails on a path that leaves the mesh */
+    {
+        amp_pvert out_path[2];
+        out_path[0].p = amp_v3(20, 0, 5);
+        out_path[1].p = amp_v3(40, 0, 5); /* 15 mm outside the tube */
+        out_path[0].r = out_path[1].r = 1;
+        ck_assert_int_eq(amp_pathset_add(&ps, AMP_ROLE_OBJECT, out_path, 2, &err), AMP_OK);
+        ck_assert_int_eq(amp_pathset_write_file(&ps, amp, NULL, &err), AMP_OK);
+    }
+    snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 2 --samples 2000 --json", amp, stl);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 1);
+    ck_assert_msg(strstr(out, "\"vertices_outside\":1"), "unexpected: %s", out);
     snprintf(args, sizeof args, "field '%s' --field helix-square --pattern spiral", stl);
     ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "field '%s' --field nothing", stl);
