@@ -43,6 +43,7 @@ struct amp_bvh {
     size_t ntris, flipped;
     bvh_node *nodes;
     size_t nnodes;
+    amp_box3 bbox; /* of the triangles (node boxes are slightly inflated) */
 };
 
 /* ------------------------------------------------------------------ build */
@@ -118,6 +119,13 @@ static uint32_t build_node(build_ctx *c, size_t first, size_t count, int depth)
     for (i = first; i < first + count; i++) {
         nd->box = amp_box3_union(nd->box, tri_box(&c->tris[i]));
         cb = amp_box3_add(cb, c->cent[i]);
+    }
+    {
+        /* inflate by a relative 1e-9 so that the exact slab test never drops a hit on a face */
+        amp_vec3 sz = amp_box3_size(nd->box);
+        double mag = fmax(fmax(fabs(nd->box.min.x), fabs(nd->box.max.x)),
+                          fmax(fmax(fabs(nd->box.min.y), fabs(nd->box.max.y)), fmax(fabs(nd->box.min.z), fabs(nd->box.max.z))));
+        nd->box = amp_box3_inflate(nd->box, 1e-9 * (mag + fmax(sz.x, fmax(sz.y, sz.z))) + 1e-300);
     }
     nd->first = (uint32_t)first;
     nd->count = (uint32_t)count;
@@ -285,6 +293,7 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
         amp_bvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
     }
+    b->bbox = amp_box3_empty();
     for (i = 0, n = 0; i < m->ntris; i++) {
         amp_vec3 p0 = m->verts[tris[i].v[0]], p1 = m->verts[tris[i].v[1]], p2 = m->verts[tris[i].v[2]];
         if (!tri_ok(p0, p1, p2))
@@ -294,6 +303,7 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
         b->tris[n].p[2] = p2;
         b->tris[n].src = i;
         c.cent[n] = amp_v3_scale(amp_v3_add(amp_v3_add(p0, p1), p2), 1.0 / 3.0);
+        b->bbox = amp_box3_union(b->bbox, tri_box(&b->tris[n]));
         n++;
     }
     amp_free(m->alloc, tris);
@@ -321,7 +331,7 @@ void amp_bvh_free(amp_bvh *b)
 
 size_t amp_bvh_triangles(const amp_bvh *b) { return b->ntris; }
 size_t amp_bvh_flipped(const amp_bvh *b) { return b->flipped; }
-amp_box3 amp_bvh_bbox(const amp_bvh *b) { return b->nodes[0].box; }
+amp_box3 amp_bvh_bbox(const amp_bvh *b) { return b->bbox; }
 
 /* ------------------------------------------------------------------- rays */
 
@@ -338,8 +348,8 @@ static int ray_box(amp_box3 bx, amp_vec3 o, amp_vec3 inv, double tmax)
     t2 = (bx.max.z - o.z) * inv.z;
     lo = fmax(lo, fmin(t1, t2));
     hi = fmin(hi, fmax(t1, t2));
-    /* small relative slack: a hit exactly on a box face must not be lost */
-    return hi >= fmax(lo, 0.0) - 1e-12 * (fabs(hi) + 1.0) && lo <= tmax * (1 + 1e-12) + 1e-12;
+    /* exact comparison: node boxes are inflated at build time, so touching hits are kept */
+    return hi >= fmax(lo, 0.0) && lo <= tmax;
 }
 
 /*
@@ -673,7 +683,8 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
 {
     piece pc;
     size_t i;
-    int open = 0;
+    int open = 0, known = 0, skipped = 0;
+    double wlast = 0.0;
     amp_status st = AMP_OK;
     if (!b || !out || (n > 0 && !v))
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_bvh_clip_polyline: NULL argument");
@@ -694,6 +705,17 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
         st = amp_bvh_ray_all(b, a, d, 1.0, &h, &nh, err);
         if (st != AMP_OK)
             break;
+        /*
+         * Without a crossing the winding number changes only continuously
+         * (near holes). While the last value was clearly 0 or 1, keep the
+         * state and re-check every 8th segment; otherwise check every one.
+         */
+        if (nh == 0 && known && fabs(wlast - 0.5) > 0.45 && ++skipped < 8) {
+            if (open)
+                st = piece_push(&pc, c, v[i + 1].r, err);
+            continue;
+        }
+        skipped = 0;
         /* breakpoints 0 < t_1 <= ... < 1, then one classification per sub-segment */
         for (k = 0; k <= nh && st == AMP_OK; k++) {
             double s1 = k < nh ? h[k].t : 1.0;
@@ -704,7 +726,9 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
             if (s1 - s0 <= 1e-12)
                 continue; /* a duplicate hit on a shared edge, or a hit at a vertex */
             mid = amp_v3_madd(a, d, 0.5 * (s0 + s1));
-            in = amp_bvh_inside(b, mid);
+            wlast = amp_bvh_winding(b, mid);
+            known = 1;
+            in = wlast >= 0.5;
             if (in) {
                 if (!open) {
                     amp_vec3 p0 = s0 == 0.0 ? a : amp_v3_madd(a, d, s0);

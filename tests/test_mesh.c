@@ -1,9 +1,8 @@
-#define _POSIX_C_SOURCE 200809L /* popen, truncate */
+#define _POSIX_C_SOURCE 200809L /* truncate */
 /* Triangle meshes: STL reading and writing, welding, topology, built-in models. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include "meshfix.h"
@@ -468,25 +467,6 @@ START_TEST(twisted_bridge_has_the_documented_size_and_volume)
 END_TEST
 
 
-/* Run "$AMP_TOOL args" and capture stdout; returns the exit status (or -1 when AMP_TOOL is unset). */
-static int run_tool(const char *args, char *out, size_t cap)
-{
-    const char *tool = getenv("AMP_TOOL");
-    char cmd[1024];
-    FILE *p;
-    size_t n;
-    int rc;
-    if (!tool)
-        return -1;
-    snprintf(cmd, sizeof cmd, "'%s' %s 2>/dev/null", tool, args);
-    p = popen(cmd, "r");
-    ck_assert_ptr_nonnull(p);
-    n = fread(out, 1, cap - 1, p);
-    out[n] = '\0';
-    rc = pclose(p);
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
 START_TEST(cli_info_reports_mesh_closedness_and_volume)
 {
     amp_mesh m;
@@ -500,7 +480,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     m.tris[0] = m.tris[--m.ntris]; /* one hole: not closed */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 0, &err), AMP_OK);
     snprintf(args, sizeof args, "info '%s' --json", f);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"kind\":\"mesh\"") && strstr(out, "\"format\":\"ascii\"") &&
                       strstr(out, "\"triangles\":575") && strstr(out, "\"closed\":false") &&
                       strstr(out, "\"boundary_edges\":3"),
@@ -508,7 +488,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
     /* a truncated binary STL: exit status 2 */
     ck_assert_int_eq(truncate(f, 84 + 50 * 10), 0);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 2);
     remove(f);
     amp_mesh_free(&m);
 }

@@ -20,6 +20,16 @@
 int check_trivariate(const char *paths_file, const char *spl_file, double eps, long samples, unsigned long seed,
                      cli_json *j);
 
+/**
+ * Coverage of the solid of the mesh @p mesh_file (STL) by the paths of
+ * @p paths_file (issue 5): the largest distance from @p samples points drawn
+ * inside the mesh to the nearest path must be <= @p eps (eps <= 0: the
+ * largest vertex radius), and no path vertex may lie more than 0.01 mm
+ * outside the mesh. tools/check_mesh.c.
+ */
+int check_mesh(const char *paths_file, const char *mesh_file, double eps, long samples, unsigned long seed,
+               cli_json *j);
+
 /** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
 int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);
 

@@ -8,6 +8,7 @@
 #include "contpath.h"
 #include "cover.h"
 #include "euler.h"
+#include "field.h"
 #include "gcode.h"
 #include "io.h"
 #include "mesh.h"
