@@ -5,6 +5,8 @@
 #include "alloc.h"
 #include "io.h"
 #include "mesh.h"
+#include "order.h"
+#include "gouge.h"
 #include "paths.h"
 #include "status.h"
 #include "vec.h"
