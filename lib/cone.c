@@ -2,6 +2,10 @@
 #include <math.h>
 
 #include "ampath/order.h"
+#include "fragbvh.h"
+
+/* Euclidean length in the plane; coordinates are millimetres, so no overflow guard (hypot) is needed. */
+static double len2d(double x, double y) { return sqrt(x * x + y * y); }
 
 void amp_head_default(amp_head *h)
 {
@@ -31,18 +35,18 @@ amp_status amp_head_validate(const amp_head *h, amp_error *err)
  */
 static double edge_max(double alpha, double beta, double k, double wx, double wy, double ex, double ey)
 {
-    double best = alpha - k * hypot(wx, wy);
-    double v = alpha + beta - k * hypot(wx + ex, wy + ey);
+    double best = alpha - k * len2d(wx, wy);
+    double v = alpha + beta - k * len2d(wx + ex, wy + ey);
     double e2 = ex * ex + ey * ey;
     if (v > best)
         best = v;
     if (e2 > 0.0) {
         double len = sqrt(e2), t0 = -(wx * ex + wy * ey) / e2;
-        double h = hypot(wx + t0 * ex, wy + t0 * ey), rho = beta / (k * len);
+        double h = len2d(wx + t0 * ex, wy + t0 * ey), rho = beta / (k * len);
         if (rho > -1.0 && rho < 1.0) {
             double t = t0 + rho * h / sqrt(1.0 - rho * rho) / len;
             if (t > 0.0 && t < 1.0) {
-                v = alpha + beta * t - k * hypot(wx + t * ex, wy + t * ey);
+                v = alpha + beta * t - k * len2d(wx + t * ex, wy + t * ey);
                 if (v > best)
                     best = v;
             }
@@ -53,9 +57,13 @@ static double edge_max(double alpha, double beta, double k, double wx, double wy
 
 double amp_cone_clearance(const amp_head *h, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1)
 {
+    return amp_cone_clearance_k(h->z_offs, 1.0 / tan(h->theta), a0, a1, b0, b1);
+}
+
+double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1)
+{
     /* g(s,t) = (b(t).z - a(s).z - z_offs) - k |b(t).xy - a(s).xy| is concave on the unit square:
      * its maximum lies on the boundary (four 1-D problems) or where the xy difference vanishes. */
-    double k = 1.0 / tan(h->theta), zo = h->z_offs;
     amp_vec3 da = amp_v3_sub(a1, a0), db = amp_v3_sub(b1, b0);
     double best, v, det;
     best = edge_max(b0.z - a0.z - zo, db.z, k, b0.x - a0.x, b0.y - a0.y, db.x, db.y);        /* s = 0 */
@@ -81,15 +89,17 @@ double amp_cone_clearance(const amp_head *h, amp_vec3 a0, amp_vec3 a1, amp_vec3 
 
 int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, size_t b)
 {
+    return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
+}
+
+int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b)
+{
     const amp_fragment *fa = &fs->frag[a], *fb = &fs->frag[b];
-    double k = 1.0 / tan(h->theta), dx, dy;
     size_t i, j, na, nb;
     if (a == b)
         return 0;
     /* box bound of the clearance: highest point of b over lowest of a, nearest in xy */
-    dx = fmax(0.0, fmax(fa->box.min.x - fb->box.max.x, fb->box.min.x - fa->box.max.x));
-    dy = fmax(0.0, fmax(fa->box.min.y - fb->box.max.y, fb->box.min.y - fa->box.max.y));
-    if (fb->box.max.z - fa->box.min.z - h->z_offs - k * hypot(dx, dy) <= AMP_CONE_TOL)
+    if (fb->box.max.z - fa->box.min.z - zo - k * amp_box_xy_gap(fa->box, fb->box) <= AMP_CONE_TOL)
         return 0;
     na = amp_fragment_npoints(fa);
     nb = amp_fragment_npoints(fb);
@@ -97,7 +107,7 @@ int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, siz
         amp_vec3 a0 = amp_fragment_point(fs, fa, i), a1 = amp_fragment_point(fs, fa, i + 1);
         for (j = 0; j + 1 < nb; j++) {
             amp_vec3 b0 = amp_fragment_point(fs, fb, j), b1 = amp_fragment_point(fs, fb, j + 1);
-            if (amp_cone_clearance(h, a0, a1, b0, b1) > AMP_CONE_TOL)
+            if (amp_cone_clearance_k(zo, k, a0, a1, b0, b1) > AMP_CONE_TOL)
                 return 1;
         }
     }

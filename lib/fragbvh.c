@@ -44,7 +44,7 @@ double amp_box_xy_gap(amp_box3 a, amp_box3 b)
 {
     double dx = fmax(0.0, fmax(a.min.x - b.max.x, b.min.x - a.max.x));
     double dy = fmax(0.0, fmax(a.min.y - b.max.y, b.min.y - a.max.y));
-    return hypot(dx, dy);
+    return sqrt(dx * dx + dy * dy);
 }
 
 void amp_fbvh_free(amp_fbvh *b)
@@ -158,30 +158,33 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     uint32_t stack[STACK_MAX];
     size_t top = 0, ntests = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double k = 1.0 / tan(h->theta), reach = fr->box.max.z - h->z_offs - AMP_CONE_TOL;
+    double k = 1.0 / tan(h->theta), reach = fr->box.max.z - h->z_offs - AMP_CONE_TOL, bestz = -HUGE_VAL;
     uint32_t found = AMP_FBVH_NONE;
     if (b->nnodes == 0)
         return found;
     stack[top++] = 0;
-    while (top && found == AMP_FBVH_NONE) {
+    /* Branch and bound for a blocker whose lowest point is high: it tends to be printed last of all the
+     * fragments below f, so f is rarely woken up again before it becomes printable. The search stops at one
+     * within 2 z_offs of the highest possible, so that wide flat layers are not scanned in full. */
+    while (top && bestz < reach - 2.0 * h->z_offs) {
         const amp_fbvh_node *nd = &b->node[stack[--top]];
         /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
-        if (nd->minz >= reach - k * amp_box_xy_gap(nd->box, fr->box))
+        if (nd->minz >= reach - k * amp_box_xy_gap(nd->box, fr->box) || nd->box.max.z <= bestz)
             continue;
         if (nd->left == 0) {
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if (g == f || done[g])
+                if (g == f || done[g] || fs->frag[g].box.min.z <= bestz)
                     continue;
                 ntests++;
-                if (amp_fragment_below(fs, h, g, f)) {
+                if (amp_fragment_below_k(fs, h->z_offs, k, g, f)) {
                     found = g;
-                    break;
+                    bestz = fs->frag[g].box.min.z;
                 }
             }
         } else if (top + 2 <= STACK_MAX) {
-            /* the higher child is searched first: a high blocker is printed late, so it is re-checked rarely */
+            /* the higher child is searched first, so that the bound tightens early */
             const amp_fbvh_node *l = &b->node[nd->left], *r = &b->node[nd->right];
             if (l->box.max.z > r->box.max.z) {
                 stack[top++] = nd->right;
@@ -215,7 +218,7 @@ size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if (amp_fragment_below(fs, h, f, g)) {
+                if (amp_fragment_below_k(fs, h->z_offs, k, f, g)) {
                     count++;
                     if (cb && cb(user, g))
                         return count;

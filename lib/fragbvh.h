@@ -49,6 +49,10 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
                           int (*cb)(void *user, uint32_t g), void *user);
 
+/* amp_cone_clearance and amp_fragment_below with k = cot(theta) precomputed (hot loops). */
+double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1);
+int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b);
+
 /* Horizontal distance between the xy projections of two boxes (0 when they overlap). */
 double amp_box_xy_gap(amp_box3 a, amp_box3 b);
 

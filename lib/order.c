@@ -463,7 +463,7 @@ static int piece_below(const orderer *o, const piece *a, const piece *b)
         return 0;
     for (i = a->lo; i <= a->hi; i++)
         for (j = b->lo; j <= b->hi; j++)
-            if (amp_fragment_below(o->fs, o->h, i, j))
+            if (amp_fragment_below_k(o->fs, o->h->z_offs, k, i, j))
                 return 1;
     return 0;
 }
