@@ -1,5 +1,5 @@
 /* `ampath check` gouge checker (paper 5.1): calls the independent amp_gouge_check. */
-#include "check.h"
+#include "checkers.h"
 
 int check_gouge(const check_ctx *c, cli_json *j)
 {

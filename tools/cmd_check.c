@@ -1,7 +1,7 @@
 /* ampath check — independent verification: a dispatcher over the checkers of check.h. */
 #include <string.h>
 
-#include "check.h"
+#include "checkers.h"
 #include "headopt.h"
 
 typedef struct checker {

@@ -7,6 +7,7 @@
 #include "mesh.h"
 #include "order.h"
 #include "gouge.h"
+#include "mdr.h"
 #include "paths.h"
 #include "status.h"
 #include "vec.h"

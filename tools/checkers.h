@@ -1,5 +1,5 @@
 /*
- * check.h — the checkers behind `ampath check` (SPEC §4).
+ * checkers.h — the checkers behind `ampath check` (SPEC §4).
  *
  * tools/cmd_check.c parses the common options once and calls every checker
  * of the table in cmd_check.c. A checker lives in tools/check_NAME.c and
@@ -11,11 +11,11 @@
  * "ran" (bool) and, when it ran, "ok" (bool). It returns CLI_OK (passed or
  * not applicable), CLI_FAILED (a violation) or CLI_USAGE (bad input, after
  * printing a one-line reason to stderr).
- * To add a checker: write check_NAME.c, declare it below, add one row to the
+ * To add a checker: write check_NAME.c, declare it below (this header is not named check.h: tests compile with -Itools, and <check.h> is the Check framework), add one row to the
  * table in cmd_check.c (its --no-NAME flag comes with the row).
  */
-#ifndef AMP_TOOLS_CHECK_H
-#define AMP_TOOLS_CHECK_H
+#ifndef AMP_TOOLS_CHECKERS_H
+#define AMP_TOOLS_CHECKERS_H
 
 #include "cli.h"
 
