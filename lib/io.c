@@ -97,3 +97,25 @@ amp_status amp_read_file(const char *path, const amp_allocator *a, size_t max_le
     *len = n;
     return AMP_OK;
 }
+
+amp_status amp_write_file_atomic(const char *path, amp_writer_fn write, void *ctx, amp_error *err)
+{
+    char tmp[1024];
+    FILE *f;
+    amp_status st;
+    if (!path || !write)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_write_file_atomic: NULL argument");
+    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
+        return amp_fail(err, AMP_ERR_ARG, 0, "%s: path too long", path);
+    f = fopen(tmp, "wb");
+    if (!f)
+        return amp_fail(err, AMP_ERR_IO, 0, "%s: cannot create", tmp);
+    st = write(ctx, amp_file_sink, f, err);
+    if (fclose(f) != 0 && st == AMP_OK)
+        st = amp_fail(err, AMP_ERR_IO, 0, "%s: write failed", tmp);
+    if (st == AMP_OK && rename(tmp, path) != 0)
+        st = amp_fail(err, AMP_ERR_IO, 0, "%s: cannot rename into place", path);
+    if (st != AMP_OK)
+        remove(tmp);
+    return st;
+}

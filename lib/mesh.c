@@ -1,7 +1,9 @@
 /* Triangle mesh container. STL, BVH and inside tests live in their own files. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "ampath/mesh.h"
+#include "mesh_internal.h"
 
 void amp_mesh_init(amp_mesh *m, const amp_allocator *a)
 {
@@ -64,4 +66,210 @@ void amp_mesh_translate(amp_mesh *m, amp_vec3 d)
     size_t i;
     for (i = 0; i < m->nverts; i++)
         m->verts[i] = amp_v3_add(m->verts[i], d);
+}
+
+double amp_mesh_volume(const amp_mesh *m)
+{
+    /* divergence theorem: sum of signed tetrahedra (origin, a, b, c) / 6 */
+    double v = 0.0;
+    size_t i;
+    for (i = 0; i < m->ntris; i++) {
+        amp_vec3 a = m->verts[m->tris[i].v[0]], b = m->verts[m->tris[i].v[1]], c = m->verts[m->tris[i].v[2]];
+        v += amp_v3_dot(a, amp_v3_cross(b, c));
+    }
+    return v / 6.0;
+}
+
+/* A directed edge (lo, hi) with the direction it was used in. */
+typedef struct edge_rec {
+    uint32_t lo, hi;
+    int dir;      /* +1: lo -> hi in the triangle, -1: hi -> lo */
+    uint32_t tri; /* triangle index, for adjacency */
+} edge_rec;
+
+static int edge_cmp(const void *pa, const void *pb)
+{
+    const edge_rec *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return a->dir - b->dir;
+}
+
+/*
+ * The 3 directed edges of every non-degenerate triangle into e (room for
+ * 3 ntris), sorted so that the uses of one undirected edge are adjacent.
+ * Returns the count; *degenerate (if not NULL) counts skipped triangles.
+ */
+static size_t collect_edges(const amp_tri *tris, size_t ntris, edge_rec *e, size_t *degenerate)
+{
+    size_t i, n = 0;
+    for (i = 0; i < ntris; i++) {
+        const amp_tri *t = &tris[i];
+        int k;
+        if (t->v[0] == t->v[1] || t->v[1] == t->v[2] || t->v[0] == t->v[2]) {
+            if (degenerate)
+                (*degenerate)++;
+            continue;
+        }
+        for (k = 0; k < 3; k++) {
+            uint32_t a = t->v[k], b = t->v[(k + 1) % 3];
+            e[n].lo = a < b ? a : b;
+            e[n].hi = a < b ? b : a;
+            e[n].dir = a < b ? 1 : -1;
+            e[n].tri = (uint32_t)i;
+            n++;
+        }
+    }
+    qsort(e, n, sizeof *e, edge_cmp);
+    return n;
+}
+
+amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err)
+{
+    edge_rec *e;
+    size_t i, n = 0;
+    if (!m || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_edges: NULL argument");
+    memset(out, 0, sizeof *out);
+    if (m->ntris == 0)
+        return AMP_OK;
+    e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
+    if (!e)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
+    n = collect_edges(m->tris, m->ntris, e, &out->degenerate);
+    for (i = 0; i < n;) {
+        size_t j = i, pos = 0, neg = 0;
+        while (j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi) {
+            if (e[j].dir > 0)
+                pos++;
+            else
+                neg++;
+            j++;
+        }
+        out->edges++;
+        if (j - i == 1)
+            out->boundary++;
+        else if (j - i > 2)
+            out->nonmanifold++;
+        else if (pos != 1)
+            out->misoriented++;
+        i = j;
+    }
+    amp_free(m->alloc, e);
+    out->closed = out->edges > 0 && !out->boundary && !out->nonmanifold && !out->misoriented && !out->degenerate;
+    return AMP_OK;
+}
+
+static double tri_area(const amp_vec3 *verts, const amp_tri *t)
+{
+    amp_vec3 a = verts[t->v[0]];
+    return 0.5 * amp_v3_len(amp_v3_cross(amp_v3_sub(verts[t->v[1]], a), amp_v3_sub(verts[t->v[2]], a)));
+}
+
+amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_tri *tris, size_t ntris,
+                           size_t *flipped, amp_error *err)
+{
+    edge_rec *e = NULL;
+    uint32_t *nb = NULL, *queue = NULL;
+    unsigned char *rel = NULL, *flip = NULL, *seen = NULL;
+    size_t i, n = 0, nflip = 0;
+    amp_status st = AMP_OK;
+    if (flipped)
+        *flipped = 0;
+    if (ntris == 0)
+        return AMP_OK;
+    if (ntris > 0x7fffffffUL)
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "too many triangles to orient");
+    e = amp_calloc(al, ntris, 3 * sizeof *e);
+    nb = amp_calloc(al, ntris, 3 * sizeof *nb);
+    rel = amp_calloc(al, ntris, 3);
+    flip = amp_calloc(al, ntris, 1);
+    seen = amp_calloc(al, ntris, 1);
+    queue = amp_calloc(al, ntris, sizeof *queue);
+    if (!e || !nb || !rel || !flip || !seen || !queue) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory orienting triangles");
+        goto done; /* one exit that frees every temporary */
+    }
+    memset(nb, 0xff, ntris * 3 * sizeof *nb);
+    n = collect_edges(tris, ntris, e, NULL);
+    /* adjacency across manifold edges only: rel = 1 when the neighbour must be flipped relative to us */
+    for (i = 0; i + 1 < n; i++) {
+        if (e[i].lo == e[i + 1].lo && e[i].hi == e[i + 1].hi &&
+            (i + 2 >= n || e[i + 2].lo != e[i].lo || e[i + 2].hi != e[i].hi) &&
+            (i == 0 || e[i - 1].lo != e[i].lo || e[i - 1].hi != e[i].hi)) {
+            uint32_t a = e[i].tri, b = e[i + 1].tri;
+            int k;
+            unsigned char r = e[i].dir == e[i + 1].dir;
+            for (k = 0; k < 3 && nb[3 * (size_t)a + k] != 0xffffffffu; k++)
+                ;
+            if (k < 3) {
+                nb[3 * (size_t)a + k] = b;
+                rel[3 * (size_t)a + k] = r;
+            }
+            for (k = 0; k < 3 && nb[3 * (size_t)b + k] != 0xffffffffu; k++)
+                ;
+            if (k < 3) {
+                nb[3 * (size_t)b + k] = a;
+                rel[3 * (size_t)b + k] = r;
+            }
+        }
+    }
+    /* breadth-first propagation per component, then keep the majority (by area) orientation */
+    for (i = 0; i < ntris; i++) {
+        size_t head = 0, tail = 0, q;
+        double keep = 0.0, swap = 0.0;
+        if (seen[i])
+            continue;
+        seen[i] = 1;
+        queue[tail++] = (uint32_t)i;
+        while (head < tail) {
+            uint32_t t = queue[head++];
+            int k;
+            for (k = 0; k < 3; k++) {
+                uint32_t o = nb[3 * (size_t)t + k];
+                if (o == 0xffffffffu || seen[o])
+                    continue;
+                seen[o] = 1;
+                flip[o] = (unsigned char)(flip[t] ^ rel[3 * (size_t)t + k]);
+                queue[tail++] = o;
+            }
+        }
+        for (q = 0; q < tail; q++) {
+            double ar = tri_area(verts, &tris[queue[q]]);
+            if (flip[queue[q]])
+                swap += ar;
+            else
+                keep += ar;
+        }
+        for (q = 0; q < tail; q++) {
+            uint32_t t = queue[q];
+            if (swap > keep)
+                flip[t] ^= 1;
+            if (flip[t]) {
+                uint32_t tmp = tris[t].v[1];
+                tris[t].v[1] = tris[t].v[2];
+                tris[t].v[2] = tmp;
+                nflip++;
+            }
+        }
+    }
+done:
+    amp_free(al, e);
+    amp_free(al, nb);
+    amp_free(al, rel);
+    amp_free(al, flip);
+    amp_free(al, seen);
+    amp_free(al, queue);
+    if (flipped && st == AMP_OK)
+        *flipped = nflip;
+    return st;
+}
+
+amp_status amp_mesh_orient(amp_mesh *m, size_t *flipped, amp_error *err)
+{
+    if (!m)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_orient: NULL mesh");
+    return amp_orient_tris(m->alloc, m->verts, m->tris, m->ntris, flipped, err);
 }

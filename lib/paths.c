@@ -269,22 +269,21 @@ amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sin
     return AMP_OK;
 }
 
+typedef struct paths_file_ctx {
+    const amp_pathset *ps;
+    const char *comment;
+} paths_file_ctx;
+
+static amp_status paths_file_writer(void *vctx, amp_sink_fn sink, void *user, amp_error *err)
+{
+    const paths_file_ctx *c = vctx;
+    return amp_pathset_write(c->ps, c->comment, sink, user, err);
+}
+
 amp_status amp_pathset_write_file(const amp_pathset *ps, const char *path, const char *comment, amp_error *err)
 {
-    char tmp[1024];
-    FILE *f;
-    amp_status st;
-    if (snprintf(tmp, sizeof tmp, "%s.tmp", path) >= (int)sizeof tmp)
-        return amp_fail(err, AMP_ERR_ARG, 0, "%s: path too long", path);
-    f = fopen(tmp, "wb");
-    if (!f)
-        return amp_fail(err, AMP_ERR_IO, 0, "%s: cannot create", tmp);
-    st = amp_pathset_write(ps, comment, amp_file_sink, f, err);
-    if (fclose(f) != 0 && st == AMP_OK)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: write failed", tmp);
-    if (st == AMP_OK && rename(tmp, path) != 0)
-        st = amp_fail(err, AMP_ERR_IO, 0, "%s: cannot rename into place", path);
-    if (st != AMP_OK)
-        remove(tmp);
-    return st;
+    paths_file_ctx c;
+    c.ps = ps;
+    c.comment = comment;
+    return amp_write_file_atomic(path, paths_file_writer, &c, err);
 }

@@ -4,8 +4,79 @@
 #include "cli.h"
 
 const char cmd_info_usage[] =
-    "describe a path (.amp) file: paths, vertices, lengths, radii, bounding box\n"
-    "usage: ampath info FILE.amp [--json]\n";
+    "describe a path (.amp) or mesh (.stl) file\n"
+    "usage: ampath info FILE.amp|FILE.stl [--json]\n"
+    "  FILE.amp   paths, support paths, vertices, length (mm), deposited volume (mm^3), radius range, bounding box\n"
+    "  FILE.stl   (binary or ASCII, chosen by the .stl extension, any case) format, triangles in the file,\n"
+    "             triangles kept, degenerate (zero-area) triangles dropped, welded vertices, bounding box (mm),\n"
+    "             signed volume (mm^3), closedness: boundary, non-manifold and misoriented edges\n"
+    "  --json     print one JSON object instead of text (default: off)\n"
+    "exit status: 0 ok, 2 bad usage or unreadable/malformed file\n";
+
+static int has_stl_ext(const char *f)
+{
+    size_t n = strlen(f);
+    return n >= 4 && f[n - 4] == '.' && (f[n - 3] | 32) == 's' && (f[n - 2] | 32) == 't' && (f[n - 1] | 32) == 'l';
+}
+
+static void json_bbox(cli_json *j, amp_box3 b)
+{
+    cli_json_arr(j, "bbox");
+    cli_json_num(j, NULL, b.min.x);
+    cli_json_num(j, NULL, b.min.y);
+    cli_json_num(j, NULL, b.min.z);
+    cli_json_num(j, NULL, b.max.x);
+    cli_json_num(j, NULL, b.max.y);
+    cli_json_num(j, NULL, b.max.z);
+    cli_json_close(j);
+}
+
+static int info_mesh(const char *file, int json)
+{
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    amp_box3 b;
+    double vol;
+    amp_error_clear(&err);
+    amp_mesh_init(&m, NULL);
+    if (amp_mesh_read_stl_file_ex(&m, file, &st, &err) != AMP_OK || amp_mesh_edges(&m, &er, &err) != AMP_OK) {
+        amp_mesh_free(&m);
+        return cli_fail_err("info", &err);
+    }
+    b = amp_mesh_bbox(&m);
+    vol = amp_mesh_volume(&m);
+    if (json) {
+        cli_json j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "kind", "mesh");
+        cli_json_str(&j, "format", st.binary ? "binary" : "ascii");
+        cli_json_int(&j, "triangles_in_file", (long long)st.triangles);
+        cli_json_int(&j, "triangles", (long long)m.ntris);
+        cli_json_int(&j, "degenerate", (long long)st.degenerate);
+        cli_json_int(&j, "vertices", (long long)m.nverts);
+        cli_json_num(&j, "volume_mm3", vol);
+        cli_json_bool(&j, "closed", er.closed);
+        cli_json_int(&j, "edges", (long long)er.edges);
+        cli_json_int(&j, "boundary_edges", (long long)er.boundary);
+        cli_json_int(&j, "nonmanifold_edges", (long long)er.nonmanifold);
+        cli_json_int(&j, "misoriented_edges", (long long)er.misoriented);
+        json_bbox(&j, b);
+        cli_json_end(&j);
+    } else {
+        printf("%s: %s STL, %lu triangles (%lu degenerate dropped), %lu vertices after welding\n", file,
+               st.binary ? "binary" : "ASCII", (unsigned long)m.ntris, (unsigned long)st.degenerate,
+               (unsigned long)m.nverts);
+        printf("bbox (%.3f %.3f %.3f) .. (%.3f %.3f %.3f), volume %.3f mm^3\n", b.min.x, b.min.y, b.min.z, b.max.x,
+               b.max.y, b.max.z, vol);
+        printf("%s: %lu edges, %lu boundary, %lu non-manifold, %lu misoriented\n",
+               er.closed ? "closed" : "NOT closed", (unsigned long)er.edges, (unsigned long)er.boundary,
+               (unsigned long)er.nonmanifold, (unsigned long)er.misoriented);
+    }
+    amp_mesh_free(&m);
+    return CLI_OK;
+}
 
 static int info_paths(const char *file, int json)
 {
@@ -38,13 +109,7 @@ static int info_paths(const char *file, int json)
         cli_json_num(&j, "volume_mm3", amp_pathset_volume(&ps, -1));
         cli_json_num(&j, "r_min", rmin);
         cli_json_num(&j, "r_max", rmax);
-        cli_json_arr(&j, "bbox");
-        cli_json_num(&j, NULL, b.min.x);
-        cli_json_num(&j, NULL, b.min.y);
-        cli_json_num(&j, NULL, b.min.z);
-        cli_json_num(&j, NULL, b.max.x);
-        cli_json_num(&j, NULL, b.max.y);
-        cli_json_num(&j, NULL, b.max.z);
+        json_bbox(&j, b);
         cli_json_end(&j);
     } else {
         printf("%s: %lu paths (%lu support), %lu vertices\n", file, (unsigned long)ps.npaths,
@@ -67,5 +132,5 @@ int cmd_info(int argc, char **argv)
     rc = cli_parse("info", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
-    return info_paths(pos[0], json);
+    return has_stl_ext(pos[0]) ? info_mesh(pos[0], json) : info_paths(pos[0], json);
 }

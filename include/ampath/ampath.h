@@ -5,6 +5,8 @@
 #include "alloc.h"
 #include "io.h"
 #include "mesh.h"
+#include "bvh.h"
+#include "field.h"
 #include "order.h"
 #include "gouge.h"
 #include "mdr.h"

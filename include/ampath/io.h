@@ -60,6 +60,16 @@ amp_status amp_sinkf(amp_sink_fn sink, void *user, const char *fmt, ...)
 amp_status amp_read_file(const char *path, const amp_allocator *a, size_t max_len, char **data, size_t *len,
                          amp_error *err);
 
+/** A writer for amp_write_file_atomic(): push the content of @p ctx through @p sink. */
+typedef amp_status (*amp_writer_fn)(void *ctx, amp_sink_fn sink, void *user, amp_error *err);
+
+/**
+ * Write a file atomically: @p write fills PATH.tmp, which is then renamed to
+ * @p path; on any failure PATH.tmp is removed and @p path is untouched.
+ * Errors: AMP_ERR_ARG (path too long), AMP_ERR_IO, or the writer's status.
+ */
+amp_status amp_write_file_atomic(const char *path, amp_writer_fn write, void *ctx, amp_error *err);
+
 /** amp_sink_fn adaptor: @p user is a FILE *. */
 amp_status amp_file_sink(void *user, const char *data, size_t len);
 

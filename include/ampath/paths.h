@@ -79,7 +79,11 @@ amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, s
 amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err);
 
 /** Vertices of path @p i (no bounds check beyond an assert-free contract: i < npaths). */
-static inline amp_pvert *amp_pathset_path_verts(const amp_pathset *ps, size_t i) { return ps->verts + ps->paths[i].first; }
+static inline amp_pvert *amp_pathset_path_verts(const amp_pathset *ps, size_t i)
+{
+    /* a set of empty paths has no vertex array: NULL + 0 is undefined behaviour (found by tests/fuzz/fuzz_amp.c) */
+    return ps->verts ? ps->verts + ps->paths[i].first : NULL;
+}
 
 /** Length of path @p i in mm. */
 double amp_path_length(const amp_pathset *ps, size_t i);

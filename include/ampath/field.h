@@ -1,0 +1,118 @@
+/*
+ * ampath/field.h — covering a mesh with the curves of a direction field
+ * (paper §4.2 and §5.4, Figs. 6, 7, 13, 15): a map F(u, v, w) -> R³ whose
+ * iso-curves in one parametric direction are the covering curves; they are
+ * sampled on a grid or honeycomb of the other two parameters at a spacing S
+ * in millimetres, cut to the mesh (amp_bvh_clip_polyline) and written as
+ * paths with the covering radius of the pattern.
+ *
+ * An amp_field is plain data describing the map; built-in fields are
+ * analytic, and any other map (a trivariate spline, a user function) plugs in
+ * through amp_field_custom(). Evaluation must be thread-safe and pure.
+ */
+#ifndef AMPATH_FIELD_H
+#define AMPATH_FIELD_H
+
+#include <stddef.h>
+
+#include "bvh.h"
+#include "paths.h"
+#include "status.h"
+#include "vec.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+struct amp_field;
+
+/** Evaluate the field at parameters uvw (inside the domain). Must be thread-safe. */
+typedef amp_status (*amp_field_eval_fn)(const struct amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err);
+
+/** A direction field: F over the box [lo, hi] of parameters; curves run along direction @p dir. */
+typedef struct amp_field {
+    amp_field_eval_fn eval;
+    const void *user;      /**< the custom evaluator's data (NULL for built-ins) */
+    double lo[3], hi[3];   /**< parameter domain */
+    int dir;               /**< 0, 1 or 2: the parameter that varies along a covering curve */
+    double p[8];           /**< parameters of built-in fields */
+} amp_field;
+
+/**
+ * Built-in field @p name:
+ * - "helix-square": a square cross-section of side 12 mm swept along the
+ *   helix of SPEC §4 (radius 20, pitch 40, same z0 as the `helix` model) in
+ *   the plane normal to the helix; it contains the `helix` solid (paper
+ *   Fig. 13b). Curves follow the helix (dir = 2, w in [-0.02, 1.02] so that
+ *   they cross the end caps instead of ending on them).
+ * - "box": straight lines parallel to x filling @p box inflated by 1 mm (to
+ *   compare with planar slicing); pass the mesh's bounding box.
+ * AMP_ERR_ARG for an unknown name (the message lists the names) or an empty
+ * box for "box".
+ */
+amp_status amp_field_builtin(amp_field *f, const char *name, amp_box3 box, amp_error *err);
+
+/** NULL-terminated list of built-in field names. */
+const char *const *amp_field_names(void);
+
+/** A field from a user evaluator over [lo, hi]; curves along @p dir (0..2). AMP_ERR_ARG on a bad domain. */
+amp_status amp_field_custom(amp_field *f, amp_field_eval_fn eval, const void *user, const double lo[3],
+                            const double hi[3], int dir, amp_error *err);
+
+/** Sampling pattern of the curves across the field. */
+typedef enum amp_pattern {
+    AMP_PATTERN_GRID = 0, /**< square grid, spacing S: covering radius S·√2/2 */
+    AMP_PATTERN_HEX = 1   /**< honeycomb (triangular lattice), spacing S: covering radius S/√3 */
+} amp_pattern;
+
+/** Options of amp_field_cover(); amp_field_opts_default() fills the defaults. */
+typedef struct amp_field_opts {
+    double spacing;      /**< S, mm, > 0 (default 1) */
+    amp_pattern pattern; /**< default AMP_PATTERN_GRID */
+    double step;         /**< sampling step along a curve, mm (default min(0.5, S/2)) */
+    double min_len;      /**< clipped pieces shorter than this are dropped, mm (default S/2) */
+    double radius;       /**< deposition radius written to the paths; 0 = the pattern's covering radius */
+} amp_field_opts;
+
+void amp_field_opts_default(amp_field_opts *o);
+
+/** Figures of one covering. */
+typedef struct amp_field_stats {
+    size_t curves;         /**< covering curves generated */
+    size_t pieces;         /**< paths kept after clipping */
+    size_t grid_a, grid_b; /**< samples across the two other parameters */
+    double length_before;  /**< total length of the curves before clipping, mm */
+    double length_after;   /**< total length of the kept paths, mm */
+    double radius;         /**< deposition radius used, mm */
+} amp_field_stats;
+
+/**
+ * Cover the solid of @p b with the curves of @p f and append the inside
+ * pieces to @p out (role object). The number of samples across each of the
+ * two other parameters is the largest length (in mm) of an iso-curve in that
+ * direction, measured on a 5 x 5 set of positions, divided by the spacing;
+ * so the spacing in space is at most S where the field is widest and near S
+ * when its metric is uniform. Errors: AMP_ERR_ARG (bad options), the
+ * evaluator's errors, AMP_ERR_LIMIT (more than 10^7 curve samples),
+ * AMP_ERR_NOMEM. @p stats may be NULL. Thread-safe on @p f and @p b.
+ */
+amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
+                           amp_field_stats *stats, amp_error *err);
+
+/**
+ * Coverage gap of @p ps in the solid of @p b: @p nsamples points drawn
+ * uniformly (deterministic generator seeded by @p seed) in the solid and at
+ * least @p margin mm (>= 0) from its surface; for each, the distance to the
+ * nearest path segment. *gap receives the largest and *mean (may be NULL) the
+ * mean distance. Inside (margin >= S) a lattice cover has gap <= its covering
+ * radius; next to the surface the clipped-away curves leave up to about S.
+ * Errors: AMP_ERR_ARG (no path segment, nsamples 0, negative margin),
+ * AMP_ERR_GEOMETRY (no sample found in 100 nsamples tries), AMP_ERR_NOMEM.
+ */
+amp_status amp_coverage_gap(const amp_pathset *ps, const amp_bvh *b, size_t nsamples, unsigned long seed,
+                            double margin, double *gap, double *mean, amp_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

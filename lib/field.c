@@ -1,0 +1,389 @@
+/*
+ * Direction-field covering of a mesh (paper §4.2): the iso-curves of a field
+ * F(u, v, w) in one direction, sampled on a grid or honeycomb of the other
+ * two parameters at a spacing in millimetres, clipped to the mesh; and the
+ * coverage gap measured by sampling the solid.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ampath/field.h"
+
+#define PI 3.14159265358979323846
+
+/* ------------------------------------------------------------ built-ins */
+
+/* helix-square: the SPEC §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
+static amp_status eval_helix_square(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
+{
+    const double R = 20, P = 40, k = P / (2 * PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * PI * R / (2 * PI * len);
+    double w = 2 * PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
+    /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/meshmodels.c) */
+    amp_vec3 c = amp_v3(R * cos(w), R * sin(w), z0 + P * uvw[2]);
+    amp_vec3 n = amp_v3(-cos(w), -sin(w), 0), bb = amp_v3(k * sin(w) / len, -k * cos(w) / len, R / len);
+    (void)err;
+    *out = amp_v3_add(c, amp_v3_add(amp_v3_scale(n, a), amp_v3_scale(bb, b)));
+    return AMP_OK;
+}
+
+/* box: x = lerp(xmin, xmax, w) along the curve, (u, v) across y and z. */
+static amp_status eval_box(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
+{
+    (void)err;
+    *out = amp_v3(f->p[0] + uvw[2] * (f->p[3] - f->p[0]), f->p[1] + uvw[0] * (f->p[4] - f->p[1]),
+                  f->p[2] + uvw[1] * (f->p[5] - f->p[2]));
+    return AMP_OK;
+}
+
+static const char *const field_names[] = {"helix-square", "box", NULL};
+
+const char *const *amp_field_names(void) { return field_names; }
+
+amp_status amp_field_custom(amp_field *f, amp_field_eval_fn eval, const void *user, const double lo[3],
+                            const double hi[3], int dir, amp_error *err)
+{
+    int d;
+    if (!f || !eval || !lo || !hi || dir < 0 || dir > 2)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_field_custom: bad argument");
+    memset(f, 0, sizeof *f);
+    for (d = 0; d < 3; d++) {
+        if (!(lo[d] < hi[d]) || !isfinite(lo[d]) || !isfinite(hi[d]))
+            return amp_fail(err, AMP_ERR_ARG, 0, "field domain of direction %d is empty or not finite", d);
+        f->lo[d] = lo[d];
+        f->hi[d] = hi[d];
+    }
+    f->eval = eval;
+    f->user = user;
+    f->dir = dir;
+    return AMP_OK;
+}
+
+amp_status amp_field_builtin(amp_field *f, const char *name, amp_box3 box, amp_error *err)
+{
+    static const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
+    amp_status st;
+    if (!f || !name)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_field_builtin: NULL argument");
+    if (strcmp(name, "helix-square") == 0) {
+        st = amp_field_custom(f, eval_helix_square, NULL, lo, hi, 2, err);
+        /* w slightly beyond [0, 1]: the curves cross the helix end caps rather than end on them */
+        f->lo[2] = -0.02;
+        f->hi[2] = 1.02;
+        f->p[0] = 12.0;
+        return st;
+    }
+    if (strcmp(name, "box") == 0) {
+        if (amp_box3_is_empty(box) || !amp_v3_finite(box.min) || !amp_v3_finite(box.max))
+            return amp_fail(err, AMP_ERR_ARG, 0, "field 'box' needs the mesh's bounding box");
+        box = amp_box3_inflate(box, 1.0);
+        st = amp_field_custom(f, eval_box, NULL, lo, hi, 2, err);
+        f->p[0] = box.min.x;
+        f->p[1] = box.min.y;
+        f->p[2] = box.min.z;
+        f->p[3] = box.max.x;
+        f->p[4] = box.max.y;
+        f->p[5] = box.max.z;
+        return st;
+    }
+    return amp_fail(err, AMP_ERR_ARG, 0, "unknown field '%s' (helix-square, box)", name);
+}
+
+void amp_field_opts_default(amp_field_opts *o)
+{
+    o->spacing = 1.0;
+    o->pattern = AMP_PATTERN_GRID;
+    o->step = 0;
+    o->min_len = -1;
+    o->radius = 0;
+}
+
+/* ------------------------------------------------------------- covering */
+
+/* Parameters (a, b, c) = (across 1, across 2, along) mapped to (u, v, w) by the field's curve direction. */
+static void to_uvw(const amp_field *f, double a, double b, double c, double uvw[3])
+{
+    int da = (f->dir + 1) % 3, db = (f->dir + 2) % 3;
+    uvw[da] = f->lo[da] + a * (f->hi[da] - f->lo[da]);
+    uvw[db] = f->lo[db] + b * (f->hi[db] - f->lo[db]);
+    uvw[f->dir] = f->lo[f->dir] + c * (f->hi[f->dir] - f->lo[f->dir]);
+}
+
+/*
+ * Largest length (mm) of an iso-curve along parameter @p which (0 = a, 1 = b,
+ * 2 = c) over a 5 x 5 set of positions of the two others, each curve measured
+ * as a polyline of @p nseg segments.
+ */
+static amp_status max_iso_length(const amp_field *f, int which, int nseg, double *out, amp_error *err)
+{
+    int i, j, k;
+    double best = 0;
+    for (i = 0; i < 5; i++)
+        for (j = 0; j < 5; j++) {
+            double len = 0, x = i / 4.0, y = j / 4.0, uvw[3];
+            amp_vec3 prev = amp_v3(0, 0, 0), p;
+            for (k = 0; k <= nseg; k++) {
+                double t = (double)k / nseg;
+                amp_status st;
+                if (which == 0)
+                    to_uvw(f, t, x, y, uvw);
+                else if (which == 1)
+                    to_uvw(f, x, t, y, uvw);
+                else
+                    to_uvw(f, x, y, t, uvw);
+                if ((st = f->eval(f, uvw, &p, err)) != AMP_OK)
+                    return st;
+                if (!amp_v3_finite(p))
+                    return amp_fail(err, AMP_ERR_GEOMETRY, 0, "field value is not finite");
+                if (k > 0)
+                    len += amp_v3_dist(prev, p);
+                prev = p;
+            }
+            best = fmax(best, len);
+        }
+    *out = best;
+    return AMP_OK;
+}
+
+amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
+                           amp_field_stats *stats, amp_error *err)
+{
+    amp_field_stats s;
+    double la, lb, lc, S, step, min_len, r, row;
+    size_t na, nb, nc, j, i, k, p0;
+    amp_pvert *curve = NULL;
+    amp_status st;
+    if (!f || !f->eval || !b || !o || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_field_cover: NULL argument");
+    S = o->spacing;
+    if (!isfinite(S) || S <= 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "spacing must be a positive number of mm");
+    if (o->pattern != AMP_PATTERN_GRID && o->pattern != AMP_PATTERN_HEX)
+        return amp_fail(err, AMP_ERR_ARG, 0, "unknown pattern");
+    step = o->step > 0 ? o->step : fmin(0.5, S / 2);
+    min_len = o->min_len >= 0 ? o->min_len : S / 2;
+    /* covering radius of the lattice: half diagonal of a square, circumradius of a triangle */
+    r = o->radius > 0 ? o->radius : (o->pattern == AMP_PATTERN_GRID ? S * sqrt(2.0) / 2 : S / sqrt(3.0));
+    if (!isfinite(step) || !isfinite(min_len) || !isfinite(r))
+        return amp_fail(err, AMP_ERR_ARG, 0, "field options must be finite");
+    if ((st = max_iso_length(f, 0, 32, &la, err)) != AMP_OK || (st = max_iso_length(f, 1, 32, &lb, err)) != AMP_OK ||
+        (st = max_iso_length(f, 2, 256, &lc, err)) != AMP_OK)
+        return st;
+    /* rows across b: S apart (grid) or S·√3/2 apart (honeycomb); S apart along a */
+    row = o->pattern == AMP_PATTERN_GRID ? S : S * sqrt(3.0) / 2;
+    /* ceil with a relative slack: a 12 mm side at S = 1 gives 12 curves, not 13 from 12.000000001 */
+    na = (size_t)ceil(la / S * (1 - 1e-9));
+    nb = (size_t)ceil(lb / row * (1 - 1e-9));
+    nc = (size_t)ceil(lc / step);
+    na = na ? na : 1;
+    nb = nb ? nb : 1;
+    nc = nc < 2 ? 2 : nc;
+    if ((double)na * (double)nb * (double)(nc + 1) > 1e7)
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "covering needs %.3g curve samples (limit 1e7): raise the spacing",
+                        (double)na * (double)nb * (double)(nc + 1));
+    memset(&s, 0, sizeof s);
+    s.grid_a = na;
+    s.grid_b = nb;
+    s.radius = r;
+    curve = amp_calloc(out->alloc, nc + 1, sizeof *curve);
+    if (!curve)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for a covering curve");
+    p0 = out->npaths;
+    for (j = 0; j < nb && st == AMP_OK; j++) {
+        int odd = o->pattern == AMP_PATTERN_HEX && (j & 1);
+        size_t count = na + (size_t)odd;
+        for (i = 0; i < count && st == AMP_OK; i++) {
+            /* cell centres; odd honeycomb rows are shifted by half a spacing (and gain one curve) */
+            double a = ((double)i + (odd ? 0.0 : 0.5)) / (double)na, bb = ((double)j + 0.5) / (double)nb;
+            for (k = 0; k <= nc && st == AMP_OK; k++) {
+                double uvw[3];
+                to_uvw(f, a, bb, (double)k / (double)nc, uvw);
+                st = f->eval(f, uvw, &curve[k].p, err);
+                curve[k].r = r;
+                if (k > 0)
+                    s.length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
+            }
+            if (st == AMP_OK)
+                st = amp_bvh_clip_polyline(b, curve, nc + 1, min_len, AMP_ROLE_OBJECT, out, err);
+            s.curves++;
+        }
+    }
+    amp_free(out->alloc, curve);
+    for (i = p0; i < out->npaths; i++)
+        s.length_after += amp_path_length(out, i);
+    s.pieces = out->npaths - p0;
+    if (stats)
+        *stats = s;
+    return st;
+}
+
+/* ---------------------------------------------------------- coverage gap */
+
+/* Uniform grid of path segments (CSR lists per cell) for nearest-segment queries. */
+typedef struct seg_grid {
+    const amp_allocator *alloc;
+    amp_box3 box;
+    double cell;
+    size_t n[3];
+    size_t *start; /* ncells + 1 */
+    size_t *items; /* segment = index of its first vertex in ps->verts */
+} seg_grid;
+
+static size_t clampi(double x, size_t n)
+{
+    if (x < 0)
+        return 0;
+    if (x >= (double)n)
+        return n - 1;
+    return (size_t)x;
+}
+
+static void cell_range(const seg_grid *g, amp_vec3 a, amp_vec3 b, size_t lo[3], size_t hi[3])
+{
+    lo[0] = clampi((fmin(a.x, b.x) - g->box.min.x) / g->cell, g->n[0]);
+    lo[1] = clampi((fmin(a.y, b.y) - g->box.min.y) / g->cell, g->n[1]);
+    lo[2] = clampi((fmin(a.z, b.z) - g->box.min.z) / g->cell, g->n[2]);
+    hi[0] = clampi((fmax(a.x, b.x) - g->box.min.x) / g->cell, g->n[0]);
+    hi[1] = clampi((fmax(a.y, b.y) - g->box.min.y) / g->cell, g->n[1]);
+    hi[2] = clampi((fmax(a.z, b.z) - g->box.min.z) / g->cell, g->n[2]);
+}
+
+/* pass 0 counts, pass 1 fills */
+static void grid_insert(seg_grid *g, const amp_pathset *ps, size_t *fill)
+{
+    size_t i, k, x, y, z;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            size_t lo[3], hi[3];
+            cell_range(g, v[k].p, v[k + 1].p, lo, hi);
+            for (z = lo[2]; z <= hi[2]; z++)
+                for (y = lo[1]; y <= hi[1]; y++)
+                    for (x = lo[0]; x <= hi[0]; x++) {
+                        size_t c = (z * g->n[1] + y) * g->n[0] + x;
+                        if (fill)
+                            g->items[fill[c]++] = ps->paths[i].first + k;
+                        else
+                            g->start[c + 1]++;
+                    }
+        }
+    }
+}
+
+static amp_status grid_build(seg_grid *g, const amp_pathset *ps, amp_box3 box, amp_error *err)
+{
+    size_t nseg = 0, i, nc, *fill;
+    amp_vec3 sz;
+    double vol;
+    for (i = 0; i < ps->npaths; i++)
+        nseg += ps->paths[i].n > 1 ? ps->paths[i].n - 1 : 0;
+    if (nseg == 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "no path segment to measure the coverage of");
+    g->box = amp_box3_union(box, amp_pathset_bbox(ps));
+    sz = amp_box3_size(g->box);
+    vol = fmax(sz.x, 1e-3) * fmax(sz.y, 1e-3) * fmax(sz.z, 1e-3);
+    /* about one segment per cell, cells no smaller than 1/1000 of the box */
+    g->cell = fmax(cbrt(vol / (double)nseg), 1e-3 * fmax(sz.x, fmax(sz.y, sz.z)));
+    g->n[0] = (size_t)(sz.x / g->cell) + 1;
+    g->n[1] = (size_t)(sz.y / g->cell) + 1;
+    g->n[2] = (size_t)(sz.z / g->cell) + 1;
+    nc = g->n[0] * g->n[1] * g->n[2];
+    g->start = amp_calloc(g->alloc, nc + 1, sizeof *g->start);
+    fill = amp_calloc(g->alloc, nc, sizeof *fill);
+    if (!g->start || !fill) {
+        amp_free(g->alloc, fill);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the segment grid");
+    }
+    grid_insert(g, ps, NULL);
+    for (i = 0; i < nc; i++)
+        g->start[i + 1] += g->start[i];
+    g->items = amp_calloc(g->alloc, g->start[nc] ? g->start[nc] : 1, sizeof *g->items);
+    if (!g->items) {
+        amp_free(g->alloc, fill);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the segment grid");
+    }
+    memcpy(fill, g->start, nc * sizeof *fill);
+    grid_insert(g, ps, fill);
+    amp_free(g->alloc, fill);
+    return AMP_OK;
+}
+
+/* Distance from p to the nearest segment: rings of cells around p's cell until no closer cell can remain. */
+static double grid_nearest(const seg_grid *g, const amp_pathset *ps, amp_vec3 p)
+{
+    size_t c0[3], kmax = g->n[0] + g->n[1] + g->n[2];
+    double best = HUGE_VAL;
+    long k;
+    cell_range(g, p, p, c0, c0);
+    for (k = 0; k <= (long)kmax; k++) {
+        long x, y, z;
+        for (z = (long)c0[2] - k; z <= (long)c0[2] + k; z++)
+            for (y = (long)c0[1] - k; y <= (long)c0[1] + k; y++)
+                for (x = (long)c0[0] - k; x <= (long)c0[0] + k; x++) {
+                    size_t c, it;
+                    if (x < 0 || y < 0 || z < 0 || x >= (long)g->n[0] || y >= (long)g->n[1] || z >= (long)g->n[2])
+                        continue;
+                    /* only the shell of the ring: inner cells were visited before */
+                    if (labs(x - (long)c0[0]) != k && labs(y - (long)c0[1]) != k && labs(z - (long)c0[2]) != k)
+                        continue;
+                    c = ((size_t)z * g->n[1] + (size_t)y) * g->n[0] + (size_t)x;
+                    for (it = g->start[c]; it < g->start[c + 1]; it++) {
+                        size_t s = g->items[it];
+                        best = fmin(best, amp_v3_seg_dist2(p, ps->verts[s].p, ps->verts[s + 1].p, NULL));
+                    }
+                }
+        /* every cell outside ring k is at least k cells away */
+        if (best < HUGE_VAL && sqrt(best) <= (double)k * g->cell)
+            break;
+    }
+    return sqrt(best);
+}
+
+static double rnd(unsigned long long *s)
+{
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 0x2545F4914F6CDD1DULL) >> 11) / 9007199254740992.0;
+}
+
+amp_status amp_coverage_gap(const amp_pathset *ps, const amp_bvh *b, size_t nsamples, unsigned long seed,
+                            double margin, double *gap, double *mean, amp_error *err)
+{
+    seg_grid g;
+    amp_box3 box;
+    unsigned long long s = 0x9E3779B97F4A7C15ULL ^ (unsigned long long)seed;
+    size_t got = 0, tries = 0;
+    double worst = 0, sum = 0;
+    amp_status st;
+    if (!ps || !b || !gap || nsamples == 0 || !(margin >= 0))
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_coverage_gap: bad argument");
+    memset(&g, 0, sizeof g);
+    g.alloc = ps->alloc;
+    box = amp_bvh_bbox(b);
+    if ((st = grid_build(&g, ps, box, err)) != AMP_OK) {
+        amp_free(g.alloc, g.start);
+        return st;
+    }
+    while (got < nsamples && tries < 100 * nsamples) {
+        amp_vec3 p = amp_v3(box.min.x + rnd(&s) * (box.max.x - box.min.x), box.min.y + rnd(&s) * (box.max.y - box.min.y),
+                            box.min.z + rnd(&s) * (box.max.z - box.min.z));
+        tries++;
+        if (!amp_bvh_inside(b, p) || (margin > 0 && amp_bvh_closest(b, p, NULL, NULL) < margin))
+            continue;
+        {
+            double d = grid_nearest(&g, ps, p);
+            worst = fmax(worst, d);
+            sum += d;
+            got++;
+        }
+    }
+    amp_free(g.alloc, g.start);
+    amp_free(g.alloc, g.items);
+    if (got == 0)
+        return amp_fail(err, AMP_ERR_GEOMETRY, 0, "no sample point fell inside the mesh");
+    *gap = worst;
+    if (mean)
+        *mean = sum / (double)got;
+    return AMP_OK;
+}

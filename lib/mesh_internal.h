@@ -1,0 +1,26 @@
+/* mesh_internal.h — helpers shared by lib/mesh.c and lib/bvh.c (not installed). */
+#ifndef AMP_MESH_INTERNAL_H
+#define AMP_MESH_INTERNAL_H
+
+#include "ampath/mesh.h"
+
+/**
+ * amp_mesh_orient() on a bare triangle array (the BVH orients its own copy
+ * without touching the caller's mesh). Allocates temporaries with @p al.
+ */
+amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_tri *tris, size_t ntris,
+                           size_t *flipped, amp_error *err);
+
+/** Exact vertex welding table (open addressing over coordinate bits; -0 == +0). */
+typedef struct amp_weld_table {
+    const amp_allocator *alloc;
+    uint32_t *slot; /* vertex indices into the mesh, 0xffffffff = free */
+    size_t cap, used;
+} amp_weld_table;
+
+void amp_weld_init(amp_weld_table *t, const amp_allocator *a);
+void amp_weld_free(amp_weld_table *t);
+/** Index of the vertex of @p m at exactly @p p, appending it when new. AMP_ERR_NOMEM, AMP_ERR_LIMIT. */
+amp_status amp_weld_vertex(amp_weld_table *t, amp_mesh *m, amp_vec3 p, uint32_t *out, amp_error *err);
+
+#endif

@@ -1,0 +1,198 @@
+/* Direction-field covering of meshes (paper §4.2): spacing, clipping, coverage gap. */
+#include <math.h>
+#include <string.h>
+
+#include "meshfix.h"
+#include "testutil.h"
+
+typedef struct cover_run {
+    amp_mesh m;
+    amp_bvh *b;
+    amp_pathset ps;
+    amp_field_stats st;
+} cover_run;
+
+static void cover(cover_run *r, const char *model, const char *field, double S, amp_pattern pat, int hole)
+{
+    amp_error err;
+    amp_field f;
+    amp_field_opts o;
+    amp_mesh_init(&r->m, NULL);
+    amp_pathset_init(&r->ps, NULL);
+    ck_assert_int_eq(amp_mesh_model(model, 0, &r->m, &err), AMP_OK);
+    if (hole) /* punch a hole: delete one triangle of the side */
+        r->m.tris[hole] = r->m.tris[--r->m.ntris];
+    ck_assert_int_eq(amp_bvh_build(&r->b, &r->m, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_builtin(&f, field, amp_mesh_bbox(&r->m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = S;
+    o.pattern = pat;
+    ck_assert_int_eq(amp_field_cover(&f, r->b, &o, &r->ps, &r->st, &err), AMP_OK);
+}
+
+static void release(cover_run *r)
+{
+    amp_bvh_free(r->b);
+    amp_pathset_free(&r->ps);
+    amp_mesh_free(&r->m);
+}
+
+static double gap(const cover_run *r, double margin)
+{
+    double g;
+    amp_error err;
+    ck_assert_int_eq(amp_coverage_gap(&r->ps, r->b, 2500, 7, margin, &g, NULL, &err), AMP_OK);
+    return g;
+}
+
+START_TEST(helix_square_grid_covers_helix_within_half_diagonal)
+{
+    cover_run r;
+    size_t i;
+    double g_in, g_all;
+    cover(&r, "helix", "helix-square", 1.0, AMP_PATTERN_GRID, 0);
+    /* a 12 mm square at S = 1: 12 x 12 curves, those inside the disc of radius 5 survive (about 25 pi) */
+    ck_assert_uint_eq(r.st.grid_a, 12);
+    ck_assert_uint_eq(r.st.grid_b, 12);
+    ck_assert_uint_eq(r.st.curves, 144);
+    ck_assert_uint_ge(r.st.pieces, 76);
+    ck_assert_uint_le(r.st.pieces, 84);
+    ck_assert_near(r.st.radius, sqrt(2.0) / 2, 1e-12);
+    /* each kept curve spans the helix: length about pieces x arc length */
+    ck_assert_near(r.st.length_after / (double)r.st.pieces, 40 * sqrt(3.14159265358979323846 * 3.14159265358979323846 + 1), 15);
+    /* no path vertex outside the mesh by more than 0.01 mm, nor outside the exact solid by more than 0.06 */
+    for (i = 0; i < r.ps.nverts; i++) {
+        amp_vec3 p = r.ps.verts[i].p;
+        ck_assert_msg(amp_bvh_inside(r.b, p) || amp_bvh_closest(r.b, p, NULL, NULL) <= 0.01, "vertex %lu outside",
+                      (unsigned long)i);
+        ck_assert(amp_fix_helix_axis_dist(p, NULL) <= 5.06);
+    }
+    /* coverage: S sqrt(2)/2 inside (samples >= S from the surface), at most S next to the surface */
+    g_in = gap(&r, 1.0);
+    g_all = gap(&r, 0.0);
+    ck_assert_msg(g_in <= sqrt(2.0) / 2 + 0.01, "interior gap %g", g_in);
+    ck_assert_msg(g_all <= 1.0, "gap %g", g_all);
+    release(&r);
+}
+END_TEST
+
+START_TEST(honeycomb_has_the_smaller_covering_radius)
+{
+    cover_run r;
+    double g_in;
+    cover(&r, "helix", "helix-square", 1.0, AMP_PATTERN_HEX, 0);
+    ck_assert_near(r.st.radius, 1 / sqrt(3.0), 1e-12);
+    g_in = gap(&r, 1.0);
+    ck_assert_msg(g_in <= 1 / sqrt(3.0) + 0.01, "interior gap %g", g_in);
+    release(&r);
+}
+END_TEST
+
+START_TEST(mesh_with_missing_triangle_still_clips_correctly)
+{
+    cover_run a, b;
+    size_t i;
+    cover(&a, "helix", "helix-square", 1.0, AMP_PATTERN_GRID, 0);
+    cover(&b, "helix", "helix-square", 1.0, AMP_PATTERN_GRID, 1000);
+    ck_assert_uint_eq(b.st.pieces, a.st.pieces);
+    ck_assert_near(b.st.length_after, a.st.length_after, 1e-6 * a.st.length_after);
+    for (i = 0; i < b.ps.nverts; i++)
+        ck_assert(amp_fix_helix_axis_dist(b.ps.verts[i].p, NULL) <= 5.06);
+    release(&a);
+    release(&b);
+}
+END_TEST
+
+START_TEST(gap_checker_fails_when_paths_are_missing)
+{
+    cover_run r;
+    double g;
+    cover(&r, "helix", "helix-square", 1.0, AMP_PATTERN_GRID, 0);
+    /* drop every other path: the interior gap must exceed the bound */
+    {
+        amp_pathset half;
+        amp_error err;
+        size_t i;
+        amp_pathset_init(&half, NULL);
+        for (i = 0; i < r.ps.npaths; i += 2)
+            ck_assert_int_eq(amp_pathset_add(&half, AMP_ROLE_OBJECT, amp_pathset_path_verts(&r.ps, i), r.ps.paths[i].n,
+                                             &err),
+                             AMP_OK);
+        amp_pathset_free(&r.ps);
+        r.ps = half;
+    }
+    g = gap(&r, 1.0);
+    ck_assert_msg(g > sqrt(2.0) / 2 + 0.1, "gap %g not detected", g);
+    release(&r);
+}
+END_TEST
+
+START_TEST(box_field_gives_straight_x_lines_inside_the_bridge)
+{
+    cover_run r;
+    size_t i, k;
+    cover(&r, "twisted-bridge", "box", 2.0, AMP_PATTERN_GRID, 0);
+    ck_assert_uint_gt(r.st.pieces, 50);
+    for (i = 0; i < r.ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&r.ps, i);
+        for (k = 1; k < r.ps.paths[i].n; k++) {
+            ck_assert_near(v[k].p.y, v[0].p.y, 1e-9);
+            ck_assert_near(v[k].p.z, v[0].p.z, 1e-9);
+            ck_assert(v[k].p.x > v[k - 1].p.x);
+        }
+    }
+    /* deposited volume is of the order of the mesh volume (S = 2: radius 1.41, a coarse cover) */
+    ck_assert(amp_pathset_volume(&r.ps, -1) > 0.5 * amp_mesh_volume(&r.m));
+    release(&r);
+}
+END_TEST
+
+START_TEST(field_errors_are_reported)
+{
+    amp_field f;
+    amp_field_opts o;
+    amp_error err;
+    amp_mesh m;
+    amp_bvh *b;
+    amp_pathset ps;
+    ck_assert_int_eq(amp_field_builtin(&f, "spiral", amp_box3_empty(), &err), AMP_ERR_ARG);
+    ck_assert(strstr(err.msg, "spiral") != NULL);
+    ck_assert_int_eq(amp_field_builtin(&f, "box", amp_box3_empty(), &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(amp_field_names()[0]);
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", 0.2, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_builtin(&f, "helix-square", amp_mesh_bbox(&m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = 0;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, NULL, &err), AMP_ERR_ARG);
+    o.spacing = 0.001;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, NULL, &err), AMP_ERR_LIMIT);
+    ck_assert_uint_eq(ps.npaths, 0);
+    {
+        double g;
+        ck_assert_int_eq(amp_coverage_gap(&ps, b, 10, 1, 0, &g, NULL, &err), AMP_ERR_ARG);
+    }
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+static Suite *field_suite(void)
+{
+    Suite *s = suite_create("field");
+    TCase *tc = tcase_create("field");
+    tcase_set_timeout(tc, 300);
+    AMP_ADD_TEST(tc, helix_square_grid_covers_helix_within_half_diagonal);
+    AMP_ADD_TEST(tc, honeycomb_has_the_smaller_covering_radius);
+    AMP_ADD_TEST(tc, mesh_with_missing_triangle_still_clips_correctly);
+    AMP_ADD_TEST(tc, gap_checker_fails_when_paths_are_missing);
+    AMP_ADD_TEST(tc, box_field_gives_straight_x_lines_inside_the_bridge);
+    AMP_ADD_TEST(tc, field_errors_are_reported);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(field_suite)
