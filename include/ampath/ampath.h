@@ -10,6 +10,7 @@
 #include "order.h"
 #include "gouge.h"
 #include "mdr.h"
+#include "support.h"
 #include "paths.h"
 #include "status.h"
 #include "vec.h"
