@@ -472,6 +472,16 @@ static int piece_below(const orderer *o, const piece *a, const piece *b)
 static uint32_t piece_end(const piece *p) { return p->dir > 0 ? p->hi : p->lo; }
 
 
+static void merge_free(const orderer *o, uint32_t *seq, uint32_t *pos, uint32_t *owner, uint32_t *win,
+                       unsigned char *ins)
+{
+    amp_free(o->a, seq);
+    amp_free(o->a, pos);
+    amp_free(o->a, owner);
+    amp_free(o->a, win);
+    amp_free(o->a, ins);
+}
+
 static amp_status merge_pass(orderer *o, size_t *merged_out)
 {
     size_t n = o->npc, a, i, merged = 0;
@@ -481,11 +491,7 @@ static amp_status merge_pass(orderer *o, size_t *merged_out)
     unsigned char *ins = amp_calloc(o->a, MERGE_MAX_PIECES, 1);
     piece *pc = o->pc;
     if (!seq || !pos || !owner || !win || !ins) {
-        amp_free(o->a, seq);
-        amp_free(o->a, pos);
-        amp_free(o->a, owner);
-        amp_free(o->a, win);
-        amp_free(o->a, ins);
+        merge_free(o, seq, pos, owner, win, ins);
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
     }
     for (i = 0; i < n; i++) {
@@ -586,11 +592,7 @@ static amp_status merge_pass(orderer *o, size_t *merged_out)
         piece *np = amp_calloc(o->a, n ? n : 1, sizeof *np);
         size_t m = 0;
         if (!np) {
-            amp_free(o->a, seq);
-            amp_free(o->a, pos);
-            amp_free(o->a, owner);
-            amp_free(o->a, win);
-            amp_free(o->a, ins);
+            merge_free(o, seq, pos, owner, win, ins);
             return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
         }
         for (i = 0; i < n; i++)
@@ -600,11 +602,7 @@ static amp_status merge_pass(orderer *o, size_t *merged_out)
         o->npc = m;
         amp_free(o->a, np);
     }
-    amp_free(o->a, seq);
-    amp_free(o->a, pos);
-    amp_free(o->a, owner);
-    amp_free(o->a, win);
-    amp_free(o->a, ins);
+    merge_free(o, seq, pos, owner, win, ins);
     *merged_out = merged;
     return AMP_OK;
 }
