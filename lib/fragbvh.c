@@ -40,13 +40,6 @@ static uint64_t quantise(double x, double lo, double hi)
     return (uint64_t)(t * 2097151.0);
 }
 
-double amp_box_xy_gap(amp_box3 a, amp_box3 b)
-{
-    double dx = fmax(0.0, fmax(a.min.x - b.max.x, b.min.x - a.max.x));
-    double dy = fmax(0.0, fmax(a.min.y - b.max.y, b.min.y - a.max.y));
-    return sqrt(dx * dx + dy * dy);
-}
-
 void amp_fbvh_free(amp_fbvh *b)
 {
     if (!b)

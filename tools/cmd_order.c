@@ -112,6 +112,8 @@ int cmd_order(int argc, char **argv)
                (unsigned long)si.fragments, z_offs, theta);
         if (graph_done)
             printf("below graph: %lu edges (%.3f s)\n", (unsigned long)edges, t_graph);
+        else if (max_edges == 0)
+            printf("below graph: not listed (--max-edges 0)\n");
         else
             printf("below graph: more than %ld edges, not listed (ordering does not need it)\n", max_edges);
         printf("subdivisions: plain greedy %lu (%.3f s), improved %lu (%.3f s; %lu fragments continued, %lu merges)\n",
