@@ -1,11 +1,9 @@
 /* Accessibility (paper §5.1): cone test, fragments, below graph, Algorithm 2, gouge checker. */
-#define _POSIX_C_SOURCE 200809L
 #include <math.h>
-#include <stdlib.h>
-#include <sys/wait.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "runtool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -468,24 +466,6 @@ END_TEST
 
 /* ---- the commands (SPEC §4) ---- */
 
-/* Run "$AMP_TOOL args", capture stdout into out (NUL-terminated), return the exit status. */
-static int run_tool(const char *args, char *out, size_t cap)
-{
-    char cmd[2048];
-    const char *tool = getenv("AMP_TOOL");
-    FILE *p;
-    size_t n = 0;
-    int st;
-    snprintf(cmd, sizeof cmd, "%s %s 2>%s", tool ? tool : "tools/ampath", args, amp_test_tmp("stderr.txt"));
-    p = popen(cmd, "r");
-    ck_assert_ptr_nonnull(p);
-    while (n + 1 < cap && (st = fgetc(p)) != EOF)
-        out[n++] = (char)st;
-    out[n] = 0;
-    st = pclose(p);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
-
 START_TEST(order_and_check_commands_report_and_exit_as_specified)
 {
     amp_pathset ps;
@@ -496,34 +476,33 @@ START_TEST(order_and_check_commands_report_and_exit_as_specified)
     add_curve(&ps, fig8_red, NULL, 40);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     snprintf(args, sizeof args, "order %s --z-offs 0.5 --theta 72 --json -o %s", in, ord);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(out[0] == '{' && strchr(out, '\n') == strrchr(out, '\n'), "one JSON object: %s", out);
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_greedy\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_improved\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"below_edges_complete\":true"));
     snprintf(args, sizeof args, "check %s --json", ord);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"gouge\":{\"ran\":true,\"ok\":true"));
     snprintf(args, sizeof args, "check %s --json", in);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
     ck_assert_ptr_nonnull(strstr(out, "\"violation\":{\"earlier_path\":0"));
     ck_assert_ptr_nonnull(strstr(out, "\"ok\":false}"));
     snprintf(args, sizeof args, "check %s --no-gouge --json", in);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"ran\":false"));
     snprintf(args, sizeof args, "order %s --theta 95 -o %s", in, ord);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --z-offs -1", in);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "mdr %s --nominal 0.5 --min 0.2 --max 0.8 --json -o %s", ord, m);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"over_coverage\":"));
     snprintf(args, sizeof args, "mdr %s --min 2 --max 1", ord);
-    ck_assert_int_eq(run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     remove(in);
     remove(ord);
     remove(m);
-    remove(amp_test_tmp("stderr.txt"));
     amp_pathset_free(&ps);
 }
 END_TEST

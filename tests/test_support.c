@@ -2,6 +2,9 @@
 #include <math.h>
 #include <string.h>
 
+#include <stdio.h>
+
+#include "runtool.h"
 #include "testutil.h"
 
 /* A closed box [x0,x1] x [y0,y1] x [z0,z1], triangles oriented outward. */
@@ -119,6 +122,41 @@ START_TEST(model_on_the_plate_needs_no_support_and_bad_options_fail)
 }
 END_TEST
 
+START_TEST(support_command_writes_interleaved_paths_and_rejects_trivariate)
+{
+    amp_mesh m;
+    amp_pathset ps, back;
+    amp_error err;
+    char args[2048], out[4096];
+    const char *stl = amp_test_tmp("slab.stl"), *in = amp_test_tmp("slab.amp"), *res = amp_test_tmp("slab-sup.amp");
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&back, NULL);
+    box_mesh(&m, amp_v3(0, 0, 3), amp_v3(10, 10, 5));
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    slab_paths(&ps);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, &err), AMP_OK);
+    snprintf(args, sizeof args, "support %s --mesh %s --spacing 1 --json -o %s", in, stl, res);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_ptr_nonnull(strstr(out, "\"rays\":121,"));
+    ck_assert_int_eq(amp_pathset_read_file(&back, res, &err), AMP_OK);
+    ck_assert_uint_gt(back.npaths, ps.npaths);
+    ck_assert_int_eq(back.paths[0].role, AMP_ROLE_SUPPORT);
+    snprintf(args, sizeof args, "check %s --json", res);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    snprintf(args, sizeof args, "support %s --trivariate x.spl -o %s", in, res);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "support %s -o %s", in, res);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    remove(stl);
+    remove(in);
+    remove(res);
+    amp_mesh_free(&m);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&back);
+}
+END_TEST
+
 static Suite *support_suite(void)
 {
     Suite *s = suite_create("support");
@@ -126,6 +164,7 @@ static Suite *support_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, floating_slab_gets_support_printed_before_the_paths_above);
     tcase_add_test(tc, model_on_the_plate_needs_no_support_and_bad_options_fail);
+    tcase_add_test(tc, support_command_writes_interleaved_paths_and_rejects_trivariate);
     suite_add_tcase(s, tc);
     return s;
 }
