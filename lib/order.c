@@ -18,6 +18,8 @@ void amp_order_opts_default(amp_order_opts *o)
     o->improve = 1;
     o->lookahead = 4;
     o->merge_window = 2000;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 /* ---- the below graph (Def. 5.2), for reporting and tests ---- */
@@ -713,8 +715,16 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     amp_free(o.a, blocker);
     blocker = NULL;
     /* Alg. 2, lines 3-8 */
-    while (st == AMP_OK && o.nprinted < n)
-        st = opts->improve ? step_improved(&o) : step_plain(&o);
+    {
+        size_t next_report = 0;
+        while (st == AMP_OK && o.nprinted < n) {
+            st = opts->improve ? step_improved(&o) : step_plain(&o);
+            if (opts->progress && o.nprinted >= next_report) {
+                opts->progress(opts->progress_user, (double)o.nprinted / (double)n);
+                next_report = o.nprinted + n / 256 + 1;
+            }
+        }
+    }
     if (st == AMP_OK && opts->improve) {
         size_t m = 0, pass;
         for (pass = 0; pass < 4 && st == AMP_OK; pass++) {

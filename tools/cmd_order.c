@@ -16,6 +16,8 @@ const char cmd_order_usage[] =
     "  -o FILE         write the ordered paths (.amp); cut points get interpolated radii\n"
     "Both orderings are always computed, so that the gain of the improvements is reported.\n";
 
+static void progress_cb(void *user, double fraction) { cli_progress_update(user, fraction); }
+
 int cmd_order(int argc, char **argv)
 {
     const char *pos[1], *output = NULL;
@@ -36,7 +38,10 @@ int cmd_order(int argc, char **argv)
     rc = cli_parse("order", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
+    cli_progress bar;
     amp_order_opts_default(&o);
+    o.progress = progress_cb;
+    o.progress_user = &bar;
     if ((rc = headopt_make("order", z_offs, theta, &o.head)) != CLI_OK)
         return rc;
     if (max_edges < 0)
@@ -53,13 +58,17 @@ int cmd_order(int argc, char **argv)
     rc = CLI_USAGE;
     t0 = cli_now();
     o.improve = 0;
+    cli_progress_begin(&bar, "order greedy");
     if (amp_order(&ps, &o, &out_g, &sg, &err) != AMP_OK)
         goto fail;
+    cli_progress_end(&bar);
     t_greedy = cli_now() - t0;
     t0 = cli_now();
     o.improve = 1;
+    cli_progress_begin(&bar, "order");
     if (amp_order(&ps, &o, &out_i, &si, &err) != AMP_OK)
         goto fail;
+    cli_progress_end(&bar);
     t_improved = cli_now() - t0;
     /* the explicit graph is for reporting only: a wide cone makes it dense, so it is capped */
     if (max_edges > 0 && amp_fragments_build(&fs, &ps, o.head.z_offs, NULL, &err) == AMP_OK) {
@@ -125,6 +134,7 @@ int cmd_order(int argc, char **argv)
     rc = CLI_OK;
     goto cleanup;
 fail:
+    cli_progress_end(&bar);
     rc = cli_fail_err("order", &err);
 cleanup:
     amp_pathset_free(&ps);

@@ -138,6 +138,10 @@ typedef struct amp_order_opts {
     int improve;      /**< 0: plain greedy Algorithm 2; 1: continuation, look-ahead and merging (default) */
     size_t lookahead; /**< candidate runs simulated per step when improving (default 4) */
     size_t merge_window; /**< most fragments between two sub-curves considered for a merge (default 2000) */
+    /** Optional progress report, called from the calling thread with the fraction of fragments
+     *  printed so far (0..1), a few hundred times per run at most; NULL (default) for none. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user; /**< passed to progress */
 } amp_order_opts;
 
 void amp_order_opts_default(amp_order_opts *o);
