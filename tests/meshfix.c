@@ -157,21 +157,3 @@ size_t amp_fix_components(const amp_mesh *m)
     return n;
 }
 
-int amp_fix_run_tool(const char *args, char *out, size_t cap)
-{
-    const char *tool = getenv("AMP_TOOL");
-    char cmd[1024];
-    FILE *p;
-    size_t n;
-    int rc;
-    if (!tool)
-        return -1;
-    snprintf(cmd, sizeof cmd, "'%s' %s 2>/dev/null", tool, args);
-    p = popen(cmd, "r");
-    if (!p)
-        return -1;
-    n = fread(out, 1, cap - 1, p);
-    out[n] = '\0';
-    rc = pclose(p);
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}

@@ -20,8 +20,6 @@ double amp_fix_rand(unsigned long long *s);
 /** Exact torus classification: signed distance to the tube (negative inside). */
 double amp_fix_torus_sdf(amp_vec3 p, double R, double r);
 
-/** Run "$AMP_TOOL args" (stderr discarded), capture stdout in out; exit status, or -1 without AMP_TOOL. */
-int amp_fix_run_tool(const char *args, char *out, size_t cap);
 
 #endif
 

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "fx_meshes.h"
-#include "fx_tool.h"
+#include "runtool.h"
 #include "testutil.h"
 
 /* Check every infill stroke of one layer section independently: one closed
@@ -254,24 +254,24 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 2.0), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --radius 0.4 --continuous -o %s --json", stl, amp);
-    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     /* 12 layers x 3 regions (the neck splits R̃), one stroke each */
     ck_assert_msg(strstr(out, "\"layers\":12,\"islands\":36,\"strokes\":36,\"multi_stroke_islands\":0") != NULL, "%s",
                   out);
     ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);
     snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", amp, stl);
-    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"ok\":true") != NULL, "%s", out);
     /* a crossing path appended: the check fails with exit 1 */
     f = fopen(amp, "a");
     ck_assert(f != NULL);
     fprintf(f, "path object 5\n1 1 0.5 0.4\n9 9 0.5 0.4\n9 1 0.5 0.4\n1 9 0.5 0.4\n1 1 0.5 0.4\n");
     fclose(f);
-    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
     ck_assert_msg(strstr(out, "\"crossings\":1") != NULL, "%s", out);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --grid octagon", stl);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
     remove(stl);
     remove(amp);
     amp_mesh_free(&m);

@@ -6,6 +6,7 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#include "runtool.h"
 #include "testutil.h"
 
 static double cover_gap(const amp_spline *v, const amp_cover_opts *o, amp_cover_stats *st, amp_pathset *keep)
@@ -231,20 +232,10 @@ START_TEST(bad_input_is_rejected)
 }
 END_TEST
 
+/* The tool's stdout and stderr, as a user sees them. */
 static int run(const char *args, char *out, size_t cap)
 {
-    char cmd[1024];
-    FILE *p;
-    size_t n;
-    int rc;
-    ck_assert_ptr_nonnull(getenv("AMP_TOOL"));
-    snprintf(cmd, sizeof cmd, "%s %s 2>&1", getenv("AMP_TOOL"), args);
-    p = popen(cmd, "r");
-    ck_assert_ptr_nonnull(p);
-    n = fread(out, 1, cap - 1, p);
-    out[n] = '\0';
-    rc = pclose(p);
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
+    return amp_test_run_tool_ex(args, NULL, 1, out, cap);
 }
 
 START_TEST(cli_cover_and_check_report_and_fail_properly)

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "fixture_geom.h"
-#include "fixture_tool.h"
+#include "runtool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846

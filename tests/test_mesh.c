@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "meshfix.h"
+#include "runtool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -480,7 +481,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     m.tris[0] = m.tris[--m.ntris]; /* one hole: not closed */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 0, &err), AMP_OK);
     snprintf(args, sizeof args, "info '%s' --json", f);
-    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"kind\":\"mesh\"") && strstr(out, "\"format\":\"ascii\"") &&
                       strstr(out, "\"triangles\":575") && strstr(out, "\"closed\":false") &&
                       strstr(out, "\"boundary_edges\":3"),
@@ -488,9 +489,50 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
     /* a truncated binary STL: exit status 2 */
     ck_assert_int_eq(truncate(f, 84 + 50 * 10), 0);
-    ck_assert_int_eq(amp_fix_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     remove(f);
     amp_mesh_free(&m);
+}
+END_TEST
+
+/* The boundary of a trivariate (support rays are cast on it): closed, outward, and of the solid's volume. */
+START_TEST(trivariate_boundary_mesh_is_closed_with_the_solid_volume)
+{
+    static const struct {
+        const char *name;
+        double volume, rel;
+    } cases[] = {
+        /* torus quarter: pi r^2 * (pi R / 2), r = 10, R = 50 */
+        {"torus-quarter", 3.14159265358979 * 100.0 * 3.14159265358979 * 50.0 / 2.0, 2e-3},
+        /* helix: pi r^2 * arc length, r = 5, length = sqrt((2 pi 20)^2 + 40^2) (Pappus, the disc stays normal) */
+        {"helix", 3.14159265358979 * 25.0 * 131.8763, 5e-3},
+        {"vase", 0, 0}, /* closed revolved wall: the seam faces must vanish */
+    };
+    size_t i;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        amp_spline v;
+        amp_mesh m;
+        amp_error err;
+        amp_mesh_edge_report er;
+        amp_mesh_init(&m, NULL);
+        ck_assert_int_eq(amp_trivariate_model(cases[i].name, NULL, &v, &err), AMP_OK);
+        ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 0, &err), AMP_OK);
+        ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+        ck_assert_msg(er.closed, "%s: boundary %lu nonmanifold %lu misoriented %lu", cases[i].name,
+                      (unsigned long)er.boundary, (unsigned long)er.nonmanifold, (unsigned long)er.misoriented);
+        ck_assert_uint_eq(amp_fix_components(&m), 1);
+        if (cases[i].volume > 0)
+            ck_assert_msg(fabs(amp_mesh_volume(&m) / cases[i].volume - 1) < cases[i].rel, "%s: volume %g, want %g",
+                          cases[i].name, amp_mesh_volume(&m), cases[i].volume);
+        else
+            ck_assert(amp_mesh_volume(&m) > 0);
+        /* not empty, a curve, a bad resolution */
+        ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 0, &err), AMP_ERR_ARG);
+        amp_mesh_free(&m);
+        ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 65, &err), AMP_ERR_ARG);
+        ck_assert_uint_eq(m.ntris, 0);
+        amp_spline_free(&v);
+    }
 }
 END_TEST
 
@@ -516,6 +558,7 @@ static Suite *mesh_suite(void)
     AMP_ADD_TEST(tc, model_errors_are_reported);
     AMP_ADD_TEST(tc, helix_mesh_is_within_0_05_mm_of_the_exact_solid);
     AMP_ADD_TEST(tc, twisted_bridge_has_the_documented_size_and_volume);
+    AMP_ADD_TEST(tc, trivariate_boundary_mesh_is_closed_with_the_solid_volume);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -5,7 +5,7 @@
 #include <string.h>
 
 #include "fixture_geom.h"
-#include "fixture_tool.h"
+#include "runtool.h"
 #include "testutil.h"
 
 /* ------------------------------------------------------------------ running the tool */

@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "fx_meshes.h"
-#include "fx_tool.h"
+#include "runtool.h"
 #include "testutil.h"
 
 #define PI 3.14159265358979323846
@@ -227,7 +227,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
     ck_assert_int_eq(fx_torus(&m, amp_v3(5, 5, 9), 10.0, 3.0, 96, 48), AMP_OK); /* z in [6, 12] */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --polygons -o %s --json", stl, amp);
-    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"layers\":12,\"polygons\":24,\"islands\":12,\"holes\":12") != NULL, "%s", out);
     ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
     ck_assert_uint_eq(ps.npaths, 24);
@@ -244,7 +244,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);
     }
     snprintf(args, sizeof args, "slice %s --layer 0.5 --z 3 -o %s", stl, svg);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
     {
         FILE *f = fopen(svg, "r");
         char head[64] = {0};
@@ -254,14 +254,14 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert(strstr(head, "<?xml") == head);
     }
     snprintf(args, sizeof args, "slice %s --polygons", stl);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2); /* --layer missing */
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2); /* --layer missing */
     snprintf(args, sizeof args, "slice %s.missing --layer 0.5", stl);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid tri --json", stl);
-    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"euler\":true") != NULL, "%s", out);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid pentagon", stl);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
     remove(stl);
     remove(amp);
     remove(svg);

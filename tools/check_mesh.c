@@ -9,60 +9,54 @@
 /* Vertices farther than this outside the mesh fail the check (issue 5). */
 #define OUTSIDE_TOL 0.01
 
-int check_mesh(const char *paths_file, const char *mesh_file, double eps, long samples, unsigned long seed,
-               cli_json *j)
+int check_mesh(const check_ctx *c, cli_json *j)
 {
     amp_mesh m;
     amp_bvh *b = NULL;
-    amp_pathset ps;
+    const amp_pathset *ps = c->ps;
     amp_error err;
-    double gap = 0, mean = 0, worst_out = 0, rmax = 0;
+    double gap = 0, mean = 0, worst_out = 0, rmax = 0, eps = c->eps;
     size_t i, outside = 0;
     int rc;
     amp_error_clear(&err);
-    amp_pathset_init(&ps, NULL);
-    rc = cli_load_paths("check", paths_file, &ps);
-    if (rc != CLI_OK)
-        return rc;
     amp_mesh_init(&m, NULL);
-    if (amp_mesh_read_stl_file(&m, mesh_file, &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK) {
+    if (amp_mesh_read_stl_file(&m, c->mesh, &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK) {
         amp_mesh_free(&m);
-        amp_pathset_free(&ps);
         return cli_fail_err("check", &err);
     }
-    for (i = 0; i < ps.nverts; i++) {
-        amp_vec3 p = ps.verts[i].p;
-        rmax = ps.verts[i].r > rmax ? ps.verts[i].r : rmax;
+    for (i = 0; i < ps->nverts; i++) {
+        amp_vec3 p = ps->verts[i].p;
+        rmax = ps->verts[i].r > rmax ? ps->verts[i].r : rmax;
         if (!amp_bvh_inside(b, p)) {
             double d = amp_bvh_closest(b, p, NULL, NULL);
             worst_out = d > worst_out ? d : worst_out;
             outside += d > OUTSIDE_TOL;
         }
     }
-    if (eps <= 0)
+    if (!c->eps_given)
         eps = rmax; /* the paths claim to cover their radius */
-    if (amp_coverage_gap(&ps, b, (size_t)samples, seed, 0.0, &gap, &mean, &err) != AMP_OK) {
+    if (amp_coverage_gap(ps, b, (size_t)c->samples, c->seed, 0.0, &gap, &mean, &err) != AMP_OK) {
         rc = cli_fail_err("check", &err);
     } else {
         rc = gap <= eps && outside == 0 ? CLI_OK : CLI_FAILED;
         if (j) {
-            cli_json_obj(j, "mesh_coverage");
+            cli_json_bool(j, "ran", 1);
+            cli_json_bool(j, "ok", rc == CLI_OK);
+            cli_json_str(j, "model", "mesh");
             cli_json_num(j, "eps", eps);
             cli_json_num(j, "coverage_gap_mm", gap);
             cli_json_num(j, "coverage_gap_mean_mm", mean);
-            cli_json_int(j, "samples", samples);
+            cli_json_int(j, "samples", c->samples);
             cli_json_int(j, "vertices_outside", (long long)outside);
             cli_json_num(j, "worst_outside_mm", worst_out);
-            cli_json_close(j);
         } else {
-            printf("mesh coverage: gap %.4f mm (mean %.4f) against eps %.4f over %ld samples; %lu vertices more than "
+            printf("coverage: gap %.4f mm (mean %.4f) against eps %.4f over %ld samples; %lu vertices more than "
                    "%.2f mm outside (worst %.4f mm): %s\n",
-                   gap, mean, eps, samples, (unsigned long)outside, OUTSIDE_TOL, worst_out,
+                   gap, mean, eps, c->samples, (unsigned long)outside, OUTSIDE_TOL, worst_out,
                    rc == CLI_OK ? "ok" : "FAILED");
         }
     }
     amp_bvh_free(b);
     amp_mesh_free(&m);
-    amp_pathset_free(&ps);
     return rc;
 }

@@ -50,44 +50,37 @@ static double eps_from_comment(const char *file)
     return eps > 0 ? eps : 0;
 }
 
-int check_trivariate(const char *paths_file, const char *spl_file, double eps, long samples, unsigned long seed,
-                     cli_json *j)
+int check_trivariate(const check_ctx *c, cli_json *j)
 {
     amp_spline v;
-    amp_pathset ps;
     amp_cover_gap g;
     amp_error err;
     int rc;
+    double eps = c->eps;
     const char *eps_from = "--eps";
-    amp_pathset_init(&ps, NULL);
-    rc = cli_load_paths("check", paths_file, &ps);
+    rc = cli_load_trivariate("check", c->trivariate, &v);
     if (rc != CLI_OK)
         return rc;
-    rc = cli_load_trivariate("check", spl_file, &v);
-    if (rc != CLI_OK) {
-        amp_pathset_free(&ps);
-        return rc;
-    }
-    if (!(eps > 0)) {
+    if (!c->eps_given) {
         size_t i;
-        eps = eps_from_comment(paths_file);
+        eps = eps_from_comment(c->paths_file);
         eps_from = "path file";
         if (!(eps > 0)) {
             eps_from = "largest radius";
-            for (i = 0; i < ps.nverts; i++)
-                eps = ps.verts[i].r > eps ? ps.verts[i].r : eps;
+            for (i = 0; i < c->ps->nverts; i++)
+                eps = c->ps->verts[i].r > eps ? c->ps->verts[i].r : eps;
         }
     }
     amp_error_clear(&err);
-    if (amp_cover_measure_gap(&v, &ps, samples > 0 ? (size_t)samples : 20000, seed, &g, &err) != AMP_OK) {
+    if (amp_cover_measure_gap(&v, c->ps, (size_t)c->samples, c->seed, &g, &err) != AMP_OK) {
         amp_spline_free(&v);
-        amp_pathset_free(&ps);
         return cli_fail_err("check", &err);
     }
     rc = g.gap <= eps ? CLI_OK : CLI_FAILED;
     if (j) {
-        cli_json_obj(j, "trivariate_coverage");
+        cli_json_bool(j, "ran", 1);
         cli_json_bool(j, "ok", rc == CLI_OK);
+        cli_json_str(j, "model", "trivariate");
         cli_json_num(j, "eps", eps);
         cli_json_str(j, "eps_from", eps_from);
         cli_json_num(j, "coverage_gap_mm", g.gap);
@@ -105,17 +98,15 @@ int check_trivariate(const char *paths_file, const char *spl_file, double eps, l
         cli_json_num(j, "volume_mm3", g.volume);
         cli_json_num(j, "deposited_mm3", g.deposited);
         cli_json_num(j, "over_coverage", g.volume > 0 ? g.deposited / g.volume : 0);
-        cli_json_close(j);
     } else {
         printf("coverage: largest distance to a path %.4f mm over %lu samples (eps %.4f mm from %s): %s\n", g.gap,
                (unsigned long)g.samples, eps, eps_from, rc == CLI_OK ? "ok" : "FAILED");
-        printf("worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n", g.worst.x,
-               g.worst.y, g.worst.z, g.worst_par[0], g.worst_par[1], g.worst_par[2],
+        printf("coverage: worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n",
+               g.worst.x, g.worst.y, g.worst.z, g.worst_par[0], g.worst_par[1], g.worst_par[2],
                g.volume > 0 ? g.deposited / g.volume : 0);
     }
     if (rc != CLI_OK)
         fprintf(stderr, "ampath check: coverage gap %.4f mm exceeds eps %.4f mm\n", g.gap, eps);
     amp_spline_free(&v);
-    amp_pathset_free(&ps);
     return rc;
 }

@@ -1,34 +1,62 @@
 /*
- * checkers.h — the independent checkers behind `ampath check` (tools/check_*.c).
- * Each returns a CLI exit code: CLI_OK (0) pass, CLI_FAILED (1) a violation,
- * CLI_USAGE (2) bad input; with @p j non-NULL it adds its figures to that JSON
- * object instead of printing a human summary.
+ * checkers.h — the independent checkers behind `ampath check` (SPEC §4).
+ *
+ * tools/cmd_check.c parses the common options once, loads the paths, and
+ * calls every checker of its table. A checker lives in tools/check_NAME.c and
+ * implements
+ *     int check_NAME(const check_ctx *c, cli_json *j);
+ * It decides itself whether it applies (the gouge check needs object paths,
+ * the coverage check a model), prints one human line when j == NULL, or fills
+ * its own JSON section (the dispatcher has already opened "NAME": {...}) with
+ * at least "ran" (bool) and, when it ran, "ok" (bool). It returns CLI_OK
+ * (passed or not applicable), CLI_FAILED (a violation) or CLI_USAGE (bad
+ * input, after printing a one-line reason to stderr).
+ * To add a checker: write check_NAME.c, declare it below, add one row to the
+ * table in cmd_check.c (its --no-NAME flag comes with the row).
+ * (This header is not named check.h: tests compile with -Itools, and
+ * <check.h> is the Check framework.)
  */
 #ifndef AMP_TOOLS_CHECKERS_H
 #define AMP_TOOLS_CHECKERS_H
 
 #include "cli.h"
 
-/**
- * Coverage of a trivariate by the paths of @p paths_file (issue 4): samples the
- * volume (uniform in parameters and uniform in space), measures the largest
- * distance to the nearest path (amp_cover_measure_gap) and fails when it
- * exceeds @p eps. eps <= 0: taken from the "ampath cover ... eps E" comment of
- * the path file, else the largest vertex radius. @p spl_file is a .spl file or
- * a built-in model name.
- */
-int check_trivariate(const char *paths_file, const char *spl_file, double eps, long samples, unsigned long seed,
-                     cli_json *j);
+typedef struct check_ctx {
+    const char *paths_file;  /* the PATHS.amp argument */
+    const amp_pathset *ps;   /* its paths, loaded */
+    const char *trivariate;  /* --trivariate F (.spl or built-in name) or NULL */
+    const char *mesh;        /* --mesh F (.stl) or NULL */
+    amp_head head;           /* --z-offs, --theta (validated; paper defaults) */
+    double eps;              /* --eps E, mm, when eps_given */
+    int eps_given;           /* --eps appeared on the command line */
+    long samples;            /* --samples N for the sampled checks */
+    unsigned long seed;      /* --seed S */
+    double layer;            /* --layer H, mm, when layer_given: the mesh was sliced at H */
+    int layer_given;
+    double first_layer;      /* --first-layer H0 (0: same as H) */
+    double tol;              /* --tol T: distance tolerance of the stroke check */
+} check_ctx;
 
-/**
- * Coverage of the solid of the mesh @p mesh_file (STL) by the paths of
- * @p paths_file (issue 5): the largest distance from @p samples points drawn
- * inside the mesh to the nearest path must be <= @p eps (eps <= 0: the
- * largest vertex radius), and no path vertex may lie more than 0.01 mm
- * outside the mesh. tools/check_mesh.c.
+/* No gouging (paper 1, §5.1): no earlier point inside the head cone while a later point prints. */
+int check_gouge(const check_ctx *c, cli_json *j);
+
+/*
+ * Coverage within eps, measured by sampling (paper 1, §4): with --trivariate
+ * the volume of the trivariate (tools/check_trivariate.c); with --mesh and no
+ * --layer the solid of the mesh, plus no path vertex more than 0.01 mm outside
+ * it (tools/check_mesh.c). Without --eps, eps is the one recorded by
+ * `ampath cover` in the path file (trivariate), else the largest vertex radius.
  */
-int check_mesh(const char *paths_file, const char *mesh_file, double eps, long samples, unsigned long seed,
-               cli_json *j);
+int check_coverage(const check_ctx *c, cli_json *j);
+int check_trivariate(const check_ctx *c, cli_json *j);
+int check_mesh(const check_ctx *c, cli_json *j);
+
+/*
+ * Strokes (paper 2, §4): every planar path (all vertices at one height) has no
+ * two crossing segments and no edge printed twice; with --mesh and --layer it
+ * also lies inside the layer polygon of its height (tools/check_stroke.c).
+ */
+int check_stroke(const check_ctx *c, cli_json *j);
 
 /** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
 int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);

@@ -1,63 +1,132 @@
-/*
- * ampath check PATHS.amp — independent verification (SPEC §4). This minimal
- * dispatcher handles --trivariate (tools/check_trivariate.c); the full
- * dispatcher with the other checkers (tools/check_*.c) replaces it at merge.
- */
+/* ampath check — independent verification: a dispatcher over the checkers of checkers.h. */
 #include <string.h>
 
-#include "check_stroke.h"
 #include "checkers.h"
+#include "headopt.h"
+
+typedef struct checker {
+    const char *name;
+    int (*run)(const check_ctx *c, cli_json *j);
+} checker;
+
+/* One row per checker; each gets a --no-NAME flag and a "NAME" section in --json. */
+static const checker checkers[] = {
+    {"coverage", check_coverage},
+    {"gouge", check_gouge},
+    {"strokes", check_stroke},
+};
+#define NCHECKERS (sizeof checkers / sizeof checkers[0])
 
 const char cmd_check_usage[] =
-    "verify paths independently: coverage of a trivariate within eps (sampled); exit 1 on a failure\n"
-    "usage: ampath check PATHS.amp --trivariate F|--mesh MESH.stl [--eps E] [--samples N] [--seed S] [--json]\n"
-    "  --trivariate F  a .spl file (its first trivariate) or a built-in model name\n"
-    "  --mesh M        an STL mesh: coverage gap of its solid (points sampled inside it) and no path vertex\n"
-    "                  more than 0.01 mm outside it\n"
-    "  --eps E         allowed gap in mm; default: the eps recorded by 'ampath cover' in the file,\n"
+    "verify paths independently; exit 1 when a check fails\n"
+    "usage: ampath check PATHS.amp [--trivariate F | --mesh F [--layer H]] [--z-offs Z] [--theta DEG] [--eps E]\n"
+    "                    [--samples N] [--seed S] [--no-NAME] [--json]\n"
+    "checks (each runs where it applies; --no-NAME skips it):\n"
+    "  coverage   every point of the model within eps of a path, measured by sampling (paper 1 §4);\n"
+    "             needs --trivariate, or --mesh without --layer (then also: no vertex > 0.01 mm outside)\n"
+    "  gouge      no point printed earlier inside the head cone while a later point prints (paper 1 §5.1);\n"
+    "             runs when the file has object paths\n"
+    "  strokes    no two segments of a planar path cross, no edge printed twice (paper 2 §4); with --mesh\n"
+    "             and --layer also inside the layer polygon of the path's height; runs on planar paths\n"
+    "options:\n"
+    "  --trivariate F  the model as a trivariate: a .spl file (its first trivariate) or a built-in name\n"
+    "  --mesh F        the model as an STL mesh\n"
+    "  --layer H       the layer height the paths were sliced with (ampath slice); --first-layer H0 too\n"
+    "  --tol T         distance tolerance of the stroke 'inside' test, mm (default 1e-6)\n"
+    HEADOPT_HELP
+    "  --eps E         allowed coverage gap, mm; default: the eps recorded by 'ampath cover' in the file,\n"
     "                  else the largest vertex radius\n"
-    "  --samples N     volume samples, half uniform in parameters, half uniform in space (default 20000)\n"
-    "  --seed S        sampling seed (default 1)\n"
-    "  --json          {\"ok\", \"trivariate_coverage\": {eps, coverage_gap_mm, samples, worst_point, ...}}\n";
+    "  --samples N     coverage samples (default 20000); --seed S their seed (default 1)\n"
+    "  --json          one JSON object: {\"input\", \"coverage\": {\"ran\", \"ok\", ...}, \"gouge\": {...},\n"
+    "                  \"strokes\": {...}, \"ok\"}\n"
+    "Exit status: 0 all checks passed, 1 a check failed, 2 bad usage or input.\n";
 
 int cmd_check(int argc, char **argv)
 {
-    int k;
-    for (k = 1; k < argc && strncmp(argv[k], "--trivariate", 12) != 0 && strncmp(argv[k], "--mesh", 6) != 0; k++)
-        ;
-    if (k == argc)
-        return check_stroke(argc, argv);
-    {
-    const char *pos[1], *tri = NULL, *mesh = NULL;
-    double eps = 0;
-    long samples = 20000, seed = 1;
-    int json = 0, npos = 0, rc;
+    const char *pos[1];
+    double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0;
+    long seed = 1;
+    int json = 0, npos = 0, rc, failed = 0, usage = 0;
+    int skip[NCHECKERS];
+    char names[NCHECKERS][40];
+    cli_opt opts[16 + NCHECKERS];
+    check_ctx c;
+    amp_pathset ps;
     cli_json j;
-    cli_opt opts[] = {{"trivariate", CLI_STR, &tri, 0}, {"eps", CLI_DOUBLE, &eps, 0},
-                      {"samples", CLI_LONG, &samples, 0}, {"seed", CLI_LONG, &seed, 0},
-                      {"json", CLI_FLAG, &json, 0},       {"mesh", CLI_STR, &mesh, 0},
-                      {NULL, CLI_FLAG, NULL, 0}};
+    size_t i, n = 0, i_eps, i_layer;
+    memset(&c, 0, sizeof c);
+    memset(skip, 0, sizeof skip);
+    c.samples = 20000;
+    c.tol = 1e-6;
+    opts[n++] = (cli_opt){"trivariate", CLI_STR, &c.trivariate, 0};
+    opts[n++] = (cli_opt){"mesh", CLI_STR, &c.mesh, 0};
+    opts[n++] = (cli_opt){"z-offs", CLI_DOUBLE, &z_offs, 0};
+    opts[n++] = (cli_opt){"theta", CLI_DOUBLE, &theta, 0};
+    i_eps = n;
+    opts[n++] = (cli_opt){"eps", CLI_DOUBLE, &c.eps, 0};
+    opts[n++] = (cli_opt){"samples", CLI_LONG, &c.samples, 0};
+    opts[n++] = (cli_opt){"seed", CLI_LONG, &seed, 0};
+    i_layer = n;
+    opts[n++] = (cli_opt){"layer", CLI_DOUBLE, &c.layer, 0};
+    opts[n++] = (cli_opt){"first-layer", CLI_DOUBLE, &c.first_layer, 0};
+    opts[n++] = (cli_opt){"tol", CLI_DOUBLE, &c.tol, 0};
+    opts[n++] = (cli_opt){"json", CLI_FLAG, &json, 0};
+    for (i = 0; i < NCHECKERS; i++) {
+        snprintf(names[i], sizeof names[i], "no-%s", checkers[i].name);
+        opts[n++] = (cli_opt){names[i], CLI_FLAG, &skip[i], 0};
+    }
+    opts[n] = (cli_opt){NULL, CLI_FLAG, NULL, 0};
     rc = cli_parse("check", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
-    if (!tri && !mesh)
-        return cli_fail("check", CLI_USAGE, "this build checks coverage only: give --trivariate F or --mesh M");
-    if (opts[1].seen && !(eps > 0))
-        return cli_fail("check", CLI_USAGE, "--eps must be positive");
-    if (samples < 1 || samples > 100000000L)
+    if (c.trivariate && c.mesh)
+        return cli_fail("check", CLI_USAGE, "give either --trivariate or --mesh, not both");
+    if ((rc = headopt_make("check", z_offs, theta, &c.head)) != CLI_OK)
+        return rc;
+    c.eps_given = opts[i_eps].seen;
+    if (c.eps_given && !(c.eps > 0.0))
+        return cli_fail("check", CLI_USAGE, "--eps must be positive (got %g)", c.eps);
+    if (c.samples < 1 || c.samples > 100000000L)
         return cli_fail("check", CLI_USAGE, "--samples must be in 1..100000000");
-    if (json)
+    c.layer_given = opts[i_layer].seen;
+    if (c.layer_given && !(c.layer > 0.0))
+        return cli_fail("check", CLI_USAGE, "--layer must be positive (got %g)", c.layer);
+    if (c.layer_given && !c.mesh)
+        return cli_fail("check", CLI_USAGE, "--layer needs the --mesh that was sliced");
+    if (!(c.tol >= 0.0) || c.tol > 1e3)
+        return cli_fail("check", CLI_USAGE, "--tol must be in [0, 1000] mm");
+    c.seed = (unsigned long)seed;
+    c.paths_file = pos[0];
+    amp_pathset_init(&ps, NULL);
+    if ((rc = cli_load_paths("check", pos[0], &ps)) != CLI_OK)
+        return rc;
+    c.ps = &ps;
+    if (json) {
         cli_json_begin(&j, stdout);
-    rc = tri ? check_trivariate(pos[0], tri, eps, samples, (unsigned long)seed, json ? &j : NULL) : CLI_OK;
-    if (mesh && rc != CLI_USAGE) {
-        int rm = check_mesh(pos[0], mesh, eps, samples, (unsigned long)seed, json ? &j : NULL);
-        rc = rm == CLI_USAGE || rc == CLI_OK ? rm : rc;
+        cli_json_str(&j, "input", pos[0]);
+    }
+    for (i = 0; i < NCHECKERS; i++) {
+        if (json)
+            cli_json_obj(&j, checkers[i].name);
+        if (skip[i]) {
+            if (json) {
+                cli_json_bool(&j, "ran", 0);
+                cli_json_str(&j, "reason", "skipped on request");
+            } else {
+                printf("%s: skipped (--no-%s)\n", checkers[i].name, checkers[i].name);
+            }
+        } else {
+            rc = checkers[i].run(&c, json ? &j : NULL);
+            failed |= rc == CLI_FAILED;
+            usage |= rc == CLI_USAGE;
+        }
+        if (json)
+            cli_json_close(&j);
     }
     if (json) {
-        if (rc != CLI_USAGE)
-            cli_json_bool(&j, "ok", rc == CLI_OK);
+        cli_json_bool(&j, "ok", !failed && !usage);
         cli_json_end(&j);
     }
-    return rc;
-}
+    amp_pathset_free(&ps);
+    return usage ? CLI_USAGE : failed ? CLI_FAILED : CLI_OK;
 }

@@ -13,7 +13,8 @@ const char cmd_model_usage[] =
     "                            major radius 50 mm, minor 10 mm, resting on z = 0\n"
     "             vase           paper Fig. 18: revolved wall 60 mm high, radii 9..30 mm, wall 3..12 mm\n"
     "  meshes (-o FILE.stl): helix (boundary of the same solid, within 0.05 mm), twisted-bridge\n"
-    "             (paper Fig. 15), crocodile-like (organic shape with thin limbs); see docs/mesh.md\n"
+    "             (paper Fig. 15), crocodile-like (organic shape with thin limbs); see docs/mesh.md;\n"
+    "             torus-quarter and vase: the tessellated boundary of the trivariate\n"
     "  -o FILE    output; FILE ending in .stl writes the mesh of the model (binary STL),\n"
     "             anything else the trivariate as .spl\n"
     "  --tol T    mesh models: largest distance to the exact surface, mm (default 0.05)\n"
@@ -37,7 +38,21 @@ static int write_mesh_model(const char *name, const char *out, double tol, int j
     amp_error err;
     amp_error_clear(&err);
     amp_mesh_init(&m, NULL);
-    if (amp_mesh_model(name, tol, &m, &err) != AMP_OK || amp_mesh_write_stl_file(&m, out, 1, &err) != AMP_OK) {
+    if (amp_mesh_model(name, tol, &m, &err) != AMP_OK) {
+        /* No mesh of that name: the boundary of the trivariate model of that name. */
+        amp_spline v;
+        amp_error err2;
+        amp_error_clear(&err2);
+        if (amp_trivariate_model(name, NULL, &v, &err2) != AMP_OK)
+            return cli_fail_err("model", &err);
+        amp_error_clear(&err);
+        if (amp_mesh_from_trivariate(&m, &v, 0, &err) != AMP_OK) {
+            amp_spline_free(&v);
+            return cli_fail_err("model", &err);
+        }
+        amp_spline_free(&v);
+    }
+    if (amp_mesh_write_stl_file(&m, out, 1, &err) != AMP_OK) {
         amp_mesh_free(&m);
         return cli_fail_err("model", &err);
     }

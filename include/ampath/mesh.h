@@ -20,6 +20,8 @@
 #include "status.h"
 #include "vec.h"
 
+struct amp_spline;
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -171,6 +173,25 @@ amp_status amp_mesh_weld(amp_mesh *m, double tol, amp_error *err);
  * Reentrant.
  */
 amp_status amp_mesh_model(const char *name, double tol, amp_mesh *m, amp_error *err);
+
+/** Default samples per knot span of amp_mesh_from_trivariate(). */
+#define AMP_MESH_TRIVARIATE_RES 8
+
+/**
+ * Tessellate the boundary of the trivariate @p v (its six faces u, v, w =
+ * lo/hi) into the empty mesh @p m: each face is sampled on a grid of
+ * @p res points per knot span and direction (0: AMP_MESH_TRIVARIATE_RES;
+ * at most 64), split into triangles, then the faces are welded (relative
+ * tolerance 1e-9 of the box diagonal, so closed directions such as a revolved
+ * seam and collapsed faces join up), oriented consistently and outward
+ * (positive volume). This is how `ampath support --trivariate` and
+ * `ampath model NAME -o F.stl` for a trivariate get a mesh to cast rays on
+ * (paper 1, §5.3). The chordal error is that of the sampling grid.
+ * Errors: AMP_ERR_ARG (NULL, not a trivariate, non-empty mesh, res > 64),
+ * AMP_ERR_GEOMETRY (the boundary encloses no volume), AMP_ERR_NOMEM or
+ * AMP_ERR_LIMIT (the mesh is left empty). Reentrant; @p v is not modified.
+ */
+amp_status amp_mesh_from_trivariate(amp_mesh *m, const struct amp_spline *v, int res, amp_error *err);
 
 /** Number of built-in mesh models. */
 size_t amp_mesh_model_count(void);

@@ -1,0 +1,115 @@
+/* The print-head cone (SPEC §2, paper §5.1 Fig. 9) and the exact segment-cone test of Fig. 10. */
+#include <math.h>
+
+#include "ampath/order.h"
+#include "fragbvh.h"
+
+/* Euclidean length in the plane; coordinates are millimetres, so no overflow guard (hypot) is needed. */
+static double len2d(double x, double y) { return sqrt(x * x + y * y); }
+
+void amp_head_default(amp_head *h)
+{
+    h->z_offs = AMP_HEAD_DEFAULT_Z_OFFS;
+    h->theta = AMP_HEAD_DEFAULT_THETA;
+}
+
+amp_status amp_head_validate(const amp_head *h, amp_error *err)
+{
+    const double half_pi = 1.57079632679489661923;
+    if (!h)
+        return amp_fail(err, AMP_ERR_ARG, 0, "no head geometry given");
+    if (!isfinite(h->z_offs) || h->z_offs <= 0.0)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "z_offs must be a positive number of mm (got %g)", h->z_offs);
+    if (!isfinite(h->theta) || h->theta <= 0.0 || h->theta >= half_pi)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "theta must lie strictly between 0 and 90 degrees (got %g degrees)",
+                        h->theta * 57.295779513082320876);
+    return AMP_OK;
+}
+
+/*
+ * max over t in [0,1] of alpha + beta t - k |w + t e| (w, e in the plane).
+ * The function is concave, so the maximum is at an end or at the one
+ * stationary point: writing |w + t e| = sqrt(h^2 + |e|^2 (t - t0)^2) around the
+ * foot t0 of the line, the derivative vanishes where
+ * beta / (k |e|) = y / sqrt(h^2 + y^2) with y = |e| (t - t0).
+ */
+static double edge_max(double alpha, double beta, double k, double wx, double wy, double ex, double ey)
+{
+    double best = alpha - k * len2d(wx, wy);
+    double v = alpha + beta - k * len2d(wx + ex, wy + ey);
+    double e2 = ex * ex + ey * ey;
+    if (v > best)
+        best = v;
+    if (e2 > 0.0) {
+        double len = sqrt(e2), t0 = -(wx * ex + wy * ey) / e2;
+        double h = len2d(wx + t0 * ex, wy + t0 * ey), rho = beta / (k * len);
+        if (rho > -1.0 && rho < 1.0) {
+            double t = t0 + rho * h / sqrt(1.0 - rho * rho) / len;
+            if (t > 0.0 && t < 1.0) {
+                v = alpha + beta * t - k * len2d(wx + t * ex, wy + t * ey);
+                if (v > best)
+                    best = v;
+            }
+        }
+    }
+    return best;
+}
+
+double amp_cone_clearance(const amp_head *h, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1)
+{
+    return amp_cone_clearance_k(h->z_offs, 1.0 / tan(h->theta), a0, a1, b0, b1);
+}
+
+double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1)
+{
+    /* g(s,t) = (b(t).z - a(s).z - z_offs) - k |b(t).xy - a(s).xy| is concave on the unit square:
+     * its maximum lies on the boundary (four 1-D problems) or where the xy difference vanishes. */
+    amp_vec3 da = amp_v3_sub(a1, a0), db = amp_v3_sub(b1, b0);
+    double best, v, det;
+    best = edge_max(b0.z - a0.z - zo, db.z, k, b0.x - a0.x, b0.y - a0.y, db.x, db.y);        /* s = 0 */
+    v = edge_max(b0.z - a1.z - zo, db.z, k, b0.x - a1.x, b0.y - a1.y, db.x, db.y);           /* s = 1 */
+    best = v > best ? v : best;
+    v = edge_max(b0.z - a0.z - zo, -da.z, k, b0.x - a0.x, b0.y - a0.y, -da.x, -da.y);        /* t = 0 */
+    best = v > best ? v : best;
+    v = edge_max(b1.z - a0.z - zo, -da.z, k, b1.x - a0.x, b1.y - a0.y, -da.x, -da.y);        /* t = 1 */
+    best = v > best ? v : best;
+    /* interior: (b0 - a0).xy + t db.xy - s da.xy = 0 */
+    det = -da.x * db.y + db.x * da.y;
+    if (fabs(det) > 1e-300) {
+        double wx = b0.x - a0.x, wy = b0.y - a0.y;
+        double s = (-wx * db.y + db.x * wy) / det;
+        double t = (da.x * wy - wx * da.y) / det;
+        if (s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0) {
+            v = b0.z - a0.z - zo + t * db.z - s * da.z;
+            best = v > best ? v : best;
+        }
+    }
+    return best;
+}
+
+int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, size_t b)
+{
+    return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
+}
+
+int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b)
+{
+    const amp_fragment *fa = &fs->frag[a], *fb = &fs->frag[b];
+    size_t i, j, na, nb;
+    if (a == b)
+        return 0;
+    /* box bound of the clearance: highest point of b over lowest of a, nearest in xy */
+    if (fb->box.max.z - fa->box.min.z - zo - k * amp_box_xy_gap(fa->box, fb->box) <= AMP_CONE_TOL)
+        return 0;
+    na = amp_fragment_npoints(fa);
+    nb = amp_fragment_npoints(fb);
+    for (i = 0; i + 1 < na; i++) {
+        amp_vec3 a0 = amp_fragment_point(fs, fa, i), a1 = amp_fragment_point(fs, fa, i + 1);
+        for (j = 0; j + 1 < nb; j++) {
+            amp_vec3 b0 = amp_fragment_point(fs, fb, j), b1 = amp_fragment_point(fs, fb, j + 1);
+            if (amp_cone_clearance_k(zo, k, a0, a1, b0, b1) > AMP_CONE_TOL)
+                return 1;
+        }
+    }
+    return 0;
+}

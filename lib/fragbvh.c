@@ -1,0 +1,226 @@
+/* BVH over fragment boxes: the accelerated below relation of paper §5.1 (see fragbvh.h). */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "fragbvh.h"
+
+#define LEAF_SIZE 4
+#define STACK_MAX 128
+
+typedef struct mkey {
+    uint64_t code;
+    uint32_t id;
+} mkey;
+
+static int mkey_cmp(const void *a, const void *b)
+{
+    const mkey *x = a, *y = b;
+    if (x->code != y->code)
+        return x->code < y->code ? -1 : 1;
+    return x->id < y->id ? -1 : (x->id > y->id);
+}
+
+/* spread the low 21 bits of v to every third bit */
+static uint64_t spread3(uint64_t v)
+{
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffULL;
+    v = (v | v << 16) & 0x1f0000ff0000ffULL;
+    v = (v | v << 8) & 0x100f00f00f00f00fULL;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+    v = (v | v << 2) & 0x1249249249249249ULL;
+    return v;
+}
+
+static uint64_t quantise(double x, double lo, double hi)
+{
+    double t = hi > lo ? (x - lo) / (hi - lo) : 0.0;
+    t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
+    return (uint64_t)(t * 2097151.0);
+}
+
+void amp_fbvh_free(amp_fbvh *b)
+{
+    if (!b)
+        return;
+    amp_free(b->alloc, b->node);
+    amp_free(b->alloc, b->order);
+    amp_free(b->alloc, b->leaf);
+    memset(b, 0, sizeof *b);
+}
+
+amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err)
+{
+    size_t n = fs->n, i, top = 0;
+    uint32_t stack[STACK_MAX];
+    amp_box3 all = amp_box3_empty();
+    mkey *keys;
+    memset(b, 0, sizeof *b);
+    b->alloc = a;
+    if (n == 0)
+        return AMP_OK;
+    keys = amp_calloc(a, n, sizeof *keys);
+    b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
+    b->order = amp_calloc(a, n, sizeof *b->order);
+    b->leaf = amp_calloc(a, n, sizeof *b->leaf);
+    if (!keys || !b->node || !b->order || !b->leaf) {
+        amp_free(a, keys);
+        amp_fbvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
+    }
+    for (i = 0; i < n; i++)
+        all = amp_box3_union(all, fs->frag[i].box);
+    for (i = 0; i < n; i++) {
+        amp_vec3 c = amp_box3_center(fs->frag[i].box);
+        keys[i].code = spread3(quantise(c.x, all.min.x, all.max.x)) | spread3(quantise(c.y, all.min.y, all.max.y)) << 1 |
+                       spread3(quantise(c.z, all.min.z, all.max.z)) << 2;
+        keys[i].id = (uint32_t)i;
+    }
+    qsort(keys, n, sizeof *keys, mkey_cmp);
+    for (i = 0; i < n; i++)
+        b->order[i] = keys[i].id;
+    amp_free(a, keys);
+
+    /* split ranges of the Morton order at their middle: depth is log2(n / LEAF_SIZE) */
+    b->nnodes = 1;
+    b->node[0].lo = 0;
+    b->node[0].hi = (uint32_t)n;
+    b->node[0].parent = AMP_FBVH_NONE;
+    stack[top++] = 0;
+    while (top) {
+        uint32_t id = stack[--top];
+        amp_fbvh_node *nd = &b->node[id];
+        if (nd->hi - nd->lo <= LEAF_SIZE) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++)
+                b->leaf[b->order[q]] = id;
+            continue;
+        } else {
+            uint32_t mid = nd->lo + (nd->hi - nd->lo) / 2, l = (uint32_t)b->nnodes, r = l + 1;
+            b->node[l].lo = nd->lo;
+            b->node[l].hi = mid;
+            b->node[r].lo = mid;
+            b->node[r].hi = nd->hi;
+            b->node[l].parent = b->node[r].parent = id;
+            nd->left = l;
+            nd->right = r;
+            b->nnodes += 2;
+            stack[top++] = l;
+            stack[top++] = r;
+        }
+    }
+    /* children always follow their parent: fill boxes backwards */
+    for (i = b->nnodes; i-- > 0;) {
+        amp_fbvh_node *nd = &b->node[i];
+        if (nd->left == 0) {
+            uint32_t q;
+            nd->box = amp_box3_empty();
+            for (q = nd->lo; q < nd->hi; q++)
+                nd->box = amp_box3_union(nd->box, fs->frag[b->order[q]].box);
+        } else {
+            nd->box = amp_box3_union(b->node[nd->left].box, b->node[nd->right].box);
+        }
+        nd->minz = nd->box.min.z;
+    }
+    return AMP_OK;
+}
+
+void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
+{
+    uint32_t id = b->leaf[f], q;
+    amp_fbvh_node *nd = &b->node[id];
+    double m = HUGE_VAL;
+    for (q = nd->lo; q < nd->hi; q++)
+        if (!done[b->order[q]])
+            m = fmin(m, fs->frag[b->order[q]].box.min.z);
+    nd->minz = m;
+    while (nd->parent != AMP_FBVH_NONE) {
+        amp_fbvh_node *p = &b->node[nd->parent];
+        m = fmin(b->node[p->left].minz, b->node[p->right].minz);
+        if (m == p->minz)
+            break;
+        p->minz = m;
+        nd = p;
+    }
+}
+
+uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
+                             const unsigned char *done, size_t *tests)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0, ntests = 0;
+    const amp_fragment *fr = &fs->frag[f];
+    double k = 1.0 / tan(h->theta), reach = fr->box.max.z - h->z_offs - AMP_CONE_TOL, bestz = -HUGE_VAL;
+    uint32_t found = AMP_FBVH_NONE;
+    if (b->nnodes == 0)
+        return found;
+    stack[top++] = 0;
+    /* Branch and bound for a blocker whose lowest point is high: it tends to be printed last of all the
+     * fragments below f, so f is rarely woken up again before it becomes printable. The search stops at one
+     * within 2 z_offs of the highest possible, so that wide flat layers are not scanned in full. */
+    while (top && bestz < reach - 2.0 * h->z_offs) {
+        const amp_fbvh_node *nd = &b->node[stack[--top]];
+        /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
+        if (nd->minz >= reach - k * amp_box_xy_gap(nd->box, fr->box) || nd->box.max.z <= bestz)
+            continue;
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if (g == f || done[g] || fs->frag[g].box.min.z <= bestz)
+                    continue;
+                ntests++;
+                if (amp_fragment_below_k(fs, h->z_offs, k, g, f)) {
+                    found = g;
+                    bestz = fs->frag[g].box.min.z;
+                }
+            }
+        } else if (top + 2 <= STACK_MAX) {
+            /* the higher child is searched first, so that the bound tightens early */
+            const amp_fbvh_node *l = &b->node[nd->left], *r = &b->node[nd->right];
+            if (l->box.max.z > r->box.max.z) {
+                stack[top++] = nd->right;
+                stack[top++] = nd->left;
+            } else {
+                stack[top++] = nd->left;
+                stack[top++] = nd->right;
+            }
+        }
+    }
+    if (tests)
+        *tests += ntests;
+    return found;
+}
+
+size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
+                          int (*cb)(void *user, uint32_t g), void *user)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0, count = 0;
+    const amp_fragment *fr = &fs->frag[f];
+    double k = 1.0 / tan(h->theta), floor_z = fr->box.min.z + h->z_offs + AMP_CONE_TOL;
+    if (b->nnodes == 0)
+        return 0;
+    stack[top++] = 0;
+    while (top) {
+        const amp_fbvh_node *nd = &b->node[stack[--top]];
+        if (nd->box.max.z <= floor_z + k * amp_box_xy_gap(nd->box, fr->box))
+            continue;
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if (amp_fragment_below_k(fs, h->z_offs, k, f, g)) {
+                    count++;
+                    if (cb && cb(user, g))
+                        return count;
+                }
+            }
+        } else if (top + 2 <= STACK_MAX) {
+            stack[top++] = nd->left;
+            stack[top++] = nd->right;
+        }
+    }
+    return count;
+}

@@ -1,0 +1,69 @@
+/*
+ * fragbvh.h (internal) — bounding volume hierarchy over fragment boxes, the
+ * acceleration structure of the below relation (paper §5.1: "we are using a
+ * BVH query to find ... all sub-curves that are above other sub-curves").
+ * Leaves hold up to 4 fragments in Morton order. Each node also keeps the
+ * lowest z of its fragments that are still unprinted, so that Algorithm 2's
+ * "is anything unprinted below f" query prunes printed regions.
+ * Queries only read the tree (thread-safe); amp_fbvh_deactivate writes.
+ */
+#ifndef AMP_LIB_FRAGBVH_H
+#define AMP_LIB_FRAGBVH_H
+
+#include <math.h>
+#include <stdint.h>
+
+#include "ampath/order.h"
+
+#define AMP_FBVH_NONE 0xffffffffU
+
+typedef struct amp_fbvh_node {
+    amp_box3 box;
+    double minz;          /* lowest box.min.z of the still active fragments below the node */
+    uint32_t lo, hi;      /* range of amp_fbvh.order */
+    uint32_t left, right; /* children; left == 0 marks a leaf (the root is node 0) */
+    uint32_t parent;
+} amp_fbvh_node;
+
+typedef struct amp_fbvh {
+    const amp_allocator *alloc;
+    amp_fbvh_node *node;
+    size_t nnodes;
+    uint32_t *order; /* fragment ids in leaf order */
+    uint32_t *leaf;  /* leaf node of each fragment */
+} amp_fbvh;
+
+amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
+void amp_fbvh_free(amp_fbvh *b);
+
+/* Fragment f is done (done[f] != 0): refresh the lowest-z bounds on its way to the root. */
+void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f);
+
+/* Some fragment g != f not done (done[g] == 0) below f (Def. 5.1), preferring high ones; AMP_FBVH_NONE if none.
+ * Bounds may be stale (lower) for fragments marked done without amp_fbvh_deactivate: still correct.
+ * *tests (if not NULL) is increased by the number of exact fragment tests. */
+uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
+                             const unsigned char *done, size_t *tests);
+
+/* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
+ * Returns the number of fragments reported. */
+size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
+                          int (*cb)(void *user, uint32_t g), void *user);
+
+/* amp_cone_clearance and amp_fragment_below with k = cot(theta) precomputed (hot loops). */
+double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1);
+int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b);
+
+/* Horizontal distance between the xy projections of two boxes (0 when they overlap). Inline and without
+ * fmax: it is the innermost bound of every query. */
+static inline double amp_box_xy_gap(amp_box3 a, amp_box3 b)
+{
+    double dx = a.min.x - b.max.x, dy = a.min.y - b.max.y, ex = b.min.x - a.max.x, ey = b.min.y - a.max.y;
+    dx = dx > ex ? dx : ex;
+    dy = dy > ey ? dy : ey;
+    dx = dx > 0.0 ? dx : 0.0;
+    dy = dy > 0.0 ? dy : 0.0;
+    return sqrt(dx * dx + dy * dy);
+}
+
+#endif

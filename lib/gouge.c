@@ -1,0 +1,350 @@
+/* Independent gouge checker (see gouge.h): numerical clearance, pairwise or with a column pyramid. */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "ampath/gouge.h"
+
+/* One segment in print order: vertices a and b of the pathset (a == b for a one-vertex path). */
+typedef struct gseg {
+    size_t a, b, path, k;
+    amp_box3 box;
+} gseg;
+
+typedef struct gctx {
+    const amp_pathset *ps;
+    double k, zo, tol;
+    gseg *seg;
+    size_t n;
+} gctx;
+
+/* Highest value of q.z - kk |q.xy - p.xy| for q on [s0, s1]; *uq receives the best parameter. */
+static double best_on_segment(amp_vec3 p, amp_vec3 s0, amp_vec3 s1, double kk, double *uq)
+{
+    double dx = s1.x - s0.x, dy = s1.y - s0.y, dz = s1.z - s0.z;
+    double L2 = dx * dx + dy * dy, best, v, u;
+    best = s0.z - kk * hypot(s0.x - p.x, s0.y - p.y);
+    *uq = 0.0;
+    v = s1.z - kk * hypot(s1.x - p.x, s1.y - p.y);
+    if (v > best) {
+        best = v;
+        *uq = 1.0;
+    }
+    if (L2 > 0.0 && kk * kk * L2 > dz * dz) {
+        /* stationary point: w = u - c with dz^2 (hd^2 + L^2 w^2) = kk^2 L^4 w^2, w of the sign of dz */
+        double L = sqrt(L2), c = ((p.x - s0.x) * dx + (p.y - s0.y) * dy) / L2;
+        double hd = hypot(s0.x + c * dx - p.x, s0.y + c * dy - p.y);
+        u = c + dz * hd / (L * sqrt(kk * kk * L2 - dz * dz));
+        if (u > 0.0 && u < 1.0) {
+            v = s0.z + u * dz - kk * hypot(s0.x + u * dx - p.x, s0.y + u * dy - p.y);
+            if (v > best) {
+                best = v;
+                *uq = u;
+            }
+        }
+    }
+    return best;
+}
+
+/*
+ * Clearance of earlier segment s against later segment t: max over p on t, q on s
+ * of q.z - p.z - zo - k |q.xy - p.xy|. The inner maximum is exact; the outer
+ * function of p's parameter is concave (a partial maximum of a concave
+ * function), so a golden-section search finds its maximum.
+ */
+static double pair_clearance(const gctx *c, const gseg *s, const gseg *t, amp_vec3 *qo, amp_vec3 *po)
+{
+    amp_vec3 s0 = c->ps->verts[s->a].p, s1 = c->ps->verts[s->b].p;
+    amp_vec3 t0 = c->ps->verts[t->a].p, t1 = c->ps->verts[t->b].p;
+    const double gr = 0.61803398874989484820;
+    double lo = 0.0, hi = 1.0, x1, x2, f1, f2, u, best, bu = 0.0, bv = 0.0;
+    int it;
+#define PHI(vv, uu) (best_on_segment(amp_v3_lerp(t0, t1, (vv)), s0, s1, c->k, &(uu)) - (t0.z + (vv) * (t1.z - t0.z)))
+    best = PHI(0.0, u);
+    bu = u;
+    f1 = PHI(1.0, u);
+    if (f1 > best) {
+        best = f1;
+        bu = u;
+        bv = 1.0;
+    }
+    x1 = hi - gr * (hi - lo);
+    x2 = lo + gr * (hi - lo);
+    f1 = PHI(x1, u);
+    f2 = PHI(x2, u);
+    for (it = 0; it < 64 && hi - lo > 1e-13; it++) {
+        if (f1 < f2) {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + gr * (hi - lo);
+            f2 = PHI(x2, u);
+        } else {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - gr * (hi - lo);
+            f1 = PHI(x1, u);
+        }
+    }
+    x1 = 0.5 * (lo + hi);
+    f1 = PHI(x1, u);
+    if (f1 > best) {
+        best = f1;
+        bu = u;
+        bv = x1;
+    }
+#undef PHI
+    *qo = amp_v3_lerp(s0, s1, bu);
+    *po = amp_v3_lerp(t0, t1, bv);
+    return best - c->zo;
+}
+
+/* Earlier points of one segment against its later points: the worst pair is its start against its end. */
+static double self_clearance(const gctx *c, const gseg *t)
+{
+    amp_vec3 a = c->ps->verts[t->a].p, b = c->ps->verts[t->b].p;
+    return (a.z - b.z) - c->k * hypot(b.x - a.x, b.y - a.y) - c->zo;
+}
+
+static double box_gap_xy(amp_box3 a, amp_box3 b)
+{
+    double dx = fmax(0.0, fmax(a.min.x - b.max.x, b.min.x - a.max.x));
+    double dy = fmax(0.0, fmax(a.min.y - b.max.y, b.min.y - a.max.y));
+    return hypot(dx, dy);
+}
+
+/* Test earlier segment si against later ti; returns 1 and fills v on a violation. */
+static int test_pair(const gctx *c, size_t si, size_t ti, amp_gouge_violation *v)
+{
+    const gseg *s = &c->seg[si], *t = &c->seg[ti];
+    amp_vec3 q, p;
+    double d;
+    if (si == ti) {
+        d = self_clearance(c, t);
+        q = c->ps->verts[t->a].p;
+        p = c->ps->verts[t->b].p;
+    } else {
+        if (s->box.max.z - t->box.min.z - c->zo - c->k * box_gap_xy(s->box, t->box) <= c->tol)
+            return 0;
+        d = pair_clearance(c, s, t, &q, &p);
+    }
+    if (d <= c->tol)
+        return 0;
+    v->earlier_path = s->path;
+    v->earlier_seg = s->k;
+    v->later_path = t->path;
+    v->later_seg = t->k;
+    v->earlier_point = q;
+    v->later_point = p;
+    v->depth = d;
+    return 1;
+}
+
+static size_t check_pairwise(const gctx *c, amp_gouge_violation *out)
+{
+    size_t first = (size_t)-1;
+    long t, n = (long)c->n;
+#pragma omp parallel for schedule(dynamic, 16)
+    for (t = 0; t < n; t++) {
+        size_t s, cur;
+        amp_gouge_violation v;
+#pragma omp atomic read
+        cur = first;
+        if ((size_t)t > cur)
+            continue;
+        for (s = 0; s <= (size_t)t; s++)
+            if (test_pair(c, s, (size_t)t, &v))
+                break;
+        if (s <= (size_t)t) {
+#pragma omp critical(amp_gouge_first)
+            {
+                if ((size_t)t < first) {
+#pragma omp atomic write
+                    first = (size_t)t;
+                    *out = v;
+                }
+            }
+        }
+    }
+    return first;
+}
+
+/*
+ * Grid method: segments are visited in print order and inserted into the xy
+ * columns their boxes cover after being tested, so the grid only ever holds
+ * earlier segments. A pyramid of per-cell maximum heights prunes every region
+ * whose highest earlier point is below the cone of the segment under test.
+ */
+typedef struct gentry {
+    uint32_t seg, next;
+} gentry;
+
+static size_t check_grid(const gctx *c, amp_gouge_violation *out, amp_error *err, amp_status *st)
+{
+    const amp_allocator *a = c->ps->alloc;
+    amp_box3 all = amp_box3_empty();
+    size_t P = 1, L = 1, i, total = 0, nent = 0, cap = 0, found = (size_t)-1;
+    size_t off[12];
+    double *maxz = NULL, cw, ch;
+    uint32_t *head = NULL, *stamp = NULL;
+    gentry *ent = NULL;
+    for (i = 0; i < c->n; i++)
+        all = amp_box3_union(all, c->seg[i].box);
+    while (P < 1024 && P * P * 4 < c->n)
+        P *= 2;
+    for (L = 0, i = P; i >= 1; i /= 2) {
+        off[L++] = total;
+        total += i * i;
+    }
+    cw = fmax((all.max.x - all.min.x) / (double)P, 1e-9);
+    ch = fmax((all.max.y - all.min.y) / (double)P, 1e-9);
+    maxz = amp_calloc(a, total, sizeof *maxz);
+    head = amp_calloc(a, P * P, sizeof *head);
+    stamp = amp_calloc(a, c->n, sizeof *stamp);
+    if (!maxz || !head || !stamp) {
+        *st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
+        goto done;
+    }
+    for (i = 0; i < total; i++)
+        maxz[i] = -HUGE_VAL;
+    for (i = 0; i < P * P; i++)
+        head[i] = 0xffffffffU;
+    for (i = 0; i < c->n; i++) {
+        const gseg *t = &c->seg[i];
+        size_t stk[3 * 64], top = 0, x0, x1, y0, y1, ix, iy;
+        amp_gouge_violation v;
+        size_t best = (size_t)-1;
+        if (test_pair(c, i, i, &v)) {
+            best = i;
+            *out = v;
+        }
+        /* query the earlier segments, coarse to fine */
+        stk[top++] = L - 1;
+        stk[top++] = 0;
+        stk[top++] = 0;
+        while (top) {
+            size_t y = stk[--top], x = stk[--top], l = stk[--top], side = P >> l;
+            double sz = (double)((size_t)1 << l);
+            amp_box3 r;
+            r.min = amp_v3(all.min.x + (double)x * cw * sz, all.min.y + (double)y * ch * sz, 0);
+            r.max = amp_v3(r.min.x + cw * sz, r.min.y + ch * sz, 0);
+            if (maxz[off[l] + y * side + x] - t->box.min.z - c->zo - c->k * box_gap_xy(r, t->box) <= c->tol)
+                continue;
+            if (l == 0) {
+                uint32_t e;
+                for (e = head[y * P + x]; e != 0xffffffffU; e = ent[e].next) {
+                    uint32_t s = ent[e].seg;
+                    if (stamp[s] == i + 1 || s >= best)
+                        continue;
+                    stamp[s] = (uint32_t)(i + 1);
+                    if (test_pair(c, s, i, &v)) {
+                        best = s;
+                        *out = v;
+                    }
+                }
+                continue;
+            }
+            {
+                size_t dx, dy;
+                for (dy = 0; dy < 2; dy++)
+                    for (dx = 0; dx < 2; dx++) {
+                        stk[top++] = l - 1;
+                        stk[top++] = 2 * x + dx;
+                        stk[top++] = 2 * y + dy;
+                    }
+            }
+        }
+        if (best != (size_t)-1) {
+            found = i;
+            break;
+        }
+        /* insert t into the columns its box covers, and raise the pyramid */
+        x0 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.min.x - all.min.x) / cw)));
+        x1 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.max.x - all.min.x) / cw)));
+        y0 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.min.y - all.min.y) / ch)));
+        y1 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.max.y - all.min.y) / ch)));
+        for (iy = y0; iy <= y1; iy++)
+            for (ix = x0; ix <= x1; ix++) {
+                size_t l, cx = ix, cy = iy;
+                void *pe = ent;
+                if (amp_grow(a, &pe, &cap, nent + 1, sizeof *ent) != AMP_OK) {
+                    *st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
+                    goto done;
+                }
+                ent = pe;
+                ent[nent].seg = (uint32_t)i;
+                ent[nent].next = head[iy * P + ix];
+                head[iy * P + ix] = (uint32_t)nent++;
+                for (l = 0; l < L; l++, cx /= 2, cy /= 2) {
+                    double *m = &maxz[off[l] + cy * (P >> l) + cx];
+                    if (*m >= t->box.max.z)
+                        break;
+                    *m = t->box.max.z;
+                }
+            }
+    }
+done:
+    amp_free(a, maxz);
+    amp_free(a, head);
+    amp_free(a, stamp);
+    amp_free(a, ent);
+    return found;
+}
+
+amp_status amp_gouge_check(const amp_pathset *ps, const amp_head *h, amp_gouge_method m, double tol,
+                           amp_gouge_violation *vout, amp_error *err)
+{
+    gctx c;
+    size_t i, k, n = 0, first;
+    amp_gouge_violation v;
+    amp_status st = AMP_OK;
+    if (!ps || !h)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_gouge_check: NULL argument");
+    if (!isfinite(h->z_offs) || h->z_offs <= 0.0 || !isfinite(h->theta) || h->theta <= 0.0 ||
+        h->theta >= 1.57079632679489661923)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",
+                        h->z_offs, h->theta * 57.295779513082320876);
+    if (!isfinite(tol) || tol < 0.0)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "gouge tolerance must be >= 0 (got %g)", tol);
+    memset(&c, 0, sizeof c);
+    c.ps = ps;
+    c.k = 1.0 / tan(h->theta);
+    c.zo = h->z_offs;
+    c.tol = tol;
+    for (i = 0; i < ps->npaths; i++)
+        n += ps->paths[i].n > 1 ? ps->paths[i].n - 1 : ps->paths[i].n;
+    if (n >= 0xffffffffUL)
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "too many segments for the gouge check (%lu)", (unsigned long)n);
+    if (n == 0)
+        return AMP_OK;
+    c.seg = amp_calloc(ps->alloc, n, sizeof *c.seg);
+    if (!c.seg)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu segments", (unsigned long)n);
+    for (i = 0; i < ps->npaths; i++) {
+        size_t np = ps->paths[i].n, f = ps->paths[i].first;
+        for (k = 0; k + 1 < np || (np == 1 && k == 0); k++) {
+            gseg *s = &c.seg[c.n++];
+            s->a = f + k;
+            s->b = np == 1 ? f : f + k + 1;
+            s->path = i;
+            s->k = k;
+            s->box = amp_box3_add(amp_box3_add(amp_box3_empty(), ps->verts[s->a].p), ps->verts[s->b].p);
+        }
+    }
+    if (m == AMP_GOUGE_AUTO)
+        m = n < 2000 ? AMP_GOUGE_PAIRWISE : AMP_GOUGE_GRID;
+    first = m == AMP_GOUGE_PAIRWISE ? check_pairwise(&c, &v) : check_grid(&c, &v, err, &st);
+    amp_free(ps->alloc, c.seg);
+    if (st != AMP_OK)
+        return st;
+    if (first == (size_t)-1)
+        return AMP_OK;
+    if (vout)
+        *vout = v;
+    return amp_fail(err, AMP_ERR_CHECK, 0,
+                    "gouge: path %lu point (%.4f %.4f %.4f) is %.4g mm inside the head while path %lu prints (%.4f %.4f "
+                    "%.4f)",
+                    (unsigned long)v.earlier_path, v.earlier_point.x, v.earlier_point.y, v.earlier_point.z, v.depth,
+                    (unsigned long)v.later_path, v.later_point.x, v.later_point.y, v.later_point.z);
+}

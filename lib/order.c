@@ -1,0 +1,748 @@
+/* Algorithm 2 (OrderCurves, paper §5.1) over fragments, with continuation, look-ahead and bottom-up merging. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ampath/order.h"
+#include "fragbvh.h"
+
+#define NONE AMP_FBVH_NONE
+/* longest continuation simulated per candidate during look-ahead */
+#define LOOKAHEAD_CAP 64
+/* most sub-curves between two merge partners */
+#define MERGE_MAX_PIECES 256
+
+void amp_order_opts_default(amp_order_opts *o)
+{
+    amp_head_default(&o->head);
+    o->improve = 1;
+    o->lookahead = 4;
+    o->merge_window = 2000;
+    o->progress = NULL;
+    o->progress_user = NULL;
+}
+
+/* ---- the below graph (Def. 5.2), for reporting and tests ---- */
+
+void amp_below_graph_free(amp_below_graph *g)
+{
+    if (!g)
+        return;
+    amp_free(g->alloc, g->row);
+    amp_free(g->alloc, g->to);
+    g->row = NULL;
+    g->to = NULL;
+    g->n = g->nedges = 0;
+}
+
+typedef struct edge_sink {
+    uint32_t *to;  /* NULL while counting */
+    size_t count;
+    size_t limit;
+} edge_sink;
+
+static int edge_cb(void *user, uint32_t gi)
+{
+    edge_sink *s = user;
+    if (s->to)
+        s->to[s->count] = gi;
+    s->count++;
+    return s->count > s->limit;
+}
+
+static int u32_cmp(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : (x > y);
+}
+
+amp_status amp_below_graph_build(amp_below_graph *g, const amp_fragments *fs, const amp_head *h, size_t max_edges,
+                                 amp_error *err)
+{
+    amp_fbvh bvh;
+    amp_status st;
+    size_t i, total = 0;
+    long n, f;
+    int over = 0;
+    memset(g, 0, sizeof *g);
+    g->alloc = fs->alloc;
+    if ((st = amp_head_validate(h, err)) != AMP_OK)
+        return st;
+    if ((st = amp_fbvh_build(&bvh, fs, fs->alloc, err)) != AMP_OK)
+        return st;
+    g->n = fs->n;
+    g->row = amp_calloc(fs->alloc, fs->n + 1, sizeof *g->row);
+    if (!g->row) {
+        amp_fbvh_free(&bvh);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the below graph");
+    }
+    n = (long)fs->n;
+    /* pass 1: count the successors of every fragment (each query is independent) */
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : total)
+    for (f = 0; f < n; f++) {
+        edge_sink s;
+        int stop;
+#pragma omp atomic read
+        stop = over;
+        if (stop)
+            continue;
+        s.to = NULL;
+        s.count = 0;
+        s.limit = max_edges;
+        amp_fbvh_for_above(&bvh, fs, h, (uint32_t)f, edge_cb, &s);
+        g->row[f + 1] = s.count;
+        total += s.count;
+        if (s.count > max_edges) {
+#pragma omp atomic write
+            over = 1;
+        }
+    }
+    if (over || total > max_edges) {
+        amp_fbvh_free(&bvh);
+        amp_below_graph_free(g);
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "the below graph has more than %lu edges", (unsigned long)max_edges);
+    }
+    for (i = 0; i < fs->n; i++)
+        g->row[i + 1] += g->row[i];
+    g->nedges = total;
+    g->to = total ? amp_calloc(fs->alloc, total, sizeof *g->to) : NULL;
+    if (total && !g->to) {
+        amp_fbvh_free(&bvh);
+        amp_below_graph_free(g);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu edges", (unsigned long)total);
+    }
+    /* pass 2: fill the rows */
+#pragma omp parallel for schedule(dynamic, 64)
+    for (f = 0; f < n; f++) {
+        edge_sink s;
+        s.to = g->to + g->row[f];
+        s.count = 0;
+        s.limit = (size_t)-1;
+        amp_fbvh_for_above(&bvh, fs, h, (uint32_t)f, edge_cb, &s);
+        qsort(s.to, s.count, sizeof *s.to, u32_cmp);
+    }
+    amp_fbvh_free(&bvh);
+    return AMP_OK;
+}
+
+/* ---- ordering state ---- */
+
+typedef struct piece {
+    uint32_t path, lo, hi; /* fragment range */
+    int dir;               /* +1: printed lo..hi, -1: printed hi..lo */
+    amp_box3 box;
+} piece;
+
+typedef struct runent {
+    uint32_t cuts, len, s, e;
+    double zmin;
+} runent;
+
+typedef struct orderer {
+    const amp_allocator *a;
+    const amp_fragments *fs;
+    const amp_head *h;
+    const amp_order_opts *o;
+    amp_fbvh bvh;
+    unsigned char *done;  /* 0 unprinted, 1 printed, 2 printed tentatively (look-ahead) */
+    unsigned char *ready; /* nothing unprinted below: member of the set B of Alg. 2, line 4 */
+    uint32_t *whead, *wnext, *rs, *re;
+    double *rz;
+    runent *heap;
+    size_t nheap, cap_heap;
+    piece *pc;
+    size_t npc, cap_pc;
+    size_t nprinted;
+    amp_order_stats st;
+    amp_error *err;
+} orderer;
+
+static uint32_t cfirst(const orderer *o, uint32_t f) { return (uint32_t)o->fs->first[o->fs->frag[f].path]; }
+static uint32_t clast(const orderer *o, uint32_t f) { return (uint32_t)o->fs->first[o->fs->frag[f].path + 1] - 1; }
+
+/* The fragment after @p f in direction @p d on the curve [lo, hi], or NONE past its end. */
+static uint32_t step_along(uint32_t f, int d, uint32_t lo, uint32_t hi)
+{
+    if (d > 0)
+        return f < hi ? f + 1 : NONE;
+    return f > lo ? f - 1 : NONE;
+}
+
+/* GetBest's preference: fewer new cuts, then a longer run, then the lower run (Lemma 5.1), then curve order */
+static int run_better(const runent *x, const runent *y)
+{
+    if (x->cuts != y->cuts)
+        return x->cuts < y->cuts;
+    if (x->len != y->len)
+        return x->len > y->len;
+    if (x->zmin != y->zmin)
+        return x->zmin < y->zmin;
+    return x->s < y->s;
+}
+
+static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
+{
+    void *p = o->heap;
+    runent r;
+    size_t i;
+    if (amp_grow(o->a, &p, &o->cap_heap, o->nheap + 1, sizeof *o->heap) != AMP_OK)
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the printable runs");
+    o->heap = p;
+    r.s = s;
+    r.e = e;
+    r.len = e - s + 1;
+    r.cuts = (uint32_t)(s != cfirst(o, s)) + (uint32_t)(e != clast(o, e));
+    r.zmin = o->rz[s];
+    i = o->nheap++;
+    while (i > 0 && run_better(&r, &o->heap[(i - 1) / 2])) {
+        o->heap[i] = o->heap[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    o->heap[i] = r;
+    return AMP_OK;
+}
+
+static runent heap_pop(orderer *o)
+{
+    runent top = o->heap[0], last = o->heap[--o->nheap];
+    size_t i = 0, n = o->nheap;
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= n)
+            break;
+        if (c + 1 < n && run_better(&o->heap[c + 1], &o->heap[c]))
+            c++;
+        if (!run_better(&o->heap[c], &last))
+            break;
+        o->heap[i] = o->heap[c];
+        i = c;
+    }
+    if (n)
+        o->heap[i] = last;
+    return top;
+}
+
+static int run_valid(const orderer *o, const runent *r)
+{
+    return o->ready[r->s] && !o->done[r->s] && !o->done[r->e] && o->re[r->s] == r->e && o->rs[r->e] == r->s;
+}
+
+/* Pop the best run still printable as a whole; 0 when none is left. */
+static int pop_valid(orderer *o, runent *out)
+{
+    while (o->nheap) {
+        runent r = heap_pop(o);
+        if (run_valid(o, &r)) {
+            *out = r;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static int open_at(const orderer *o, uint32_t f) { return o->ready[f] && !o->done[f]; }
+
+/* f entered B (Alg. 2, line 4): join it with the printable neighbours on its curve. */
+static amp_status make_ready(orderer *o, uint32_t f)
+{
+    uint32_t s = f, e = f;
+    double z = o->fs->frag[f].box.min.z;
+    o->ready[f] = 1;
+    if (f > cfirst(o, f) && open_at(o, f - 1)) {
+        s = o->rs[f - 1];
+        z = fmin(z, o->rz[s]);
+    }
+    if (f < clast(o, f) && open_at(o, f + 1)) {
+        e = o->re[f + 1];
+        z = fmin(z, o->rz[f + 1]);
+    }
+    o->re[s] = e;
+    o->rs[e] = s;
+    o->rz[s] = z;
+    return heap_push(o, s, e);
+}
+
+/* Below(f) ∩ F (Alg. 2, line 4) by a hierarchy query; f waits on the blocker it finds. */
+static amp_status recheck(orderer *o, uint32_t f)
+{
+    uint32_t g = amp_fbvh_find_below(&o->bvh, o->fs, o->h, f, o->done, NULL);
+    o->st.queries++;
+    if (g == NONE)
+        return make_ready(o, f);
+    o->wnext[f] = o->whead[g];
+    o->whead[g] = f;
+    return AMP_OK;
+}
+
+static void mark_done(orderer *o, uint32_t f)
+{
+    o->done[f] = 1;
+    o->nprinted++;
+    amp_fbvh_deactivate(&o->bvh, o->fs, o->done, f);
+}
+
+/* f was printed: the fragments waiting on it look for another blocker or become printable. */
+static amp_status release(orderer *o, uint32_t f)
+{
+    uint32_t w = o->whead[f];
+    o->whead[f] = NONE;
+    while (w != NONE) {
+        uint32_t next = o->wnext[w];
+        amp_status st = o->done[w] ? AMP_OK : recheck(o, w);
+        if (st != AMP_OK)
+            return st;
+        w = next;
+    }
+    return AMP_OK;
+}
+
+/* x (printable, at one end of its run) is printed alone: the rest of its run stays a run. */
+static amp_status split_off(orderer *o, uint32_t x)
+{
+    if (x == cfirst(o, x) || !open_at(o, x - 1)) {
+        uint32_t e = o->re[x];
+        if (e > x) {
+            o->re[x + 1] = e;
+            o->rs[e] = x + 1;
+            o->rz[x + 1] = o->rz[x];
+            return heap_push(o, x + 1, e);
+        }
+    } else {
+        uint32_t s = o->rs[x];
+        if (s < x) {
+            o->re[s] = x - 1;
+            o->rs[x - 1] = s;
+            return heap_push(o, s, x - 1);
+        }
+    }
+    return AMP_OK;
+}
+
+static amp_status add_piece(orderer *o, uint32_t lo, uint32_t hi, int dir)
+{
+    void *p = o->pc;
+    piece *q;
+    uint32_t f;
+    if (amp_grow(o->a, &p, &o->cap_pc, o->npc + 1, sizeof *o->pc) != AMP_OK)
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for sub-curves");
+    o->pc = p;
+    q = &o->pc[o->npc++];
+    q->path = o->fs->frag[lo].path;
+    q->lo = lo;
+    q->hi = hi;
+    q->dir = dir;
+    q->box = amp_box3_empty();
+    for (f = lo; f <= hi; f++)
+        q->box = amp_box3_union(q->box, o->fs->frag[f].box);
+    return AMP_OK;
+}
+
+/* Print the whole run [s, e] (all of it is in B, so any order inside it is valid). */
+static amp_status print_run(orderer *o, uint32_t s, uint32_t e)
+{
+    uint32_t f;
+    amp_status st = AMP_OK;
+    for (f = s; f <= e; f++)
+        mark_done(o, f);
+    for (f = s; f <= e && st == AMP_OK; f++)
+        st = release(o, f);
+    return st;
+}
+
+/* Look-ahead: how many fragments past the run would become printable one after another in direction dir. */
+static uint32_t simulate(orderer *o, uint32_t s, uint32_t e, int dir)
+{
+    uint32_t f, x, cnt = 0, lo = cfirst(o, s), hi = clast(o, s);
+    for (f = s; f <= e; f++)
+        o->done[f] = 2;
+    x = step_along(dir > 0 ? e : s, dir, lo, hi);
+    while (x != NONE && cnt < LOOKAHEAD_CAP && !o->done[x]) {
+        o->st.queries++;
+        if (amp_fbvh_find_below(&o->bvh, o->fs, o->h, x, o->done, NULL) != NONE)
+            break;
+        o->done[x] = 2;
+        cnt++;
+        x = step_along(x, dir, lo, hi);
+    }
+    for (f = s; f <= e; f++)
+        o->done[f] = 0;
+    for (f = 1; f <= cnt; f++)
+        o->done[dir > 0 ? e + f : s - f] = 0;
+    return cnt;
+}
+
+static amp_status step_plain(orderer *o)
+{
+    runent r;
+    if (!pop_valid(o, &r))
+        return amp_fail(o->err, AMP_ERR_GEOMETRY, 0,
+                        "inaccessibility cycle among %lu unprinted fragments (Lemma 5.1 violated numerically)",
+                        (unsigned long)(o->fs->n - o->nprinted));
+    o->st.steps++;
+    if (add_piece(o, r.s, r.e, 1) != AMP_OK)
+        return AMP_ERR_NOMEM;
+    return print_run(o, r.s, r.e);
+}
+
+static amp_status step_improved(orderer *o)
+{
+    runent cand[16];
+    size_t nc = 0, i, best = 0, k = o->o->lookahead;
+    int bestdir = 1;
+    uint32_t bestcuts = 3, bestlen = 0, x;
+    amp_status st;
+    if (k < 1)
+        k = 1;
+    if (k > 16)
+        k = 16;
+    while (nc < k && pop_valid(o, &cand[nc])) {
+        for (i = 0; i < nc && cand[i].s != cand[nc].s; i++)
+            ;
+        if (i == nc)
+            nc++;
+    }
+    if (nc == 0)
+        return amp_fail(o->err, AMP_ERR_GEOMETRY, 0,
+                        "inaccessibility cycle among %lu unprinted fragments (Lemma 5.1 violated numerically)",
+                        (unsigned long)(o->fs->n - o->nprinted));
+    for (i = 0; i < nc; i++) {
+        /* look ahead in both directions: how far the curve can be continued right after this run */
+        uint32_t s = cand[i].s, e = cand[i].e, lo = cfirst(o, s), hi = clast(o, s);
+        uint32_t fw = simulate(o, s, e, 1), bw = simulate(o, s, e, -1);
+        uint32_t cf = (uint32_t)(s != lo) + (uint32_t)(e + fw != hi), cb = (uint32_t)(s - bw != lo) + (uint32_t)(e != hi);
+        if (cf < bestcuts || (cf == bestcuts && e - s + 1 + fw > bestlen)) {
+            bestcuts = cf;
+            bestlen = e - s + 1 + fw;
+            best = i;
+            bestdir = 1;
+        }
+        if (cb < bestcuts || (cb == bestcuts && e - s + 1 + bw > bestlen)) {
+            bestcuts = cb;
+            bestlen = e - s + 1 + bw;
+            best = i;
+            bestdir = -1;
+        }
+    }
+    for (i = 0; i < nc; i++)
+        if (i != best && (st = heap_push(o, cand[i].s, cand[i].e)) != AMP_OK)
+            return st;
+    o->st.steps++;
+    {
+        uint32_t s = cand[best].s, e = cand[best].e, lo = cfirst(o, s), hi = clast(o, s);
+        if ((st = print_run(o, s, e)) != AMP_OK)
+            return st;
+        /* prefer continuing the curve just printed: extend while the next fragment has become printable */
+        if (bestdir > 0) {
+            for (x = e + 1; e < hi && x <= hi && open_at(o, x); x++) {
+                if ((st = split_off(o, x)) != AMP_OK)
+                    return st;
+                mark_done(o, x);
+                o->st.extended++;
+                if ((st = release(o, x)) != AMP_OK)
+                    return st;
+            }
+            return add_piece(o, s, x - 1, 1);
+        }
+        for (x = s; x > lo && open_at(o, x - 1); x--) {
+            if ((st = split_off(o, x - 1)) != AMP_OK)
+                return st;
+            mark_done(o, x - 1);
+            o->st.extended++;
+            if ((st = release(o, x - 1)) != AMP_OK)
+                return st;
+        }
+        return add_piece(o, x, e, -1);
+    }
+}
+
+/* ---- bottom-up merging of adjacent sub-curves (§5.1) ---- */
+
+static int piece_below(const orderer *o, const piece *a, const piece *b)
+{
+    double k = 1.0 / tan(o->h->theta);
+    uint32_t i, j;
+    if (b->box.max.z - a->box.min.z - o->h->z_offs - k * amp_box_xy_gap(a->box, b->box) <= AMP_CONE_TOL)
+        return 0;
+    for (i = a->lo; i <= a->hi; i++)
+        for (j = b->lo; j <= b->hi; j++)
+            if (amp_fragment_below_k(o->fs, o->h->z_offs, k, i, j))
+                return 1;
+    return 0;
+}
+
+/* The print-order end and start fragments of a piece; a one-fragment piece may be printed either way. */
+static uint32_t piece_end(const piece *p) { return p->dir > 0 ? p->hi : p->lo; }
+
+
+static void merge_free(const orderer *o, uint32_t *seq, uint32_t *pos, uint32_t *owner, uint32_t *win,
+                       unsigned char *ins)
+{
+    amp_free(o->a, seq);
+    amp_free(o->a, pos);
+    amp_free(o->a, owner);
+    amp_free(o->a, win);
+    amp_free(o->a, ins);
+}
+
+static amp_status merge_pass(orderer *o, size_t *merged_out)
+{
+    size_t n = o->npc, a, i, merged = 0;
+    uint32_t *seq = amp_calloc(o->a, n ? n : 1, sizeof *seq), *pos = amp_calloc(o->a, n ? n : 1, sizeof *pos);
+    uint32_t *owner = amp_calloc(o->a, o->fs->n ? o->fs->n : 1, sizeof *owner);
+    uint32_t *win = amp_calloc(o->a, MERGE_MAX_PIECES, sizeof *win);
+    unsigned char *ins = amp_calloc(o->a, MERGE_MAX_PIECES, 1);
+    piece *pc = o->pc;
+    if (!seq || !pos || !owner || !win || !ins) {
+        merge_free(o, seq, pos, owner, win, ins);
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
+    }
+    for (i = 0; i < n; i++) {
+        uint32_t f;
+        seq[i] = pos[i] = (uint32_t)i;
+        for (f = pc[i].lo; f <= pc[i].hi; f++)
+            owner[f] = (uint32_t)i;
+    }
+    for (a = 0; a < n; a++) {
+        for (;;) {
+            uint32_t pid = seq[a], qid, nf, b, nwin = 0, nfr = 0, x, lo, hi;
+            piece *p, *q;
+            int ok = 1, flip = 0;
+            size_t w;
+            if (pid == NONE)
+                break;
+            p = &pc[pid];
+            lo = (uint32_t)o->fs->first[p->path];
+            hi = (uint32_t)o->fs->first[p->path + 1] - 1;
+            nf = step_along(piece_end(p), p->dir, lo, hi);
+            if (nf == NONE && p->lo == p->hi) {
+                /* a single fragment can be printed the other way round */
+                flip = 1;
+                nf = step_along(p->lo, -p->dir, lo, hi);
+            }
+            if (nf == NONE)
+                break;
+            qid = owner[nf];
+            q = &pc[qid];
+            b = pos[qid];
+            if (b <= a)
+                break;
+            {
+                int pd = flip ? -p->dir : p->dir;
+                int qd = q->lo == q->hi ? pd : q->dir;
+                uint32_t qs = qd > 0 ? q->lo : q->hi;
+                if (qd != pd || qs != nf)
+                    break;
+            }
+            /* the sub-curves printed in between: S = those reachable from p (they must stay after it) */
+            for (x = (uint32_t)a + 1; x < b && ok; x++) {
+                if (seq[x] == NONE)
+                    continue;
+                if (nwin >= MERGE_MAX_PIECES)
+                    ok = 0;
+                else {
+                    win[nwin++] = seq[x];
+                    nfr += pc[seq[x]].hi - pc[seq[x]].lo + 1;
+                    if (nfr > o->o->merge_window)
+                        ok = 0;
+                }
+            }
+            if (!ok)
+                break;
+            for (w = 0; w < nwin; w++) {
+                size_t t;
+                ins[w] = piece_below(o, p, &pc[win[w]]);
+                for (t = 0; t < w && !ins[w]; t++)
+                    ins[w] = ins[t] && piece_below(o, &pc[win[t]], &pc[win[w]]);
+            }
+            /* merged graph acyclic unless q depends on something in S */
+            for (w = 0; w < nwin && ok; w++)
+                if (ins[w] && piece_below(o, &pc[win[w]], q))
+                    ok = 0;
+            if (!ok)
+                break;
+            /* merge: [not in S] p+q [in S] tombstone */
+            if (flip)
+                p->dir = -p->dir;
+            p->lo = p->lo < q->lo ? p->lo : q->lo;
+            p->hi = p->hi > q->hi ? p->hi : q->hi;
+            p->box = amp_box3_union(p->box, q->box);
+            for (x = q->lo; x <= q->hi; x++)
+                owner[x] = pid;
+            {
+                size_t at = a;
+                for (w = 0; w < nwin; w++)
+                    if (!ins[w]) {
+                        seq[at] = win[w];
+                        pos[win[w]] = (uint32_t)at++;
+                    }
+                seq[at] = pid;
+                pos[pid] = (uint32_t)at;
+                a = at++;
+                for (w = 0; w < nwin; w++)
+                    if (ins[w]) {
+                        seq[at] = win[w];
+                        pos[win[w]] = (uint32_t)at++;
+                    }
+                for (; at <= b; at++)
+                    seq[at] = NONE;
+            }
+            merged++;
+        }
+    }
+    /* compact in the new order */
+    {
+        piece *np = amp_calloc(o->a, n ? n : 1, sizeof *np);
+        size_t m = 0;
+        if (!np) {
+            merge_free(o, seq, pos, owner, win, ins);
+            return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
+        }
+        for (i = 0; i < n; i++)
+            if (seq[i] != NONE)
+                np[m++] = pc[seq[i]];
+        memcpy(o->pc, np, m * sizeof *np);
+        o->npc = m;
+        amp_free(o->a, np);
+    }
+    merge_free(o, seq, pos, owner, win, ins);
+    *merged_out = merged;
+    return AMP_OK;
+}
+
+/* ---- output ---- */
+
+static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out, amp_error *err)
+{
+    size_t i;
+    for (i = 0; i < o->npc; i++) {
+        const piece *p = &o->pc[i];
+        uint32_t f, q;
+        amp_status st = amp_pathset_begin(out, in->paths[p->path].role, err);
+        for (f = 0; st == AMP_OK && f <= p->hi - p->lo; f++) {
+            const amp_fragment *fr = &o->fs->frag[p->dir > 0 ? p->lo + f : p->hi - f];
+            if (f == 0)
+                st = p->dir > 0 ? amp_pathset_push(out, fr->p0, fr->r0, err) : amp_pathset_push(out, fr->p1, fr->r1, err);
+            for (q = 0; st == AMP_OK && q < fr->nin; q++) {
+                const amp_pvert *v = &in->verts[fr->vfirst + (p->dir > 0 ? q : fr->nin - 1 - q)];
+                st = amp_pathset_push(out, v->p, v->r, err);
+            }
+            /* consecutive fragments share their cut point; a one-vertex path is a single point */
+            if (st == AMP_OK && in->paths[p->path].n > 1)
+                st = p->dir > 0 ? amp_pathset_push(out, fr->p1, fr->r1, err) : amp_pathset_push(out, fr->p0, fr->r0, err);
+        }
+        if (st != AMP_OK)
+            return st;
+    }
+    return AMP_OK;
+}
+
+static void orderer_free(orderer *o)
+{
+    amp_fbvh_free(&o->bvh);
+    amp_free(o->a, o->done);
+    amp_free(o->a, o->ready);
+    amp_free(o->a, o->whead);
+    amp_free(o->a, o->wnext);
+    amp_free(o->a, o->rs);
+    amp_free(o->a, o->re);
+    amp_free(o->a, o->rz);
+    amp_free(o->a, o->heap);
+    amp_free(o->a, o->pc);
+}
+
+amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_pathset *out, amp_order_stats *stats,
+                     amp_error *err)
+{
+    amp_order_opts defaults;
+    amp_fragments fs;
+    orderer o;
+    amp_status st;
+    size_t i, n;
+    long f;
+    uint32_t *blocker = NULL;
+    if (!in || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_order: NULL pathset");
+    if (!opts) {
+        amp_order_opts_default(&defaults);
+        opts = &defaults;
+    }
+    if ((st = amp_head_validate(&opts->head, err)) != AMP_OK)
+        return st;
+    /* Alg. 2, line 2: fragments shorter than z_offs, so that Lemma 5.1 holds */
+    if ((st = amp_fragments_build(&fs, in, opts->head.z_offs, out->alloc, err)) != AMP_OK)
+        return st;
+    memset(&o, 0, sizeof o);
+    o.a = out->alloc;
+    o.fs = &fs;
+    o.h = &opts->head;
+    o.o = opts;
+    o.err = err;
+    n = fs.n;
+    for (i = 0; i < in->npaths; i++)
+        o.st.paths_in += in->paths[i].n > 0;
+    o.st.fragments = n;
+    if ((st = amp_fbvh_build(&o.bvh, &fs, o.a, err)) != AMP_OK) {
+        amp_fragments_free(&fs);
+        return st;
+    }
+    o.done = amp_calloc(o.a, n + 1, 1);
+    o.ready = amp_calloc(o.a, n + 1, 1);
+    o.whead = amp_calloc(o.a, n + 1, sizeof *o.whead);
+    o.wnext = amp_calloc(o.a, n + 1, sizeof *o.wnext);
+    o.rs = amp_calloc(o.a, n + 1, sizeof *o.rs);
+    o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
+    o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
+    blocker = amp_calloc(o.a, n + 1, sizeof *blocker);
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !blocker) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
+        goto done;
+    }
+    for (i = 0; i < n; i++)
+        o.whead[i] = o.wnext[i] = NONE;
+    /* Alg. 2, line 4 for the initial set: independent queries, run in parallel */
+#pragma omp parallel for schedule(dynamic, 256)
+    for (f = 0; f < (long)n; f++)
+        blocker[f] = amp_fbvh_find_below(&o.bvh, &fs, o.h, (uint32_t)f, o.done, NULL);
+    o.st.queries += n;
+    for (i = 0; i < n && st == AMP_OK; i++) {
+        if (blocker[i] == NONE)
+            st = make_ready(&o, (uint32_t)i);
+        else {
+            o.wnext[i] = o.whead[blocker[i]];
+            o.whead[blocker[i]] = (uint32_t)i;
+        }
+    }
+    amp_free(o.a, blocker);
+    blocker = NULL;
+    /* Alg. 2, lines 3-8 */
+    {
+        size_t next_report = 0;
+        while (st == AMP_OK && o.nprinted < n) {
+            st = opts->improve ? step_improved(&o) : step_plain(&o);
+            if (opts->progress && o.nprinted >= next_report) {
+                opts->progress(opts->progress_user, (double)o.nprinted / (double)n);
+                next_report = o.nprinted + n / 256 + 1;
+            }
+        }
+    }
+    if (st == AMP_OK && opts->improve) {
+        size_t m = 0, pass;
+        for (pass = 0; pass < 4 && st == AMP_OK; pass++) {
+            st = merge_pass(&o, &m);
+            o.st.merges += m;
+            if (m == 0)
+                break;
+        }
+    }
+    if (st == AMP_OK)
+        st = emit(&o, in, out, err);
+    o.st.pieces = o.npc;
+    o.st.subdivisions = o.npc > o.st.paths_in ? o.npc - o.st.paths_in : 0;
+    if (stats)
+        *stats = o.st;
+done:
+    amp_free(o.a, blocker);
+    orderer_free(&o);
+    amp_fragments_free(&fs);
+    return st;
+}
