@@ -145,25 +145,62 @@ static int frame(amp_proto *p, amp_proto_slot *s, long n, const char *cmd, size_
     return 1;
 }
 
+/* Strip a ';' comment and surrounding blanks: [*a, *b) is what goes on the wire. 0 on a line break or NUL. */
+static int strip(const char *cmd, size_t len, size_t *a, size_t *b)
+{
+    size_t i;
+    for (i = 0; i < len; i++) {
+        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
+            return 0;
+        if (cmd[i] == ';')
+            break; /* Marlin comments run to the end of the line; the checksum covers the stripped text */
+    }
+    *b = i;
+    /* a later line break would still split the line on the wire */
+    for (; i < len; i++)
+        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
+            return 0;
+    *a = 0;
+    while (*a < *b && (cmd[*a] == ' ' || cmd[*a] == '\t'))
+        (*a)++;
+    while (*b > *a && (cmd[*b - 1] == ' ' || cmd[*b - 1] == '\t'))
+        (*b)--;
+    return 1;
+}
+
+size_t amp_proto_framed_size(amp_proto_flavor flavor, long n, const char *cmd, size_t len)
+{
+    size_t a, b, k;
+    char digits[24];
+    if (!cmd || !strip(cmd, len, &a, &b) || a == b)
+        return 0;
+    if (flavor == AMP_PROTO_KLIPPER)
+        return b - a;
+    k = put_long(digits, n);
+    /* "N<n> " + cmd + "*" + checksum digits (computed, they vary from 1 to 3) */
+    {
+        unsigned cs = 'N';
+        size_t i;
+        for (i = 0; i < k; i++)
+            cs ^= (unsigned char)digits[i];
+        cs ^= ' ';
+        for (i = a; i < b; i++)
+            cs ^= (unsigned char)cmd[i];
+        cs &= 0xffu;
+        return 1 + k + 1 + (b - a) + 1 + (cs >= 100 ? 3 : cs >= 10 ? 2 : 1);
+    }
+}
+
 amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lineno, amp_error *err)
 {
-    size_t a = 0, b, i;
+    size_t a, b;
     amp_proto_slot *s;
     if (lineno)
         *lineno = 0;
     if (!p || (!cmd && len))
         return amp_fail(err, AMP_ERR_ARG, 0, "proto: NULL argument");
-    for (i = 0; i < len; i++) {
-        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
-            return amp_fail(err, AMP_ERR_PARSE, 0, "proto: line break or NUL inside a command");
-        if (cmd[i] == ';')
-            break; /* Marlin comments run to the end of the line and are not sent (checksum is over the stripped text) */
-    }
-    b = i;
-    while (a < b && (cmd[a] == ' ' || cmd[a] == '\t'))
-        a++;
-    while (b > a && (cmd[b - 1] == ' ' || cmd[b - 1] == '\t'))
-        b--;
+    if (!strip(cmd, len, &a, &b))
+        return amp_fail(err, AMP_ERR_PARSE, 0, "proto: line break or NUL inside a command");
     if (a == b)
         return AMP_OK;
     if (b - a == 4 && memcmp(cmd + a, "M112", 4) == 0) {
@@ -182,6 +219,16 @@ amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lin
         *lineno = p->next_n;
     p->next_n++;
     return AMP_OK;
+}
+
+long amp_proto_cancel_unsent(amp_proto *p)
+{
+    long keep = p->top_sent + 1 > p->send_n ? p->top_sent + 1 : p->send_n, dropped = 0;
+    if (p->next_n > keep) {
+        dropped = p->next_n - keep;
+        p->next_n = keep;
+    }
+    return dropped;
 }
 
 void amp_proto_estop(amp_proto *p)

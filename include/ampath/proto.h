@@ -185,6 +185,21 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now_ms, char *buf, size_t cap,
 /** Milliseconds until the next timer of the engine fires (for poll()); -1 if none. */
 long amp_proto_wait_ms(const amp_proto *p, unsigned long now_ms);
 
+/**
+ * Drop the lines submitted but never transmitted (for a clean stop: the line
+ * in flight finishes, nothing new starts). Lines already sent stay, so that
+ * resend requests for them can still be served. Returns how many were dropped.
+ */
+long amp_proto_cancel_unsent(amp_proto *p);
+
+/**
+ * Size in bytes (without the newline) that @p cmd would have once stripped and
+ * framed as line number @p n for @p flavor; 0 when nothing is left after
+ * stripping. Lets a host reject a job before sending any of it: a result of
+ * AMP_PROTO_LINE_MAX or more is refused by amp_proto_submit. Thread-safe.
+ */
+size_t amp_proto_framed_size(amp_proto_flavor flavor, long n, const char *cmd, size_t len);
+
 /** Emergency stop: `M112` goes out next, ahead of the window, and the engine stops. */
 void amp_proto_estop(amp_proto *p);
 

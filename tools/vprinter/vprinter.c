@@ -561,6 +561,8 @@ static void on_bytes(vp *v, const char *b, ssize_t n, double now)
         }
         if (v->booting)
             continue; /* bytes sent to a booting MCU are lost */
+        if (v->rxlen >= (v->klipper ? (int)sizeof v->rxq : v->rx_bytes))
+            parse_rx(v); /* the main loop keeps moving lines into the queue while it has room */
         if (v->rxlen < (v->klipper ? (int)sizeof v->rxq : v->rx_bytes))
             v->rxq[v->rxlen++] = c; /* Marlin has no flow control: overflow drops bytes */
         else
