@@ -91,7 +91,10 @@ typedef struct br_session {
     int stopping; /* finish the line in flight, then stop */
     br_stop stop;
     char stop_text[300];
-    long map[BR_MAP];      /* engine line number -> job line (0 = preamble) */
+    long map[BR_MAP];      /* engine line number -> last job line up to it (0 = none yet) */
+    long cum[BR_MAP];      /* engine line number -> job lines (not preamble) up to it */
+    long cum_total, last_jl;
+    int verified;
     long sent_moves, acked_moves, last_acked_job_line, first_unacked_job_line;
     char tx[AMP_PROTO_LINE_MAX + 8];
     size_t txlen, txoff;

@@ -77,15 +77,6 @@ static void on_event(void *user, const amp_proto_event *ev)
     br_session *s = user;
     logf_(s, "< %-10s %ld %s", amp_proto_event_name(ev->kind), ev->line, ev->text);
     switch (ev->kind) {
-    case AMP_EV_ACK: {
-        long jl = s->map[ev->line % BR_MAP];
-        if (jl > 0) {
-            s->acked_moves++;
-            s->last_acked_job_line = jl;
-            s->first_unacked_job_line = jl + 1;
-        }
-        break;
-    }
     case AMP_EV_ERROR:
         if (!s->cfg.quiet)
             fprintf(stderr, "ampath-bridge: printer: %s\n", ev->text);
@@ -174,6 +165,7 @@ int br_session_open(br_session *s, const br_cfg *cfg, char *why, size_t whylen)
     o.rx_bytes = cfg->rx_bytes;
     o.resend_ok = cfg->resend_ok;
     o.timeout_ms = cfg->timeout_ms;
+    o.byte_us = s->link.is_pty ? 0 : (unsigned long)(10000000L / cfg->baud);
     o.boot_ms = cfg->flavor < 0 ? 0 : cfg->boot_ms; /* detection already waited for the boot */
     o.on_event = on_event;
     o.user = s;
@@ -203,6 +195,10 @@ int br_session_start_job(br_session *s, const char *path, long resume_from, char
     s->stopping = 0;
     s->stop = BR_RUNNING;
     s->sent_moves = s->acked_moves = 0;
+    s->cum_total = s->last_jl = 0;
+    s->verified = 0;
+    memset(s->map, 0, sizeof s->map);
+    memset(s->cum, 0, sizeof s->cum);
     s->last_acked_job_line = 0;
     s->first_unacked_job_line = s->job.first_line;
     s->rate_t0 = br_now();
@@ -246,18 +242,23 @@ static void try_reconnect(br_session *s)
     amp_proto_link_restored(&s->p, ms(br_now()));
 }
 
+/* Counts from the engine's own numbers (acknowledgements can be revised downwards by a resend request). */
+static void account(br_session *s)
+{
+    long a = s->p.acked, t = s->p.top_sent;
+    s->acked_moves = a > 0 ? s->cum[a % BR_MAP] : 0;
+    s->sent_moves = t > 0 ? s->cum[t % BR_MAP] : 0;
+    s->last_acked_job_line = a > 0 ? s->map[a % BR_MAP] : 0;
+    s->first_unacked_job_line = s->last_acked_job_line > 0 ? s->last_acked_job_line + 1 : s->job.first_line;
+}
+
 /* Fill the engine and the write buffer as far as the window allows. */
 static void pump(br_session *s)
 {
     for (;;) {
         if (s->txlen == 0) {
-            long before = s->p.top_sent;
             if (amp_proto_next_tx(&s->p, ms(br_now()), s->tx, sizeof s->tx, &s->txlen)) {
-                long k;
                 s->txoff = 0;
-                for (k = before + 1; k <= s->p.top_sent; k++)
-                    if (s->map[k % BR_MAP] > 0)
-                        s->sent_moves++;
                 logf_(s, "> %.*s", (int)(s->txlen - 1), s->tx);
                 continue;
             }
@@ -286,8 +287,14 @@ static void pump(br_session *s)
                 set_stop(s, BR_JOB_ERROR, msg);
                 return;
             }
-            if (n > 0)
-                s->map[n % BR_MAP] = jl;
+            if (n > 0) {
+                if (jl > 0) {
+                    s->cum_total++;
+                    s->last_jl = jl;
+                }
+                s->cum[n % BR_MAP] = s->cum_total;
+                s->map[n % BR_MAP] = s->last_jl;
+            }
         }
     }
 }
@@ -369,10 +376,20 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
         if (s->link.fd >= 0 && s->stop == BR_RUNNING)
             pump(s);
     }
+    if (s->have_job)
+        account(s);
     if (s->stop == BR_RUNNING && s->have_job) {
         long inflight = s->p.top_sent - s->p.acked;
-        if (s->job_eof && amp_proto_pending(&s->p) == 0 && s->txlen == 0)
-            set_stop(s, BR_DONE, "");
+        if (s->job_eof && amp_proto_pending(&s->p) == 0 && s->txlen == 0 && !s->p.probing && !s->p.verify) {
+            if (!s->verified && s->p.o.flavor == AMP_PROTO_MARLIN) {
+                /* prove receipt of the last lines before declaring the job done */
+                s->verified = 1;
+                amp_proto_verify(&s->p);
+                logf_(s, "verifying the end of the job");
+            } else {
+                set_stop(s, BR_DONE, "");
+            }
+        }
         else if (s->stopping && (inflight <= 0 || s->p.state == AMP_PROTO_STOPPED) && s->txlen == 0)
             set_stop(s, (br_stop)s->stopping, "");
     }

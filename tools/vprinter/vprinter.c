@@ -111,6 +111,7 @@ typedef struct vp {
     FILE *logf;
     int hung;
     double reopen_at;
+    int in_hit; /* a byte of the current incoming line was corrupted */
 } vp;
 
 static volatile sig_atomic_t quit_flag;
@@ -292,6 +293,13 @@ static int execute(vp *v, const char *cmd, long n, double now)
             v->exec_until = now + v->heat_secs;
             v->next_keepalive = now + v->busy_interval;
         }
+    }
+    if (!v->klipper && !((cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'T') && cmd[1] >= '0' && cmd[1] <= '9')) {
+        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush): echo, no-op, ok */
+        say(v, "echo:Unknown command: \"%s\"\n", cmd);
+        send_ok(v);
+        v->exec_has = 0;
+        return 1;
     }
     if (v->exec_busy) {
         if (now >= v->next_keepalive) {
@@ -543,8 +551,14 @@ static void on_bytes(vp *v, const char *b, ssize_t n, double now)
         char c = b[i];
         if (v->drop_in > 0 && rnd01(v) < v->drop_in)
             continue;
-        if (v->corrupt_in > 0 && rnd01(v) < v->corrupt_in)
+        /* At most one corrupted byte per line: Marlin's XOR checksum cannot see two flips of the same bit
+           in one line, so no host could pass a model with more (see docs/bridge.md, "Limits"). */
+        if (v->corrupt_in > 0 && !v->in_hit && rnd01(v) < v->corrupt_in) {
             c ^= (char)(1 << (int)(rnd01(v) * 7));
+            v->in_hit = 1;
+        }
+        if (b[i] == '\n')
+            v->in_hit = 0;
         if (v->klipper && c == 'M' && i + 3 < n && memcmp(b + i, "M112", 4) == 0) {
             klipper_shutdown(v, "Shutdown due to M112"); /* acted on when read, ahead of the queue */
             continue;
@@ -565,8 +579,10 @@ static void on_bytes(vp *v, const char *b, ssize_t n, double now)
             parse_rx(v); /* the main loop keeps moving lines into the queue while it has room */
         if (v->rxlen < (v->klipper ? (int)sizeof v->rxq : v->rx_bytes))
             v->rxq[v->rxlen++] = c; /* Marlin has no flow control: overflow drops bytes */
-        else
-            v->overruns++;
+        else {
+            if (v->overruns++ == 0 || v->overruns % 100 == 0)
+                logf_line(v, "# RX overrun (%ld so far)\n", v->overruns);
+        }
     }
     (void)now;
 }
