@@ -69,7 +69,7 @@ typedef struct br_cfg {
     int flavor; /* AMP_PROTO_MARLIN, AMP_PROTO_KLIPPER or -1 = auto (M115) */
     amp_proto_window mode;
     int window, bufsize, rx_bytes, resend_ok;
-    unsigned long timeout_ms, boot_ms;
+    unsigned long timeout_ms, boot_ms, settle_ms;
     double reconnect_s; /* how long to wait for a lost device */
     FILE *log;          /* protocol log, or NULL */
     int progress;       /* progress line on stderr */

@@ -28,6 +28,8 @@ static const char usage[] =
     "  --rx-bytes N         printer serial RX buffer in bytes (default 128)\n"
     "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: it does, as Marlin)\n"
     "  --timeout S          silence (no ok, busy or temperature) before a probe, seconds (default 10)\n"
+"  --settle-ms MS       after a resend request, wait MS (plus the wire time of the lines sent ahead)\n"
+    "                       for the echoes of the same request before sending again (default 30)\n"
     "  --boot-wait S        wait for the 'start' banner before the handshake, seconds (default 3)\n"
     "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60)\n"
     "  --resume-from LINE   start the job at file line LINE after a safe restart (lift, home X Y,\n"
@@ -310,6 +312,11 @@ int main(int argc, char **argv)
             if (!parse_num(val, &d) || d <= 0 || d > 3600)
                 return fail("bad --timeout %s", val);
             cfg.timeout_ms = (unsigned long)(d * 1000);
+        } else if (strcmp(a, "--settle-ms") == 0) {
+            NEEDVAL;
+            if (!parse_num(val, &d) || d < 0 || d > 10000)
+                return fail("bad --settle-ms %s", val);
+            cfg.settle_ms = (unsigned long)d;
         } else if (strcmp(a, "--boot-wait") == 0) {
             NEEDVAL;
             if (!parse_num(val, &d) || d < 0 || d > 600)

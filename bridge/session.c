@@ -38,6 +38,7 @@ void br_cfg_default(br_cfg *c)
     c->resend_ok = 1;
     c->timeout_ms = 10000;
     c->boot_ms = 3000;
+    c->settle_ms = 30;
     c->reconnect_s = 60;
 }
 
@@ -165,6 +166,7 @@ int br_session_open(br_session *s, const br_cfg *cfg, char *why, size_t whylen)
     o.rx_bytes = cfg->rx_bytes;
     o.resend_ok = cfg->resend_ok;
     o.timeout_ms = cfg->timeout_ms;
+    o.settle_ms = cfg->settle_ms;
     o.byte_us = s->link.is_pty ? 0 : (unsigned long)(10000000L / cfg->baud);
     o.boot_ms = cfg->flavor < 0 ? 0 : cfg->boot_ms; /* detection already waited for the boot */
     o.on_event = on_event;

@@ -537,8 +537,13 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         emit(p, AMP_EV_BUSY, 0, s);
         return;
     }
-    if (strcmp(s, "wait") == 0)
-        return; /* idle printer with an empty queue: says nothing about our lines, and keeps nothing alive */
+    if (strcmp(s, "wait") == 0) {
+        /* Marlin says wait when its queue is empty and it is idle. It keeps nothing alive; but if we still
+           count lines in flight, their oks were lost (or the lines were): probe now instead of after the timeout. */
+        if (p->state == AMP_PROTO_RUNNING && p->send_n - 1 > p->acked && !p->probing && !p->settling)
+            p->last_rx = now - p->o.timeout_ms;
+        return;
+    }
     if (has_temp(s)) {
         p->last_rx = now; /* M109/M190 report every second while heating */
         emit(p, AMP_EV_TEMP, 0, s);
