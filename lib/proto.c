@@ -47,6 +47,7 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
     o->boot_ms = 3000;
     o->timeout_ms = 10000;
     o->settle_ms = 30;
+    o->guard_nl = flavor == AMP_PROTO_MARLIN;
     o->byte_us = 0;
 }
 
@@ -141,6 +142,8 @@ static int frame(amp_proto *p, amp_proto_slot *s, long n, const char *cmd, size_
     if (k >= AMP_PROTO_LINE_MAX)
         return 0;
     tmp[k++] = '\n';
+    if (p->o.guard_nl && p->o.flavor == AMP_PROTO_MARLIN)
+        tmp[k++] = '\n';
     memcpy(s->text, tmp, k);
     s->len = (unsigned char)k;
     s->n = n;

@@ -79,6 +79,7 @@ static void start_marlin(amp_proto *p, rec *r, amp_proto_window mode, int window
     o.mode = mode;
     o.window = window;
     o.timeout_ms = 1000;
+    o.guard_nl = 0; /* exact framing compared below; the guard newline has its own test */
     o.on_event = on_ev;
     o.user = r;
     memset(r, 0, sizeof *r);
@@ -161,6 +162,20 @@ START_TEST(framing_strips_comments_and_rejects_overlong_lines_before_sending)
 }
 END_TEST
 
+START_TEST(guard_newline_keeps_a_corrupted_newline_from_merging_two_lines)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    ck_assert_int_eq(o.guard_nl, 1);
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    ck_assert_str_eq(tx(&p, 1), "N0 M110 N0*125\n\n");
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    ck_assert_int_eq(o.guard_nl, 0);
+}
+END_TEST
+
 START_TEST(handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it)
 {
     amp_proto p;
@@ -169,6 +184,7 @@ START_TEST(handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it)
     memset(&r, 0, sizeof r);
     amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
     o.boot_ms = 2000;
+    o.guard_nl = 0;
     o.on_event = on_ev;
     o.user = &r;
     ck_assert_int_eq(amp_proto_init(&p, &o, 5000, NULL), AMP_OK);
@@ -588,6 +604,7 @@ static Suite *proto_suite(void)
     TCase *tc = tcase_create("core");
     AMP_ADD_TEST(tc, checksum_matches_reprap_reference_values);
     AMP_ADD_TEST(tc, framing_strips_comments_and_rejects_overlong_lines_before_sending);
+    AMP_ADD_TEST(tc, guard_newline_keeps_a_corrupted_newline_from_merging_two_lines);
     AMP_ADD_TEST(tc, handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it);
     AMP_ADD_TEST(tc, pingpong_sends_one_line_per_ok_split_byte_by_byte);
     AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin21);

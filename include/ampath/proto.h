@@ -109,6 +109,9 @@ typedef struct amp_proto_opts {
     unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
     unsigned long settle_ms;    /**< after a rewind, wait this long (plus the stale bytes' wire time) for the
                                      requests the lines sent ahead provoke, before sending again (default 30) */
+    int guard_nl;               /**< Marlin: end each line with a second newline (default 1). A corrupted newline
+                                     would merge two lines into one that passes the XOR check with odds
+                                     1/256; the spare newline keeps them apart (Marlin skips empty lines) */
     unsigned long byte_us;      /**< wire time of one byte in microseconds (10e6 / baud; 0 for a pty) */
     amp_proto_event_fn on_event; /**< optional event callback */
     void *user;                 /**< passed to on_event */
