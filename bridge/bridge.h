@@ -96,6 +96,7 @@ typedef struct br_session {
     long cum_total, last_jl;
     int verified;
     long sent_moves, acked_moves, last_acked_job_line, first_unacked_job_line;
+    long bytes_out; /* bytes written to the device */
     char tx[AMP_PROTO_LINE_MAX + 8];
     size_t txlen, txoff;
     double t_start, t_lost, t_progress;

@@ -368,6 +368,7 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
         if (s->link.fd >= 0 && s->txlen > s->txoff) {
             ssize_t n = write(s->link.fd, s->tx + s->txoff, s->txlen - s->txoff);
             if (n > 0) {
+                s->bytes_out += (long)n;
                 s->txoff += (size_t)n;
                 if (s->txoff == s->txlen)
                     s->txlen = s->txoff = 0;

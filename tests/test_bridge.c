@@ -530,7 +530,7 @@ START_TEST(soak_corrupted_commands_and_two_resets_resume_exactly)
     int runs, rc;
     char *out;
     const char *job = make_job("soak.gcode", 1000, NULL);
-    vp_start(&v, "--corrupt-in 0.01 --seed 12 --reset-after 300 --reset-after 400 --wait-ms 20");
+    vp_start(&v, "--corrupt-in 0.005 --seed 12 --reset-after 300 --reset-after 400 --wait-ms 20");
     rc = run_resuming(&v, job, &runs, &out);
     vp_stop(&v);
     ck_assert_msg(rc == 0, "exit %d: %s", rc, out);
