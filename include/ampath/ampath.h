@@ -3,6 +3,7 @@
 #define AMPATH_AMPATH_H
 
 #include "alloc.h"
+#include "gcode.h"
 #include "io.h"
 #include "mesh.h"
 #include "paths.h"

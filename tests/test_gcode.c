@@ -1,0 +1,802 @@
+/* G-code writer (SPEC §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fixture_geom.h"
+#include "fixture_tool.h"
+#include "testutil.h"
+
+#define PI 3.14159265358979323846
+
+/* ------------------------------------------------------------------ a small G-code reader */
+
+typedef struct seg {
+    amp_vec3 a, b;
+    double e, feed; /* feed mm/s */
+    size_t before;  /* travels: number of extrusion segments printed before */
+} seg;
+
+typedef struct gsim {
+    int rel_e, have_e_mode, g90, homed, heated, line_no, last_path;
+    amp_vec3 pos;
+    double e, f;
+    seg *segs;
+    size_t nsegs, cap;
+    seg *travels; /* XY travel moves (z constant) */
+    size_t ntrav, captrav;
+    size_t g0_lines, e_only, klipper_cmds;
+    double last_abs_e;
+    char why[200];
+} gsim;
+
+static void gsim_init(gsim *s)
+{
+    memset(s, 0, sizeof *s);
+    s->last_path = -1;
+    s->f = -1;
+}
+
+static void gsim_free(gsim *s)
+{
+    free(s->segs);
+    free(s->travels);
+}
+
+static void push_seg(seg **v, size_t *n, size_t *cap, seg x)
+{
+    if (*n == *cap) {
+        *cap = *cap ? 2 * *cap : 256;
+        *v = realloc(*v, *cap * sizeof **v);
+    }
+    (*v)[(*n)++] = x;
+}
+
+#define BAD(...)                                                                                                   \
+    do {                                                                                                           \
+        snprintf(s->why, sizeof s->why, __VA_ARGS__);                                                              \
+        return 0;                                                                                                  \
+    } while (0)
+
+/* Parse one line; 0 with s->why on anything a printer would not accept or that breaks the job's structure. */
+static int gsim_line(gsim *s, const char *line)
+{
+    char buf[256], *tok, *save = NULL;
+    const char *c = strchr(line, ';');
+    size_t n = c ? (size_t)(c - line) : strlen(line);
+    int g = -1, m = -1, have[26] = {0};
+    double val[26];
+    s->line_no++;
+    if (strlen(line) > AMP_GCODE_LINE_MAX)
+        BAD("line %d longer than %d", s->line_no, AMP_GCODE_LINE_MAX);
+    if (c && strncmp(c, "; path ", 7) == 0) {
+        int p = atoi(c + 7);
+        if (p <= s->last_path)
+            BAD("line %d: path %d after path %d", s->line_no, p, s->last_path);
+        s->last_path = p;
+    }
+    if (n >= sizeof buf)
+        BAD("line %d too long", s->line_no);
+    memcpy(buf, line, n);
+    buf[n] = '\0';
+    tok = strtok_r(buf, " \t", &save);
+    if (!tok)
+        return 1; /* comment or blank */
+    if (strcmp(tok, "SET_VELOCITY_LIMIT") == 0) {
+        tok = strtok_r(NULL, " \t", &save);
+        if (!tok || strncmp(tok, "ACCEL=", 6) != 0 || !(atof(tok + 6) > 0))
+            BAD("line %d: bad SET_VELOCITY_LIMIT", s->line_no);
+        s->klipper_cmds++;
+        return 1;
+    }
+    if (tok[0] == 'G')
+        g = atoi(tok + 1);
+    else if (tok[0] == 'M')
+        m = atoi(tok + 1);
+    else
+        BAD("line %d: unknown command '%s'", s->line_no, tok);
+    {
+        static const int gs[] = {0, 1, 21, 28, 90, 92}, ms[] = {82, 83, 84, 104, 107, 109, 140, 190, 204};
+        size_t i;
+        int ok = 0;
+        for (i = 0; i < sizeof gs / sizeof gs[0]; i++)
+            ok |= g == gs[i];
+        for (i = 0; i < sizeof ms / sizeof ms[0]; i++)
+            ok |= m == ms[i];
+        if (!ok || strlen(tok) > 4)
+            BAD("line %d: unknown command '%s'", s->line_no, tok);
+    }
+    while ((tok = strtok_r(NULL, " \t", &save)) != NULL) {
+        char *end;
+        int k = tok[0] - 'A';
+        double d;
+        if (k < 0 || k >= 26 || have[k])
+            BAD("line %d: bad or repeated word '%s'", s->line_no, tok);
+        d = strtod(tok + 1, &end);
+        if (end == tok + 1 || *end || !isfinite(d) || strchr(tok, 'e') || strchr(tok, 'n'))
+            BAD("line %d: bad number in '%s'", s->line_no, tok);
+        have[k] = 1;
+        val[k] = d;
+    }
+    if (g == 90)
+        s->g90 = 1;
+    if (g == 28)
+        s->homed = 1;
+    if (m == 82 || m == 83) {
+        s->rel_e = m == 83;
+        s->have_e_mode = 1;
+    }
+    if (m == 109)
+        s->heated = 1;
+    if (g == 92 && have['E' - 'A'])
+        s->e = val['E' - 'A'];
+    if (have['F' - 'A']) {
+        if (!(val['F' - 'A'] > 0))
+            BAD("line %d: feed not positive", s->line_no);
+        s->f = val['F' - 'A'] / 60.0;
+    }
+    if (g == 0 || g == 1) {
+        amp_vec3 to = s->pos;
+        double de = 0.0;
+        if (!s->g90 || !s->have_e_mode || !s->homed)
+            BAD("line %d: move before G28, G90 and the E mode", s->line_no);
+        if (s->f <= 0)
+            BAD("line %d: move without a feed", s->line_no);
+        if (have['X' - 'A'])
+            to.x = val['X' - 'A'];
+        if (have['Y' - 'A'])
+            to.y = val['Y' - 'A'];
+        if (have['Z' - 'A'])
+            to.z = val['Z' - 'A'];
+        if (have['E' - 'A']) {
+            if (g == 0)
+                BAD("line %d: extrusion in G0", s->line_no);
+            de = s->rel_e ? val['E' - 'A'] : val['E' - 'A'] - s->e;
+            s->e = s->rel_e ? s->e + de : val['E' - 'A'];
+        }
+        if (g == 1 && have['E' - 'A'] && (have['X' - 'A'] || have['Y' - 'A'] || have['Z' - 'A'])) {
+            seg x;
+            if (!s->heated)
+                BAD("line %d: extrusion before the hot end is heated", s->line_no);
+            x.a = s->pos;
+            x.b = to;
+            x.e = de;
+            x.feed = s->f;
+            x.before = 0;
+            push_seg(&s->segs, &s->nsegs, &s->cap, x);
+        } else if (g == 1 && have['E' - 'A']) {
+            s->e_only++;
+        } else if (g == 0) {
+            s->g0_lines++;
+            if (have['X' - 'A'] || have['Y' - 'A']) {
+                seg x;
+                if (to.z != s->pos.z)
+                    BAD("line %d: diagonal travel", s->line_no);
+                x.a = s->pos;
+                x.b = to;
+                x.e = 0;
+                x.feed = s->f;
+                x.before = s->nsegs;
+                push_seg(&s->travels, &s->ntrav, &s->captrav, x);
+            }
+        } else {
+            BAD("line %d: G1 without E", s->line_no);
+        }
+        s->pos = to;
+    }
+    return 1;
+}
+
+/* Parse a whole text; returns 1 when every line is accepted. */
+static int gsim_run(gsim *s, const char *text)
+{
+    char line[512];
+    const char *p = text;
+    while (*p) {
+        const char *e = strchr(p, '\n');
+        size_t n = e ? (size_t)(e - p) : strlen(p);
+        if (n >= sizeof line) {
+            snprintf(s->why, sizeof s->why, "line %d: overlong", s->line_no + 1);
+            return 0;
+        }
+        memcpy(line, p, n);
+        line[n] = '\0';
+        if (!gsim_line(s, line))
+            return 0;
+        p = e ? e + 1 : p + n;
+    }
+    return 1;
+}
+
+/* ------------------------------------------------------------------ independent no-gouge checker */
+
+static double seg2d_point(double px, double py, amp_vec3 a, amp_vec3 b)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t = 0;
+    if (l2 > 0)
+        t = ((px - a.x) * dx + (py - a.y) * dy) / l2;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return hypot(px - (a.x + t * dx), py - (a.y + t * dy));
+}
+
+static double seg2d_dist(amp_vec3 a, amp_vec3 b, amp_vec3 c, amp_vec3 d)
+{
+    double m = seg2d_point(a.x, a.y, c, d);
+    double cross1 = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    double cross2 = (b.x - a.x) * (d.y - a.y) - (b.y - a.y) * (d.x - a.x);
+    double cross3 = (d.x - c.x) * (a.y - c.y) - (d.y - c.y) * (a.x - c.x);
+    double cross4 = (d.x - c.x) * (b.y - c.y) - (d.y - c.y) * (b.x - c.x);
+    if (((cross1 < 0) != (cross2 < 0)) && ((cross3 < 0) != (cross4 < 0)))
+        return 0.0;
+    m = fmin(m, seg2d_point(b.x, b.y, c, d));
+    m = fmin(m, seg2d_point(c.x, c.y, a, b));
+    return fmin(m, seg2d_point(d.x, d.y, a, b));
+}
+
+/*
+ * Every XY travel must pass at least @p hop above the top of each earlier
+ * extrusion whose centre line comes within its radius + @p reach of the travel
+ * line. The radius comes from the G-code itself: r = sqrt(E (d/2)^2 / (flow L)).
+ * Returns the number of violations (0 = no gouging); *near counts the
+ * travel/segment pairs that were close enough to matter.
+ */
+static int count_gouges(const gsim *s, double fil_d, double flow, double reach, double hop, size_t *near)
+{
+    size_t t, k;
+    int bad = 0;
+    *near = 0;
+    for (t = 0; t < s->ntrav; t++) {
+        const seg *tr = &s->travels[t];
+        for (k = 0; k < tr->before; k++) {
+            const seg *g = &s->segs[k];
+            double len = amp_v3_dist(g->a, g->b), r, top;
+            if (len <= 0 || g->e <= 0)
+                continue;
+            r = sqrt(g->e * 0.25 * fil_d * fil_d / (flow * len));
+            if (seg2d_dist(tr->a, tr->b, g->a, g->b) > r + reach)
+                continue;
+            (*near)++;
+            top = fmax(g->a.z, g->b.z) + r;
+            if (tr->a.z < top + hop - 2e-3) /* 3-decimal rounding of the G-code */
+                bad++;
+        }
+    }
+    return bad;
+}
+
+/* ------------------------------------------------------------------ helpers */
+
+static char *gen(const amp_pathset *ps, const amp_gcode_opts *o, amp_gcode_stats *st)
+{
+    amp_buf b;
+    amp_error err;
+    amp_status s;
+    amp_buf_init(&b, NULL);
+    amp_error_clear(&err);
+    s = amp_gcode_write(ps, o, amp_buf_sink, &b, st, &err);
+    ck_assert_msg(s == AMP_OK, "gcode write: %s", err.msg);
+    return b.data;
+}
+
+static void demo_like(amp_pathset *ps)
+{
+    amp_pathset_init(ps, NULL);
+    amp_fixture_rings(ps, 0, 0, 4, 3, 48, 0.25);
+    amp_fixture_helix(ps, 12, 120);
+}
+
+/* Expected E of segment k of path i: flow * (pi r^2 L) / (pi (d/2)^2), r the mean of the end radii. */
+static double formula_e(const amp_pathset *ps, size_t i, size_t k, const amp_gcode_opts *o)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    double r = 0.5 * (v[k].r + v[k + 1].r), L = amp_v3_dist(v[k].p, v[k + 1].p);
+    return o->flow * (PI * r * r * L) / (PI * (o->filament_diameter / 2) * (o->filament_diameter / 2));
+}
+
+/* ------------------------------------------------------------------ tests */
+
+START_TEST(e_per_segment_matches_formula_for_constant_and_varying_radius)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    amp_error err;
+    char line[AMP_GCODE_LINE_CAP];
+    size_t checked = 0, varying = 0, i, k, expect = 0;
+    int r;
+    demo_like(&ps);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER); /* relative E: the line's E is the segment's */
+    o.filament_diameter = 2.85;
+    o.flow = 0.93;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_OK);
+    while ((r = amp_gcode_iter_next(&it, line, sizeof line, &err)) == 1) {
+        if (it.last.kind == 1) {
+            const amp_pvert *v = amp_pathset_path_verts(&ps, it.last.path);
+            double want = formula_e(&ps, it.last.path, it.last.seg, &o);
+            const char *e = strstr(line, " E");
+            ck_assert_msg(fabs(it.last.e - want) <= 1e-9, "path %lu seg %lu: E %.12g, formula %.12g",
+                          (unsigned long)it.last.path, (unsigned long)it.last.seg, it.last.e, want);
+            ck_assert_ptr_nonnull(e);
+            /* the printed value differs only by the 5-decimal rounding */
+            ck_assert_msg(fabs(atof(e + 2) - want) <= 1.0001e-5, "'%s' vs %.9f", line, want);
+            varying += v[it.last.seg].r != v[it.last.seg + 1].r;
+            checked++;
+        }
+    }
+    ck_assert_int_eq(r, 0);
+    for (i = 0; i < ps.npaths; i++)
+        for (k = 0; k + 1 < ps.paths[i].n; k++)
+            expect += amp_v3_dist(amp_pathset_path_verts(&ps, i)[k].p, amp_pathset_path_verts(&ps, i)[k + 1].p) > 1e-9;
+    ck_assert_uint_eq(checked, expect);
+    ck_assert_uint_gt(varying, 1000);
+    ck_assert_uint_gt(checked - varying, 500); /* the rings: constant radius */
+    /* total filament = flow * deposited volume / filament area */
+    ck_assert_near(it.stats.filament_length,
+                   o.flow * amp_pathset_volume(&ps, -1) / (PI * 2.85 * 2.85 / 4), 1e-9 * it.stats.filament_length);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(volumetric_cap_lowers_feed_exactly_where_needed)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text;
+    size_t k, lowered = 0, kept = 0;
+    const int n = 60;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    /* radius ramps 0.2 -> 0.6 mm: the cap pi r^2 v <= 12 mm^3/s at 40 mm/s binds from r = 0.309 mm */
+    for (k = 0; k <= (size_t)n; k++)
+        amp_pathset_push(&ps, amp_v3(10 + 0.7 * k, 5 + 0.3 * sin(0.2 * k), 0.3), 0.2 + 0.4 * k / n, NULL);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.print_feed = 40;
+    text = gen(&ps, &o, &st);
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    ck_assert_uint_eq(s.nsegs, (size_t)n);
+    for (k = 0; k < s.nsegs; k++) {
+        const amp_pvert *v = ps.verts;
+        double r = 0.5 * (v[k].r + v[k + 1].r), area = PI * r * r;
+        if (area * o.print_feed > o.max_volumetric_flow) {
+            ck_assert_msg(area * s.segs[k].feed <= o.max_volumetric_flow * (1 + 1e-12), "segment %lu over the cap",
+                          (unsigned long)k);
+            /* lowered by no more than the 0.1 mm/min resolution of F */
+            ck_assert_msg(area * (s.segs[k].feed + 0.1 / 60) > o.max_volumetric_flow, "segment %lu lowered too much",
+                          (unsigned long)k);
+            lowered++;
+        } else {
+            ck_assert_msg(fabs(s.segs[k].feed - o.print_feed) < 1e-9, "segment %lu: feed %g without need",
+                          (unsigned long)k, s.segs[k].feed);
+            kept++;
+        }
+    }
+    ck_assert_uint_gt(lowered, 10);
+    ck_assert_uint_gt(kept, 10);
+    ck_assert_uint_eq(st.lowered_feed_segments, lowered);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(travels_lift_above_printed_material)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text;
+    size_t near;
+    int hop;
+    demo_like(&ps);
+    for (hop = 0; hop < 2; hop++) {
+        amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+        o.z_hop = hop ? 0.4 : 0.0;
+        text = gen(&ps, &o, &st);
+        gsim_init(&s);
+        ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+        ck_assert_uint_eq(s.ntrav, st.travels);
+        ck_assert_int_eq(count_gouges(&s, o.filament_diameter, o.flow, 1.0, o.z_hop, &near), 0);
+        ck_assert_uint_gt(near, 100); /* the check had material to look at */
+        gsim_free(&s);
+        free(text);
+    }
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(gouge_checker_catches_a_travel_without_lift)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim s;
+    char *text, *p, *q;
+    size_t near;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 2, 3, 48, 0.25);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.retract_length = 0;
+    text = gen(&ps, &o, NULL);
+    /* drop the lift and the descent around the travel to path 1: it then runs at print height over ring 0 */
+    p = strstr(text, "; path 1 ");
+    ck_assert_ptr_nonnull(p);
+    p = strchr(p, '\n') + 1;
+    ck_assert(strncmp(p, "G0 Z", 4) == 0);
+    q = strchr(p, '\n') + 1;
+    memmove(p, q, strlen(q) + 1); /* lift removed; the XY travel is now at z 0.3 */
+    p = strchr(p, '\n') + 1;
+    ck_assert(strncmp(p, "G0 Z", 4) == 0);
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    ck_assert_int_gt(count_gouges(&s, o.filament_diameter, o.flow, 1.0, o.z_hop, &near), 0);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(relative_and_absolute_e_agree)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim a, r;
+    char *ta, *tr;
+    size_t k;
+    demo_like(&ps);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.relative_e = 0;
+    ta = gen(&ps, &o, NULL);
+    o.relative_e = 1;
+    tr = gen(&ps, &o, NULL);
+    ck_assert_ptr_nonnull(strstr(ta, "\nM82"));
+    ck_assert_ptr_nonnull(strstr(tr, "\nM83"));
+    gsim_init(&a);
+    gsim_init(&r);
+    ck_assert_msg(gsim_run(&a, ta), "%s", a.why);
+    ck_assert_msg(gsim_run(&r, tr), "%s", r.why);
+    ck_assert_uint_eq(a.nsegs, r.nsegs);
+    ck_assert_uint_eq(a.e_only, r.e_only);
+    for (k = 0; k < a.nsegs; k++) {
+        /* same moves; E agrees to the last printed digit because both round the absolute value once */
+        ck_assert_near(a.segs[k].e, r.segs[k].e, 1e-9);
+        ck_assert_near(a.segs[k].b.x, r.segs[k].b.x, 0);
+    }
+    ck_assert_near(a.e, r.e, 1e-6);
+    gsim_free(&a);
+    gsim_free(&r);
+    free(ta);
+    free(tr);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(reader_parses_every_line_of_both_flavors)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    int fl;
+    demo_like(&ps);
+    for (fl = 0; fl < 2; fl++) {
+        gsim s;
+        char *text;
+        const char *p;
+        size_t k = 0, i, j;
+        amp_gcode_iter it;
+        amp_gcode_opts_default(&o, fl ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN);
+        ck_assert_int_eq(o.relative_e, fl);
+        text = gen(&ps, &o, &st);
+        gsim_init(&s);
+        ck_assert_msg(gsim_run(&s, text), "%s: %s", fl ? "klipper" : "marlin", s.why);
+        ck_assert_int_eq(s.rel_e, fl);
+        ck_assert_uint_eq((size_t)s.line_no, st.lines);
+        ck_assert_uint_eq(s.nsegs, st.segments);
+        ck_assert_uint_eq(s.klipper_cmds, (size_t)fl);
+        ck_assert_int_eq(strstr(text, "\nM204 S1000") != NULL, !fl);
+        ck_assert_int_eq(s.last_path, (int)ps.npaths - 1);
+        for (p = text; *p; p = strchr(p, '\n') + 1)
+            ck_assert_msg(*p != 'N', "line numbers are the sender's job");
+        /* the extrusion moves visit the path vertices in order */
+        for (i = 0; i < ps.npaths; i++)
+            for (j = 1; j < ps.paths[i].n; j++, k++) {
+                amp_vec3 v = amp_pathset_path_verts(&ps, i)[j].p;
+                ck_assert_msg(amp_v3_dist(v, s.segs[k].b) < 1e-3, "path %lu vertex %lu", (unsigned long)i,
+                              (unsigned long)j);
+            }
+        /* the header's figures (from init) are those of the job written */
+        ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+        ck_assert_uint_eq(it.est.lines, st.lines);
+        ck_assert_near(it.est.time, st.time, 1e-9);
+        ck_assert_near(it.est.filament_length, st.filament_length, 1e-9);
+        ck_assert_uint_eq(it.est.retractions, st.retractions);
+        ck_assert_uint_eq(st.retractions, st.travels); /* one per travel except the first, plus the final one */
+        gsim_free(&s);
+        free(text);
+    }
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+static const char *const broken_gcode[] = {
+    "G28\nG90\nM82\nG5 X1\n",               /* unknown command */
+    "G28\nG90\nM82\nG1 Xnan Y0 E1 F100\n",  /* NaN */
+    "G28\nG90\nG1 X1 Y0 E1 F100\n",         /* move before the E mode */
+    "; path 3 object\n; path 2 object\n",   /* paths out of order */
+    "G28\nG90\nM82\nG0 X1 X2 F100\n",       /* repeated word */
+    "M109 S200\nG28\nG90\nM82\nG1 X1e3 E1 F100\n", /* exponent notation */
+    "G28 ; the next line has 90 characters\n"
+    "M84 ;....................................................................................\n",
+};
+
+START_TEST(reader_rejects_broken_gcode)
+{
+    gsim s;
+    gsim_init(&s);
+    ck_assert_msg(!gsim_run(&s, broken_gcode[_i]), "case %d accepted", _i);
+    ck_assert(s.why[0] != '\0');
+    gsim_free(&s);
+}
+END_TEST
+
+START_TEST(time_estimate_follows_trapezoids_and_junction_limit)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    double a = 1000, v = 50, t, vj, s2;
+    int k, n;
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.print_feed = v;
+    o.max_volumetric_flow = 1000;
+    o.accel = a;
+    /* a straight 100 mm line split into n collinear segments: one trapezoid, whatever the look-ahead */
+    for (n = 1; n <= 64; n *= 4) {
+        amp_pathset_init(&ps, NULL);
+        amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+        for (k = 0; k <= n; k++)
+            amp_pathset_push(&ps, amp_v3(100.0 * k / n, 0, 0.2), 0.2, NULL);
+        ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+        t = 2 * v / a + (100 - v * v / a) / v;
+        ck_assert_near(it.est.print_time, t, 1e-9);
+        amp_pathset_free(&ps);
+    }
+    /* a right angle: the junction deviation rule v^2 = a jd sin(t/2) / (1 - sin(t/2)), t = 90 degrees */
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(50, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(50, 50, 0.2), 0.2, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+    s2 = sqrt(0.5);
+    vj = sqrt(a * o.junction_deviation * s2 / (1 - s2));
+    /* each leg: accelerate from 0 (or vj) to v, cruise, decelerate to vj (or 0) */
+    t = 2 * ((v / a) + (v - vj) / a + (50 - v * v / (2 * a) - (v * v - vj * vj) / (2 * a)) / v);
+    ck_assert_near(it.est.print_time, t, 1e-9);
+    ck_assert_near(amp_gcode_trapezoid_time(1.0, 0, 0, 50, 1000), 2 * sqrt(1.0 / 1000), 1e-12); /* triangle */
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(caller_start_and_end_sequences_replace_the_built_in_ones)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    char *text;
+    gsim s;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.start_gcode = "G28\r\n\nM109 S215 ; mine\n";
+    o.end_gcode = "M84 ; my end";
+    text = gen(&ps, &o, NULL);
+    ck_assert_ptr_null(strstr(text, "M140"));
+    ck_assert_ptr_nonnull(strstr(text, "\nM109 S215 ; mine\n"));
+    ck_assert_ptr_nonnull(strstr(text, "\nM84 ; my end\n"));
+    ck_assert_ptr_null(strstr(text, "M104 S0"));
+    ck_assert_ptr_null(strstr(text, "\r"));
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    gsim_free(&s);
+    free(text);
+    /* built-in: temperatures and homing before anything moves */
+    text = gen(&ps, NULL, NULL);
+    ck_assert_ptr_nonnull(strstr(text, "\nM140 S60"));
+    ck_assert_ptr_nonnull(strstr(text, "\nM109 S210"));
+    ck_assert(strstr(text, "\nG28") < strstr(text, "\nG0 "));
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(lines_stay_within_the_length_limit_at_extreme_coordinates)
+{
+    amp_pathset ps;
+    amp_gcode_iter it;
+    amp_gcode_opts o;
+    amp_error err;
+    char line[AMP_GCODE_LINE_CAP];
+    size_t longest = 0;
+    int r, k;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < 50; k++)
+        amp_pathset_push(&ps, amp_v3(-99998.123456 + 0.1 * k, -99997.987654, 99950.5 + 0.01 * k), 0.9, NULL);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.end_lift = 5;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_OK);
+    while ((r = amp_gcode_iter_next(&it, line, sizeof line, &err)) == 1)
+        if (strlen(line) > longest)
+            longest = strlen(line);
+    ck_assert_int_eq(r, 0);
+    ck_assert_int_eq(amp_gcode_iter_next(&it, line, sizeof line, &err), 0); /* stays at the end */
+    ck_assert_uint_le(longest, AMP_GCODE_LINE_MAX);
+    ck_assert_uint_gt(longest, 40);
+    /* one step further is refused rather than written as an overlong line */
+    ps.verts[3].p.x = -100001;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_RANGE);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(bad_input_gives_clear_errors)
+{
+    amp_pathset ps, empty;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    amp_error err;
+    char line[AMP_GCODE_LINE_CAP];
+    amp_buf b;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&empty, NULL);
+    amp_buf_init(&b, NULL);
+    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+
+    ck_assert_int_eq(amp_gcode_iter_init(&it, NULL, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "NULL"));
+    ck_assert_int_eq(amp_gcode_iter_init(NULL, &ps, &o, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &empty, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "empty"));
+    /* paths that are single points or repeat one vertex have nothing to print */
+    amp_pathset_begin(&empty, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&empty, amp_v3(1, 2, 3), 0.5, NULL);
+    amp_pathset_push(&empty, amp_v3(1, 2, 3), 0.5, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &empty, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "empty"));
+    ck_assert_int_eq(amp_gcode_write(&empty, &o, amp_buf_sink, &b, NULL, &err), AMP_ERR_ARG);
+    ck_assert_uint_eq(b.len, 0);
+
+    o.filament_diameter = 0;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "filament diameter"));
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.print_feed = NAN;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "print feed"));
+    amp_gcode_opts_default(&o, 7);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "flavor"));
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.start_gcode = "G28\nM117 this message is far too long for a printer's command buffer once the sender adds N and *\n";
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_LIMIT);
+    ck_assert_int_eq(err.line, 2);
+    ck_assert_ptr_nonnull(strstr(err.msg, "start"));
+
+    /* a failed init leaves an iterator that refuses to run */
+    ck_assert_int_eq(amp_gcode_iter_next(&it, line, sizeof line, &err), AMP_ERR_STATE);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_OK);
+    ck_assert_int_eq(amp_gcode_iter_next(&it, line, 40, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_gcode_iter_next(&it, NULL, sizeof line, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_gcode_write(&ps, &o, NULL, NULL, NULL, &err), AMP_ERR_ARG);
+    /* a negative radius smuggled past the path API */
+    ps.verts[2].r = -1;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "vertex 2"));
+    amp_buf_free(&b);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&empty);
+}
+END_TEST
+
+/* A sink that fails after n calls: the writer stops and passes the status back. */
+static amp_status failing_sink(void *user, const char *data, size_t len)
+{
+    int *n = user;
+    (void)data;
+    (void)len;
+    return (*n)-- > 0 ? AMP_OK : AMP_ERR_IO;
+}
+
+START_TEST(sink_failure_stops_the_writer)
+{
+    amp_pathset ps;
+    amp_error err;
+    int n = 20;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 1, 2, 12, 0.3);
+    ck_assert_int_eq(amp_gcode_write(&ps, NULL, failing_sink, &n, NULL, &err), AMP_ERR_IO);
+    ck_assert_ptr_nonnull(strstr(err.msg, "line 21"));
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(gcode_command_writes_file_and_reports_json)
+{
+    amp_pathset ps;
+    const char *in = amp_test_tmp("cli.amp"), *out = amp_test_tmp("cli.gcode"), *start = amp_test_tmp("start.gcode");
+    char args[2048], json[4096];
+    FILE *f;
+    gsim s;
+    size_t n;
+    char *text;
+    int rc;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 2, 2, 24, 0.3);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    f = fopen(start, "w");
+    fputs("G28\nM109 S199\n", f);
+    fclose(f);
+    snprintf(args, sizeof args, "gcode %s --flavor klipper --feed 25 --start %s --json -o %s", in, start, out);
+    rc = amp_test_run_tool(args, json, sizeof json);
+    ck_assert_msg(rc != -2, "AMP_TOOL not set");
+    ck_assert_int_eq(rc, 0);
+    ck_assert_ptr_nonnull(strstr(json, "\"flavor\":\"klipper\""));
+    ck_assert_ptr_nonnull(strstr(json, "\"relative_e\":true"));
+    ck_assert_ptr_nonnull(strstr(json, "\"segments\":96"));
+    ck_assert_ptr_nonnull(strstr(json, "\"time_s\":"));
+    f = fopen(out, "rb");
+    ck_assert_ptr_nonnull(f);
+    text = calloc(1, 1 << 20);
+    n = fread(text, 1, (1 << 20) - 1, f);
+    fclose(f);
+    ck_assert_uint_gt(n, 1000);
+    ck_assert_ptr_nonnull(strstr(text, "\nM109 S199\n"));
+    ck_assert_ptr_nonnull(strstr(text, " F1500"));
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    gsim_free(&s);
+    free(text);
+    /* bad usage and bad input: exit 2, no output written */
+    remove(out);
+    snprintf(args, sizeof args, "gcode %s --flavor reprap -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --filament 0 -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, amp_test_tmp("nope"), out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s -o %s", amp_test_tmp("nope.amp"), out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_ptr_null(fopen(out, "rb"));
+    remove(in);
+    remove(start);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+static Suite *gcode_suite(void)
+{
+    Suite *s = suite_create("gcode");
+    TCase *tc = tcase_create("gcode");
+    tcase_add_test(tc, e_per_segment_matches_formula_for_constant_and_varying_radius);
+    tcase_add_test(tc, volumetric_cap_lowers_feed_exactly_where_needed);
+    tcase_add_test(tc, travels_lift_above_printed_material);
+    tcase_add_test(tc, gouge_checker_catches_a_travel_without_lift);
+    tcase_add_test(tc, relative_and_absolute_e_agree);
+    tcase_add_test(tc, reader_parses_every_line_of_both_flavors);
+    tcase_add_loop_test(tc, reader_rejects_broken_gcode, 0, (int)(sizeof broken_gcode / sizeof broken_gcode[0]));
+    tcase_add_test(tc, time_estimate_follows_trapezoids_and_junction_limit);
+    tcase_add_test(tc, caller_start_and_end_sequences_replace_the_built_in_ones);
+    tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
+    tcase_add_test(tc, bad_input_gives_clear_errors);
+    tcase_add_test(tc, sink_failure_stops_the_writer);
+    tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
+    suite_add_tcase(s, tc);
+    return s;
+}
+
+AMP_TEST_MAIN(gcode_suite)

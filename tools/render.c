@@ -1,0 +1,663 @@
+/* Pictures of path sets (PNG rasterised and encoded here, or SVG) for `ampath preview`. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render.h"
+
+#define LEGEND_H 110
+#define MARGIN 24.0
+
+/* ---------------------------------------------------------------- layout and colours */
+
+typedef struct view {
+    int iso;                /* 1 isometric, 0 top */
+    double x0, y0, w, h;    /* panel in pixels */
+    double scale, ox, oy;   /* screen = (proj - o) * scale + panel origin */
+} view;
+
+static const double ISO_C = 0.86602540378443865, ISO_S = 0.5;
+
+/* Projection: screen x, screen y (downwards) and a depth (larger = nearer the viewer). */
+static void project(int iso, amp_vec3 p, double *sx, double *sy, double *depth)
+{
+    if (iso) {
+        /* camera along +(1,1,1): z points up on the screen */
+        *sx = (p.x - p.y) * ISO_C;
+        *sy = (p.x + p.y) * ISO_S - p.z;
+        *depth = p.x + p.y + p.z;
+    } else {
+        *sx = p.x;
+        *sy = -p.y;
+        *depth = p.z;
+    }
+}
+
+static void fit_view(view *v, const amp_pathset *ps)
+{
+    double minx = HUGE_VAL, miny = HUGE_VAL, maxx = -HUGE_VAL, maxy = -HUGE_VAL, ex, ey;
+    size_t i;
+    for (i = 0; i < ps->nverts; i++) {
+        double sx, sy, d, r = ps->verts[i].r;
+        project(v->iso, ps->verts[i].p, &sx, &sy, &d);
+        minx = fmin(minx, sx - r);
+        maxx = fmax(maxx, sx + r);
+        miny = fmin(miny, sy - r);
+        maxy = fmax(maxy, sy + r);
+    }
+    if (!(minx <= maxx)) {
+        minx = miny = 0;
+        maxx = maxy = 1;
+    }
+    ex = fmax(maxx - minx, 1e-6);
+    ey = fmax(maxy - miny, 1e-6);
+    v->scale = fmin((v->w - 2 * MARGIN) / ex, (v->h - 2 * MARGIN - 20) / ey);
+    /* centre the drawing in the panel (20 px at the top for the title) */
+    v->ox = minx - ((v->w - 2 * MARGIN) / v->scale - ex) / 2;
+    v->oy = miny - ((v->h - 2 * MARGIN - 20) / v->scale - ey) / 2;
+}
+
+static void to_screen(const view *v, amp_vec3 p, double *sx, double *sy, double *depth)
+{
+    project(v->iso, p, sx, sy, depth);
+    *sx = v->x0 + MARGIN + (*sx - v->ox) * v->scale;
+    *sy = v->y0 + MARGIN + 20 + (*sy - v->oy) * v->scale;
+}
+
+/* Print-order ramp: blue, cyan, green, yellow, red. */
+static void ramp(double t, unsigned char rgb[3])
+{
+    static const double stops[5][3] = {{40, 60, 200}, {20, 170, 210}, {60, 185, 80}, {235, 200, 40}, {215, 50, 40}};
+    double f;
+    int i, k;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    f = t * 4;
+    i = (int)f;
+    if (i > 3)
+        i = 3;
+    f -= i;
+    for (k = 0; k < 3; k++)
+        rgb[k] = (unsigned char)(stops[i][k] + f * (stops[i + 1][k] - stops[i][k]) + 0.5);
+}
+
+static void path_colour(const amp_pathset *ps, size_t i, unsigned char rgb[3])
+{
+    if (ps->paths[i].role == AMP_ROLE_SUPPORT) {
+        rgb[0] = rgb[1] = rgb[2] = 150;
+        return;
+    }
+    ramp(ps->npaths > 1 ? (double)i / (double)(ps->npaths - 1) : 0.0, rgb);
+}
+
+static void layout(view v[2], int width, int height)
+{
+    v[0].iso = 1;
+    v[1].iso = 0;
+    v[0].x0 = 0;
+    v[1].x0 = width / 2;
+    v[0].y0 = v[1].y0 = 0;
+    v[0].w = v[1].w = width / 2;
+    v[0].h = v[1].h = height - LEGEND_H;
+}
+
+static void summary(const amp_pathset *ps, char *buf, size_t cap, size_t *support)
+{
+    size_t i;
+    double rmin = HUGE_VAL, rmax = 0;
+    *support = 0;
+    for (i = 0; i < ps->npaths; i++)
+        *support += ps->paths[i].role == AMP_ROLE_SUPPORT;
+    for (i = 0; i < ps->nverts; i++) {
+        rmin = fmin(rmin, ps->verts[i].r);
+        rmax = fmax(rmax, ps->verts[i].r);
+    }
+    if (ps->nverts == 0)
+        rmin = 0;
+    snprintf(buf, cap, "%lu paths (%lu object, %lu support), %lu vertices, %.0f mm, radius %.2f-%.2f mm",
+             (unsigned long)ps->npaths, (unsigned long)(ps->npaths - *support), (unsigned long)*support,
+             (unsigned long)ps->nverts, amp_pathset_length(ps, -1), rmin, rmax);
+}
+
+/*
+ * Walk path i in view v, keeping a vertex only when it lies at least one pixel
+ * from the last kept one (the path's last vertex is always kept), so that the
+ * work and the SVG size follow the picture, not the vertex count.
+ */
+typedef void (*seg_fn)(void *user, const double a[5], const double b[5]);
+
+static size_t walk_path(const amp_pathset *ps, size_t i, const view *v, seg_fn fn, void *user)
+{
+    const amp_pvert *p = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, k, drawn = 0;
+    double last[5], cur[5];
+    if (n == 0)
+        return 0;
+    to_screen(v, p[0].p, &last[0], &last[1], &last[2]);
+    last[3] = p[0].r * v->scale;
+    last[4] = p[0].r;
+    if (n == 1) {
+        fn(user, last, last);
+        return 1;
+    }
+    for (k = 1; k < n; k++) {
+        to_screen(v, p[k].p, &cur[0], &cur[1], &cur[2]);
+        cur[3] = p[k].r * v->scale;
+        cur[4] = p[k].r;
+        if (k + 1 < n && hypot(cur[0] - last[0], cur[1] - last[1]) < 1.0)
+            continue;
+        fn(user, last, cur);
+        drawn++;
+        memcpy(last, cur, sizeof last);
+    }
+    return drawn;
+}
+
+/* ---------------------------------------------------------------- raster */
+
+typedef struct raster {
+    int w, h;
+    unsigned char *rgb;
+    float *depth;
+    unsigned char col[3];
+} raster;
+
+/* A shaded capsule a-b; a[] = {sx, sy, depth, radius px, radius world}. */
+static void raster_seg(void *user, const double a[5], const double b[5])
+{
+    raster *r = user;
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy;
+    double wmax = fmax(fmax(a[3], b[3]), 0.8), bound = fmax(a[2], b[2]) + fmax(a[4], b[4]);
+    int x0 = (int)floor(fmin(a[0], b[0]) - wmax), x1 = (int)ceil(fmax(a[0], b[0]) + wmax);
+    int y0 = (int)floor(fmin(a[1], b[1]) - wmax), y1 = (int)ceil(fmax(a[1], b[1]) + wmax);
+    int x, y;
+    if (l2 > (4 * wmax + 8) * (4 * wmax + 8)) {
+        /* long segment: halves keep the scanned boxes close to the tube */
+        double m[5];
+        int k;
+        for (k = 0; k < 5; k++)
+            m[k] = 0.5 * (a[k] + b[k]);
+        raster_seg(user, a, m);
+        raster_seg(user, m, b);
+        return;
+    }
+    if (x0 < 0)
+        x0 = 0;
+    if (y0 < 0)
+        y0 = 0;
+    if (x1 >= r->w)
+        x1 = r->w - 1;
+    if (y1 >= r->h)
+        y1 = r->h - 1;
+    for (y = y0; y <= y1; y++)
+        for (x = x0; x <= x1; x++) {
+            double px = x + 0.5 - a[0], py = y + 0.5 - a[1], t = 0, u = 0, d, dp, w, q, depth, shade;
+            size_t idx = (size_t)y * (size_t)r->w + (size_t)x;
+            if (bound <= r->depth[idx])
+                continue; /* nearer material already there: the common case when drawing top-down */
+            if (l2 > 0) {
+                u = (px * dx + py * dy) / l2;
+                t = u < 0 ? 0 : u > 1 ? 1 : u;
+            }
+            d = hypot(px - t * dx, py - t * dy);
+            w = fmax(a[3] + t * (b[3] - a[3]), 0.8);
+            if (d > w)
+                continue;
+            /* shade by the distance across the tube (not to the end cap), so joints do not show as rings */
+            dp = l2 > 0 ? fabs(px * dy - py * dx) / sqrt(l2) : d;
+            q = sqrt(fmax(0.0, 1 - (dp / w) * (dp / w))); /* the tube's bulge towards the viewer */
+            depth = a[2] + t * (b[2] - a[2]) + q * (a[4] + t * (b[4] - a[4]));
+            if (depth <= r->depth[idx])
+                continue;
+            r->depth[idx] = (float)depth;
+            /* a few shading levels: smooth enough to read the tubes, and far better compressed */
+            shade = 0.45 + 0.55 * floor(q * 8 + 0.5) / 8;
+            r->rgb[3 * idx] = (unsigned char)(r->col[0] * shade);
+            r->rgb[3 * idx + 1] = (unsigned char)(r->col[1] * shade);
+            r->rgb[3 * idx + 2] = (unsigned char)(r->col[2] * shade);
+        }
+}
+
+static void fill_rect(raster *r, int x0, int y0, int w, int h, const unsigned char c[3])
+{
+    int x, y;
+    for (y = y0; y < y0 + h; y++)
+        for (x = x0; x < x0 + w; x++)
+            if (x >= 0 && y >= 0 && x < r->w && y < r->h)
+                memcpy(r->rgb + 3 * ((size_t)y * (size_t)r->w + (size_t)x), c, 3);
+}
+
+/* A 3x5 pixel font: five rows of three bits per glyph. */
+static const char FONT_CHARS[] = "0123456789abcdefghijklmnopqrstuvwxyz.,-():/=%^";
+static const unsigned char FONT[][5] = {
+    {7, 5, 5, 5, 7}, {2, 6, 2, 2, 7}, {7, 1, 7, 4, 7}, {7, 1, 3, 1, 7}, {5, 5, 7, 1, 1}, {7, 4, 7, 1, 7},
+    {7, 4, 7, 5, 7}, {7, 1, 1, 2, 2}, {7, 5, 7, 5, 7}, {7, 5, 7, 1, 7}, {2, 5, 7, 5, 5}, {6, 5, 6, 5, 6},
+    {3, 4, 4, 4, 3}, {6, 5, 5, 5, 6}, {7, 4, 6, 4, 7}, {7, 4, 6, 4, 4}, {3, 4, 5, 5, 3}, {5, 5, 7, 5, 5},
+    {7, 2, 2, 2, 7}, {1, 1, 1, 5, 2}, {5, 5, 6, 5, 5}, {4, 4, 4, 4, 7}, {5, 7, 7, 5, 5}, {6, 5, 5, 5, 5},
+    {2, 5, 5, 5, 2}, {6, 5, 6, 4, 4}, {2, 5, 5, 6, 3}, {6, 5, 6, 5, 5}, {3, 4, 2, 1, 6}, {7, 2, 2, 2, 2},
+    {5, 5, 5, 5, 7}, {5, 5, 5, 5, 2}, {5, 5, 7, 7, 5}, {5, 5, 2, 5, 5}, {5, 5, 2, 2, 2}, {7, 1, 2, 4, 7},
+    {0, 0, 0, 0, 2}, {0, 0, 0, 2, 4}, {0, 0, 7, 0, 0}, {1, 2, 2, 2, 1}, {4, 2, 2, 2, 4}, {0, 2, 0, 2, 0},
+    {1, 1, 2, 4, 4}, {0, 7, 0, 7, 0}, {5, 1, 2, 4, 5}, {2, 5, 0, 0, 0}};
+
+static void text(raster *r, int x, int y, int px, const char *s)
+{
+    static const unsigned char ink[3] = {40, 40, 40};
+    for (; *s; s++, x += 4 * px) {
+        char c = (char)(*s >= 'A' && *s <= 'Z' ? *s - 'A' + 'a' : *s);
+        const char *f = c ? strchr(FONT_CHARS, c) : NULL;
+        int row, col;
+        if (!f)
+            continue;
+        for (row = 0; row < 5; row++)
+            for (col = 0; col < 3; col++)
+                if (FONT[f - FONT_CHARS][row] & (4 >> col))
+                    fill_rect(r, x + col * px, y + row * px, px, px, ink);
+    }
+}
+
+/* ---------------------------------------------------------------- PNG encoding */
+
+unsigned long render_crc32(unsigned long crc, const unsigned char *p, size_t n)
+{
+    size_t i;
+    int k;
+    crc = ~crc & 0xffffffffUL;
+    for (i = 0; i < n; i++) {
+        crc ^= p[i];
+        for (k = 0; k < 8; k++)
+            crc = (crc >> 1) ^ (0xedb88320UL & (0UL - (crc & 1UL)));
+    }
+    return ~crc & 0xffffffffUL;
+}
+
+typedef struct bitw {
+    unsigned char *buf;
+    size_t len, cap;
+    unsigned long acc;
+    int nbits;
+    int oom;
+} bitw;
+
+static void bw_byte(bitw *b, unsigned char c)
+{
+    if (b->len == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 65536;
+        unsigned char *p = realloc(b->buf, cap);
+        if (!p) {
+            b->oom = 1;
+            return;
+        }
+        b->buf = p;
+        b->cap = cap;
+    }
+    b->buf[b->len++] = c;
+}
+
+/* Append @p n bits of @p v, least significant first (deflate's bit order). */
+static void bw_bits(bitw *b, unsigned long v, int n)
+{
+    b->acc |= v << b->nbits;
+    b->nbits += n;
+    while (b->nbits >= 8) {
+        bw_byte(b, (unsigned char)(b->acc & 0xff));
+        b->acc >>= 8;
+        b->nbits -= 8;
+    }
+}
+
+/* Huffman codes go most significant bit first. */
+static void bw_code(bitw *b, unsigned v, int n)
+{
+    unsigned r = 0;
+    int i;
+    for (i = 0; i < n; i++)
+        r |= ((v >> i) & 1u) << (n - 1 - i);
+    bw_bits(b, r, n);
+}
+
+/* Fixed Huffman literal/length symbol (RFC 1951 §3.2.6). */
+static void put_sym(bitw *b, unsigned s)
+{
+    if (s < 144)
+        bw_code(b, 0x30 + s, 8);
+    else if (s < 256)
+        bw_code(b, 0x190 + (s - 144), 9);
+    else if (s < 280)
+        bw_code(b, s - 256, 7);
+    else
+        bw_code(b, 0xc0 + (s - 280), 8);
+}
+
+static const unsigned short DIST_BASE[30] = {1,   2,   3,   4,   5,   7,    9,    13,   17,   25,
+                                             33,  49,  65,  97,  129, 193,  257,  385,  513,  769,
+                                             1025, 1537, 2049, 3073, 4097, 6145, 8193, 12289, 16385, 24577};
+static const unsigned char DIST_EXTRA[30] = {0, 0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, 5, 5, 6,
+                                             6, 7, 7, 8, 8, 9, 9, 10, 10, 11, 11, 12, 12, 13, 13};
+
+/* A match of @p len (3..258) at distance @p dist (1..32768), RFC 1951 §3.2.5. */
+static void put_match(bitw *b, unsigned len, unsigned dist)
+{
+    static const unsigned short base[] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
+                                          31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+    static const unsigned char extra[] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                          2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+    int i = 28, d = 29;
+    while (base[i] > len)
+        i--;
+    put_sym(b, 257 + (unsigned)i);
+    if (extra[i])
+        bw_bits(b, len - base[i], extra[i]);
+    while (DIST_BASE[d] > dist)
+        d--;
+    bw_code(b, (unsigned)d, 5); /* fixed distance codes are 5 bits */
+    if (DIST_EXTRA[d])
+        bw_bits(b, dist - DIST_BASE[d], DIST_EXTRA[d]);
+}
+
+/*
+ * zlib stream of @p data: one fixed-Huffman deflate block. Instead of a
+ * general LZ77 search, each position tries a few distances that pay off in
+ * pictures: the previous byte and pixel (runs, flat colour) and the same
+ * place one or two rows above (@p row bytes per row, filter byte included).
+ */
+static void deflate_rle(bitw *b, const unsigned char *data, size_t n, size_t row)
+{
+    size_t cand[7], ncand = 0, i = 0, k;
+    unsigned long s1 = 1, s2 = 0;
+    size_t try_d[7];
+    try_d[0] = 1;
+    try_d[1] = 3;
+    try_d[2] = 6;
+    try_d[3] = row;
+    try_d[4] = row - 3;
+    try_d[5] = row + 3;
+    try_d[6] = 2 * row;
+    for (k = 0; k < 7; k++)
+        if (try_d[k] >= 1 && try_d[k] <= 32768)
+            cand[ncand++] = try_d[k];
+    bw_byte(b, 0x78); /* CM 8, 32K window */
+    bw_byte(b, 0x01); /* FCHECK: 0x7801 % 31 == 0 */
+    bw_bits(b, 1, 1); /* BFINAL */
+    bw_bits(b, 1, 2); /* BTYPE 01: fixed Huffman */
+    while (i < n) {
+        size_t best = 0, bestd = 0, c;
+        for (c = 0; c < ncand; c++) {
+            size_t d = cand[c], len = 0;
+            if (d > i)
+                continue;
+            while (i + len < n && len < 258 && data[i + len] == data[i + len - d])
+                len++;
+            if (len > best) {
+                best = len;
+                bestd = d;
+            }
+        }
+        if (best >= 3) {
+            put_match(b, (unsigned)best, (unsigned)bestd);
+            i += best;
+        } else {
+            put_sym(b, data[i]);
+            i++;
+        }
+    }
+    put_sym(b, 256);
+    if (b->nbits)
+        bw_bits(b, 0, 8 - b->nbits);
+    for (k = 0; k < n; k++) {
+        s1 = (s1 + data[k]) % 65521UL;
+        s2 = (s2 + s1) % 65521UL;
+    }
+    bw_byte(b, (unsigned char)(s2 >> 8));
+    bw_byte(b, (unsigned char)s2);
+    bw_byte(b, (unsigned char)(s1 >> 8));
+    bw_byte(b, (unsigned char)s1);
+}
+
+static int put_be32(FILE *f, unsigned long v)
+{
+    unsigned char c[4];
+    c[0] = (unsigned char)(v >> 24);
+    c[1] = (unsigned char)(v >> 16);
+    c[2] = (unsigned char)(v >> 8);
+    c[3] = (unsigned char)v;
+    return fwrite(c, 1, 4, f) == 4 ? 0 : -1;
+}
+
+static int put_chunk(FILE *f, const char *type, const unsigned char *data, size_t n, size_t *bytes)
+{
+    unsigned long crc = render_crc32(0, (const unsigned char *)type, 4);
+    crc = render_crc32(crc, data, n);
+    if (put_be32(f, (unsigned long)n) || fwrite(type, 1, 4, f) != 4 || (n && fwrite(data, 1, n, f) != n) ||
+        put_be32(f, crc))
+        return -1;
+    *bytes += 12 + n;
+    return 0;
+}
+
+static int write_png(FILE *f, const raster *r, size_t *bytes)
+{
+    static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
+    unsigned char ihdr[13];
+    size_t stride = 3 * (size_t)r->w, y, x, n = (stride + 1) * (size_t)r->h;
+    unsigned char *filt = malloc(n);
+    bitw b;
+    int rc;
+    if (!filt)
+        return -1;
+    /* filter "Up" on every row: identical rows and flat areas become zeros */
+    for (y = 0; y < (size_t)r->h; y++) {
+        unsigned char *o = filt + y * (stride + 1);
+        const unsigned char *cur = r->rgb + y * stride, *prev = y ? cur - stride : NULL;
+        o[0] = 2;
+        for (x = 0; x < stride; x++)
+            o[1 + x] = (unsigned char)(cur[x] - (prev ? prev[x] : 0));
+    }
+    memset(&b, 0, sizeof b);
+    deflate_rle(&b, filt, n, stride + 1);
+    free(filt);
+    if (b.oom) {
+        free(b.buf);
+        return -1;
+    }
+    ihdr[0] = (unsigned char)(r->w >> 24);
+    ihdr[1] = (unsigned char)(r->w >> 16);
+    ihdr[2] = (unsigned char)(r->w >> 8);
+    ihdr[3] = (unsigned char)r->w;
+    ihdr[4] = (unsigned char)(r->h >> 24);
+    ihdr[5] = (unsigned char)(r->h >> 16);
+    ihdr[6] = (unsigned char)(r->h >> 8);
+    ihdr[7] = (unsigned char)r->h;
+    ihdr[8] = 8;  /* bit depth */
+    ihdr[9] = 2;  /* colour type RGB */
+    ihdr[10] = 0; /* deflate */
+    ihdr[11] = 0; /* adaptive filtering */
+    ihdr[12] = 0; /* no interlace */
+    *bytes = 8;
+    rc = fwrite(sig, 1, 8, f) == 8 ? 0 : -1;
+    if (!rc)
+        rc = put_chunk(f, "IHDR", ihdr, 13, bytes);
+    {
+        /* IDAT chunks of at most 1 MiB */
+        size_t off = 0;
+        while (!rc && off < b.len) {
+            size_t m = b.len - off > (1u << 20) ? (1u << 20) : b.len - off;
+            rc = put_chunk(f, "IDAT", b.buf + off, m, bytes);
+            off += m;
+        }
+    }
+    if (!rc)
+        rc = put_chunk(f, "IEND", NULL, 0, bytes);
+    free(b.buf);
+    return rc;
+}
+
+/* Size of a font pixel in the legend: the 3x5 font at 3 px per dot fits 1600 px pictures. */
+static int legend_unit(int width) { return width >= 1200 ? 3 : width >= 700 ? 2 : 1; }
+
+static void legend_common(int width, int height, int *lx, int *ly)
+{
+    *lx = 16;
+    *ly = height - LEGEND_H + 10;
+    (void)width;
+}
+
+int render_png(const amp_pathset *ps, int width, FILE *out, render_stats *st)
+{
+    raster r;
+    view v[2];
+    size_t i, npix, support;
+    int k, lx, ly, rc;
+    char line[256];
+    static const unsigned char bg[3] = {250, 250, 247}, frame[3] = {210, 210, 205};
+    int u = legend_unit(width);
+    memset(st, 0, sizeof *st);
+    r.w = width;
+    r.h = width / 2 + LEGEND_H;
+    npix = (size_t)r.w * (size_t)r.h;
+    r.rgb = malloc(3 * npix);
+    r.depth = malloc(sizeof(float) * npix);
+    if (!r.rgb || !r.depth) {
+        free(r.rgb);
+        free(r.depth);
+        return -1;
+    }
+    for (i = 0; i < npix; i++) {
+        memcpy(r.rgb + 3 * i, bg, 3);
+        r.depth[i] = -HUGE_VALF;
+    }
+    layout(v, r.w, r.h);
+    for (k = 0; k < 2; k++) {
+        fit_view(&v[k], ps);
+        /* z-buffered, so the order only matters for speed: the last printed paths tend to be the
+           nearest, so drawing them first lets the depth test reject most of the rest early */
+        for (i = ps->npaths; i-- > 0;) {
+            path_colour(ps, i, r.col);
+            st->drawn += walk_path(ps, i, &v[k], raster_seg, &r);
+        }
+        text(&r, (int)v[k].x0 + 4 * u, 10, u, k == 0 ? "isometric view" : "top view");
+    }
+    fill_rect(&r, r.w / 2, 0, 1, r.h - LEGEND_H, frame);
+    fill_rect(&r, 0, r.h - LEGEND_H, r.w, 1, frame);
+    /* legend: the counts, the print-order ramp, the support swatch (sized by the picture width) */
+    legend_common(r.w, r.h, &lx, &ly);
+    summary(ps, line, sizeof line, &support);
+    text(&r, lx, ly, u, line);
+    text(&r, lx, ly + 10 * u, u, "print order: first");
+    for (k = 0; k < 100 * u; k++) {
+        unsigned char c[3];
+        ramp(k / (100.0 * u - 1), c);
+        fill_rect(&r, lx + 77 * u + k, ly + 9 * u, 1, 7 * u, c);
+    }
+    text(&r, lx + 180 * u, ly + 10 * u, u, "last");
+    {
+        static const unsigned char grey[3] = {150, 150, 150};
+        fill_rect(&r, lx + 200 * u, ly + 9 * u, 10 * u, 7 * u, grey);
+        snprintf(line, sizeof line, "support (%lu)", (unsigned long)support);
+        text(&r, lx + 213 * u, ly + 10 * u, u, line);
+    }
+    text(&r, lx, ly + 21 * u, u > 1 ? u - 1 : 1, "tube width follows the material deposition radius");
+    rc = write_png(out, &r, &st->bytes);
+    st->width = r.w;
+    st->height = r.h;
+    st->paths = ps->npaths;
+    st->support = support;
+    st->vertices = ps->nverts;
+    free(r.rgb);
+    free(r.depth);
+    return rc;
+}
+
+/* ---------------------------------------------------------------- SVG */
+
+typedef struct svgw {
+    FILE *f;
+    int open;         /* a polyline is open */
+    double width;     /* its stroke width (px) */
+    double lx, ly;    /* its last point */
+    const char *col;  /* "#rrggbb" */
+} svgw;
+
+static double qwidth(double r) { return floor(fmax(2 * r, 0.6) * 4 + 0.5) / 4; }
+
+static void svg_close(svgw *s)
+{
+    if (s->open)
+        fputs("\"/>\n", s->f);
+    s->open = 0;
+}
+
+/* Consecutive segments of equal (quantised) width join one polyline. */
+static void svg_seg(void *user, const double a[5], const double b[5])
+{
+    svgw *s = user;
+    double w = qwidth(0.5 * (a[3] + b[3]));
+    if (!s->open || w != s->width || a[0] != s->lx || a[1] != s->ly) {
+        svg_close(s);
+        fprintf(s->f, "<polyline stroke=\"%s\" stroke-width=\"%.2f\" points=\"%.1f,%.1f", s->col, w, a[0], a[1]);
+        s->open = 1;
+        s->width = w;
+    }
+    fprintf(s->f, " %.1f,%.1f", b[0], b[1]);
+    s->lx = b[0];
+    s->ly = b[1];
+}
+
+int render_svg(const amp_pathset *ps, int width, FILE *out, render_stats *st)
+{
+    view v[2];
+    size_t i, support;
+    int k, h = width / 2 + LEGEND_H, lx, ly;
+    char line[256], col[8];
+    svgw s;
+    memset(st, 0, sizeof *st);
+    layout(v, width, h);
+    fprintf(out,
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\">\n"
+            "<rect width=\"%d\" height=\"%d\" fill=\"#fafaf7\"/>\n",
+            width, h, width, h, width, h);
+    for (k = 0; k < 2; k++) {
+        fit_view(&v[k], ps);
+        fprintf(out, "<text x=\"%.0f\" y=\"18\" font-family=\"sans-serif\" font-size=\"15\">%s</text>\n",
+                v[k].x0 + 12, k == 0 ? "isometric view" : "top view");
+        fprintf(out, "<g fill=\"none\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n");
+        for (i = 0; i < ps->npaths; i++) {
+            unsigned char c[3];
+            path_colour(ps, i, c);
+            snprintf(col, sizeof col, "#%02x%02x%02x", c[0], c[1], c[2]);
+            s.f = out;
+            s.open = 0;
+            s.col = col;
+            st->drawn += walk_path(ps, i, &v[k], svg_seg, &s);
+            svg_close(&s);
+        }
+        fputs("</g>\n", out);
+    }
+    fprintf(out, "<line x1=\"%d\" y1=\"0\" x2=\"%d\" y2=\"%d\" stroke=\"#d2d2cd\"/>\n", width / 2, width / 2,
+            h - LEGEND_H);
+    legend_common(width, h, &lx, &ly);
+    summary(ps, line, sizeof line, &support);
+    fprintf(out, "<g font-family=\"sans-serif\" font-size=\"15\" fill=\"#282828\" transform=\"translate(%d %d) scale(%g)\">\n",
+            lx, ly, legend_unit(width) / 3.0);
+    fprintf(out, "<text x=\"0\" y=\"14\">%s</text>\n", line);
+    fprintf(out, "<defs><linearGradient id=\"order\">");
+    for (k = 0; k <= 4; k++) {
+        unsigned char c[3];
+        ramp(k / 4.0, c);
+        fprintf(out, "<stop offset=\"%d%%\" stop-color=\"#%02x%02x%02x\"/>", k * 25, c[0], c[1], c[2]);
+    }
+    fprintf(out, "</linearGradient></defs>\n");
+    fprintf(out, "<text x=\"0\" y=\"44\">print order: first</text>\n");
+    fprintf(out, "<rect x=\"150\" y=\"26\" width=\"300\" height=\"24\" fill=\"url(#order)\"/>\n");
+    fprintf(out, "<text x=\"460\" y=\"44\">last</text>\n");
+    fprintf(out, "<rect x=\"520\" y=\"26\" width=\"30\" height=\"24\" fill=\"#969696\"/>\n");
+    fprintf(out, "<text x=\"560\" y=\"44\">support (%lu)</text>\n", (unsigned long)support);
+    fprintf(out, "<text x=\"0\" y=\"78\">tube width follows the material deposition radius</text>\n");
+    fputs("</g>\n</svg>\n", out);
+    st->width = width;
+    st->height = h;
+    st->paths = ps->npaths;
+    st->support = support;
+    st->vertices = ps->nverts;
+    st->bytes = (size_t)ftell(out);
+    return ferror(out) ? -1 : 0;
+}
