@@ -31,6 +31,10 @@ void br_link_close(br_link *l);
 /* ---- jobs: .gcode files (and .amp through the G-code writer when available) ---- */
 typedef struct br_job {
     FILE *f;
+    int is_amp;          /* .amp: G-code made on the fly by the library's writer (SPEC §5) */
+    amp_pathset ps;
+    amp_gcode_opts go;
+    amp_gcode_iter it;
     char path[PATH_MAX];
     long line;       /* job line number of the last line returned (1-based file line) */
     long total;      /* commands in the job (non-empty after stripping) */

@@ -99,6 +99,59 @@ static char *clean(char *s)
     return s;
 }
 
+/* One raw line of the job (comment included): 1, 0 at the end, -1 on an error. */
+static int job_read(br_job *j, char *buf, size_t cap)
+{
+    if (j->is_amp) {
+        int r = amp_gcode_iter_next(&j->it, buf, cap, NULL);
+        return r > 0 ? 1 : r == 0 ? 0 : -1;
+    }
+    if (!fgets(buf, (int)cap, j->f))
+        return ferror(j->f) ? -1 : 0;
+    return 1;
+}
+
+/* Back to the first line (the job is read twice: check, then send). */
+static int job_restart(br_job *j)
+{
+    if (j->is_amp)
+        return amp_gcode_iter_init(&j->it, &j->ps, &j->go, NULL) == AMP_OK ? 0 : -1;
+    rewind(j->f);
+    return 0;
+}
+
+static int ends_with(const char *s, const char *suf)
+{
+    size_t a = strlen(s), b = strlen(suf);
+    return a >= b && strcmp(s + a - b, suf) == 0;
+}
+
+/* .amp: parse the paths and start the G-code writer with the defaults of the flavor. */
+static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, char *why, size_t whylen)
+{
+    char *text = NULL;
+    size_t len = 0;
+    amp_error err;
+    amp_error_clear(&err);
+    amp_pathset_init(&j->ps, NULL);
+    if (amp_read_file(path, NULL, 0, &text, &len, &err) != AMP_OK ||
+        amp_pathset_parse(&j->ps, text, len, &err) != AMP_OK) {
+        snprintf(why, whylen, "%s:%ld: %s", path, err.line, err.msg);
+        amp_free(NULL, text);
+        amp_pathset_free(&j->ps);
+        return -1;
+    }
+    amp_free(NULL, text);
+    amp_gcode_opts_default(&j->go, flavor == AMP_PROTO_KLIPPER ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN);
+    if (amp_gcode_iter_init(&j->it, &j->ps, &j->go, &err) != AMP_OK) {
+        snprintf(why, whylen, "%s: %s", path, err.msg);
+        amp_pathset_free(&j->ps);
+        return -1;
+    }
+    j->is_amp = 1;
+    return 0;
+}
+
 static void pre(br_job *j, const char *fmt, double a, double b)
 {
     if (j->npre < 16)
@@ -137,22 +190,31 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
     memset(&st, 0, sizeof st);
     snprintf(j->path, sizeof j->path, "%s", path);
     j->first_line = resume_from > 1 ? resume_from : 1;
-    j->f = fopen(path, "r");
-    if (!j->f) {
-        snprintf(why, whylen, "%s: %s", path, strerror(errno));
-        return -1;
+    if (ends_with(path, ".amp")) {
+        if (open_amp(j, path, flavor, why, whylen) != 0)
+            return -1;
+    } else {
+        j->f = fopen(path, "r");
+        if (!j->f) {
+            snprintf(why, whylen, "%s: %s", path, strerror(errno));
+            return -1;
+        }
     }
     /* first pass: count, check every line fits the printer, and track the state for a resume */
-    while (fgets(buf, sizeof buf, j->f)) {
+    for (;;) {
         char *c;
-        size_t n = strlen(buf);
-        line++;
-        if (n == sizeof buf - 1 && buf[n - 1] != '\n') {
-            snprintf(why, whylen, "%s:%ld: line longer than %d bytes", path, line, JOB_LINE_MAX - 2);
+        size_t n;
+        int r = job_read(j, buf, sizeof buf);
+        if (r < 0) {
+            snprintf(why, whylen, "%s: read error", path);
             goto fail;
         }
-        if (memchr(buf, '\0', n) != NULL || strlen(buf) != n) {
-            snprintf(why, whylen, "%s:%ld: NUL byte", path, line);
+        if (r == 0)
+            break;
+        n = strlen(buf);
+        line++;
+        if (!j->is_amp && n == sizeof buf - 1 && buf[n - 1] != '\n') {
+            snprintf(why, whylen, "%s:%ld: line longer than %d bytes", path, line, JOB_LINE_MAX - 2);
             goto fail;
         }
         c = clean(buf);
@@ -173,22 +235,20 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
             goto fail;
         }
     }
-    if (ferror(j->f)) {
-        snprintf(why, whylen, "%s: read error", path);
-        goto fail;
-    }
     if (resume_from > line + 1) {
         snprintf(why, whylen, "%s: --resume-from %ld is past the end (%ld lines)", path, resume_from, line);
         goto fail;
     }
     if (resume_from > 1)
         build_preamble(j, &st);
-    rewind(j->f);
+    if (job_restart(j) != 0) {
+        snprintf(why, whylen, "%s: cannot restart the G-code writer", path);
+        goto fail;
+    }
     j->line = 0;
     return 0;
 fail:
-    fclose(j->f);
-    j->f = NULL;
+    br_job_close(j);
     return -1;
 }
 
@@ -200,10 +260,13 @@ int br_job_next(br_job *j, char *buf, size_t cap, long *jobline)
         *jobline = 0;
         return 1;
     }
-    if (!j->f)
+    if (!j->f && !j->is_amp)
         return 0;
-    while (fgets(tmp, sizeof tmp, j->f)) {
+    for (;;) {
         char *c;
+        int r = job_read(j, tmp, sizeof tmp);
+        if (r <= 0)
+            return r;
         j->line++;
         c = clean(tmp);
         if (*c == '\0' || j->line < j->first_line)
@@ -212,7 +275,6 @@ int br_job_next(br_job *j, char *buf, size_t cap, long *jobline)
         *jobline = j->line;
         return 1;
     }
-    return ferror(j->f) ? -1 : 0;
 }
 
 void br_job_close(br_job *j)
@@ -220,4 +282,7 @@ void br_job_close(br_job *j)
     if (j->f)
         fclose(j->f);
     j->f = NULL;
+    if (j->is_amp)
+        amp_pathset_free(&j->ps);
+    j->is_amp = 0;
 }

@@ -540,6 +540,55 @@ START_TEST(soak_corrupted_commands_and_two_resets_resume_exactly)
 }
 END_TEST
 
+START_TEST(amp_job_is_converted_on_the_fly_with_the_gcode_writer)
+{
+    /* a helix-like path and a support column: the printer must run exactly the writer's moves */
+    amp_pathset ps;
+    amp_buf b;
+    vpr v;
+    char *out, amp[256], gc[256];
+    FILE *f;
+    int k;
+    snprintf(amp, sizeof amp, "%s", amp_test_tmp("job.amp"));
+    snprintf(gc, sizeof gc, "%s", amp_test_tmp("expected.gcode"));
+    amp_pathset_init(&ps, NULL);
+    amp_buf_init(&b, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < 150; k++)
+        amp_pathset_push(&ps, amp_v3(100 + 20 * cos(0.05 * k), 100 + 20 * sin(0.05 * k), 0.3 + 0.01 * k),
+                         0.3 + 0.1 * sin(0.1 * k), NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_SUPPORT, NULL);
+    amp_pathset_push(&ps, amp_v3(60, 60, 0.2), 0.25, NULL);
+    amp_pathset_push(&ps, amp_v3(60, 70, 0.2), 0.25, NULL);
+    ck_assert_int_eq(amp_pathset_write(&ps, NULL, amp_buf_sink, &b, NULL), AMP_OK);
+    f = fopen(amp, "w");
+    fwrite(b.data, 1, b.len, f);
+    fclose(f);
+    amp_buf_free(&b);
+    amp_buf_init(&b, NULL);
+    {
+        amp_gcode_opts o;
+        amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+        ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
+    }
+    f = fopen(gc, "w");
+    fwrite(b.data, 1, b.len, f);
+    fclose(f);
+    amp_buf_free(&b);
+    amp_pathset_free(&ps);
+    vp_start(&v, "--corrupt-in 0.005 --seed 3");
+    ck_assert_int_eq(bridge_run(&v, amp, FAST, &out), 0);
+    vp_stop(&v);
+    assert_executed_equals_job(&v, gc, -1);
+    {
+        static lines m;
+        moves_of(gc, 0, &m);
+        ck_assert_int_gt(m.n, 140);
+        free_lines(&m);
+    }
+}
+END_TEST
+
 static Suite *bridge_suite(void)
 {
     Suite *s = suite_create("bridge");
@@ -561,6 +610,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
+    AMP_ADD_TEST(tc, amp_job_is_converted_on_the_fly_with_the_gcode_writer);
     AMP_ADD_TEST(tc, soak_one_percent_corrupted_bytes_both_ways);
     AMP_ADD_TEST(tc, soak_corrupted_commands_and_two_resets_resume_exactly);
     suite_add_tcase(s, tc);
