@@ -90,6 +90,16 @@ static void start_marlin(amp_proto *p, rec *r, amp_proto_window mode, int window
     ck_assert_int_eq(p->state, AMP_PROTO_RUNNING);
 }
 
+static void start_klipper(amp_proto *p, rec *r)
+{
+    amp_proto_opts o;
+    memset(r, 0, sizeof *r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.on_event = on_ev;
+    o.user = r;
+    ck_assert_int_eq(amp_proto_init(p, &o, 0, NULL), AMP_OK);
+}
+
 static void submit_moves(amp_proto *p, int n)
 {
     int i;
@@ -462,14 +472,9 @@ END_TEST
 START_TEST(klipper_has_no_numbers_acks_errors_and_stops_on_shutdown)
 {
     amp_proto p;
-    amp_proto_opts o;
     rec r;
     int i;
-    memset(&r, 0, sizeof r);
-    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
-    o.on_event = on_ev;
-    o.user = &r;
-    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    start_klipper(&p, &r);
     ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
     submit_moves(&p, 20);
     ck_assert_str_eq(tx(&p, 1), "G1 X0.5 Y0 E0.00\n");
@@ -492,13 +497,8 @@ END_TEST
 START_TEST(klipper_shutdown_reports_the_last_acknowledged_line)
 {
     amp_proto p;
-    amp_proto_opts o;
     rec r;
-    memset(&r, 0, sizeof r);
-    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
-    o.on_event = on_ev;
-    o.user = &r;
-    amp_proto_init(&p, &o, 0, NULL);
+    start_klipper(&p, &r);
     submit_moves(&p, 5);
     while (*tx(&p, 1))
         ;
