@@ -167,7 +167,7 @@ int br_session_open(br_session *s, const br_cfg *cfg, char *why, size_t whylen)
     o.resend_ok = cfg->resend_ok;
     o.timeout_ms = cfg->timeout_ms;
     o.settle_ms = cfg->settle_ms;
-    o.byte_us = s->link.is_pty ? 0 : (unsigned long)(10000000L / cfg->baud);
+    o.byte_us = (unsigned long)(10000000L / cfg->baud); /* ptys too: the virtual printer models a wire */
     o.boot_ms = cfg->flavor < 0 ? 0 : cfg->boot_ms; /* detection already waited for the boot */
     o.on_event = on_event;
     o.user = s;

@@ -213,7 +213,7 @@ static int count_in_file(const char *path, const char *needle)
     return c;
 }
 
-static const char *FAST = "--timeout 0.3 --settle-ms 5 --boot-wait 0.3";
+static const char *FAST = "--timeout 0.3 --settle-ms 5 --boot-wait 0.3 --baud 1000000";
 
 static void scenario(const char *vopts, const char *bopts, int n, int want_rc)
 {
@@ -288,7 +288,7 @@ END_TEST
 START_TEST(garbled_replies_split_at_low_baud)
 {
     /* 9600 baud model: replies arrive a few bytes at a time; 2 % of them corrupted */
-    scenario("--baud 9600 --corrupt-out 0.02 --seed 4", "--window 4", 60, 0);
+    scenario("--baud 9600 --corrupt-out 0.02 --seed 4", "--window 4 --baud 9600 --timeout 0.6", 60, 0);
 }
 END_TEST
 
@@ -493,7 +493,7 @@ static int run_resuming(const vpr *v, const char *job, int *runs, char **outp)
     *runs = 0;
     do {
         const char *p;
-        snprintf(opts, sizeof opts, "--timeout 0.1 --settle-ms 3 --boot-wait 0.2 --resume-from %ld", resume);
+        snprintf(opts, sizeof opts, "--timeout 0.1 --settle-ms 3 --boot-wait 0.2 --baud 1000000 --resume-from %ld", resume);
         rc = bridge_run(v, job, opts, &out);
         p = strstr(out, "resume with --resume-from ");
         if (rc == 1) {

@@ -137,13 +137,18 @@ int bench_bridge(cli_json *j, int quick)
             cli_json_num(j, "window_link_fraction", win.fraction);
             cli_json_num(j, "window_over_pingpong", win.lines_s / (pp.lines_s > 0 ? pp.lines_s : 1e-9));
             cli_json_num(j, "bridge_cpu_ms_per_1000_lines", win.cpu_ms_per_kline);
+            /* upper bounds: the printer takes 2 ms per command, the link 10 bits per byte */
+            cli_json_num(j, "printer_bound_lines_per_s", 500.0);
+            cli_json_num(j, "link_bound_lines_per_s", (double)bauds[k] / 10.0 / (win.lines > 0 ? (double)win.bytes / (double)win.lines : 1));
             cli_json_bool(j, "all_acknowledged", pp.ok && win.ok);
             cli_json_close(j);
         } else {
             printf("bridge %6ld baud, 2 ms turnaround, %d lines: ping-pong %.0f lines/s (%.0f %% of the link), "
-                   "window of 8 %.0f lines/s (%.0f %% of the link), %.2fx; bridge CPU %.1f ms per 1000 lines%s\n",
+                   "window of 8 %.0f lines/s (%.0f %% of the link), %.2fx (bounds: printer 500, link %.0f lines/s); "
+                   "bridge CPU %.1f ms per 1000 lines%s\n",
                    bauds[k], nlines, pp.lines_s, 100 * pp.fraction, win.lines_s, 100 * win.fraction,
-                   win.lines_s / (pp.lines_s > 0 ? pp.lines_s : 1e-9), win.cpu_ms_per_kline,
+                   win.lines_s / (pp.lines_s > 0 ? pp.lines_s : 1e-9),
+                   (double)bauds[k] / 10.0 / (win.lines > 0 ? (double)win.bytes / (double)win.lines : 1), win.cpu_ms_per_kline,
                    pp.ok && win.ok ? "" : " (NOT all acknowledged)");
         }
     }

@@ -79,7 +79,11 @@ typedef struct vp {
     /* link */
     int mfd, sfd;
     char slave[256];
-    double in_credit, out_credit, t_credit;
+    /* modelled wire: bytes the host wrote, each with the time its last bit arrives */
+    char wire[8192];
+    double wire_t[8192];
+    int wire_len;
+    double wire_in_t, out_free;
     /* RX: bytes read from the link waiting for the parser (capacity rx_bytes) */
     char rxq[4096];
     int rxlen;
@@ -638,7 +642,7 @@ static void step(vp *v, double now)
     }
 }
 
-static void flush_out(vp *v, double dt)
+static void flush_out(vp *v, double now)
 {
     size_t i, n, k = 0, consumed;
     ssize_t w;
@@ -648,11 +652,14 @@ static void flush_out(vp *v, double dt)
         return;
     n = v->outlen;
     if (v->baud > 0) {
-        v->out_credit += dt * v->baud / 10.0;
-        if (v->out_credit > 64)
-            v->out_credit = 64;
-        if ((double)n > v->out_credit)
-            n = (size_t)v->out_credit;
+        /* 10 bits per byte; no credit piles up while the line is idle */
+        double bt = 10.0 / v->baud;
+        size_t nmax;
+        if (v->out_free < now - bt)
+            v->out_free = now - bt;
+        nmax = (size_t)((now - v->out_free) / bt + 1e-6); /* the idle case gives exactly one byte */
+        if (n > nmax)
+            n = nmax;
     }
     if (n > sizeof tmp)
         n = sizeof tmp;
@@ -677,7 +684,7 @@ static void flush_out(vp *v, double dt)
     v->outlen -= consumed;
     v->protect = v->protect > consumed ? v->protect - consumed : 0;
     if (v->baud > 0)
-        v->out_credit -= (double)consumed;
+        v->out_free += (double)consumed * 10.0 / v->baud;
 }
 
 static int parse_list(long *l, int *n, const char *s)
@@ -822,7 +829,7 @@ int main(int argc, char **argv)
     }
     while (!quit_flag) {
         struct pollfd pfd;
-        double now = now_s(), dt = now - last;
+        double now = now_s();
         int timeout = 50, rc;
         last = now;
         if (v->hung) {
@@ -836,9 +843,21 @@ int main(int argc, char **argv)
                 continue;
             }
         }
+        if (v->wire_len > 0) {
+            /* deliver the bytes whose modelled arrival time has come */
+            int k = 0;
+            while (k < v->wire_len && v->wire_t[k] <= now)
+                k++;
+            if (k > 0) {
+                on_bytes(v, v->wire, k, now);
+                memmove(v->wire, v->wire + k, (size_t)(v->wire_len - k));
+                memmove(v->wire_t, v->wire_t + k, (size_t)(v->wire_len - k) * sizeof v->wire_t[0]);
+                v->wire_len -= k;
+            }
+        }
         step(v, now);
-        flush_out(v, dt);
-        if (v->outlen > 0 || v->qcount > 0 || v->booting == 1 || v->exec_has || v->plan_count > 0)
+        flush_out(v, now);
+        if (v->outlen > 0 || v->wire_len > 0 || v->qcount > 0 || v->booting == 1 || v->exec_has || v->plan_count > 0)
             timeout = 1;
         pfd.fd = v->mfd;
         pfd.events = POLLIN;
@@ -847,12 +866,8 @@ int main(int argc, char **argv)
         if (rc > 0 && (pfd.revents & POLLIN)) {
             char buf[512];
             ssize_t n, cap = (ssize_t)sizeof buf;
-            if (v->baud > 0) {
-                v->in_credit += dt * v->baud / 10.0;
-                if (v->in_credit > 64)
-                    v->in_credit = 64;
-                cap = (ssize_t)v->in_credit;
-            }
+            if (v->baud > 0)
+                cap = (ssize_t)sizeof v->wire - v->wire_len < cap ? (ssize_t)sizeof v->wire - v->wire_len : cap;
             if (v->klipper) {
                 /* Klipper stops reading at 20 pending lines, and never drops what it read */
                 ssize_t room = (ssize_t)sizeof v->rxq - v->rxlen;
@@ -860,10 +875,17 @@ int main(int argc, char **argv)
             }
             if (cap > 0) {
                 n = read(v->mfd, buf, (size_t)cap);
-                if (n > 0) {
+                if (n > 0 && v->baud > 0) {
+                    ssize_t b;
+                    if (v->wire_in_t < now)
+                        v->wire_in_t = now;
+                    for (b = 0; b < n; b++) {
+                        v->wire_in_t += 10.0 / v->baud;
+                        v->wire[v->wire_len] = buf[b];
+                        v->wire_t[v->wire_len++] = v->wire_in_t;
+                    }
+                } else if (n > 0) {
                     on_bytes(v, buf, n, now);
-                    if (v->baud > 0)
-                        v->in_credit -= (double)n;
                 }
             } else {
                 usleep(500);
