@@ -87,8 +87,16 @@ static void vp_stop(vpr *v)
     waitpid(v->pid, &st, 0);
 }
 
+static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char **out, int sigint_ms);
+
 /* Run the bridge to completion; returns its exit status, stdout in *out (static buffer). */
 static int bridge_run(const vpr *v, const char *job, const char *opts, char **out)
+{
+    return bridge_run_sig(v, job, opts, out, 0);
+}
+
+/* As bridge_run, sending SIGINT after @p sigint_ms (0 = never). */
+static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char **out, int sigint_ms)
 {
     static char obuf[8192];
     char buf[1024], outpath[256];
@@ -113,6 +121,10 @@ static int bridge_run(const vpr *v, const char *job, const char *opts, char **ou
         dup2(1, 2); /* reasons for a failure show up in the assertion messages */
         execv(argv[0], argv);
         _exit(127);
+    }
+    if (sigint_ms > 0) {
+        msleep(sigint_ms);
+        kill(pid, SIGINT);
     }
     waitpid(pid, &st, 0);
     f = fopen(outpath, "r");
@@ -364,6 +376,30 @@ START_TEST(reset_mid_job_stops_reports_and_resumes_safely)
 }
 END_TEST
 
+START_TEST(sigint_finishes_the_lines_in_flight_and_reports_where_it_stopped)
+{
+    vpr v;
+    char *out;
+    long last = 0, acked = 0;
+    const char *p, *job = make_job("job.gcode", 300, NULL);
+    vp_start(&v, "--turnaround 10");
+    ck_assert_int_eq(bridge_run_sig(&v, job, FAST, &out, 700), 1);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "stopped: interrupted") != NULL, "%s", out);
+    p = strstr(out, "last acknowledged job line ");
+    ck_assert_ptr_nonnull(p);
+    sscanf(p, "last acknowledged job line %ld", &last);
+    p = strstr(out, "acknowledged ");
+    sscanf(p, "acknowledged %ld", &acked);
+    ck_assert_int_gt(last, 10);
+    ck_assert_int_lt(last, 300);
+    /* every line sent was acknowledged before the exit, so the printer ran exactly the moves up to the
+       reported line (moves start at file line 5) */
+    assert_executed_equals_job(&v, job, (int)last - 4);
+    ck_assert_int_eq(acked, last - 1); /* the comment line is not a command */
+}
+END_TEST
+
 START_TEST(hangup_and_reappearance_lose_and_duplicate_nothing)
 {
     scenario("--hangup-after 40 --hangup-secs 0.5", "--window 4 --reconnect 10", 100, 0);
@@ -606,6 +642,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, advanced_ok_window_fills_a_larger_queue);
     AMP_ADD_TEST(tc, overlong_line_is_rejected_before_anything_is_sent);
     AMP_ADD_TEST(tc, reset_mid_job_stops_reports_and_resumes_safely);
+    AMP_ADD_TEST(tc, sigint_finishes_the_lines_in_flight_and_reports_where_it_stopped);
     AMP_ADD_TEST(tc, hangup_and_reappearance_lose_and_duplicate_nothing);
     AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
