@@ -292,15 +292,15 @@ int main(int argc, char **argv)
                 cfg.mode = AMP_PROTO_PINGPONG;
             else if (strcmp(val, "advanced") == 0)
                 cfg.mode = AMP_PROTO_ADVANCED;
-            else if (parse_num(val, &d) && d >= 1 && d < AMP_PROTO_RING) {
+            else if (parse_num(val, &d) && d >= 1 && d <= AMP_PROTO_MAX_INFLIGHT) {
                 cfg.mode = AMP_PROTO_FIXED;
                 cfg.window = (int)d;
             } else
-                return fail("bad --window %s (pingpong, advanced or 1..31)", val);
+                return fail("bad --window %s (pingpong, advanced or 1..24)", val);
         } else if (strcmp(a, "--bufsize") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 1 || d >= AMP_PROTO_RING)
-                return fail("bad --bufsize %s (1..31)", val);
+            if (!parse_num(val, &d) || d < 1 || d > AMP_PROTO_MAX_INFLIGHT)
+                return fail("bad --bufsize %s (1..24)", val);
             cfg.bufsize = (int)d;
         } else if (strcmp(a, "--rx-bytes") == 0) {
             NEEDVAL;
