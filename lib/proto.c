@@ -46,6 +46,9 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
     o->resend_ok = 1;
     o->boot_ms = 3000;
     o->timeout_ms = 10000;
+    o->settle_ms = 30;
+    o->guard_nl = flavor == AMP_PROTO_MARLIN;
+    o->byte_us = 0;
 }
 
 static void emit(amp_proto *p, amp_proto_event_kind k, long line, const char *text)
@@ -63,8 +66,8 @@ amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long n
 {
     if (!p || !o)
         return amp_fail(err, AMP_ERR_ARG, 0, "proto: NULL argument");
-    if (o->window < 1 || o->window > AMP_PROTO_RING - 1 || o->bufsize < 1 || o->bufsize > AMP_PROTO_RING - 1)
-        return amp_fail(err, AMP_ERR_ARG, 0, "proto: window and bufsize must lie in [1, %d]", AMP_PROTO_RING - 1);
+    if (o->window < 1 || o->window > AMP_PROTO_MAX_INFLIGHT || o->bufsize < 1 || o->bufsize > AMP_PROTO_MAX_INFLIGHT)
+        return amp_fail(err, AMP_ERR_ARG, 0, "proto: window and bufsize must lie in [1, %d]", AMP_PROTO_MAX_INFLIGHT);
     if (o->rx_bytes < AMP_PROTO_LINE_MAX)
         return amp_fail(err, AMP_ERR_ARG, 0, "proto: rx_bytes must be at least %d", AMP_PROTO_LINE_MAX);
     if (o->flavor != AMP_PROTO_MARLIN && o->flavor != AMP_PROTO_KLIPPER)
@@ -93,8 +96,8 @@ long amp_proto_pending(const amp_proto *p)
 
 int amp_proto_can_submit(const amp_proto *p)
 {
-    /* keep one slot spare so that a resend request for the oldest unacknowledged line can always be served */
-    return p->state == AMP_PROTO_RUNNING && !p->estop && p->next_n - 1 - p->acked < AMP_PROTO_RING - 1;
+    /* the ring keeps some acknowledged lines too: see AMP_PROTO_MAX_INFLIGHT */
+    return p->state == AMP_PROTO_RUNNING && !p->estop && p->next_n - 1 - p->acked < AMP_PROTO_MAX_INFLIGHT;
 }
 
 static size_t put_long(char *dst, long v)
@@ -139,31 +142,70 @@ static int frame(amp_proto *p, amp_proto_slot *s, long n, const char *cmd, size_
     if (k >= AMP_PROTO_LINE_MAX)
         return 0;
     tmp[k++] = '\n';
+    if (p->o.guard_nl && p->o.flavor == AMP_PROTO_MARLIN)
+        tmp[k++] = '\n';
     memcpy(s->text, tmp, k);
     s->len = (unsigned char)k;
     s->n = n;
     return 1;
 }
 
+/* Strip a ';' comment and surrounding blanks: [*a, *b) is what goes on the wire. 0 on a line break or NUL. */
+static int strip(const char *cmd, size_t len, size_t *a, size_t *b)
+{
+    size_t i;
+    for (i = 0; i < len; i++) {
+        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
+            return 0;
+        if (cmd[i] == ';')
+            break; /* Marlin comments run to the end of the line; the checksum covers the stripped text */
+    }
+    *b = i;
+    /* a later line break would still split the line on the wire */
+    for (; i < len; i++)
+        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
+            return 0;
+    *a = 0;
+    while (*a < *b && (cmd[*a] == ' ' || cmd[*a] == '\t'))
+        (*a)++;
+    while (*b > *a && (cmd[*b - 1] == ' ' || cmd[*b - 1] == '\t'))
+        (*b)--;
+    return 1;
+}
+
+size_t amp_proto_framed_size(amp_proto_flavor flavor, long n, const char *cmd, size_t len)
+{
+    size_t a, b, k;
+    char digits[24];
+    if (!cmd || !strip(cmd, len, &a, &b) || a == b)
+        return 0;
+    if (flavor == AMP_PROTO_KLIPPER)
+        return b - a;
+    k = put_long(digits, n);
+    /* "N<n> " + cmd + "*" + checksum digits (computed, they vary from 1 to 3) */
+    {
+        unsigned cs = 'N';
+        size_t i;
+        for (i = 0; i < k; i++)
+            cs ^= (unsigned char)digits[i];
+        cs ^= ' ';
+        for (i = a; i < b; i++)
+            cs ^= (unsigned char)cmd[i];
+        cs &= 0xffu;
+        return 1 + k + 1 + (b - a) + 1 + (cs >= 100 ? 3 : cs >= 10 ? 2 : 1);
+    }
+}
+
 amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lineno, amp_error *err)
 {
-    size_t a = 0, b, i;
+    size_t a, b;
     amp_proto_slot *s;
     if (lineno)
         *lineno = 0;
     if (!p || (!cmd && len))
         return amp_fail(err, AMP_ERR_ARG, 0, "proto: NULL argument");
-    for (i = 0; i < len; i++) {
-        if (cmd[i] == '\n' || cmd[i] == '\r' || cmd[i] == '\0')
-            return amp_fail(err, AMP_ERR_PARSE, 0, "proto: line break or NUL inside a command");
-        if (cmd[i] == ';')
-            break; /* Marlin comments run to the end of the line and are not sent (checksum is over the stripped text) */
-    }
-    b = i;
-    while (a < b && (cmd[a] == ' ' || cmd[a] == '\t'))
-        a++;
-    while (b > a && (cmd[b - 1] == ' ' || cmd[b - 1] == '\t'))
-        b--;
+    if (!strip(cmd, len, &a, &b))
+        return amp_fail(err, AMP_ERR_PARSE, 0, "proto: line break or NUL inside a command");
     if (a == b)
         return AMP_OK;
     if (b - a == 4 && memcmp(cmd + a, "M112", 4) == 0) {
@@ -184,6 +226,22 @@ amp_status amp_proto_submit(amp_proto *p, const char *cmd, size_t len, long *lin
     return AMP_OK;
 }
 
+long amp_proto_cancel_unsent(amp_proto *p)
+{
+    long keep = p->top_sent + 1 > p->send_n ? p->top_sent + 1 : p->send_n, dropped = 0;
+    if (p->next_n > keep) {
+        dropped = p->next_n - keep;
+        p->next_n = keep;
+    }
+    return dropped;
+}
+
+void amp_proto_verify(amp_proto *p)
+{
+    if (p->o.flavor == AMP_PROTO_MARLIN && p->state == AMP_PROTO_RUNNING && p->top_sent > 0)
+        p->verify = 1;
+}
+
 void amp_proto_estop(amp_proto *p)
 {
     p->estop = 1;
@@ -196,7 +254,7 @@ void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
     p->last_rx = p->t0 = now_ms;
     /* stale error replies of a burst may have been lost with the link: do not wait for them */
     p->rewind_n = -1;
-    p->burst_left = 0;
+    p->settling = 0;
 }
 
 static void stop(amp_proto *p, amp_proto_event_kind k, const char *text)
@@ -267,7 +325,7 @@ static void ack_one(amp_proto *p)
         p->acked++;
         if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
             p->rewind_n = -1; /* the re-sent line went through: the burst is over */
-            p->burst_left = 0;
+            p->settling = 0;
         }
         emit(p, AMP_EV_ACK, p->acked, p->rx);
     } else {
@@ -303,15 +361,19 @@ static void on_ok(amp_proto *p, unsigned long now)
         long q = b + 1 + (n - p->acked);
         if (q < 1)
             q = 1;
-        if (q > AMP_PROTO_RING - 1)
-            q = AMP_PROTO_RING - 1;
-        p->qslots = (int)q;
+        if (q > AMP_PROTO_MAX_INFLIGHT)
+            q = AMP_PROTO_MAX_INFLIGHT;
+        /* a garbled digit must not open the window: adopt an estimate only when two oks agree */
+        if (q == p->q_cand)
+            p->qslots = (int)q;
+        p->q_cand = (int)q;
     }
 }
 
 static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
 {
-    long stale;
+    long k;
+    unsigned long stale_bytes = 0;
     p->last_rx = now;
     if (with_ok && p->o.resend_ok)
         p->skip_ok = 1;
@@ -321,13 +383,20 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
     }
     if (p->state != AMP_PROTO_RUNNING)
         return;
-    if (m < 1 || m > p->send_n || m > p->top_sent + 1) {
+    if (m < 1 || m > p->top_sent + 1) {
         p->n_garbage++; /* a garbled number, or a request for a line never sent: ignore */
         emit(p, AMP_EV_INFO, m, p->rx);
         return;
     }
     if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
-        stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
+        if (m == 1) {
+            stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
+        } else if (m <= p->acked) {
+            p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
+            emit(p, AMP_EV_INFO, m, p->rx);
+        } else {
+            stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
+        }
         return;
     }
     /* lines from m on were not received, so they cannot have been executed */
@@ -342,34 +411,49 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
             emit(p, AMP_EV_ACK, p->acked, p->rx);
         }
         p->rewind_n = -1;
-        p->burst_left = 0;
+        p->settling = 0;
         if (m < p->send_n) {
-            p->send_n = m;
             p->n_rewinds++;
             emit(p, AMP_EV_RESEND, m, p->rx);
         }
+        p->send_n = m;
         return;
     }
-    if (p->rewind_n == m && p->burst_left > 0) {
+    if (p->rewind_n == m && p->settling) {
         /* After an error Marlin drops its receive buffer, so each line sent ahead provokes another
-           request for the same line: rewind once per burst, not once per error. */
-        p->burst_left--;
+           request for the same line (or cut tails of lines do): rewind once per burst, not once per
+           error, and keep quiet while the echoes arrive. */
+        if (now + p->o.settle_ms - p->settle_until < (1UL << 30))
+            p->settle_until = now + p->o.settle_ms;
         p->n_dups++;
         emit(p, AMP_EV_RESEND_DUP, m, p->rx);
         return;
     }
-    if (m == p->send_n) {
-        /* nothing to rewind: the printer asks for the line we are about to send */
+    if (m >= p->send_n) {
+        /* the printer already holds the lines before m (we had rewound too far on a garbled number):
+           go forward; if m itself was garbled, the printer's next request puts us right */
+        p->send_n = m;
         p->rewind_n = -1;
-        p->burst_left = 0;
+        p->settling = 0;
         return;
     }
-    stale = p->send_n - 1 - m; /* lines m+1.. already on their way, each may provoke one more request */
+    for (k = m; k <= p->top_sent && k < p->send_n; k++)
+        stale_bytes += p->ring[k & RING_MASK].len;
     p->rewind_n = m;
-    p->burst_left = stale > 0 ? stale : 0;
+    p->settling = 1;
+    p->settle_until = now + p->o.settle_ms + stale_bytes * p->o.byte_us / 1000UL;
     p->send_n = m;
     p->n_rewinds++;
     emit(p, AMP_EV_RESEND, m, p->rx);
+}
+
+/* How many of the first bytes of s match pattern position by position. */
+static int fuzzy(const char *s, const char *pat)
+{
+    int k = 0, i;
+    for (i = 0; pat[i] && s[i]; i++)
+        k += s[i] == pat[i];
+    return k;
 }
 
 static int has_temp(const char *s)
@@ -427,21 +511,63 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
             stop(p, AMP_EV_SHUTDOWN, s);
         return;
     }
+    if (starts(s, "echo:Unknown command:") && p->state == AMP_PROTO_RUNNING) {
+        /* Marlin answers an unknown command with an ok. If the text is none of our lines in flight it is the
+           tail of a line cut by an RX flush, and that ok acknowledges nothing of ours. */
+        const char *q = strchr(s, '"'), *qe = q ? strrchr(q + 1, '"') : NULL;
+        long k;
+        int ours = 0;
+        for (k = p->acked + 1; q && qe && k < p->send_n && !ours; k++) {
+            const amp_proto_slot *sl = &p->ring[k & RING_MASK];
+            const char *a = memchr(sl->text, ' ', sl->len), *b = NULL;
+            size_t i;
+            for (i = sl->len; i > 0; i--)
+                if (sl->text[i - 1] == '*') {
+                    b = sl->text + i - 1;
+                    break;
+                }
+            if (a && b && b > a && (size_t)(b - a - 1) == (size_t)(qe - q - 1) && memcmp(a + 1, q + 1, (size_t)(b - a - 1)) == 0)
+                ours = 1;
+        }
+        if (!ours)
+            p->skip_ok = 1;
+        emit(p, AMP_EV_ERROR, 0, s);
+        return;
+    }
     if (starts(s, "echo:busy:") || starts(s, "busy:")) {
         p->last_rx = now;
         p->n_busy++;
         emit(p, AMP_EV_BUSY, 0, s);
         return;
     }
-    if (strcmp(s, "wait") == 0)
-        return; /* idle printer with an empty queue: says nothing about our lines, and keeps nothing alive */
+    if (strcmp(s, "wait") == 0) {
+        /* Marlin says wait when its queue is empty and it is idle. It keeps nothing alive; but if we still
+           count lines in flight, their oks were lost (or the lines were): probe now instead of after the timeout. */
+        if (p->state == AMP_PROTO_RUNNING && p->send_n - 1 > p->acked && !p->probing && !p->settling)
+            p->last_rx = now - p->o.timeout_ms;
+        return;
+    }
     if (has_temp(s)) {
         p->last_rx = now; /* M109/M190 report every second while heating */
         emit(p, AMP_EV_TEMP, 0, s);
         return;
     }
-    if (!starts(s, "echo:") && !starts(s, "//"))
+    if (!starts(s, "echo:") && !starts(s, "//")) {
         p->n_garbage++;
+        if (p->o.resend_ok && p->state == AMP_PROTO_RUNNING && fuzzy(s, "Resend:") >= 5) {
+            /* a garbled "Resend:": its ok must not count as an acknowledgement (an ok too few is
+               repaired by the probe, an ok too many could hide a lost line) */
+            const char *c = strchr(s, ':');
+            p->skip_ok = 1;
+            if (c && parse_long(c + 1, &m))
+                on_resend(p, m, 0, now);
+            return;
+        }
+        if (strlen(s) == 5 && fuzzy(s, "start") >= 4 && p->state == AMP_PROTO_RUNNING && p->next_n > 1) {
+            stop(p, AMP_EV_RESET, s); /* a garbled boot banner is still a reset */
+            return;
+        }
+    }
     emit(p, AMP_EV_INFO, 0, s);
 }
 
@@ -512,7 +638,7 @@ static int window_allows(const amp_proto *p)
         return inflight < 1;
     if (p->o.flavor == AMP_PROTO_KLIPPER)
         return inflight < p->o.window; /* Klipper stops reading at 20 pending lines */
-    lim = p->o.mode == AMP_PROTO_ADVANCED ? AMP_PROTO_RING - 1 : p->o.window;
+    lim = p->o.mode == AMP_PROTO_ADVANCED ? AMP_PROTO_MAX_INFLIGHT : p->o.window;
     if (inflight >= lim)
         return 0;
     /* The oldest qslots lines sit in the command queue (ok comes after execution); the rest wait in the
@@ -572,7 +698,7 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         return copy_out(tmp.text, tmp.len, buf, cap, len);
     }
     /* RUNNING */
-    if (p->send_n - 1 > p->acked && now - p->last_rx >= p->o.timeout_ms) {
+    if ((p->send_n - 1 > p->acked || p->probing) && now - p->last_rx >= p->o.timeout_ms) {
         p->n_timeouts++;
         p->last_rx = now;
         if (p->o.flavor == AMP_PROTO_KLIPPER) {
@@ -584,8 +710,22 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         p->probing = 1;
         p->skip_ok = 0;
         p->rewind_n = -1;
-        p->burst_left = 0;
+        p->settling = 0;
         emit(p, AMP_EV_TIMEOUT, p->send_n - 1, "no reply, probing");
+        s = &p->ring[(p->send_n - 1) & RING_MASK];
+        p->n_resent++;
+        return copy_out(s->text, s->len, buf, cap, len);
+    }
+    if (p->settling) {
+        if (now - p->settle_until >= (1UL << 30))
+            return 0; /* still settling (wrap-safe: settle_until lies ahead of now) */
+        p->settling = 0;
+    }
+    if (p->verify && !p->probing && p->send_n - 1 == p->acked && p->send_n == p->next_n) {
+        p->verify = 0;
+        p->probing = 1;
+        p->skip_ok = 0;
+        p->last_rx = now;
         s = &p->ring[(p->send_n - 1) & RING_MASK];
         p->n_resent++;
         return copy_out(s->text, s->len, buf, cap, len);
@@ -618,7 +758,11 @@ long amp_proto_wait_ms(const amp_proto *p, unsigned long now)
         el = now - p->t0;
         return p->start_seen || el >= p->o.boot_ms ? 0 : (long)(p->o.boot_ms - el);
     }
-    if (p->state == AMP_PROTO_SYNCING || p->send_n - 1 > p->acked) {
+    if (p->verify)
+        return 0;
+    if (p->settling && p->settle_until - now < (1UL << 30))
+        return (long)(p->settle_until - now);
+    if (p->state == AMP_PROTO_SYNCING || p->send_n - 1 > p->acked || p->probing) {
         if (p->resync)
             return 0;
         el = now - p->last_rx;

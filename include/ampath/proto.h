@@ -13,8 +13,10 @@
  * connection starts with `N0 M110 N0` once the boot banner `start` was seen
  * or did not come. Replies understood: `ok` (plain or ADVANCED_OK
  * `ok N<n> P<p> B<b>`), `Resend: <n>` / `rs <n>` (rewind ONCE per error
- * burst: the requests that the lines sent ahead provoke are recognised and
- * dropped), `Error:...`, `echo:busy: processing` (keep-alive), `wait`,
+ * burst: after a rewind the engine stays silent for a settling time in which
+ * the requests provoked by the lines sent ahead arrive and are dropped; each
+ * such echo extends it; sending during the burst would only have the printer
+ * flush the re-sent lines again), `Error:...`, `echo:busy: processing` (keep-alive), `wait`,
  * ` T:` temperature reports, `start` (the printer reset: the engine stops and
  * reports the last acknowledged line; it never continues blindly).
  * Klipper flavor: no numbers or checksums, one `ok` per line (also after
@@ -43,6 +45,9 @@ extern "C" {
 #define AMP_PROTO_LINE_MAX 96
 /** Lines kept for resending (a power of two); bounds the send-ahead window. */
 #define AMP_PROTO_RING 32
+/** Most lines in flight; the ring keeps AMP_PROTO_RING - AMP_PROTO_MAX_INFLIGHT acknowledged lines
+    behind them, so that a resend request after an ok was miscounted on a noisy link can still be served. */
+#define AMP_PROTO_MAX_INFLIGHT 24
 /** Longest reply line kept (longer replies are truncated, never overrun). */
 #define AMP_PROTO_RX_MAX 160
 
@@ -96,12 +101,18 @@ typedef void (*amp_proto_event_fn)(void *user, const amp_proto_event *ev);
 typedef struct amp_proto_opts {
     amp_proto_flavor flavor;    /**< default AMP_PROTO_MARLIN */
     amp_proto_window mode;      /**< default AMP_PROTO_FIXED */
-    int window;                 /**< max lines in flight, FIXED/Klipper (default 4 Marlin, 16 Klipper), <= AMP_PROTO_RING-1 */
+    int window;                 /**< max lines in flight, FIXED/Klipper (default 4 Marlin, 16 Klipper), 1..AMP_PROTO_MAX_INFLIGHT */
     int bufsize;                /**< printer command-queue slots (Marlin BUFSIZE, default 4) */
     int rx_bytes;               /**< printer serial RX buffer bytes (default 128) */
     int resend_ok;              /**< non-zero: an `ok` follows every `Resend:` and is no acknowledgement (Marlin, default 1) */
     unsigned long boot_ms;      /**< wait this long for `start` before the handshake (default 3000) */
     unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
+    unsigned long settle_ms;    /**< after a rewind, wait this long (plus the stale bytes' wire time) for the
+                                     requests the lines sent ahead provoke, before sending again (default 30) */
+    int guard_nl;               /**< Marlin: end each line with a second newline (default 1). A corrupted newline
+                                     would merge two lines into one that passes the XOR check with odds
+                                     1/256; the spare newline keeps them apart (Marlin skips empty lines) */
+    unsigned long byte_us;      /**< wire time of one byte in microseconds (10e6 / baud; 0 for a pty) */
     amp_proto_event_fn on_event; /**< optional event callback */
     void *user;                 /**< passed to on_event */
 } amp_proto_opts;
@@ -123,13 +134,16 @@ typedef struct amp_proto {
     long acked;      /**< last acknowledged line number (0 = none) */
     long sync_n;     /**< number used by the pending M110, -1 if none */
     long rewind_n;   /**< target of the current error burst, -1 outside a burst */
-    long burst_left; /**< resend requests of that burst still to be ignored */
+    int settling;    /**< in a burst: requests for rewind_n are echoes of lines sent ahead */
+    unsigned long settle_until; /**< end of the settling time */
     int skip_ok;     /**< an ok owed to a Resend is expected */
     int probing;     /**< a probe is out after a timeout */
     int estop;       /**< M112 pending, goes before everything */
     int start_seen;  /**< boot banner seen while connecting */
     int resync;      /**< the M110 must be (re)sent */
     int qslots;      /**< command-queue size in use (learned under ADVANCED_OK) */
+    int q_cand;      /**< last queue-size estimate; adopted when two oks in a row agree */
+    int verify;      /**< end-of-job check requested (amp_proto_verify) */
     unsigned long last_rx; /**< time of the last ok/busy/temperature/start */
     unsigned long t0;      /**< time of init or of the last link restore */
     /* counters */
@@ -146,7 +160,7 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor);
 /**
  * Start an engine at time @p now_ms. Klipper starts RUNNING at once; Marlin
  * first waits for `start` (at most opts.boot_ms), then sends `N0 M110 N0`.
- * AMP_ERR_ARG on bad options (window or bufsize outside [1, AMP_PROTO_RING-1]).
+ * AMP_ERR_ARG on bad options (window or bufsize outside [1, AMP_PROTO_MAX_INFLIGHT]).
  */
 amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long now_ms, amp_error *err);
 
@@ -184,6 +198,31 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now_ms, char *buf, size_t cap,
 
 /** Milliseconds until the next timer of the engine fires (for poll()); -1 if none. */
 long amp_proto_wait_ms(const amp_proto *p, unsigned long now_ms);
+
+/**
+ * Drop the lines submitted but never transmitted (for a clean stop: the line
+ * in flight finishes, nothing new starts). Lines already sent stay, so that
+ * resend requests for them can still be served. Returns how many were dropped.
+ */
+long amp_proto_cancel_unsent(amp_proto *p);
+
+/**
+ * Size in bytes (without the newline) that @p cmd would have once stripped and
+ * framed as line number @p n for @p flavor; 0 when nothing is left after
+ * stripping. Lets a host reject a job before sending any of it: a result of
+ * AMP_PROTO_LINE_MAX or more is refused by amp_proto_submit. Thread-safe.
+ */
+size_t amp_proto_framed_size(amp_proto_flavor flavor, long n, const char *cmd, size_t len);
+
+/**
+ * Marlin: confirm that the printer really holds every line counted as
+ * acknowledged (an `ok` garbled into existence cannot be ruled out on a noisy
+ * link). Re-sends the newest line as a probe: the printer either runs it (it
+ * had been lost) or answers `Resend: <next>`, which proves receipt. Call it
+ * when amp_proto_pending() reached 0 at the end of a job; wait until
+ * amp_proto_pending() is 0 and p->probing and p->verify are 0. No-op for Klipper.
+ */
+void amp_proto_verify(amp_proto *p);
 
 /** Emergency stop: `M112` goes out next, ahead of the window, and the engine stops. */
 void amp_proto_estop(amp_proto *p);

@@ -1,0 +1,904 @@
+/*
+ * ampath-vprinter — a virtual 3-D printer on a pseudo-terminal (SPEC §8).
+ *
+ * Speaks Marlin (2.1 or 2.0 dialect, BUFSIZE, RX buffer, ADVANCED_OK, a planner
+ * draining at a modelled speed, a modelled baud rate) or Klipper's pty protocol,
+ * injects faults from a seeded PRNG, and records every command it EXECUTED with
+ * its line number, so that a test can prove each move ran exactly once, in order.
+ *
+ * One state machine (struct vp) and one poll() loop. See `ampath-vprinter --help`.
+ */
+#define _XOPEN_SOURCE 600
+#define _DEFAULT_SOURCE
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <termios.h>
+#include <time.h>
+#include <unistd.h>
+
+#define MAX_CMD 96   /* Marlin MAX_CMD_SIZE */
+#define QMAX 64      /* command queue capacity upper bound */
+#define PLAN_MAX 64  /* planner slots upper bound */
+#define OUT_MAX (1 << 20)
+#define LIST_MAX 16
+
+static const char usage[] =
+    "usage: ampath-vprinter [options]\n"
+    "Creates a pseudo-terminal that behaves like a printer; prints its path (or makes --link PATH).\n"
+    "  --link PATH          symlink to the pty slave (recreated after a hang-up)\n"
+    "  --log FILE           record every executed command as '<line> <command>'\n"
+    "  --flavor F           marlin (default) | klipper\n"
+    "  --dialect D          Marlin resend reply: 2.1 (Resend + ok, default) | 2.0 (Resend + ok_to_send,\n"
+    "                       with ADVANCED_OK fields) | bare (Resend without ok) | rs (rs N, no ok)\n"
+    "  --bufsize N          command queue slots (default 4)\n"
+    "  --rx-bytes N         serial RX buffer bytes; overflowing bytes are lost (default 128)\n"
+    "  --advanced-ok        answer 'ok N<n> P<p> B<b>' (B one low, as Marlin)\n"
+    "  --planner N          planner slots (default 16)\n"
+    "  --speed MM_S         modelled head speed for G0/G1 (default 0 = instant)\n"
+    "  --baud N             modelled link rate, both ways (default 0 = unlimited)\n"
+    "  --turnaround MS      time to process each command before its ok (default 0)\n"
+    "  --boot-ms MS         delay before the 'start' banner, at start and after a reset (default 0)\n"
+    "  --seed N             PRNG seed for the faults (default 1)\n"
+    "  --corrupt-in P / --corrupt-out P   fraction of bytes corrupted host->printer / printer->host\n"
+    "  --drop-in P / --drop-out P         fraction of bytes dropped\n"
+    "  --corrupt-line K     corrupt one byte of the K-th received line (repeatable, up to 16)\n"
+    "  --lose-line K        the K-th received line vanishes (repeatable)\n"
+    "  --lose-ok K          no ok for the K-th executed command (repeatable)\n"
+    "  --busy-at K --busy-secs S   the K-th executed command stays busy S s ('echo:busy: processing')\n"
+    "  --busy-interval S    keep-alive period (default 2)\n"
+    "  --heat-secs S        M109/M190 take S s, reporting ' T:' every busy-interval (default 0)\n"
+    "  --wait-ms MS         print 'wait' after MS idle with an empty queue (default 0 = never)\n"
+    "  --reset-after K      reset after executing K commands (repeatable: counts restart)\n"
+    "  --hangup-after K --hangup-secs S   close the pty after K commands, reopen after S s\n"
+    "  --error-at K         Klipper: the K-th received line fails ('!! ...' then ok)\n"
+    "  --shutdown-after K   Klipper: shut down after K executed commands\n";
+
+typedef struct plan_move {
+    double dur;
+} plan_move;
+
+typedef struct vp {
+    /* options */
+    const char *link, *logpath;
+    int klipper, dialect; /* 21, 20, 1 = bare, 2 = rs */
+    int bufsize, rx_bytes, adv_ok, planner;
+    double speed, baud, turnaround, boot, busy_secs, busy_interval, heat_secs, wait_s, hangup_secs;
+    double corrupt_in, corrupt_out, drop_in, drop_out;
+    long corrupt_line[LIST_MAX], lose_line[LIST_MAX], lose_ok[LIST_MAX], reset_after[LIST_MAX];
+    int n_corrupt_line, n_lose_line, n_lose_ok, n_reset_after;
+    long busy_at, hangup_after, error_at, shutdown_after;
+    unsigned long long rng;
+    /* link */
+    int mfd, sfd;
+    char slave[256];
+    /* modelled wire: bytes the host wrote, each with the time its last bit arrives */
+    char wire[8192];
+    double wire_t[8192];
+    int wire_len;
+    double wire_in_t, out_free;
+    /* RX: bytes read from the link waiting for the parser (capacity rx_bytes) */
+    char rxq[4096];
+    int rxlen;
+    char line[MAX_CMD + 2];
+    int linelen, line_over;
+    /* output */
+    char *out;
+    size_t outlen;
+    size_t protect; /* leading bytes of out sent without faults */
+    /* Marlin */
+    long last_n;
+    char q[QMAX][MAX_CMD + 2];
+    long qn[QMAX];
+    int qhead, qcount;
+    double plan_end[PLAN_MAX]; /* completion times of planned moves, FIFO */
+    int plan_head, plan_count;
+    double x, y, z, e, f;
+    int rel;
+    int booting;
+    double boot_at;
+    /* executing a long command */
+    int exec_busy; /* 1 busy, 2 heating */
+    double exec_until, next_keepalive, exec_ready_at;
+    int exec_has;
+    double last_activity;
+    /* counters */
+    long received, executed, since_reset, reset_idx, overruns;
+    int klipper_shutdown;
+    FILE *logf;
+    int hung;
+    double reopen_at;
+    int in_hit; /* a byte of the current incoming line was corrupted */
+} vp;
+
+static volatile sig_atomic_t quit_flag;
+static void on_signal(int sig)
+{
+    (void)sig;
+    quit_flag = 1;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static double rnd01(vp *v)
+{
+    v->rng ^= v->rng << 13;
+    v->rng ^= v->rng >> 7;
+    v->rng ^= v->rng << 17;
+    return (double)(v->rng >> 11) / 9007199254740992.0;
+}
+
+static int in_list(const long *l, int n, long k)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (l[i] == k)
+            return 1;
+    return 0;
+}
+
+static void say(vp *v, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+    if (v->hung)
+        return;
+    va_start(ap, fmt);
+    n = vsnprintf(v->out + v->outlen, OUT_MAX - v->outlen, fmt, ap);
+    va_end(ap);
+    if (n > 0 && v->outlen + (size_t)n < OUT_MAX)
+        v->outlen += (size_t)n;
+}
+
+static void logf_line(vp *v, const char *fmt, ...)
+{
+    va_list ap;
+    if (!v->logf)
+        return;
+    va_start(ap, fmt);
+    vfprintf(v->logf, fmt, ap);
+    va_end(ap);
+    fflush(v->logf);
+}
+
+/* ---------------- pty ---------------- */
+
+static int open_pty(vp *v)
+{
+    struct termios t;
+    char *name;
+    v->mfd = posix_openpt(O_RDWR | O_NOCTTY);
+    if (v->mfd < 0 || grantpt(v->mfd) != 0 || unlockpt(v->mfd) != 0 || !(name = ptsname(v->mfd))) {
+        perror("ampath-vprinter: pty");
+        return -1;
+    }
+    snprintf(v->slave, sizeof v->slave, "%s", name);
+    /* Keep a slave fd open: the line discipline must be raw before the host opens it (no echo of our
+       banner back to us), and the master then never sees a hang-up when the host closes and reopens. */
+    v->sfd = open(v->slave, O_RDWR | O_NOCTTY);
+    if (v->sfd < 0 || tcgetattr(v->sfd, &t) != 0) {
+        perror("ampath-vprinter: slave");
+        return -1;
+    }
+    cfmakeraw(&t);
+    tcsetattr(v->sfd, TCSANOW, &t);
+    fcntl(v->mfd, F_SETFL, fcntl(v->mfd, F_GETFL) | O_NONBLOCK);
+    if (v->link) {
+        char tmp[1024];
+        snprintf(tmp, sizeof tmp, "%s.tmp%ld", v->link, (long)getpid());
+        unlink(tmp);
+        if (symlink(v->slave, tmp) != 0 || rename(tmp, v->link) != 0) {
+            perror("ampath-vprinter: --link");
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static void close_pty(vp *v)
+{
+    if (v->mfd >= 0)
+        close(v->mfd);
+    if (v->sfd >= 0)
+        close(v->sfd);
+    v->mfd = v->sfd = -1;
+    if (v->link)
+        unlink(v->link);
+}
+
+/* ---------------- printer model ---------------- */
+
+static void do_reset(vp *v, double now)
+{
+    v->last_n = 0;
+    v->qcount = v->qhead = 0;
+    v->plan_count = v->plan_head = 0;
+    v->rxlen = 0;
+    v->linelen = 0;
+    v->exec_busy = 0;
+    v->exec_has = 0;
+    v->since_reset = 0;
+    v->booting = 1;
+    v->boot_at = now + v->boot;
+    v->outlen = 0; /* whatever was still going out dies with the MCU */
+    v->protect = 0;
+    logf_line(v, "# reset\n");
+}
+
+static double num_arg(const char *cmd, char letter, double def, int *seen)
+{
+    const char *s = cmd;
+    while ((s = strchr(s, letter)) != NULL) {
+        if (s > cmd && s[-1] == ' ') {
+            char *end;
+            double d = strtod(s + 1, &end);
+            if (end != s + 1) {
+                if (seen)
+                    *seen = 1;
+                return d;
+            }
+        }
+        s++;
+    }
+    return def;
+}
+
+static int is_cmd(const char *c, const char *name)
+{
+    size_t n = strlen(name);
+    return strncmp(c, name, n) == 0 && (c[n] == '\0' || c[n] == ' ');
+}
+
+static void send_ok(vp *v)
+{
+    if (in_list(v->lose_ok, v->n_lose_ok, v->executed))
+        return;
+    if (v->adv_ok && !v->klipper)
+        /* sent while the command still holds its queue slot: B is one low, as in Marlin */
+        say(v, "ok N%ld P%d B%d\n", v->last_n, v->planner - v->plan_count, v->bufsize - v->qcount);
+    else
+        say(v, "ok\n");
+}
+
+static void planner_drain(vp *v, double now)
+{
+    while (v->plan_count > 0 && v->plan_end[v->plan_head] <= now) {
+        v->plan_head = (v->plan_head + 1) % PLAN_MAX;
+        v->plan_count--;
+    }
+}
+
+/* Start executing the head command. Returns 1 when it finished (ok sent), 0 while it is still running. */
+static int execute(vp *v, const char *cmd, long n, double now)
+{
+    int seen = 0;
+    if (!v->exec_has) {
+        v->exec_has = 1;
+        v->exec_ready_at = now + v->turnaround;
+        v->exec_busy = 0;
+        if (v->busy_at > 0 && v->executed + 1 == v->busy_at && v->busy_secs > 0) {
+            v->exec_busy = 1;
+            v->exec_until = now + v->busy_secs;
+            v->next_keepalive = now + v->busy_interval;
+        } else if ((is_cmd(cmd, "M109") || is_cmd(cmd, "M190")) && v->heat_secs > 0) {
+            v->exec_busy = 2;
+            v->exec_until = now + v->heat_secs;
+            v->next_keepalive = now + v->busy_interval;
+        }
+    }
+    if (!v->klipper && !((cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'T') && cmd[1] >= '0' && cmd[1] <= '9')) {
+        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush): echo, no-op, ok */
+        say(v, "echo:Unknown command: \"%s\"\n", cmd);
+        send_ok(v);
+        v->exec_has = 0;
+        return 1;
+    }
+    if (v->exec_busy) {
+        if (now >= v->next_keepalive) {
+            if (v->exec_busy == 1 || v->klipper)
+                say(v, v->klipper ? "// busy\n" : "echo:busy: processing\n");
+            if (v->exec_busy == 2)
+                say(v, " T:%.1f /210.0 B:60.0 /60.0 @:127 B@:0 W:?\n", 150.0 + 60.0 * (1 - (v->exec_until - now) / v->heat_secs));
+            v->next_keepalive = now + v->busy_interval;
+        }
+        if (now < v->exec_until)
+            return 0;
+    }
+    if (now < v->exec_ready_at)
+        return 0;
+    if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
+        double nx, ny, nz, d;
+        planner_drain(v, now);
+        if (v->plan_count >= v->planner)
+            return 0; /* Marlin blocks in the handler until the planner has room */
+        v->f = num_arg(cmd, 'F', v->f, NULL);
+        nx = num_arg(cmd, 'X', v->rel ? 0 : v->x, &seen);
+        ny = num_arg(cmd, 'Y', v->rel ? 0 : v->y, &seen);
+        nz = num_arg(cmd, 'Z', v->rel ? 0 : v->z, &seen);
+        if (v->rel) {
+            nx += v->x;
+            ny += v->y;
+            nz += v->z;
+        }
+        d = sqrt((nx - v->x) * (nx - v->x) + (ny - v->y) * (ny - v->y) + (nz - v->z) * (nz - v->z));
+        v->x = nx;
+        v->y = ny;
+        v->z = nz;
+        if (v->speed > 0) {
+            double start = v->plan_count ? v->plan_end[(v->plan_head + v->plan_count - 1) % PLAN_MAX] : now;
+            v->plan_end[(v->plan_head + v->plan_count) % PLAN_MAX] = start + d / v->speed;
+            v->plan_count++;
+        }
+    } else if (is_cmd(cmd, "M400")) {
+        planner_drain(v, now);
+        if (v->plan_count > 0)
+            return 0;
+    } else if (is_cmd(cmd, "G90")) {
+        v->rel = 0;
+    } else if (is_cmd(cmd, "G91")) {
+        v->rel = 1;
+    } else if (is_cmd(cmd, "M105")) {
+        v->executed++;
+        v->since_reset++;
+        logf_line(v, "%ld %s\n", n, cmd);
+        say(v, "ok T:210.0 /210.0 B:60.0 /60.0 @:0 B@:0\n");
+        v->exec_has = 0;
+        return 1;
+    } else if (is_cmd(cmd, "M115")) {
+        if (v->klipper)
+            say(v, "// FIRMWARE_NAME:Klipper FIRMWARE_VERSION:v0.12.0\n");
+        else
+            say(v, "FIRMWARE_NAME:Marlin 2.1.2 (ampath-vprinter) SOURCE_CODE_URL:github.com/MarlinFirmware/Marlin "
+                   "PROTOCOL_VERSION:1.0 MACHINE_TYPE:3D Printer EXTRUDER_COUNT:1\nCap:ADVANCED_OK:%d\n",
+                v->adv_ok);
+    }
+    v->executed++;
+    v->since_reset++;
+    logf_line(v, "%ld %s\n", n, cmd);
+    send_ok(v);
+    v->exec_has = 0;
+    v->exec_busy = 0;
+    return 1;
+}
+
+/* A complete line arrived (Marlin). Mirrors GCodeQueue::get_serial_commands. */
+static void marlin_line(vp *v, char *s, int over)
+{
+    char *star, *cmd = s;
+    long n = -1;
+    int m110;
+    while (*s == ' ')
+        s++;
+    if (*s == '\0')
+        return;
+    v->received++;
+    if (in_list(v->lose_line, v->n_lose_line, v->received))
+        return;
+    if (in_list(v->corrupt_line, v->n_corrupt_line, v->received))
+        s[strlen(s) / 2] ^= 0x04; /* a flipped bit on the wire: the checksum must catch it */
+    if (over)
+        logf_line(v, "# overlong line received\n");
+    if (*s == 'N') {
+        unsigned cs = 0, want;
+        char *p, *end;
+        n = strtol(s + 1, &end, 10);
+        cmd = end;
+        while (*cmd == ' ')
+            cmd++;
+        m110 = strstr(s, "M110") != NULL;
+        if (n != v->last_n + 1 && !m110) {
+            say(v, "Error:Line Number is not Last Line Number+1, Last Line: %ld\n", v->last_n);
+            goto resend;
+        }
+        star = strrchr(s, '*');
+        if (!star) {
+            say(v, "Error:No Checksum with line number, Last Line: %ld\n", v->last_n);
+            goto resend;
+        }
+        for (p = s; p < star; p++)
+            cs ^= (unsigned char)*p;
+        want = (unsigned)strtoul(star + 1, &end, 10);
+        if (end == star + 1 || *end != '\0' || want != cs) {
+            say(v, "Error:checksum mismatch, Last Line: %ld\n", v->last_n);
+            goto resend;
+        }
+        *star = '\0';
+        v->last_n = n;
+    } else {
+        star = strchr(s, '*');
+        if (star) {
+            say(v, "Error:No Line Number with checksum, Last Line: %ld\n", v->last_n);
+            goto resend;
+        }
+        cmd = s;
+    }
+    /* trailing blanks */
+    {
+        size_t l = strlen(cmd);
+        while (l && cmd[l - 1] == ' ')
+            cmd[--l] = '\0';
+    }
+    if (is_cmd(cmd, "M110")) {
+        int seen = 0;
+        double k = num_arg(cmd, 'N', 0, &seen);
+        v->last_n = seen ? (long)k : (n >= 0 ? n : 0);
+    }
+    {
+        int slot = (v->qhead + v->qcount) % QMAX;
+        snprintf(v->q[slot], sizeof v->q[slot], "%s", cmd);
+        v->qn[slot] = n < 0 ? 0 : n;
+        v->qcount++;
+    }
+    return;
+resend:
+    v->rxlen = 0; /* Marlin flushes its RX buffer with the resend request */
+    v->linelen = 0;
+    if (v->dialect == 2)
+        say(v, "rs %ld\n", v->last_n + 1);
+    else {
+        say(v, "Resend: %ld\n", v->last_n + 1);
+        if (v->dialect == 21)
+            say(v, "ok\n");
+        else if (v->dialect == 20)
+            send_ok(v);
+    }
+}
+
+/* Klipper: lines carry no numbers; a failed command gets "!! ..." and still an ok. */
+static void klipper_line(vp *v, char *s)
+{
+    char *p;
+    int slot;
+    while (*s == ' ')
+        s++;
+    if ((p = strchr(s, ';')) != NULL)
+        *p = '\0';
+    p = s + strlen(s);
+    while (p > s && p[-1] == ' ')
+        *--p = '\0';
+    if (*s == '\0')
+        return;
+    v->received++;
+    if (in_list(v->lose_line, v->n_lose_line, v->received))
+        return;
+    slot = (v->qhead + v->qcount) % QMAX;
+    snprintf(v->q[slot], sizeof v->q[slot], "%s", s);
+    v->qn[slot] = v->received;
+    v->qcount++;
+}
+
+static void klipper_shutdown(vp *v, const char *why)
+{
+    if (v->klipper_shutdown)
+        return;
+    v->klipper_shutdown = 1;
+    v->qcount = 0;
+    v->exec_has = 0;
+    say(v, "!! %s\n// Klipper state: Shutdown\n", why);
+    logf_line(v, "# shutdown\n");
+}
+
+static int klipper_known(const char *c)
+{
+    return (c[0] == 'G' || c[0] == 'M' || c[0] == 'T') && c[1] >= '0' && c[1] <= '9';
+}
+
+static void klipper_exec(vp *v, double now)
+{
+    char *cmd = v->q[v->qhead];
+    long n = v->qn[v->qhead];
+    if (v->klipper_shutdown) {
+        say(v, "!! Printer is not ready\nok\n");
+    } else if ((v->error_at > 0 && n == v->error_at) || !klipper_known(cmd)) {
+        if (!klipper_known(cmd))
+            say(v, "!! Unknown command:\"%.*s\"\nok\n", (int)strcspn(cmd, " "), cmd);
+        else
+            say(v, "!! Move out of range: %s\nok\n", cmd);
+    } else {
+        if (!execute(v, cmd, n, now))
+            return;
+        if (v->shutdown_after > 0 && v->executed == v->shutdown_after) {
+            klipper_shutdown(v, "MCU 'mcu' shutdown: Timer too close"); /* drops the queue */
+            return;
+        }
+    }
+    v->qhead = (v->qhead + 1) % QMAX;
+    v->qcount--;
+}
+
+/* Move bytes from the RX buffer into lines while the queue has room (Marlin reads only then). */
+static void parse_rx(vp *v)
+{
+    int i = 0;
+    int qcap = v->klipper ? 20 : v->bufsize;
+    while (i < v->rxlen && v->qcount < qcap) {
+        char c = v->rxq[i++];
+        if (c == '\n' || c == '\r') {
+            v->line[v->linelen] = '\0';
+            if (v->linelen > 0) {
+                if (v->klipper)
+                    klipper_line(v, v->line);
+                else
+                    marlin_line(v, v->line, v->line_over);
+            }
+            v->linelen = 0;
+            v->line_over = 0;
+            if (v->rxlen == 0) /* flushed by an error */
+                return;
+        } else if (v->linelen < MAX_CMD - 1) {
+            v->line[v->linelen++] = c;
+        } else {
+            v->line_over = 1; /* Marlin drops the rest; the checksum then fails */
+        }
+    }
+    memmove(v->rxq, v->rxq + i, (size_t)(v->rxlen - i));
+    v->rxlen -= i;
+}
+
+/* Bytes from the host (after link faults). */
+static void on_bytes(vp *v, const char *b, ssize_t n, double now)
+{
+    ssize_t i;
+    for (i = 0; i < n; i++) {
+        char c = b[i];
+        if (v->drop_in > 0 && rnd01(v) < v->drop_in)
+            continue;
+        /* At most one corrupted byte per line: Marlin's XOR checksum cannot see two flips of the same bit
+           in one line, so no host could pass a model with more (see docs/bridge.md, "Limits"). */
+        /* The '*' is spared too: a line cut by Marlin's RX flush whose '*' is lost runs as an unnumbered
+           command, a hole in the protocol no host can close (docs/bridge.md, "Limits"). */
+        if (v->corrupt_in > 0 && !v->in_hit && c != '*' && rnd01(v) < v->corrupt_in) {
+            c ^= (char)(1 << (int)(rnd01(v) * 7));
+            v->in_hit = 1;
+        }
+        if (b[i] == '\n')
+            v->in_hit = 0;
+        if (v->klipper && c == 'M' && i + 3 < n && memcmp(b + i, "M112", 4) == 0) {
+            klipper_shutdown(v, "Shutdown due to M112"); /* acted on when read, ahead of the queue */
+            continue;
+        }
+        if (!v->klipper && i + 3 < n && memcmp(b + i, "M112", 4) == 0 && (i == 0 || b[i - 1] == '\n')) {
+            /* EMERGENCY_PARSER: kill() at once */
+            say(v, "Error:Printer halted. kill() called!\n");
+            logf_line(v, "# M112 kill\n");
+            v->qcount = 0;
+            v->exec_has = 0;
+            v->rxlen = 0;
+            v->booting = 2; /* halted: ignores everything until reset */
+            return;
+        }
+        if (v->booting)
+            continue; /* bytes sent to a booting MCU are lost */
+        if (v->rxlen >= (v->klipper ? (int)sizeof v->rxq : v->rx_bytes))
+            parse_rx(v); /* the main loop keeps moving lines into the queue while it has room */
+        if (v->rxlen < (v->klipper ? (int)sizeof v->rxq : v->rx_bytes))
+            v->rxq[v->rxlen++] = c; /* Marlin has no flow control: overflow drops bytes */
+        else {
+            if (v->overruns++ == 0 || v->overruns % 100 == 0)
+                logf_line(v, "# RX overrun (%ld so far)\n", v->overruns);
+        }
+    }
+    (void)now;
+}
+
+static void step(vp *v, double now)
+{
+    if (v->booting == 1 && now >= v->boot_at) {
+        v->booting = 0;
+        say(v, "start\necho:Marlin 2.1.2 (ampath-vprinter)\necho: Last Updated: 2023-01-01\n");
+    }
+    if (v->booting)
+        return;
+    parse_rx(v);
+    while (v->qcount > 0) {
+        if (v->klipper) {
+            int before = v->qcount;
+            klipper_exec(v, now);
+            if (v->qcount == before)
+                break;
+        } else {
+            int slot = v->qhead;
+            if (!execute(v, v->q[slot], v->qn[slot], now))
+                break;
+            v->qhead = (v->qhead + 1) % QMAX;
+            v->qcount--;
+        }
+        v->last_activity = now;
+        if (v->n_reset_after > v->reset_idx && v->since_reset == v->reset_after[v->reset_idx]) {
+            v->reset_idx++;
+            {
+                /* the replies already produced reach the host intact (a brown-out between moves), then the
+                   MCU restarts: a move whose ok is lost in a reset cannot be told from one never run */
+                size_t keep = v->outlen;
+                do_reset(v, now);
+                v->outlen = keep;
+                v->protect = keep;
+            }
+            return;
+        }
+        if (v->hangup_after > 0 && v->executed == v->hangup_after && !v->hung) {
+            v->hung = 1;
+            v->reopen_at = now + v->hangup_secs;
+            logf_line(v, "# hangup\n");
+            close_pty(v);
+            v->outlen = 0;
+            return;
+        }
+        parse_rx(v);
+    }
+    if (v->wait_s > 0 && v->qcount == 0 && !v->exec_has && now - v->last_activity >= v->wait_s) {
+        say(v, "wait\n");
+        v->last_activity = now;
+    }
+}
+
+static void flush_out(vp *v, double now)
+{
+    size_t i, n, k = 0, consumed;
+    ssize_t w;
+    char tmp[4096];
+    size_t src[4096];
+    if (v->mfd < 0 || v->outlen == 0)
+        return;
+    n = v->outlen;
+    if (v->baud > 0) {
+        /* 10 bits per byte; no credit piles up while the line is idle */
+        double bt = 10.0 / v->baud;
+        size_t nmax;
+        if (v->out_free < now - bt)
+            v->out_free = now - bt;
+        nmax = (size_t)((now - v->out_free) / bt + 1e-6); /* the idle case gives exactly one byte */
+        if (n > nmax)
+            n = nmax;
+    }
+    if (n > sizeof tmp)
+        n = sizeof tmp;
+    if (n == 0)
+        return;
+    /* faults on the way out, byte by byte */
+    for (i = 0; i < n; i++) {
+        char c = v->out[i];
+        int faults = i >= v->protect;
+        if (faults && v->drop_out > 0 && rnd01(v) < v->drop_out)
+            continue;
+        if (faults && v->corrupt_out > 0 && rnd01(v) < v->corrupt_out)
+            c ^= (char)(1 << (int)(rnd01(v) * 7));
+        src[k] = i;
+        tmp[k++] = c;
+    }
+    w = k ? write(v->mfd, tmp, k) : 0;
+    if (w < 0)
+        return; /* EAGAIN: the host is not reading; try again later */
+    consumed = (size_t)w < k ? src[w] : n;
+    memmove(v->out, v->out + consumed, v->outlen - consumed);
+    v->outlen -= consumed;
+    v->protect = v->protect > consumed ? v->protect - consumed : 0;
+    if (v->baud > 0)
+        v->out_free += (double)consumed * 10.0 / v->baud;
+}
+
+static int parse_list(long *l, int *n, const char *s)
+{
+    if (*n >= LIST_MAX)
+        return -1;
+    l[(*n)++] = atol(s);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    static vp V;
+    vp *v = &V;
+    int i;
+    double last;
+    memset(v, 0, sizeof *v);
+    v->dialect = 21;
+    v->bufsize = 4;
+    v->rx_bytes = 128;
+    v->planner = 16;
+    v->busy_interval = 2;
+    v->rng = 1;
+    v->mfd = v->sfd = -1;
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
+#define OPT(name) (strcmp(a, name) == 0 && val && (i++, 1))
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            fputs(usage, stdout);
+            return 0;
+        } else if (strcmp(a, "--advanced-ok") == 0)
+            v->adv_ok = 1;
+        else if (OPT("--link"))
+            v->link = val;
+        else if (OPT("--log"))
+            v->logpath = val;
+        else if (OPT("--flavor")) {
+            if (strcmp(val, "klipper") == 0)
+                v->klipper = 1;
+            else if (strcmp(val, "marlin") != 0)
+                goto bad;
+        } else if (OPT("--dialect")) {
+            if (strcmp(val, "2.1") == 0)
+                v->dialect = 21;
+            else if (strcmp(val, "2.0") == 0)
+                v->dialect = 20;
+            else if (strcmp(val, "bare") == 0)
+                v->dialect = 1;
+            else if (strcmp(val, "rs") == 0)
+                v->dialect = 2;
+            else
+                goto bad;
+        } else if (OPT("--bufsize"))
+            v->bufsize = atoi(val);
+        else if (OPT("--rx-bytes"))
+            v->rx_bytes = atoi(val);
+        else if (OPT("--planner"))
+            v->planner = atoi(val);
+        else if (OPT("--speed"))
+            v->speed = atof(val);
+        else if (OPT("--baud"))
+            v->baud = atof(val);
+        else if (OPT("--turnaround"))
+            v->turnaround = atof(val) / 1000.0;
+        else if (OPT("--boot-ms"))
+            v->boot = atof(val) / 1000.0;
+        else if (OPT("--seed"))
+            v->rng = (unsigned long long)atoll(val) * 2654435761ULL + 1;
+        else if (OPT("--corrupt-in"))
+            v->corrupt_in = atof(val);
+        else if (OPT("--corrupt-out"))
+            v->corrupt_out = atof(val);
+        else if (OPT("--drop-in"))
+            v->drop_in = atof(val);
+        else if (OPT("--drop-out"))
+            v->drop_out = atof(val);
+        else if (OPT("--corrupt-line")) {
+            if (parse_list(v->corrupt_line, &v->n_corrupt_line, val))
+                goto bad;
+        } else if (OPT("--lose-line")) {
+            if (parse_list(v->lose_line, &v->n_lose_line, val))
+                goto bad;
+        } else if (OPT("--lose-ok")) {
+            if (parse_list(v->lose_ok, &v->n_lose_ok, val))
+                goto bad;
+        } else if (OPT("--reset-after")) {
+            if (parse_list(v->reset_after, &v->n_reset_after, val))
+                goto bad;
+        } else if (OPT("--busy-at"))
+            v->busy_at = atol(val);
+        else if (OPT("--busy-secs"))
+            v->busy_secs = atof(val);
+        else if (OPT("--busy-interval"))
+            v->busy_interval = atof(val);
+        else if (OPT("--heat-secs"))
+            v->heat_secs = atof(val);
+        else if (OPT("--wait-ms"))
+            v->wait_s = atof(val) / 1000.0;
+        else if (OPT("--hangup-after"))
+            v->hangup_after = atol(val);
+        else if (OPT("--hangup-secs"))
+            v->hangup_secs = atof(val);
+        else if (OPT("--error-at"))
+            v->error_at = atol(val);
+        else if (OPT("--shutdown-after"))
+            v->shutdown_after = atol(val);
+        else {
+        bad:
+            fprintf(stderr, "ampath-vprinter: bad option or value: %s\n%s", a, usage);
+            return 2;
+        }
+#undef OPT
+    }
+    if (v->bufsize < 1 || v->bufsize > QMAX || v->planner < 1 || v->planner > PLAN_MAX || v->rx_bytes < 1 ||
+        v->rx_bytes > (int)sizeof v->rxq || v->busy_interval <= 0) {
+        fprintf(stderr, "ampath-vprinter: --bufsize 1..%d, --planner 1..%d, --rx-bytes 1..%d\n", QMAX, PLAN_MAX,
+                (int)sizeof v->rxq);
+        return 2;
+    }
+    v->out = malloc(OUT_MAX);
+    if (!v->out)
+        return 1;
+    if (v->logpath && !(v->logf = fopen(v->logpath, "w"))) {
+        perror("ampath-vprinter: --log");
+        return 2;
+    }
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    signal(SIGPIPE, SIG_IGN);
+    if (open_pty(v) != 0)
+        return 1;
+    if (!v->link)
+        printf("%s\n", v->slave);
+    fflush(stdout);
+    last = now_s();
+    v->last_activity = last;
+    if (v->klipper) {
+        v->booting = 0;
+    } else {
+        v->booting = 1;
+        v->boot_at = last + v->boot;
+    }
+    while (!quit_flag) {
+        struct pollfd pfd;
+        double now = now_s();
+        int timeout = 50, rc;
+        last = now;
+        if (v->hung) {
+            if (now >= v->reopen_at) {
+                v->hung = 0;
+                if (open_pty(v) != 0)
+                    return 1;
+                logf_line(v, "# reopened\n");
+            } else {
+                usleep(2000);
+                continue;
+            }
+        }
+        if (v->wire_len > 0) {
+            /* deliver the bytes whose modelled arrival time has come */
+            int k = 0;
+            while (k < v->wire_len && v->wire_t[k] <= now)
+                k++;
+            if (k > 0) {
+                on_bytes(v, v->wire, k, now);
+                memmove(v->wire, v->wire + k, (size_t)(v->wire_len - k));
+                memmove(v->wire_t, v->wire_t + k, (size_t)(v->wire_len - k) * sizeof v->wire_t[0]);
+                v->wire_len -= k;
+            }
+        }
+        step(v, now);
+        flush_out(v, now);
+        if (v->outlen > 0 || v->wire_len > 0 || v->qcount > 0 || v->booting == 1 || v->exec_has || v->plan_count > 0)
+            timeout = 1;
+        pfd.fd = v->mfd;
+        pfd.events = POLLIN;
+        /* Marlin stops taking bytes into its line buffer when the queue is full; the RX buffer fills */
+        rc = poll(&pfd, 1, timeout);
+        if (rc > 0 && (pfd.revents & POLLIN)) {
+            char buf[512];
+            ssize_t n, cap = (ssize_t)sizeof buf;
+            if (v->baud > 0)
+                cap = (ssize_t)sizeof v->wire - v->wire_len < cap ? (ssize_t)sizeof v->wire - v->wire_len : cap;
+            if (v->klipper) {
+                /* Klipper stops reading at 20 pending lines, and never drops what it read */
+                ssize_t room = (ssize_t)sizeof v->rxq - v->rxlen;
+                cap = v->qcount >= 20 ? 0 : (room < cap ? room : cap);
+            }
+            if (cap > 0) {
+                n = read(v->mfd, buf, (size_t)cap);
+                if (n > 0 && v->baud > 0) {
+                    ssize_t b;
+                    if (v->wire_in_t < now)
+                        v->wire_in_t = now;
+                    for (b = 0; b < n; b++) {
+                        v->wire_in_t += 10.0 / v->baud;
+                        v->wire[v->wire_len] = buf[b];
+                        v->wire_t[v->wire_len++] = v->wire_in_t;
+                    }
+                } else if (n > 0) {
+                    on_bytes(v, buf, n, now);
+                }
+            } else {
+                usleep(500);
+            }
+        }
+    }
+    fprintf(stderr, "ampath-vprinter: received %ld lines, executed %ld commands, %ld RX overruns\n", v->received,
+            v->executed, v->overruns);
+    close_pty(v);
+    if (v->logf)
+        fclose(v->logf);
+    free(v->out);
+    return 0;
+}
