@@ -173,6 +173,7 @@ check: deps-test
 	@$(MAKE) --no-print-directory all
 	@$(MAKE) --no-print-directory test-run
 	@$(MAKE) --no-print-directory SAN=1 OPENMP=0 test-run
+	@$(MAKE) --no-print-directory cross
 
 # ---- demo, bench ----
 demo: all

@@ -135,6 +135,8 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
 }
 
 #define NOPATH 0xffffffffU
+/* late[] marker of a support fragment left out */
+#define LEFT_OUT (NOPATH - 1)
 
 /*
  * Over the object fragments, the smallest path index (want_min) of a fragment
@@ -178,6 +180,155 @@ static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_hea
     return best;
 }
 
+/* A piece of a support row: fragments [f0, f1) printed together just before object path pos. */
+typedef struct piece {
+    size_t f0, f1;
+    uint32_t pos;
+} piece;
+
+/* Append the fragments of @p pc that are not left out, one path per run of consecutive kept fragments. */
+static amp_status emit_piece(amp_pathset *out, const amp_fragments *fs, const uint32_t *late, const piece *pc,
+                             amp_pvert **run, size_t *cap, amp_error *err)
+{
+    const amp_pathset *ps = fs->ps;
+    size_t f = pc->f0;
+    amp_status st = AMP_OK;
+    while (st == AMP_OK && f < pc->f1) {
+        size_t n = 0, g;
+        for (; f < pc->f1 && late[f] == LEFT_OUT; f++)
+            ;
+        for (g = f; g < pc->f1 && late[g] != LEFT_OUT; g++) {
+            const amp_fragment *fr = &fs->frag[g];
+            size_t v;
+            if (amp_grow(out->alloc, (void **)run, cap, n + fr->nin + 2, sizeof **run) != AMP_OK)
+                return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support paths");
+            if (n == 0) {
+                (*run)[n].p = fr->p0;
+                (*run)[n++].r = fr->r0;
+            }
+            for (v = 0; v < fr->nin; v++)
+                (*run)[n++] = ps->verts[fr->vfirst + v];
+            (*run)[n].p = fr->p1;
+            (*run)[n++].r = fr->r1;
+        }
+        f = g;
+        if (n >= 2)
+            st = amp_pathset_add(out, AMP_ROLE_SUPPORT, *run, n, err);
+    }
+    return st;
+}
+
+/* Cells per support grid spacing in the field of order_pieces (finer cells: less over-approximation). */
+#define SUB 4
+
+/* Chebyshev dilation of a min-field by k cells (separable running minimum), via scratch tmp. */
+static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k)
+{
+    size_t x, y, t;
+    for (y = 0; y < ny; y++)
+        for (x = 0; x < nx; x++) {
+            uint32_t m = NOPATH;
+            for (t = x > k ? x - k : 0; t <= x + k && t < nx; t++)
+                m = d[y * nx + t] < m ? d[y * nx + t] : m;
+            tmp[y * nx + x] = m;
+        }
+    for (y = 0; y < ny; y++)
+        for (x = 0; x < nx; x++) {
+            uint32_t m = NOPATH;
+            for (t = y > k ? y - k : 0; t <= y + k && t < ny; t++)
+                m = tmp[t * nx + x] < m ? tmp[t * nx + x] : m;
+            d[y * nx + x] = m;
+        }
+}
+
+/* Cell range of a fragment's xy box grown by r cells, clamped to the field. */
+static void cell_range(const sctx *c, const amp_box3 *b, size_t r, size_t nx, size_t ny, size_t *x0, size_t *x1,
+                       size_t *y0, size_t *y1)
+{
+    double cs = c->sp / SUB;
+    long a0 = (long)floor((b->min.x - c->x0) / cs + 0.5) - (long)r, a1 = (long)floor((b->max.x - c->x0) / cs + 0.5) + (long)r;
+    long b0 = (long)floor((b->min.y - c->y0) / cs + 0.5) - (long)r, b1 = (long)floor((b->max.y - c->y0) / cs + 0.5) + (long)r;
+    *x0 = a0 < 0 ? 0 : (size_t)a0;
+    *y0 = b0 < 0 ? 0 : (size_t)b0;
+    *x1 = a1 < 0 ? 0 : (size_t)a1 >= nx ? nx - 1 : (size_t)a1;
+    *y1 = b1 < 0 ? 0 : (size_t)b1 >= ny ? ny - 1 : (size_t)b1;
+}
+
+/*
+ * A lower support piece L must be printed no later than any piece H above it:
+ * pos(L) = min(pos(L), pos(H)). Going down layer by layer, a field over a fine
+ * xy grid holds, per cell, the smallest pos of the pieces above that cell's
+ * points at the current height: H enters once it is more than z_offs higher
+ * (disc of radius (dz - z_offs) / cot(theta), grown by one cell), and
+ * every layer down the discs grow by layer_height / cot(theta). Square cells
+ * and square dilation over-approximate the cone, which only ever moves pieces
+ * earlier (safe), never later.
+ */
+static amp_status order_pieces(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, piece *pcs,
+                               size_t npc, amp_error *err)
+{
+    double cs = c->sp / SUB, h = o->layer_height, cot = 1.0 / tan(o->head.theta);
+    size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, *lfirst;
+    size_t step = (size_t)ceil(h / cot / cs), lag = (size_t)floor(o->head.z_offs / h) + 1;
+    uint32_t *d, *tmp;
+    long l;
+    if (npc == 0)
+        return AMP_OK;
+    for (i = 0; i < npc; i++) {
+        size_t li = (size_t)floor(fs->frag[pcs[i].f0].p0.z / h + 0.5);
+        nl = li + 1 > nl ? li + 1 : nl;
+    }
+    d = amp_calloc(c->a, nx * ny, sizeof *d);
+    tmp = amp_calloc(c->a, nx * ny, sizeof *tmp);
+    lfirst = amp_calloc(c->a, nl + 2, sizeof *lfirst);
+    if (!d || !tmp || !lfirst) {
+        amp_free(c->a, d);
+        amp_free(c->a, tmp);
+        amp_free(c->a, lfirst);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering support pieces");
+    }
+    /* pieces are made layer by layer: lfirst[l] = first piece of layer l */
+    for (i = 0; i < npc; i++)
+        lfirst[(size_t)floor(fs->frag[pcs[i].f0].p0.z / h + 0.5) + 1]++;
+    for (i = 0; i <= nl; i++)
+        lfirst[i + 1] += lfirst[i];
+    for (i = 0; i < nx * ny; i++)
+        d[i] = NOPATH;
+    for (l = (long)nl - 1; l >= 0; l--) {
+        size_t m = (size_t)l + lag, k;
+        if ((size_t)l + 1 < nl)
+            dilate_min(d, tmp, nx, ny, step);
+        if (m < nl) { /* layer m is now more than z_offs above layer l */
+            double dz = (double)(m - (size_t)l) * h - o->head.z_offs;
+            size_t r = (size_t)ceil(dz / cot / cs) + 1;
+            for (k = lfirst[m]; k < lfirst[m + 1]; k++) {
+                size_t f;
+                for (f = pcs[k].f0; f < pcs[k].f1; f++) {
+                    size_t x0, x1, y0, y1, x, y;
+                    cell_range(c, &fs->frag[f].box, r, nx, ny, &x0, &x1, &y0, &y1);
+                    for (y = y0; y <= y1; y++)
+                        for (x = x0; x <= x1; x++)
+                            d[y * nx + x] = pcs[k].pos < d[y * nx + x] ? pcs[k].pos : d[y * nx + x];
+                }
+            }
+        }
+        for (k = lfirst[l]; k < lfirst[l + 1]; k++) {
+            size_t f;
+            for (f = pcs[k].f0; f < pcs[k].f1; f++) {
+                size_t x0, x1, y0, y1, x, y;
+                cell_range(c, &fs->frag[f].box, 0, nx, ny, &x0, &x1, &y0, &y1);
+                for (y = y0; y <= y1; y++)
+                    for (x = x0; x <= x1; x++)
+                        pcs[k].pos = d[y * nx + x] < pcs[k].pos ? d[y * nx + x] : pcs[k].pos;
+            }
+        }
+    }
+    amp_free(c->a, d);
+    amp_free(c->a, tmp);
+    amp_free(c->a, lfirst);
+    return AMP_OK;
+}
+
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
                        amp_support_stats *st, amp_error *err)
 {
@@ -186,8 +337,11 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     amp_pathset all;
     amp_fragments fs;
     amp_fbvh b;
-    uint32_t *nmin = NULL, *nmax = NULL, *pos = NULL;
-    size_t i, nobj, nsup;
+    uint32_t *nmin = NULL, *nmax = NULL, *first = NULL, *late = NULL;
+    amp_pvert *run = NULL;
+    piece *pcs = NULL;
+    size_t run_cap = 0, npc = 0, pcap = 0;
+    size_t i, nobj;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
@@ -209,8 +363,6 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     nobj = in->npaths;
     if ((stt = amp_pathset_append(&all, in, err)) != AMP_OK || (stt = fill(&c, o, &all, err)) != AMP_OK)
         goto done;
-    nsup = all.npaths - nobj;
-    s.paths = nsup;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
     /* §5.3 ordering: the support below an object path is printed before it */
@@ -219,8 +371,9 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     nmin = amp_calloc(c.a, b.nnodes + 1, sizeof *nmin);
     nmax = amp_calloc(c.a, b.nnodes + 1, sizeof *nmax);
-    pos = amp_calloc(c.a, nsup + 1, sizeof *pos);
-    if (!nmin || !nmax || !pos) {
+    first = amp_calloc(c.a, fs.n + 1, sizeof *first);
+    late = amp_calloc(c.a, fs.n + 1, sizeof *late);
+    if (!nmin || !nmax || !first || !late) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
         goto done;
     }
@@ -242,35 +395,74 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
             nmax[i] = nmax[nd->left] > nmax[nd->right] ? nmax[nd->left] : nmax[nd->right];
         }
     }
+    /* per support fragment: the first object path above it (it must come before) and the last one below it
+     * (it must come after) */
     {
-        long si;
-        size_t conflicts = 0;
-#pragma omp parallel for schedule(dynamic, 16) reduction(+ : conflicts)
-        for (si = 0; si < (long)nsup; si++) {
-            size_t path = nobj + (size_t)si, f;
-            uint32_t best = NOPATH, late = NOPATH;
-            for (f = fs.first[path]; f < fs.first[path + 1]; f++) {
-                uint32_t p = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 1);
-                best = p < best ? p : best;
-            }
-            for (f = fs.first[path]; best != NOPATH && f < fs.first[path + 1]; f++) {
-                uint32_t p = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 0);
-                if (p != NOPATH && (late == NOPATH || p > late))
-                    late = p;
-            }
-            pos[si] = best;
-            conflicts += late != NOPATH && late >= best;
+        long f0 = (long)fs.first[nobj], f;
+#pragma omp parallel for schedule(dynamic, 64)
+        for (f = f0; f < (long)fs.n; f++) {
+            first[f] = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 1);
+            late[f] = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 0);
         }
-        s.conflicts = conflicts;
     }
-    /* Supports are made bottom-up, layer by layer: a support printed after a higher one could lie below it
-     * (support-support gouge), so each is moved no later than every support made after it (suffix minimum). */
-    for (i = nsup; i-- > 1;)
-        if (pos[i] < pos[i - 1])
-            pos[i - 1] = pos[i];
-    /* emit: the supports of object path i (in layer order) right before it */
+    /* Cut each row into as few pieces as possible such that every piece has a slot: the first object above
+     * any of its fragments comes after the last object below any of them. A fragment with no slot of its own
+     * (an object printed later lies below it: a thin overhang gap, a steep underside) is left out. */
+    for (i = nobj; i < all.npaths; i++) {
+        size_t f = fs.first[i];
+        while (f < fs.first[i + 1]) {
+            piece pc;
+            uint32_t lo = NOPATH, hi = 0;
+            int any_late = 0;
+            pc.f0 = f;
+            for (; f < fs.first[i + 1]; f++) {
+                uint32_t nlo = first[f] < lo ? first[f] : lo, nhi = hi;
+                int nany = any_late;
+                if (late[f] != NOPATH) {
+                    nhi = late[f] > hi ? late[f] : hi;
+                    nany = 1;
+                }
+                if (nany && nlo != NOPATH && nhi >= nlo) {
+                    if (f == pc.f0) { /* no slot even alone */
+                        late[f] = LEFT_OUT;
+                        s.conflicts++;
+                        s.trimmed += amp_v3_dist(fs.frag[f].p0, fs.frag[f].p1);
+                        pc.f0 = f + 1;
+                        continue;
+                    }
+                    break;
+                }
+                lo = nlo;
+                hi = nhi;
+                any_late = nany;
+            }
+            if (f == pc.f0)
+                continue;
+            pc.f1 = f;
+            pc.pos = lo;
+            if ((stt = amp_grow(c.a, (void **)&pcs, &pcap, npc + 1, sizeof *pcs)) != AMP_OK) {
+                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+                goto done;
+            }
+            pcs[npc++] = pc;
+        }
+    }
+    /* Support-support gouging: a piece must be printed before every piece above it (Def. 5.1). */
+    if ((stt = order_pieces(&c, o, &fs, pcs, npc, err)) != AMP_OK)
+        goto done;
+    /* Moving a piece earlier can put it before an object below it: those fragments are left out too. */
+    for (i = 0; i < npc; i++) {
+        size_t f;
+        for (f = pcs[i].f0; f < pcs[i].f1; f++)
+            if (late[f] != NOPATH && late[f] != LEFT_OUT && pcs[i].pos != NOPATH && late[f] >= pcs[i].pos) {
+                late[f] = LEFT_OUT;
+                s.conflicts++;
+                s.trimmed += amp_v3_dist(fs.frag[f].p0, fs.frag[f].p1);
+            }
+    }
+    /* emit: the pieces of object path k (in the order they were made) right before it, unplaced ones last */
     {
-        size_t *cnt = amp_calloc(c.a, nobj + 2, sizeof *cnt), *ord = amp_calloc(c.a, nsup + 1, sizeof *ord);
+        size_t *cnt = amp_calloc(c.a, nobj + 2, sizeof *cnt), *ord = amp_calloc(c.a, npc + 1, sizeof *ord);
         size_t k;
         if (!cnt || !ord) {
             amp_free(c.a, cnt);
@@ -278,23 +470,27 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
             stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
             goto done;
         }
-        for (i = 0; i < nsup; i++)
-            cnt[(pos[i] == NOPATH ? nobj : pos[i]) + 1]++;
+        for (i = 0; i < npc; i++)
+            cnt[(pcs[i].pos == NOPATH ? nobj : pcs[i].pos) + 1]++;
         for (i = 0; i <= nobj; i++)
             cnt[i + 1] += cnt[i];
-        for (i = 0; i < nsup; i++)
-            ord[cnt[pos[i] == NOPATH ? nobj : pos[i]]++] = i;
-        s.unplaced = cnt[nobj] - (nobj ? cnt[nobj - 1] : 0);
+        for (i = 0; i < npc; i++)
+            ord[cnt[pcs[i].pos == NOPATH ? nobj : pcs[i].pos]++] = i;
         for (i = 0, k = 0; stt == AMP_OK && i <= nobj; i++) {
+            size_t before = out->npaths;
             for (; stt == AMP_OK && k < cnt[i]; k++)
-                stt = amp_pathset_add(out, AMP_ROLE_SUPPORT, amp_pathset_path_verts(&all, nobj + ord[k]),
-                                      all.paths[nobj + ord[k]].n, err);
+                stt = emit_piece(out, &fs, late, &pcs[ord[k]], &run, &run_cap, err);
+            if (i == nobj)
+                s.unplaced = out->npaths - before;
             if (stt == AMP_OK && i < nobj)
                 stt = amp_pathset_add(out, in->paths[i].role, amp_pathset_path_verts(in, i), in->paths[i].n, err);
         }
         amp_free(c.a, cnt);
         amp_free(c.a, ord);
     }
+    s.paths = 0;
+    for (i = 0; i < out->npaths; i++)
+        s.paths += out->paths[i].role == AMP_ROLE_SUPPORT;
     if (st)
         *st = s;
 done:
@@ -302,7 +498,10 @@ done:
     amp_free(c.a, c.first);
     amp_free(c.a, nmin);
     amp_free(c.a, nmax);
-    amp_free(c.a, pos);
+    amp_free(c.a, first);
+    amp_free(c.a, late);
+    amp_free(c.a, pcs);
+    amp_free(c.a, run);
     amp_fbvh_free(&b);
     amp_fragments_free(&fs);
     amp_pathset_free(&all);

@@ -11,7 +11,7 @@ const char cmd_order_usage[] =
     "  --greedy        write the plain greedy order of Algorithm 2 instead of the improved one\n"
     "                  (continuation of the curve just printed, look-ahead, merging of adjacent sub-curves)\n"
     "  --lookahead K   candidate runs simulated per step when improving (default 4, 1..16)\n"
-    "  --max-edges N   count the below graph's edges only up to N (default 500000; 0 = skip)\n"
+    "  --max-edges N   also list the below graph up to N edges, for the report (default 0: skip; slow, ordering never needs it)\n"
     "  --json          print one JSON object: fragments, below-graph edges, subdivisions greedy vs improved, times\n"
     "  -o FILE         write the ordered paths (.amp); cut points get interpolated radii\n"
     "Both orderings are always computed, so that the gain of the improvements is reported.\n";
@@ -22,7 +22,7 @@ int cmd_order(int argc, char **argv)
 {
     const char *pos[1], *output = NULL;
     double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, t0, t_greedy, t_improved, t_graph = 0.0;
-    long max_edges = 500000, lookahead = 4;
+    long max_edges = 0, lookahead = 4;
     int json = 0, greedy = 0, npos = 0, rc, graph_done = 0;
     amp_pathset ps, out_g, out_i;
     amp_order_opts o;

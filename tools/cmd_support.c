@@ -86,13 +86,14 @@ int cmd_support(int argc, char **argv)
         cli_json_num(&j, "support_length_mm", st.length);
         cli_json_int(&j, "unplaced", (long long)st.unplaced);
         cli_json_int(&j, "conflicts", (long long)st.conflicts);
+        cli_json_num(&j, "trimmed_mm", st.trimmed);
         cli_json_int(&j, "paths_out", (long long)out.npaths);
         cli_json_num(&j, "time_s", cli_now() - t0);
         cli_json_end(&j);
     } else {
-        printf("%s: %lu rays, %lu columns need support: %lu support paths, %.1f mm (%lu printed last, %lu conflicts)\n",
+        printf("%s: %lu rays, %lu columns need support: %lu support paths, %.1f mm (%lu printed last, %lu conflicts: %.1f mm left out)\n",
                pos[0], (unsigned long)st.rays, (unsigned long)st.columns, (unsigned long)st.paths, st.length,
-               (unsigned long)st.unplaced, (unsigned long)st.conflicts);
+               (unsigned long)st.unplaced, (unsigned long)st.conflicts, st.trimmed);
     }
     rc = CLI_OK;
 done:

@@ -12,8 +12,10 @@
  * path), so that the support under a path is printed before the path, in
  * stages. Support paths with no object path above them are printed last.
  * The reverse constraint (an object path printed later that lies below a
- * support path, e.g. inside an overhang gap) is not resolved; it is counted
- * in amp_support_stats.conflicts and shows up in the gouge check.
+ * support fragment, e.g. in a thin overhang gap or under a steep underside)
+ * cannot be met by any placement: such fragments are left out (the support
+ * path is split around them), counted in amp_support_stats.conflicts and
+ * .trimmed, so the result passes the gouge check.
  * Thread-safe; the model's BVH is only read.
  */
 #ifndef AMPATH_SUPPORT_H
@@ -43,10 +45,11 @@ void amp_support_opts_default(amp_support_opts *o);
 typedef struct amp_support_stats {
     size_t rays;          /**< vertical rays cast */
     size_t columns;       /**< ray stretches that need support */
-    size_t paths;         /**< support paths made */
-    double length;        /**< their total length, mm */
+    size_t paths;         /**< support paths written (after splitting around conflicts) */
+    double length;        /**< length of the support rows made, mm (before trimming) */
     size_t unplaced;      /**< support paths with no object path above (printed last) */
-    size_t conflicts;     /**< support paths that also lie above an object path printed after them */
+    size_t conflicts;     /**< support rows that also lay above an object path printed after them */
+    double trimmed;       /**< length left out for those conflicts, mm */
 } amp_support_stats;
 
 /**
