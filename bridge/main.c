@@ -60,7 +60,7 @@ static int fail(const char *fmt, const char *a)
 
 static void report(br_session *s)
 {
-    printf("sent %ld moves, acknowledged %ld\n", s->sent_moves, s->acked_moves);
+    printf("sent %ld commands (moves and others), acknowledged %ld\n", s->sent_moves, s->acked_moves);
     if (s->stop != BR_DONE) {
         printf("stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
                br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,

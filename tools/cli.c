@@ -257,6 +257,33 @@ int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps)
     return CLI_OK;
 }
 
+int cli_save_derived(const char *cmd, const char *file, const amp_pathset *ps, const char *comment, const char *from)
+{
+    char all[2048], line[512];
+    size_t n;
+    int lines = 0;
+    FILE *f = fopen(from, "r");
+    snprintf(all, sizeof all, "%s", comment);
+    n = strlen(all);
+    /* the header: the magic line, then comment lines until the first path */
+    while (f && lines < 16 && fgets(line, sizeof line, f)) {
+        size_t k = strlen(line);
+        if (line[0] != '#' && strncmp(line, "ampath-paths", 12) != 0)
+            break;
+        if (strncmp(line, "# ampath ", 9) != 0 || strchr(line, '\n') == NULL)
+            continue;
+        line[k - 1] = 0;
+        if (n + k + 1 < sizeof all && strstr(all, line + 2) == NULL) {
+            snprintf(all + n, sizeof all - n, "\n%s", line + 2);
+            n += strlen(all + n);
+        }
+        lines++;
+    }
+    if (f)
+        fclose(f);
+    return cli_save_paths(cmd, file, ps, all);
+}
+
 int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment)
 {
     amp_error err;

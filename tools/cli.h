@@ -85,6 +85,13 @@ double cli_now(void);
 /* ---- loaders that print their own errors (return CLI_OK or CLI_USAGE) ---- */
 int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps);
 int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment);
+/*
+ * As cli_save_paths() for a command that transforms the paths of @p from:
+ * the "# ampath ..." header comments of @p from follow @p comment, so the
+ * history (e.g. the eps that `ampath cover` guaranteed, which `ampath check`
+ * uses) survives order, mdr and support.
+ */
+int cli_save_derived(const char *cmd, const char *file, const amp_pathset *ps, const char *comment, const char *from);
 
 /* Prototypes of every registered command and benchmark (generated lists). */
 #define AMP_CMD(name)                                                                                                \

@@ -32,7 +32,8 @@ const char cmd_check_usage[] =
     "  --trivariate F  the model as a trivariate: a .spl file (its first trivariate) or a built-in name\n"
     "  --mesh F        the model as an STL mesh\n"
     "  --layer H       the layer height the paths were sliced with (ampath slice); --first-layer H0 too\n"
-    "  --tol T         distance tolerance of the stroke 'inside' test, mm (default 1e-6)\n"
+    "  --tol T         distance tolerance of the stroke 'inside' test, mm (default 1e-6); with --mesh coverage,\n"
+    "                  vertices may lie max(T, 0.01) mm outside the mesh (raise T for a tessellated model)\n"
     HEADOPT_HELP
     "  --eps E         allowed coverage gap, mm; default: the eps recorded by 'ampath cover' in the file,\n"
     "                  else the largest vertex radius\n"

@@ -64,7 +64,7 @@ int cmd_mdr(int argc, char **argv)
         goto done;
     }
     t_vol = cli_now() - t0;
-    if (output && (rc = cli_save_paths("mdr", output, &out, "ampath mdr")) != CLI_OK)
+    if (output && (rc = cli_save_derived("mdr", output, &out, "ampath mdr", pos[0])) != CLI_OK)
         goto done;
     if (json) {
         cli_json j;

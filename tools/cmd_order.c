@@ -85,7 +85,7 @@ int cmd_order(int argc, char **argv)
         char comment[256];
         snprintf(comment, sizeof comment, "ampath order: z_offs %g mm, theta %g deg, %s, %lu subdivisions", z_offs,
                  theta, greedy ? "plain greedy" : "improved", (unsigned long)(greedy ? sg : si).subdivisions);
-        if (cli_save_paths("order", output, greedy ? &out_g : &out_i, comment) != CLI_OK)
+        if (cli_save_derived("order", output, greedy ? &out_g : &out_i, comment, pos[0]) != CLI_OK)
             goto cleanup;
     }
     if (json) {

@@ -71,7 +71,7 @@ int cmd_support(int argc, char **argv)
         rc = cli_fail_err("support", &err);
         goto done;
     }
-    if (output && cli_save_paths("support", output, &out, "ampath support") != CLI_OK)
+    if (output && cli_save_derived("support", output, &out, "ampath support", pos[0]) != CLI_OK)
         goto done;
     if (json) {
         cli_json j;

@@ -1,9 +1,70 @@
 #!/bin/sh
-# make demo: the main job of SPEC §6 on built-in defaults, as far as the pipeline exists.
+# make demo — SPEC §6: the main job on built-in defaults, end to end.
+#   helix model -> cover (paper 1 §4.1) -> order for the default head (§5.1) -> MDR (§5.2)
+#   -> support (§5.3) -> independent checks -> G-code (SPEC §5) -> pictures
+#   -> stream through ampath-bridge to the virtual printer, and compare what it executed.
+# Everything lands in demo/. Options through the environment:
+#   DEMO_EPS (default 1 mm), DEMO_DIR (default u: curves along the helix, as in paper Fig. 11).
 set -e
 A=./tools/ampath
-mkdir -p demo
-echo "ampath demo ($($A --version))"
-printf 'ampath-paths 1\n# a hand-made square spiral, until the covering commands land\npath object 5\n0 0 0.2 0.5\n10 0 0.2 0.5\n10 10 0.2 0.5\n0 10 0.2 0.5\n0 0 0.2 0.5\n' > demo/square.amp
-$A info demo/square.amp
-echo "demo: the covering, ordering and G-code stages are not built yet; stopped after demo/square.amp"
+B=./bridge/ampath-bridge
+V=./tools/ampath-vprinter
+D=demo
+EPS=${DEMO_EPS:-1}
+DIR=${DEMO_DIR:-u}
+mkdir -p $D
+rm -f $D/*.amp $D/*.gcode $D/*.log $D/*.json
+
+# value of a JSON number field: num FILE NAME
+num() { sed -n "s/.*\"$2\":\([-0-9.e+]*\).*/\1/p" "$1" | head -n 1; }
+step() { printf '%-9s %s\n' "$1" "$2"; }
+
+echo "ampath demo ($($A --version)) — helix, eps $EPS mm, default head (z_offs 0.5 mm, theta 72 deg)"
+$A model helix -o $D/helix.spl
+$A model helix -o $D/helix.stl --json > $D/model.json
+step model "helix trivariate $D/helix.spl and its boundary mesh $D/helix.stl ($(num $D/model.json triangles) triangles)"
+
+$A cover $D/helix.spl --eps "$EPS" --dir "$DIR" --json -o $D/helix-cover.amp > $D/cover.json
+step cover "$(num $D/cover.json surfaces) iso-surfaces, $(num $D/cover.json curves) curves, $(num $D/cover.json length_mm | cut -d. -f1) mm (Algorithm 1, arc-length bound)"
+
+$A order $D/helix-cover.amp --json -o $D/helix-ordered.amp > $D/order.json
+step order "$(num $D/order.json fragments) fragments -> $(num $D/order.json paths_out) gouge-free paths: $(num $D/order.json subdivisions_improved) subdivisions (plain greedy: $(num $D/order.json subdivisions_greedy))"
+
+$A mdr $D/helix-ordered.amp --nominal 0.5 --json -o $D/helix-mdr.amp > $D/mdr.json
+step mdr "deposition radius $(num $D/mdr.json radius_lo | cut -c1-5)..$(num $D/mdr.json radius_hi | cut -c1-5) mm, over-coverage $(num $D/mdr.json over_coverage | cut -c1-5)"
+
+$A support $D/helix-mdr.amp --mesh $D/helix.stl --json -o $D/helix.amp > $D/support.json
+step support "$(num $D/support.json support_paths) support paths under the overhangs ($(num $D/support.json conflicts) fragments with no gouge-free slot left out)"
+
+$A check $D/helix.amp --trivariate $D/helix.spl --json > $D/check.json || {
+    echo "demo: ampath check FAILED on $D/helix.amp:"; cat $D/check.json; exit 1; }
+GAP=$(sed -n 's/.*"coverage":{[^}]*"coverage_gap_mm":\([0-9.e+-]*\).*/\1/p' $D/check.json)
+step check "coverage gap $(echo "$GAP" | cut -c1-6) mm <= eps $EPS mm, no gouging, no crossing (independent checkers)"
+
+$A gcode $D/helix.amp --json -o $D/helix.gcode > $D/gcode.json
+$A preview $D/helix.amp -o $D/helix.png
+$A preview $D/helix.amp -o $D/helix.svg
+step gcode "$D/helix.gcode: $(num $D/gcode.json lines) lines; pictures $D/helix.png, $D/helix.svg"
+
+T=$(num $D/gcode.json time_s | cut -d. -f1)
+echo
+echo "paths:           $(num $D/order.json paths_out) object + $(num $D/support.json support_paths) support"
+echo "subdivisions:    $(num $D/order.json subdivisions_improved) (plain greedy $(num $D/order.json subdivisions_greedy))"
+echo "coverage error:  $(echo "$GAP" | cut -c1-6) mm (eps $EPS mm)"
+echo "print length:    $(num $D/gcode.json print_length_mm | cut -d. -f1) mm extruding, $(num $D/gcode.json travel_length_mm | cut -d. -f1) mm travel"
+echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, filament $(num $D/gcode.json filament_mm | cut -d. -f1) mm"
+echo
+
+# Stream the job to the virtual printer (SPEC §8) through a pseudo-terminal, then compare.
+LINK=/tmp/ampath-demo-printer-$$
+$V --link $LINK --log $D/printer.log > /dev/null 2>&1 &
+VP=$!
+trap 'kill $VP 2>/dev/null || true; rm -f $LINK' EXIT
+i=0
+while [ ! -e $LINK ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+$B $LINK $D/helix.gcode --boot-wait 0.2 --quiet
+kill $VP 2>/dev/null; wait $VP 2>/dev/null || true
+SENT=$(grep -c '^G[01] ' $D/helix.gcode || true)
+DONE=$(grep -c '^[0-9]* G[01] ' $D/printer.log || true)
+echo "virtual printer: executed $DONE of $SENT moves of $D/helix.gcode"
+[ "$SENT" = "$DONE" ]
