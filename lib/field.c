@@ -37,6 +37,87 @@ static amp_status eval_box(const amp_field *f, const double uvw[3], amp_vec3 *ou
     return AMP_OK;
 }
 
+/* sweep: C(w) + u N(w) + v B(w), w the arc length along the spine (mm), straight beyond the ends. */
+static amp_status eval_sweep(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
+{
+    const amp_sweep *sw = f->user;
+    double w = uvw[2], L = sw->s[sw->n - 1];
+    amp_vec3 c, t, n;
+    (void)err;
+    if (w <= 0 || w >= L) {
+        size_t e = w <= 0 ? 0 : sw->n - 1;
+        c = amp_v3_add(sw->p[e], amp_v3_scale(sw->t[e], w <= 0 ? w : w - L));
+        t = sw->t[e];
+        n = sw->nrm[e];
+    } else {
+        size_t lo = 0, hi = sw->n - 1;
+        double a;
+        while (hi - lo > 1) {
+            size_t mid = (lo + hi) / 2;
+            if (sw->s[mid] <= w)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        a = (w - sw->s[lo]) / (sw->s[hi] - sw->s[lo]);
+        c = amp_v3_lerp(sw->p[lo], sw->p[hi], a);
+        t = amp_v3_normalize(amp_v3_lerp(sw->t[lo], sw->t[hi], a));
+        n = amp_v3_lerp(sw->nrm[lo], sw->nrm[hi], a);
+        n = amp_v3_normalize(amp_v3_sub(n, amp_v3_scale(t, amp_v3_dot(n, t))));
+    }
+    *out = amp_v3_add(c, amp_v3_add(amp_v3_scale(n, uvw[0]), amp_v3_scale(amp_v3_cross(t, n), uvw[1])));
+    return AMP_OK;
+}
+
+amp_status amp_field_sweep(amp_field *f, amp_sweep *sw, const amp_vec3 *pts, size_t n, double side, amp_error *err)
+{
+    double lo[3], hi[3];
+    amp_vec3 d0;
+    size_t i;
+    if (!f || !sw || !pts || n < 2 || n > AMP_SWEEP_MAX || !(side > 0) || !isfinite(side))
+        return amp_fail(err, AMP_ERR_ARG, 0, "sweep: need 2..%d spine points and a positive side", AMP_SWEEP_MAX);
+    sw->n = n;
+    sw->s[0] = 0;
+    for (i = 0; i < n; i++) {
+        if (!isfinite(pts[i].x) || !isfinite(pts[i].y) || !isfinite(pts[i].z))
+            return amp_fail(err, AMP_ERR_ARG, 0, "sweep: spine point %lu is not finite", (unsigned long)i);
+        sw->p[i] = pts[i];
+        if (i > 0) {
+            double l = amp_v3_dist(pts[i - 1], pts[i]);
+            if (!(l > 1e-6))
+                return amp_fail(err, AMP_ERR_GEOMETRY, 0, "sweep: spine segment %lu is shorter than 1e-6 mm",
+                                (unsigned long)(i - 1));
+            sw->s[i] = sw->s[i - 1] + l;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        amp_vec3 a = amp_v3_normalize(amp_v3_sub(sw->p[i > 0 ? i : 1], sw->p[i > 0 ? i - 1 : 0]));
+        amp_vec3 b = amp_v3_normalize(amp_v3_sub(sw->p[i + 1 < n ? i + 1 : n - 1], sw->p[i + 1 < n ? i : n - 2]));
+        if (amp_v3_dot(a, b) < -0.985)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "sweep: the spine turns back on itself at point %lu",
+                            (unsigned long)i);
+        sw->t[i] = amp_v3_normalize(amp_v3_add(a, b));
+    }
+    /* any normal to start with, then the double-reflection rotation-minimizing frame (Wang et al. 2008) */
+    d0 = fabs(sw->t[0].x) < 0.9 ? amp_v3(1, 0, 0) : amp_v3(0, 1, 0);
+    sw->nrm[0] = amp_v3_normalize(amp_v3_sub(d0, amp_v3_scale(sw->t[0], amp_v3_dot(d0, sw->t[0]))));
+    for (i = 0; i + 1 < n; i++) {
+        amp_vec3 v1 = amp_v3_sub(sw->p[i + 1], sw->p[i]), rl, tl, v2;
+        double c1 = amp_v3_dot(v1, v1), c2;
+        rl = amp_v3_sub(sw->nrm[i], amp_v3_scale(v1, 2 / c1 * amp_v3_dot(v1, sw->nrm[i])));
+        tl = amp_v3_sub(sw->t[i], amp_v3_scale(v1, 2 / c1 * amp_v3_dot(v1, sw->t[i])));
+        v2 = amp_v3_sub(sw->t[i + 1], tl);
+        c2 = amp_v3_dot(v2, v2);
+        sw->nrm[i + 1] = c2 > 1e-18 ? amp_v3_sub(rl, amp_v3_scale(v2, 2 / c2 * amp_v3_dot(v2, rl))) : rl;
+        sw->nrm[i + 1] = amp_v3_normalize(sw->nrm[i + 1]);
+    }
+    lo[0] = lo[1] = -side / 2;
+    hi[0] = hi[1] = side / 2;
+    lo[2] = -side / 2;
+    hi[2] = sw->s[n - 1] + side / 2;
+    return amp_field_custom(f, eval_sweep, sw, lo, hi, 2, err);
+}
+
 static const char *const field_names[] = {"helix-square", "box", NULL};
 
 const char *const *amp_field_names(void) { return field_names; }

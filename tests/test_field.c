@@ -184,6 +184,96 @@ START_TEST(field_errors_are_reported)
 END_TEST
 
 
+/* Distance from p to the nearest segment of any path. */
+static double nearest_path(const amp_pathset *ps, amp_vec3 p)
+{
+    double best = 1e300, t;
+    size_t i, k;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        for (k = 0; k + 1 < ps->paths[i].n; k++)
+            best = fmin(best, amp_v3_seg_dist2(p, v[k].p, v[k + 1].p, &t));
+    }
+    return sqrt(best);
+}
+
+/* The crocodile's front leg (hip, knee, foot; radius 2.6 -> 1.9 mm, lib/meshmodels.c). */
+static const amp_vec3 croc_leg[3] = {{16, 6, 9}, {19, 15, 6}, {17, 17, 1.9}};
+
+/* Largest distance to the paths over 216 points of the leg's core (within 1.5 mm of its axis). */
+static double leg_core_gap(const amp_pathset *ps)
+{
+    double worst = 0;
+    int seg, a, k;
+    for (seg = 0; seg < 2; seg++)
+        for (k = 1; k < 10; k++)
+            for (a = 0; a < 12; a++) {
+                amp_vec3 c = amp_v3_lerp(croc_leg[seg], croc_leg[seg + 1], k / 10.0);
+                amp_vec3 t = amp_v3_normalize(amp_v3_sub(croc_leg[seg + 1], croc_leg[seg]));
+                amp_vec3 n = amp_v3_normalize(amp_v3_cross(t, amp_v3(0, 0, 1)));
+                amp_vec3 bn = amp_v3_cross(t, n);
+                double r = 1.5 * ((a % 3) + 1) / 3.0, ang = a * 0.5235987755982988;
+                amp_vec3 p = amp_v3_add(c, amp_v3_add(amp_v3_scale(n, r * cos(ang)), amp_v3_scale(bn, r * sin(ang))));
+                worst = fmax(worst, nearest_path(ps, p));
+            }
+    return worst;
+}
+
+/* Paper Fig. 6: a field of its own along a thin limb. A 7 mm square swept along a spine through the
+ * crocodile's leg: clipped curves stay in the mesh and cover the leg's core within the lattice's
+ * covering radius S sqrt(2) / 2; the same measure fails on a sparser covering. */
+START_TEST(sweep_field_along_a_leg_covers_the_leg)
+{
+    static const amp_vec3 spine[4] = {{14, 2, 13}, {16, 6, 9}, {19, 15, 6}, {17, 17, -1}};
+    amp_mesh m;
+    amp_bvh *b;
+    amp_field f;
+    amp_field_opts o;
+    amp_field_stats st;
+    amp_sweep *sw = malloc(sizeof *sw);
+    amp_pathset ps, sparse;
+    amp_error err;
+    double g;
+    size_t i, outside = 0;
+    ck_assert_ptr_nonnull(sw);
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&sparse, NULL);
+    ck_assert_int_eq(amp_mesh_model("crocodile-like", 0, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_sweep(&f, sw, spine, 4, 7.0, &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = 1.0;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.curves, 49); /* 7 x 7 across the 7 mm square at S = 1 */
+    for (i = 0; i < ps.nverts; i++)
+        if (!amp_bvh_inside(b, ps.verts[i].p))
+            outside += amp_bvh_closest(b, ps.verts[i].p, NULL, NULL) > 0.01;
+    ck_assert_uint_eq(outside, 0);
+    g = leg_core_gap(&ps);
+    ck_assert_msg(g <= 1.0 * sqrt(2) / 2 + 0.05, "leg core gap %g", g);
+    o.spacing = 3.0;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &sparse, NULL, &err), AMP_OK);
+    g = leg_core_gap(&sparse);
+    ck_assert_msg(g > 1.0 * sqrt(2) / 2 + 0.05, "sparse covering: gap %g", g);
+    /* bad spines */
+    ck_assert_int_eq(amp_field_sweep(&f, sw, spine, 1, 7.0, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_field_sweep(&f, sw, spine, 4, 0.0, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_field_sweep(&f, sw, spine, AMP_SWEEP_MAX + 1, 7.0, &err), AMP_ERR_ARG);
+    {
+        amp_vec3 dup[3] = {{0, 0, 0}, {0, 0, 0}, {1, 0, 0}}, back[3] = {{0, 0, 0}, {5, 0, 0}, {1, 0, 0}};
+        ck_assert_int_eq(amp_field_sweep(&f, sw, dup, 3, 7.0, &err), AMP_ERR_GEOMETRY);
+        ck_assert_int_eq(amp_field_sweep(&f, sw, back, 3, 7.0, &err), AMP_ERR_GEOMETRY);
+        ck_assert_ptr_nonnull(strstr(err.msg, "turns back"));
+    }
+    free(sw);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&sparse);
+}
+END_TEST
+
 START_TEST(cli_field_reports_figures_and_writes_paths)
 {
     amp_mesh m;
@@ -224,6 +314,8 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
     ck_assert_msg(strstr(out, "\"vertices_outside\":1"), "unexpected: %s", out);
     snprintf(args, sizeof args, "field '%s' --field helix-square --pattern spiral", stl);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "field '%s' --field sweep --spacing 1", stl); /* no --along */
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "field '%s' --field nothing", stl);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
@@ -320,6 +412,7 @@ static Suite *field_suite(void)
     AMP_ADD_TEST(tc, helix_square_grid_covers_helix_within_half_diagonal);
     AMP_ADD_TEST(tc, honeycomb_has_the_smaller_covering_radius);
     AMP_ADD_TEST(tc, mesh_with_missing_triangle_still_clips_correctly);
+    AMP_ADD_TEST(tc, sweep_field_along_a_leg_covers_the_leg);
     AMP_ADD_TEST(tc, gap_checker_fails_when_paths_are_missing);
     AMP_ADD_TEST(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     AMP_ADD_TEST(tc, field_errors_are_reported);

@@ -1,4 +1,5 @@
 /* ampath field MESH.stl --field NAME --spacing S — paper §4.2: direction-field curves clipped to a mesh. */
+#include <stdlib.h>
 #include <string.h>
 
 #include "checkers.h"
@@ -7,9 +8,12 @@ const char cmd_field_usage[] =
     "cover a mesh with the curves of a direction field, clipped to the mesh (paper 4.2)\n"
     "usage: ampath field MESH.stl --field NAME --spacing S [options] [-o PATHS.amp] [--json]\n"
     "  --field F         built-in field: helix-square (12 mm square swept along the SPEC helix; contains the\n"
-    "                    helix model) or box (lines parallel to x over the mesh's bounding box); or a\n"
+    "                    helix model), box (lines parallel to x over the mesh's bounding box), sweep (a\n"
+    "                    square of side --side swept along the spine --along, paper Fig. 6); or a\n"
     "                    trivariate: a .spl file (its first trivariate) or a built-in trivariate name\n"
     "                    (helix, torus-quarter, vase); required\n"
+    "  --along FILE      sweep: the spine, the first path of a .amp file (2..256 points)\n"
+    "  --side W          sweep: side of the square cross-section, mm (default 6)\n"
     "  --dir D           for a trivariate field: the direction of the curves, u, v or w (default w)\n"
     "  --spacing S       distance between neighbouring curves, mm (default 1)\n"
     "  --pattern P       grid (square lattice, covering radius S*sqrt(2)/2) or hex (honeycomb, S/sqrt(3));\n"
@@ -27,8 +31,8 @@ const char cmd_field_usage[] =
 
 int cmd_field(int argc, char **argv)
 {
-    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w";
-    double spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
+    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w", *along = NULL;
+    double side = 6.0, spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
     double gap_all = -1, gap_in = -1, mean = -1;
     long samples = 10000;
     int json = 0, npos = 0, rc;
@@ -36,7 +40,8 @@ int cmd_field(int argc, char **argv)
     amp_bvh *b = NULL;
     amp_field f;
     amp_spline spl;
-    int builtin;
+    int builtin, sweep;
+    amp_sweep *sw = NULL;
     amp_field_opts o;
     amp_field_stats st;
     amp_pathset ps;
@@ -46,12 +51,13 @@ int cmd_field(int argc, char **argv)
                       {"min-len", CLI_DOUBLE, &min_len, 0}, {"radius", CLI_DOUBLE, &radius, 0},
                       {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
+                      {"along", CLI_STR, &along, 0},     {"side", CLI_DOUBLE, &side, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
     if (!field)
-        return cli_fail("field", CLI_USAGE, "--field NAME is required (helix-square, box)");
+        return cli_fail("field", CLI_USAGE, "--field NAME is required (helix-square, box, sweep, or a trivariate)");
     if (strcmp(pattern, "grid") != 0 && strcmp(pattern, "hex") != 0)
         return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", pattern);
     if (samples < 0)
@@ -59,15 +65,38 @@ int cmd_field(int argc, char **argv)
     if (strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
         return cli_fail("field", CLI_USAGE, "--dir must be u, v or w, not '%s'", dir);
     builtin = strcmp(field, "helix-square") == 0 || strcmp(field, "box") == 0;
+    sweep = strcmp(field, "sweep") == 0;
+    if (sweep != (along != NULL))
+        return cli_fail("field", CLI_USAGE, "--along SPINE.amp goes with --field sweep (and is required by it)");
     amp_spline_init(&spl);
-    if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
-        return CLI_USAGE;
     amp_error_clear(&err);
+    if (sweep) {
+        amp_pathset spine;
+        amp_vec3 pts[AMP_SWEEP_MAX];
+        size_t i, n;
+        amp_pathset_init(&spine, NULL);
+        if (cli_load_paths("field", along, &spine) != CLI_OK)
+            return CLI_USAGE;
+        n = spine.npaths ? spine.paths[0].n : 0;
+        for (i = 0; i < n && i < AMP_SWEEP_MAX; i++)
+            pts[i] = amp_pathset_path_verts(&spine, 0)[i].p;
+        amp_pathset_free(&spine);
+        sw = malloc(sizeof *sw);
+        if (!sw)
+            return cli_fail("field", CLI_USAGE, "out of memory");
+        if (amp_field_sweep(&f, sw, pts, n, side, &err) != AMP_OK) {
+            free(sw);
+            return cli_fail("field", CLI_USAGE, "%s: %s", along, err.msg);
+        }
+    } else if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
+        return CLI_USAGE;
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
     if (amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
-        (builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
-                 : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
+        (sweep ? AMP_OK
+               : builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
+                         : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
+        free(sw);
         amp_bvh_free(b);
         amp_mesh_free(&m);
         amp_spline_free(&spl);
@@ -140,5 +169,6 @@ int cmd_field(int argc, char **argv)
     amp_pathset_free(&ps);
     amp_mesh_free(&m);
     amp_spline_free(&spl);
+    free(sw);
     return rc;
 }

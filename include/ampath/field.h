@@ -59,6 +59,37 @@ const char *const *amp_field_names(void);
 amp_status amp_field_custom(amp_field *f, amp_field_eval_fn eval, const void *user, const double lo[3],
                             const double hi[3], int dir, amp_error *err);
 
+/** Most vertices of a sweep spine (amp_sweep is caller memory of fixed size). */
+#define AMP_SWEEP_MAX 256
+
+/**
+ * A square cross-section swept along a polyline spine (paper §4.2, Fig. 6:
+ * the crocodile's legs get their own field along each leg). Filled by
+ * amp_field_sweep(); plain caller memory (about 15 KB), no allocation.
+ */
+typedef struct amp_sweep {
+    size_t n;                     /**< spine vertices */
+    amp_vec3 p[AMP_SWEEP_MAX];    /**< spine */
+    amp_vec3 t[AMP_SWEEP_MAX];    /**< unit tangent at each vertex (mean of the adjacent segments) */
+    amp_vec3 nrm[AMP_SWEEP_MAX];  /**< rotation-minimizing normal at each vertex (double reflection) */
+    double s[AMP_SWEEP_MAX];      /**< arc length at each vertex, mm */
+} amp_sweep;
+
+/**
+ * The field of a square of side @p side mm swept along the polyline @p pts
+ * (@p n points): F(u, v, w) = C(w) + u N(w) + v B(w), with w the arc length
+ * in mm, extended straight by side/2 beyond both ends so that the curves
+ * cross the model's surface there, (u, v) in [-side/2, side/2] mm, and the
+ * frame (T, N, B) interpolated between rotation-minimizing frames at the
+ * vertices (so the curves are continuous through the bends and do not
+ * twist). Curves run along the spine (dir = 2). @p sw receives the spine and
+ * frames and must outlive @p f. Errors: AMP_ERR_ARG (NULL, n < 2,
+ * n > AMP_SWEEP_MAX, side not positive, a non-finite point),
+ * AMP_ERR_GEOMETRY (a segment shorter than 1e-6 mm, or the spine turning back
+ * on itself by more than 170 degrees). Reentrant.
+ */
+amp_status amp_field_sweep(amp_field *f, amp_sweep *sw, const amp_vec3 *pts, size_t n, double side, amp_error *err);
+
 struct amp_spline;
 
 /**
