@@ -778,6 +778,47 @@ START_TEST(gcode_command_writes_file_and_reports_json)
 }
 END_TEST
 
+/* Issue 7: the G-code of the demo pipeline (SPEC 6, smaller eps) parses line by line in the reader. */
+START_TEST(demo_pipeline_gcode_parses_in_the_reader)
+{
+    static const char *const steps[] = {
+        "model helix -o %s-helix.spl",
+        "model helix -o %s-helix.stl",
+        "cover %s-helix.spl --eps 3 --dir u -o %s-c.amp",
+        "order %s-c.amp -o %s-o.amp",
+        "mdr %s-o.amp --nominal 0.5 -o %s-m.amp",
+        "support %s-m.amp --mesh %s-helix.stl -o %s-h.amp",
+        "check %s-h.amp --trivariate %s-helix.spl",
+        "gcode %s-h.amp -o %s-h.gcode",
+    };
+    char dir[256], args[2048], *text = NULL;
+    size_t i, len;
+    gsim s;
+    const char *d;
+    snprintf(dir, sizeof dir, "%s", amp_test_tmp("demo"));
+    d = dir;
+    for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
+        snprintf(args, sizeof args, steps[i], d, d, d);
+        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+    }
+    snprintf(args, sizeof args, "%s-h.gcode", d);
+    ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
+    ck_assert_uint_gt(len, 100000);
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "demo G-code: %s", s.why);
+    ck_assert_uint_gt(s.nsegs, 1000);
+    gsim_free(&s);
+    amp_free(NULL, text);
+    {
+        static const char *const files[] = {"helix.spl", "helix.stl", "c.amp", "o.amp", "m.amp", "h.amp", "h.gcode"};
+        for (i = 0; i < sizeof files / sizeof files[0]; i++) {
+            snprintf(args, sizeof args, "%s-%s", d, files[i]);
+            remove(args);
+        }
+    }
+}
+END_TEST
+
 static Suite *gcode_suite(void)
 {
     Suite *s = suite_create("gcode");
@@ -795,6 +836,8 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, bad_input_gives_clear_errors);
     tcase_add_test(tc, sink_failure_stops_the_writer);
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
+    tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
+    tcase_set_timeout(tc, 300);
     suite_add_tcase(s, tc);
     return s;
 }
