@@ -42,16 +42,8 @@ int check_gouge(const check_ctx *c, cli_json *j)
             cli_json_int(j, "earlier_segment", (long long)v.earlier_seg);
             cli_json_int(j, "later_path", (long long)v.later_path);
             cli_json_int(j, "later_segment", (long long)v.later_seg);
-            cli_json_arr(j, "earlier_point");
-            cli_json_num(j, NULL, v.earlier_point.x);
-            cli_json_num(j, NULL, v.earlier_point.y);
-            cli_json_num(j, NULL, v.earlier_point.z);
-            cli_json_close(j);
-            cli_json_arr(j, "later_point");
-            cli_json_num(j, NULL, v.later_point.x);
-            cli_json_num(j, NULL, v.later_point.y);
-            cli_json_num(j, NULL, v.later_point.z);
-            cli_json_close(j);
+            cli_json_vec3(j, "earlier_point", v.earlier_point);
+            cli_json_vec3(j, "later_point", v.later_point);
             cli_json_num(j, "depth", v.depth);
             cli_json_close(j);
         }

@@ -85,11 +85,7 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         cli_json_str(j, "eps_from", eps_from);
         cli_json_num(j, "coverage_gap_mm", g.gap);
         cli_json_int(j, "samples", (long long)g.samples);
-        cli_json_arr(j, "worst_point");
-        cli_json_num(j, NULL, g.worst.x);
-        cli_json_num(j, NULL, g.worst.y);
-        cli_json_num(j, NULL, g.worst.z);
-        cli_json_close(j);
+        cli_json_vec3(j, "worst_point", g.worst);
         cli_json_arr(j, "worst_parameters");
         cli_json_num(j, NULL, g.worst_par[0]);
         cli_json_num(j, NULL, g.worst_par[1]);

@@ -196,6 +196,27 @@ void cli_json_close(cli_json *j)
     }
 }
 
+void cli_json_vec3(cli_json *j, const char *key, amp_vec3 v)
+{
+    cli_json_arr(j, key);
+    cli_json_num(j, NULL, v.x);
+    cli_json_num(j, NULL, v.y);
+    cli_json_num(j, NULL, v.z);
+    cli_json_close(j);
+}
+
+void cli_json_box(cli_json *j, const char *key, amp_box3 b)
+{
+    cli_json_arr(j, key);
+    cli_json_num(j, NULL, b.min.x);
+    cli_json_num(j, NULL, b.min.y);
+    cli_json_num(j, NULL, b.min.z);
+    cli_json_num(j, NULL, b.max.x);
+    cli_json_num(j, NULL, b.max.y);
+    cli_json_num(j, NULL, b.max.z);
+    cli_json_close(j);
+}
+
 void cli_json_end(cli_json *j)
 {
     while (j->depth > 0)

@@ -19,18 +19,6 @@ static int has_stl_ext(const char *f)
     return n >= 4 && f[n - 4] == '.' && (f[n - 3] | 32) == 's' && (f[n - 2] | 32) == 't' && (f[n - 1] | 32) == 'l';
 }
 
-static void json_bbox(cli_json *j, amp_box3 b)
-{
-    cli_json_arr(j, "bbox");
-    cli_json_num(j, NULL, b.min.x);
-    cli_json_num(j, NULL, b.min.y);
-    cli_json_num(j, NULL, b.min.z);
-    cli_json_num(j, NULL, b.max.x);
-    cli_json_num(j, NULL, b.max.y);
-    cli_json_num(j, NULL, b.max.z);
-    cli_json_close(j);
-}
-
 static int info_mesh(const char *file, int json)
 {
     amp_mesh m;
@@ -62,7 +50,7 @@ static int info_mesh(const char *file, int json)
         cli_json_int(&j, "boundary_edges", (long long)er.boundary);
         cli_json_int(&j, "nonmanifold_edges", (long long)er.nonmanifold);
         cli_json_int(&j, "misoriented_edges", (long long)er.misoriented);
-        json_bbox(&j, b);
+        cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
     } else {
         printf("%s: %s STL, %lu triangles (%lu degenerate dropped), %lu vertices after welding\n", file,
@@ -109,7 +97,7 @@ static int info_paths(const char *file, int json)
         cli_json_num(&j, "volume_mm3", amp_pathset_volume(&ps, -1));
         cli_json_num(&j, "r_min", rmin);
         cli_json_num(&j, "r_max", rmax);
-        json_bbox(&j, b);
+        cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
     } else {
         printf("%s: %lu paths (%lu support), %lu vertices\n", file, (unsigned long)ps.npaths,

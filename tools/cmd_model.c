@@ -20,18 +20,6 @@ const char cmd_model_usage[] =
     "  --tol T    mesh models: largest distance to the exact surface, mm (default 0.05)\n"
     "  --json     print {\"model\", \"file\", \"kind\", counts, \"bbox\"} on stdout\n";
 
-static void json_bbox(cli_json *j, amp_box3 b)
-{
-    cli_json_arr(j, "bbox");
-    cli_json_num(j, NULL, b.min.x);
-    cli_json_num(j, NULL, b.min.y);
-    cli_json_num(j, NULL, b.min.z);
-    cli_json_num(j, NULL, b.max.x);
-    cli_json_num(j, NULL, b.max.y);
-    cli_json_num(j, NULL, b.max.z);
-    cli_json_close(j);
-}
-
 static int write_mesh_model(const char *name, const char *out, double tol, int json)
 {
     amp_mesh m;
@@ -64,7 +52,7 @@ static int write_mesh_model(const char *name, const char *out, double tol, int j
         cli_json_str(&j, "kind", "mesh");
         cli_json_int(&j, "triangles", (long long)m.ntris);
         cli_json_int(&j, "vertices", (long long)m.nverts);
-        json_bbox(&j, amp_mesh_bbox(&m));
+        cli_json_box(&j, "bbox", amp_mesh_bbox(&m));
         cli_json_end(&j);
     }
     amp_mesh_free(&m);
@@ -113,7 +101,7 @@ int cmd_model(int argc, char **argv)
         cli_json_str(&j, "file", out);
         cli_json_str(&j, "kind", "trivariate");
         cli_json_int(&j, "control_points", (long long)s.ncp);
-        json_bbox(&j, b);
+        cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
     }
     amp_spline_free(&s);
