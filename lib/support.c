@@ -221,24 +221,25 @@ static amp_status emit_piece(amp_pathset *out, const amp_fragments *fs, const ui
 /* Cells per support grid spacing in the field of order_pieces (finer cells: less over-approximation). */
 #define SUB 4
 
-/* Chebyshev dilation of a min-field by k cells (separable running minimum), via scratch tmp. */
+/* Running minimum over a window of 2k + 1 cells along @p lines lines of @p n cells (stride @p step). */
+static void min_pass(const uint32_t *src, uint32_t *dst, size_t n, size_t step, size_t lines, size_t line_step,
+                     size_t k)
+{
+    size_t l, i, t;
+    for (l = 0; l < lines; l++)
+        for (i = 0; i < n; i++) {
+            uint32_t m = NOPATH;
+            for (t = i > k ? i - k : 0; t <= i + k && t < n; t++)
+                m = src[l * line_step + t * step] < m ? src[l * line_step + t * step] : m;
+            dst[l * line_step + i * step] = m;
+        }
+}
+
+/* Chebyshev dilation of a min-field by k cells: rows, then columns, via scratch tmp. */
 static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k)
 {
-    size_t x, y, t;
-    for (y = 0; y < ny; y++)
-        for (x = 0; x < nx; x++) {
-            uint32_t m = NOPATH;
-            for (t = x > k ? x - k : 0; t <= x + k && t < nx; t++)
-                m = d[y * nx + t] < m ? d[y * nx + t] : m;
-            tmp[y * nx + x] = m;
-        }
-    for (y = 0; y < ny; y++)
-        for (x = 0; x < nx; x++) {
-            uint32_t m = NOPATH;
-            for (t = y > k ? y - k : 0; t <= y + k && t < ny; t++)
-                m = tmp[t * nx + x] < m ? tmp[t * nx + x] : m;
-            d[y * nx + x] = m;
-        }
+    min_pass(d, tmp, nx, 1, ny, nx, k);
+    min_pass(tmp, d, ny, nx, nx, 1, k);
 }
 
 /* Cell range of a fragment's xy box grown by r cells, clamped to the field. */
