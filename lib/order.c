@@ -611,6 +611,30 @@ static amp_status merge_pass(orderer *o, size_t *merged_out)
 
 /* ---- output ---- */
 
+/* The cut point after fragment f of run p (in print direction) need not be written: it lies on a straight
+ * stretch between the point before it and the next fragment's first point (no turn, relative 1e-9), or
+ * within 1e-9 mm of one of them. */
+static int cut_is_straight(const orderer *o, const amp_pathset *in, const piece *p, uint32_t f)
+{
+    const amp_fragment *a = &o->fs->frag[p->dir > 0 ? p->lo + f : p->hi - f];
+    const amp_fragment *b = &o->fs->frag[p->dir > 0 ? p->lo + f + 1 : p->hi - f - 1];
+    amp_vec3 c = p->dir > 0 ? a->p1 : a->p0, prev, next, u, w;
+    if (a->nin)
+        prev = in->verts[a->vfirst + (p->dir > 0 ? a->nin - 1 : 0)].p;
+    else
+        prev = p->dir > 0 ? a->p0 : a->p1;
+    if (b->nin)
+        next = in->verts[b->vfirst + (p->dir > 0 ? 0 : b->nin - 1)].p;
+    else
+        next = p->dir > 0 ? b->p1 : b->p0;
+    u = amp_v3_sub(c, prev);
+    w = amp_v3_sub(next, c);
+    if (amp_v3_len2(u) <= 1e-18 || amp_v3_len2(w) <= 1e-18)
+        return 1; /* the cut falls on a vertex that is written anyway */
+    return amp_v3_dot(u, w) > 0 &&
+           amp_v3_len2(amp_v3_cross(u, w)) <= 1e-18 * amp_v3_len2(u) * amp_v3_len2(w);
+}
+
 static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out, amp_error *err)
 {
     size_t i;
@@ -626,8 +650,11 @@ static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out
                 const amp_pvert *v = &in->verts[fr->vfirst + (p->dir > 0 ? q : fr->nin - 1 - q)];
                 st = amp_pathset_push(out, v->p, v->r, err);
             }
-            /* consecutive fragments share their cut point; a one-vertex path is a single point */
-            if (st == AMP_OK && in->paths[p->path].n > 1)
+            /* consecutive fragments share their cut point; a one-vertex path is a single point. A cut point
+             * inside a run lies on a segment of the input: it is written only where it is a corner (an input
+             * vertex at the cut), so the output keeps the input's vertices, not one per fragment. */
+            if (st == AMP_OK && in->paths[p->path].n > 1 &&
+                (f == p->hi - p->lo || !cut_is_straight(o, in, p, f)))
                 st = p->dir > 0 ? amp_pathset_push(out, fr->p1, fr->r1, err) : amp_pathset_push(out, fr->p0, fr->r0, err);
         }
         if (st != AMP_OK)

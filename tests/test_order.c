@@ -317,6 +317,8 @@ START_TEST(twisted_bridge_needs_no_subdivision_at_45_degrees)
     ck_assert_int_eq(amp_order(&ps, &o, &out, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.subdivisions, 0);
     ck_assert_uint_eq(out.npaths, ps.npaths);
+    /* uncut paths come out with their own vertices, not one per fragment */
+    ck_assert_uint_eq(out.nverts, ps.nverts);
     ck_assert_int_eq(amp_gouge_check(&out, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     /* the default 72 degree cone is flatter than the arch: every arch must be cut near its crest */
     o.head = head(0.5, 72);
