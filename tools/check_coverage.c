@@ -7,8 +7,20 @@ static int run_on_objects(const check_ctx *c, cli_json *j, int (*run)(const chec
     amp_pathset obj;
     check_ctx co = *c;
     amp_error err;
-    size_t i;
+    size_t i, segs = 0;
     int rc;
+    for (i = 0; i < c->ps->npaths; i++)
+        segs += c->ps->paths[i].role == AMP_ROLE_OBJECT && c->ps->paths[i].n > 1;
+    if (segs == 0) { /* nothing covers the model: a failed check, not bad input */
+        if (j) {
+            cli_json_bool(j, "ran", 1);
+            cli_json_bool(j, "ok", 0);
+            cli_json_str(j, "reason", "no object path with a segment");
+        } else {
+            printf("coverage: no object path with a segment covers the model: FAILED\n");
+        }
+        return CLI_FAILED;
+    }
     for (i = 0; i < c->ps->npaths && c->ps->paths[i].role == AMP_ROLE_OBJECT; i++)
         ;
     if (i == c->ps->npaths)
