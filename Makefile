@@ -83,7 +83,7 @@ TEST_PKGS := $(BUILD_PKGS) check
 CROSS_PKGS := gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
 FUZZ_PKGS := clang libclang-rt-14-dev
 
-.PHONY: all check test-run demo bench cross fuzz install uninstall clean deps-build deps-test FORCE
+.PHONY: all check test-run demo bench soak cross fuzz install uninstall clean deps-build deps-test FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -181,6 +181,10 @@ demo: all
 
 bench: all
 	$(AMPATH) bench
+
+# issue 10's soak at full size (10^5 moves, a few minutes): SOAK_LINES=N to change
+soak: all
+	@sh tools/soak.sh
 
 # ---- cross build for Cortex-M4F: the library must compile freestanding-friendly ----
 CROSS_CC ?= arm-none-eabi-gcc
