@@ -497,6 +497,16 @@ START_TEST(order_and_check_commands_report_and_exit_as_specified)
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --z-offs -1", in);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    /* the dispatcher's own usage errors */
+    snprintf(args, sizeof args, "check %s --layer 0.2", in); /* --layer needs the sliced --mesh */
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "check %s --trivariate helix --mesh x.stl", in);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "check %s --eps 0", in);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    snprintf(args, sizeof args, "check %s --no-gouge --no-coverage --no-strokes --json", in);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_ptr_nonnull(strstr(out, "\"strokes\":{\"ran\":false"));
     snprintf(args, sizeof args, "mdr %s --nominal 0.5 --min 0.2 --max 0.8 --json -o %s", ord, m);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"over_coverage\":"));
