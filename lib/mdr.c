@@ -12,6 +12,8 @@ void amp_mdr_opts_default(amp_mdr_opts *o, double nominal)
     o->r_min = 0.5 * nominal;
     o->r_max = 1.5 * nominal;
     o->fragment = nominal;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 /* Squared distance between segments [p1,q1] and [p2,q2] (closest points of two segments, clamped). */
@@ -194,7 +196,7 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
     amp_mdr_stats s;
     ugrid g;
     amp_vec3 *ctr = NULL;
-    size_t *row = NULL, npairs = 0, cap_pairs = 0, i, nh = 0, caph = 0;
+    size_t *row = NULL, npairs = 0, cap_pairs = 0, i, nh = 0, caph = 0, nfrozen = 0;
     nb *adj = NULL;
     uint32_t(*pairs)[2] = NULL;
     double *pd = NULL, *r = NULL, reach;
@@ -232,6 +234,8 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
         goto done;
     for (i = 0; i < fs.n; i++) {
         size_t ix, iy, iz, x, y, z;
+        if (o->progress && (i & 4095) == 0) /* finding neighbours: the first half of the work */
+            o->progress(o->progress_user, 0.5 * (double)i / (double)fs.n);
         cell_of(&g, ctr[i], &ix, &iy, &iz);
         for (z = iz ? iz - 1 : 0; z <= iz + 1 && z < g.nz; z++)
             for (y = iy ? iy - 1 : 0; y <= iy + 1 && y < g.ny; y++)
@@ -332,6 +336,8 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
             continue;
         }
         frozen[e.f] = 1;
+        if (o->progress && (++nfrozen & 4095) == 0)
+            o->progress(o->progress_user, 0.5 + 0.5 * (double)nfrozen / (double)fs.n);
         if (key >= o->r_max)
             s.at_max++;
         if (key < o->r_min * (1 - 1e-9))

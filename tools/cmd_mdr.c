@@ -16,8 +16,12 @@ const char cmd_mdr_usage[] =
     "  -o FILE       write the paths with cut points inserted and r set per vertex (.amp)\n"
     "Over-coverage = sum(pi r^2 L) / volume: 1 means no material is deposited twice.\n";
 
+static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
 int cmd_mdr(int argc, char **argv)
 {
+    cli_progress bar;
+    amp_status st_mdr;
     const char *pos[1], *output = NULL;
     double nominal = 0.5, rmin = -1, rmax = -1, frag = -1, volume = -1, t0, t_mdr, t_vol;
     long samples = 200000;
@@ -53,7 +57,12 @@ int cmd_mdr(int argc, char **argv)
     if ((rc = cli_load_paths("mdr", pos[0], &ps)) != CLI_OK)
         return rc;
     t0 = cli_now();
-    if (amp_mdr(&ps, &o, &out, &st, &err) != AMP_OK) {
+    cli_progress_begin(&bar, "mdr");
+    o.progress = progress;
+    o.progress_user = &bar;
+    st_mdr = amp_mdr(&ps, &o, &out, &st, &err);
+    cli_progress_end(&bar);
+    if (st_mdr != AMP_OK) {
         rc = cli_fail_err("mdr", &err);
         goto done;
     }

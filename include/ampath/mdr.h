@@ -28,6 +28,10 @@ typedef struct amp_mdr_opts {
     double r_min;    /**< lower bound, mm (default nominal / 2) */
     double r_max;    /**< upper bound, mm (default 1.5 * nominal) */
     double fragment; /**< fragment length, mm (default: nominal) */
+    /** Optional progress report, called from the calling thread with the fraction done (0..1), a few
+     *  hundred times per run at most; NULL (default) for none. */
+    void (*progress)(void *user, double fraction);
+    void *progress_user; /**< passed to progress */
 } amp_mdr_opts;
 
 /** Defaults for @p nominal (mm). */
