@@ -85,9 +85,11 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
 
 /**
  * Steps 5 + §4 for one connected region @p region (organised, one island:
- * outer ring and holes): appends the stroke(s) over @p khat clipped to the
- * region as closed object paths at height @p z with radius o->radius, and
- * the Remark 2.1 stretches when asked. Updates @p st. AMP_ERR_NOMEM.
+ * outer ring and holes): appends the stroke over @p khat clipped to the
+ * region (one closed object path; more only if components could not be
+ * joined, counted in st->multi_stroke) at height @p z with radius o->radius
+ * on printed stretches and 0 on pseudo edges (joins run back, thin cells),
+ * and the Remark 2.1 stretches when asked. Updates @p st. AMP_ERR_NOMEM.
  */
 amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, double z,
                                const amp_contpath_opts *o, amp_pathset *out, amp_contpath_stats *st,
