@@ -214,9 +214,13 @@ static void check_section_fig(const amp_mesh *m, double z, double r, amp_grid_ki
     amp_slices_free(&sl);
 }
 
+/* ... and on every section: nothing dropped, no beads of non-adjacent edges overlapping */
 static void check_section(const amp_mesh *m, double z, double r, amp_grid_kind kind, size_t want_regions)
 {
-    check_section_fig(m, z, r, kind, 0, 1, want_regions, NULL);
+    section_fig f;
+    check_section_fig(m, z, r, kind, 0, 1, want_regions, &f);
+    ck_assert_uint_eq(f.missed, 0);
+    ck_assert_msg(f.overlap <= 1e-6, "z %g: beads overlap by %g mm", z, f.overlap);
 }
 
 START_TEST(torus_sections_get_one_crossing_free_stroke)
