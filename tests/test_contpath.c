@@ -519,6 +519,7 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", amp, stl);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"ok\":true") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"pseudo_segments\":") != NULL, "%s", out);
     /* a crossing path appended: the check fails with exit 1 */
     f = fopen(amp, "a");
     ck_assert(f != NULL);
