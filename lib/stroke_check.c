@@ -37,6 +37,7 @@ typedef struct seg2 {
     amp_vec2 a, b;
     size_t ia, ib;
     double xmin;
+    int pseudo; /* travel inside the stroke: no material */
 } seg2;
 
 static int cmp_seg2(const void *p, const void *q)
@@ -54,6 +55,10 @@ static int seg_conflict(const seg2 *s, const seg2 *t)
     int o3 = sgn(amp_v2_orient(t->a, t->b, s->a)), o4 = sgn(amp_v2_orient(t->a, t->b, s->b));
     if (o1 * o2 < 0 && o3 * o4 < 0)
         return 1;
+    /* a pseudo edge deposits nothing: it may run over material, only a
+     * proper crossing makes the stroke cross itself */
+    if (s->pseudo || t->pseudo)
+        return 0;
     if (o1 == 0 && o2 == 0) {
         /* collinear: overlapping interiors print material twice */
         double dx = s->b.x - s->a.x, dy = s->b.y - s->a.y;
@@ -89,6 +94,13 @@ static int cmp_pass(const void *p, const void *q)
 amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err)
 {
+    return amp_stroke_check_radii(pts, NULL, n, region, tol, rep, err);
+}
+
+amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
+                                  double tol, amp_stroke_report *rep, amp_error *err)
+{
+    size_t ne = 0;
     const amp_allocator *al = region ? region->alloc : NULL;
     amp_stroke_report r;
     vkey *vk = NULL;
@@ -131,14 +143,21 @@ amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *re
         sg[ns].ia = id[i];
         sg[ns].ib = id[i + 1];
         sg[ns].xmin = fmin(pts[i].x, pts[i + 1].x);
-        ek[ns].a = id[i] < id[i + 1] ? id[i] : id[i + 1];
-        ek[ns].b = id[i] < id[i + 1] ? id[i + 1] : id[i];
+        sg[ns].pseudo = rad && rad[i] == 0 && rad[i + 1] == 0;
+        if (sg[ns].pseudo)
+            r.pseudo++;
+        else {
+            /* only material counts as printed twice */
+            ek[ne].a = id[i] < id[i + 1] ? id[i] : id[i + 1];
+            ek[ne].b = id[i] < id[i + 1] ? id[i + 1] : id[i];
+            ne++;
+        }
         ns++;
     }
     r.segments = ns;
-    if (ns > 1)
-        qsort(ek, ns, sizeof *ek, cmp_ekey2);
-    for (i = 1; i < ns; i++)
+    if (ne > 1)
+        qsort(ek, ne, sizeof *ek, cmp_ekey2);
+    for (i = 1; i < ne; i++)
         if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b)
             r.repeated_edges++;
     /* segment pairs, swept over x */

@@ -34,7 +34,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
     const char *mesh = c->layer_given ? c->mesh : NULL;
     amp_mesh m;
     amp_slices sl;
-    size_t i, segs = 0, cross = 0, reps = 0, outside = 0, failed = 0, nolayer = 0, flipped, planar = 0;
+    size_t i, segs = 0, pseudo = 0, cross = 0, reps = 0, outside = 0, failed = 0, nolayer = 0, flipped, planar = 0;
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     for (i = 0; i < ps->npaths; i++)
@@ -71,6 +71,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
         }
         failed += st != AMP_OK;
         segs += rep.segments;
+        pseudo += rep.pseudo;
         cross += rep.crossings;
         reps += rep.repeated_edges;
         outside += rep.outside;
@@ -82,6 +83,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
             cli_json_bool(j, "ok", ok);
             cli_json_int(j, "paths", (long long)planar);
             cli_json_int(j, "segments", (long long)segs);
+            cli_json_int(j, "pseudo_segments", (long long)pseudo);
             cli_json_int(j, "crossings", (long long)cross);
             cli_json_int(j, "repeated_edges", (long long)reps);
             cli_json_int(j, "outside", (long long)outside);

@@ -25,6 +25,9 @@ const char cmd_slice_usage[] =
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
     "  --no-perimeter     --continuous without the perimeter loops\n"
     "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
+    "  --no-pseudo        print every patch of thin boundary cells (default: stretches closer than\n"
+    "                     2r to a lattice piece of their cell are pseudo edges, radius 0: travel\n"
+    "                     inside the stroke, paper Figs. 7, 8)\n"
     "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
@@ -32,7 +35,8 @@ const char cmd_slice_usage[] =
     "                     the SVG, in mm (default 0.5)\n"
     "  --json             print the figures as one JSON object (layers, polygons, islands, holes,\n"
     "                     area per layer, open chains of an open mesh, time; with --continuous:\n"
-    "                     strokes, travel moves, printed/travel/support lengths, crossings)\n"
+    "                     strokes, joins, travel moves, printed/travel/support/pseudo lengths,\n"
+    "                     crossings)\n"
     "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
     "(open_chains) with a warning on stderr.\n";
 
@@ -166,7 +170,8 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         cli_json_num(&j, "travel_length_mm", st.travel_length);
         cli_json_num(&j, "support_length_mm", st.support_length);
         cli_json_num(&j, "unprinted_ring_length_mm", st.unprinted_length);
-        cli_json_num(&j, "dropped_length_mm", st.dropped_length);
+        cli_json_int(&j, "joins", (long long)st.joins);
+        cli_json_num(&j, "pseudo_length_mm", st.pseudo_length);
         cli_json_int(&j, "free_ends", (long long)st.free_ends);
         cli_json_int(&j, "odd_vertices", (long long)st.odd_vertices);
         cli_json_int(&j, "crossings", (long long)crossings);
@@ -187,7 +192,7 @@ int cmd_slice(int argc, char **argv)
 {
     double layer = 0, first = 0, radius = 0.5, z = 0, t0 = cli_now();
     long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, npos = 0, rc, ok;
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0;
     const char *pos[1], *out = NULL, *grid = "square";
     amp_contpath_opts co;
@@ -201,6 +206,7 @@ int cmd_slice(int argc, char **argv)
                       {"continuous", CLI_FLAG, &continuous, 0}, {"cell", CLI_DOUBLE, &cell, 0},
                       {"grid", CLI_STR, &grid, 0},          {"offset", CLI_DOUBLE, &offset, 0},
                       {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
+                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -223,6 +229,7 @@ int cmd_slice(int argc, char **argv)
         co.offset = offset;
     co.perimeters = !noperim;
     co.support_stretches = stretches;
+    co.pseudo_edges = !nopseudo;
     if (continuous && out && ends_with(out, ".svg"))
         return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
     amp_mesh_init(&m, NULL);

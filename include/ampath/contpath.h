@@ -9,7 +9,10 @@
  *     one bead radius from it); for every connected part R̃_j of it:
  *     clip the 1-skeleton of K̂ (step 5), join the free-edge end points of
  *     each ring of R̃_j in alternating pairs by paths along the ring (of the two
- *     pairings the one that connects the pieces, then the longer), and trace
+ *     pairings the one that connects the pieces, then the longer), join the
+ *     components still apart by a ring path printed once and run back as a
+ *     pseudo edge (Fig. 6), turn patch stretches of thin boundary cells into
+ *     pseudo edges (Figs. 7, 8), and trace
  *     one closed Euler tour without crossovers (§4: the tour is assembled from
  *     non-crossing cycles through each vertex, merged pairwise at shared
  *     vertices — the cycle tree — by re-pairing two adjacent transitions).
@@ -18,6 +21,11 @@
  * K is a lattice covering the convex hull of all layers (steps 2-3) and K̂ its
  * Euler transformation with mitered offset δ (default r): every vertex of K̂
  * inside R̃ has even degree because the rim cells of K lie outside R̃.
+ * A pseudo edge is a stretch of a stroke that the nozzle runs without
+ * extruding: its two end vertices carry radius 0 in the path, and where
+ * printing and travel meet the vertex is written twice (once with each
+ * radius), so that no segment mixes the two (the G-code writer extrudes by
+ * the mean radius of a segment, SPEC §5).
  * Functions are reentrant; inputs are only read.
  */
 #ifndef AMPATH_CONTPATH_H
@@ -42,9 +50,11 @@ typedef struct amp_contpath_opts {
     double offset;         /**< mitered offset δ of K̂ (<= 0: r) */
     int perimeters;        /**< 1: print the perimeter loop(s) of each island */
     int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
+    int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
+                                cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
 } amp_contpath_opts;
 
-/** Fill @p o with the defaults for radius @p r (square grid, perimeters on). */
+/** Fill @p o with the defaults for radius @p r (square grid, perimeters on, pseudo edges on). */
 void amp_contpath_opts_default(amp_contpath_opts *o, double r);
 
 typedef struct amp_contpath_stats {
@@ -57,12 +67,13 @@ typedef struct amp_contpath_stats {
     size_t travel_moves;     /**< moves between consecutive paths */
     size_t free_ends;        /**< free-edge end points patched (Σ m) */
     size_t odd_vertices;     /**< odd vertices left after patching (0 expected) */
-    double printed_length;   /**< mm, all object paths */
-    double infill_length;    /**< mm, strokes only */
+    size_t joins;            /**< components joined by a patch printed once and run back as a pseudo edge (Fig. 6) */
+    double printed_length;   /**< mm, all object paths, pseudo edges excluded */
+    double infill_length;    /**< mm, strokes only, pseudo edges excluded */
+    double pseudo_length;    /**< mm, pseudo edges inside the strokes (travel without extrusion) */
     double travel_length;    /**< mm, straight moves between paths (3-D) */
     double support_length;   /**< mm, Remark 2.1 stretches printed */
     double unprinted_length; /**< mm, ring stretches of R̃ left unprinted */
-    double dropped_length;   /**< mm, small clipped pieces dropped because no pairing joins them (see docs) */
 } amp_contpath_stats;
 
 /**
@@ -74,9 +85,11 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
 
 /**
  * Steps 5 + §4 for one connected region @p region (organised, one island:
- * outer ring and holes): appends the stroke(s) over @p khat clipped to the
- * region as closed object paths at height @p z with radius o->radius, and
- * the Remark 2.1 stretches when asked. Updates @p st. AMP_ERR_NOMEM.
+ * outer ring and holes): appends the stroke over @p khat clipped to the
+ * region (one closed object path; more only if components could not be
+ * joined, counted in st->multi_stroke) at height @p z with radius o->radius
+ * on printed stretches and 0 on pseudo edges (joins run back, thin cells),
+ * and the Remark 2.1 stretches when asked. Updates @p st. AMP_ERR_NOMEM.
  */
 amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, double z,
                                const amp_contpath_opts *o, amp_pathset *out, amp_contpath_stats *st,
@@ -92,8 +105,9 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
 /** Findings of amp_stroke_check(). */
 typedef struct amp_stroke_report {
     size_t segments;       /**< non-degenerate segments checked */
+    size_t pseudo;         /**< of which pseudo edges (radius 0 at both ends; only with radii) */
     size_t crossings;      /**< pairs of segments crossing, and crossing passes through a shared vertex */
-    size_t repeated_edges; /**< segments printed more than once (same end points, either direction) */
+    size_t repeated_edges; /**< printed segments printed more than once (same end points, either direction) */
     size_t outside;        /**< vertices or segment midpoints outside the region (beyond tol) */
     int closed;            /**< 1 when the last point equals the first */
 } amp_stroke_report;
@@ -106,13 +120,26 @@ typedef struct amp_stroke_report {
  * segment midpoint lies in the region or within @p tol of it. Fills @p rep
  * (optional) and returns AMP_ERR_CHECK with a reason on any violation,
  * AMP_ERR_NOMEM, else AMP_OK. Shares no code with the stroke builder.
+ * Every segment counts as printed (see amp_stroke_check_radii()).
  */
 amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err);
 
 /**
- * amp_stroke_check() on path @p i of @p ps (its x, y; z is ignored). A
- * scratch copy is allocated with the set's allocator (AMP_ERR_NOMEM).
+ * amp_stroke_check() with the deposition radius @p rad of every point (NULL:
+ * all printed). A segment whose two ends have radius 0 is a pseudo edge
+ * (travel inside the stroke): it may run over printed segments (collinear
+ * overlap and repetition are allowed for it, since it deposits nothing), but
+ * it must still not properly cross any segment, its passes through shared
+ * vertices must not interleave, and it must stay inside the region.
+ */
+amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
+                                  double tol, amp_stroke_report *rep, amp_error *err);
+
+/**
+ * amp_stroke_check_radii() on path @p i of @p ps (its x, y and radii; z is
+ * ignored). A scratch copy is allocated with the set's allocator
+ * (AMP_ERR_NOMEM).
  */
 amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
                                     amp_stroke_report *rep, amp_error *err);
