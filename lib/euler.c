@@ -125,8 +125,12 @@ static amp_status add_cell(amp_cx2 *out, uint32_t *v, size_t n, int cls, int *co
     return AMP_OK;
 }
 
-amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
-                               amp_error *err)
+/* T(K) (§1.3). @p bmap_out (optional, k->nv entries) receives, for every
+ * boundary vertex of K, its index in K̂ (UINT32_MAX for the others): the
+ * boundary of K is kept as it is, which is what lets Lemma 3.3 glue a
+ * transformed sub-complex back into its surroundings. */
+static amp_status transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                            uint32_t *bmap_out, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
     amp_euler_stats s0;
@@ -155,7 +159,7 @@ amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx
     fo.dir = amp_alloc(al, maxn * sizeof *fo.dir);
     fo.base = amp_alloc(al, maxn * sizeof *fo.base);
     cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *cmap);
-    bmap = amp_alloc(al, (k->nv + 1) * sizeof *bmap);
+    bmap = bmap_out ? bmap_out : amp_alloc(al, (k->nv + 1) * sizeof *bmap);
     loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *loop);
     vstart = amp_calloc(al, k->nv + 2, sizeof *vstart);
     vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *vhe);
@@ -250,7 +254,8 @@ done:
     amp_free(al, fo.dir);
     amp_free(al, fo.base);
     amp_free(al, cmap);
-    amp_free(al, bmap);
+    if (bmap != bmap_out)
+        amp_free(al, bmap);
     amp_free(al, loop);
     amp_free(al, vstart);
     amp_free(al, vhe);
@@ -258,6 +263,12 @@ done:
     if (st)
         *st = s0;
     return rc;
+}
+
+amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                               amp_error *err)
+{
+    return transform(k, o, out, st, NULL, err);
 }
 
 /* A quarter of the smallest feature of k: shortest edge and 2*area/perimeter. */
@@ -282,32 +293,245 @@ static double feature_size(const amp_cx2 *k)
     return best;
 }
 
-amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err)
+/* T(K) without combinatorial changes at offset delta, halved (up to 8
+ * times) until every mitered offset is valid: the passes of Def. 3.2 after
+ * the first one only need some offset small enough for their cells. */
+static amp_status transform_fitting(const amp_cx2 *k, double delta, amp_cx2 *out, uint32_t *bmap, amp_error *err)
 {
-    amp_cx2 mid;
-    amp_euler_stats st;
-    amp_euler_opts o2;
-    amp_status rc;
+    amp_euler_opts o;
+    amp_status rc = AMP_ERR_GEOMETRY;
     int tries;
-    amp_cx2_init(&mid, out->alloc);
-    /* Def. 3.2: apply the transformation twice */
-    rc = amp_euler_transform(k, o, &mid, &st, err);
-    if (rc == AMP_OK && st.collapsed_class2)
-        rc = amp_fail(err, AMP_ERR_UNSUPPORTED, 0,
-                      "%lu Class 2 cells collapsed to edges: the local repair of Lemma 3.3 is not implemented",
-                      (unsigned long)st.collapsed_class2);
-    if (rc != AMP_OK) {
-        amp_cx2_free(&mid);
-        return rc;
-    }
-    o2.combinatorial = 0;
-    o2.offset = 0.25 * fmin(o->offset, feature_size(&mid));
+    o.combinatorial = 0;
+    o.offset = delta;
     for (tries = 0; tries < 8; tries++) {
-        rc = amp_euler_transform(&mid, &o2, out, NULL, err);
+        rc = transform(k, &o, out, NULL, bmap, err);
         if (rc != AMP_ERR_GEOMETRY)
             break;
-        o2.offset *= 0.5;
+        o.offset *= 0.5;
     }
+    return rc;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t s = *(const uint64_t *)a, t = *(const uint64_t *)b;
+    return s < t ? -1 : (s > t ? 1 : 0);
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+static size_t uf_find(size_t *par, size_t x)
+{
+    while (par[x] != x)
+        x = par[x] = par[par[x]];
+    return x;
+}
+
+/*
+ * Lemma 3.3. k̂ = the Class 3 cells sharing a collapsed Class 2 edge ê (in
+ * T(K), ê joins the merged copies P_f = Q_f and P_g = Q_g, so it is the edge
+ * between the Class 3 cells of P and Q, and the free 1-cell only repeats it).
+ * Every vertex of k̂ lies on its boundary (it is a copy in a Class 1 cell or
+ * a boundary vertex of K, never surrounded by Class 3 cells alone) and has an
+ * even number of K̂ edges outside k̂ (proof of Lemma 3.3). T(T(k̂)) (Def. 3.2)
+ * keeps k̂'s boundary vertices and edges and gives each of them degree 4 per
+ * fan, so (K̂ \ k̂) ∪ T(T(k̂)) has even degrees wherever T(K) had only the
+ * odd vertices of collapsed Class 2 cells. The components k̂_j are
+ * transformed together: T is local (one cell per cell, edge and vertex of
+ * k̂, fans taken one by one at a vertex shared by two components), so this
+ * equals transforming each k̂_j (each k̃_i) on its own.
+ */
+amp_status amp_euler_repair(const amp_cx2 *khat, amp_cx2 *out, amp_euler_repair_stats *st, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    amp_euler_repair_stats s0;
+    amp_cx2 sub, t1, t2;
+    uint64_t *keys = NULL;
+    unsigned char *mark = NULL, *cover = NULL;
+    uint32_t *vmap = NULL, *vback = NULL, *bmap1 = NULL, *bmap2 = NULL, *tmap = NULL, *loop = NULL;
+    size_t *par = NULL;
+    size_t i, f, h, maxn = 3;
+    amp_status rc = AMP_OK;
+    memset(&s0, 0, sizeof s0);
+    if (st)
+        *st = s0;
+    if (out == khat)
+        return amp_fail(err, AMP_ERR_ARG, 0, "Lemma 3.3 repair needs distinct input and output complexes");
+    amp_cx2_free(out);
+    if (!khat->built || (khat->nf && !khat->he_twin))
+        return amp_fail(err, AMP_ERR_STATE, 0, "complex topology not built (amp_cx2_build)");
+    amp_cx2_init(&sub, al);
+    amp_cx2_init(&t1, al);
+    amp_cx2_init(&t2, al);
+    for (f = 0; f < khat->nf; f++)
+        if (amp_cx2_face_size(khat, f) > maxn)
+            maxn = amp_cx2_face_size(khat, f);
+    keys = amp_alloc(al, (khat->nxe + 1) * sizeof *keys);
+    cover = amp_calloc(al, khat->nxe + 1, 1);
+    mark = amp_calloc(al, khat->nf + 1, 1);
+    par = amp_alloc(al, (khat->nf + 1) * sizeof *par);
+    vmap = amp_alloc(al, (khat->nv + 1) * sizeof *vmap);
+    loop = amp_alloc(al, (maxn + 1) * sizeof *loop);
+    if (!keys || !cover || !mark || !par || !vmap || !loop) {
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        goto done;
+    }
+    for (i = 0; i < khat->nxe; i++)
+        keys[i] = edge_key(khat->xedge[2 * i], khat->xedge[2 * i + 1]);
+    if (khat->nxe > 1)
+        qsort(keys, khat->nxe, sizeof *keys, cmp_u64);
+    /* k̂: the cells with a collapsed edge ê */
+    for (h = 0; h < khat->nfidx && khat->nxe; h++) {
+        uint64_t key = edge_key(khat->fidx[h], khat->fidx[amp_cx2_he_next(khat, h)]);
+        const uint64_t *hit = bsearch(&key, keys, khat->nxe, sizeof *keys, cmp_u64);
+        if (!hit)
+            continue;
+        f = khat->he_face[h];
+        if (khat->fclass[f] != AMP_CELL_CLASS3) {
+            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                          "free edge %lu-%lu lies on a 2-cell of class %d, not between Class 3 cells (Lemma 3.3)",
+                          (unsigned long)(key >> 32), (unsigned long)(key & 0xffffffffu), khat->fclass[f]);
+            goto done;
+        }
+        mark[f] = 1;
+        cover[hit - keys] = 1;
+    }
+    for (i = 0; i < khat->nxe; i++)
+        if (!cover[i]) {
+            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                          "free edge %lu-%lu is in no 2-cell: not a Class 2 cell collapsed between Class 3 cells "
+                          "(Lemma 3.3)",
+                          (unsigned long)(keys[i] >> 32), (unsigned long)(keys[i] & 0xffffffffu));
+            goto done;
+        }
+    /* components k̂_j: marked cells joined by shared edges */
+    for (f = 0; f < khat->nf; f++)
+        par[f] = f;
+    for (h = 0; h < khat->nfidx; h++) {
+        size_t t = khat->he_twin[h];
+        if (t != AMP_CX2_NONE && mark[khat->he_face[h]] && mark[khat->he_face[t]])
+            par[uf_find(par, khat->he_face[h])] = uf_find(par, khat->he_face[t]);
+    }
+    /* the sub-complex k̂ on its own vertices */
+    for (i = 0; i < khat->nv; i++)
+        vmap[i] = UINT32_MAX;
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++) {
+        size_t a = khat->fstart[f], n = khat->fstart[f + 1] - a, j;
+        if (!mark[f])
+            continue;
+        s0.cells++;
+        s0.components += uf_find(par, f) == f;
+        for (j = 0; j < n && rc == AMP_OK; j++) {
+            uint32_t v = khat->fidx[a + j];
+            if (vmap[v] == UINT32_MAX)
+                rc = amp_cx2_add_vertex(&sub, khat->v[v], &vmap[v], err);
+            loop[j] = vmap[v];
+        }
+        if (rc == AMP_OK)
+            rc = amp_cx2_add_face(&sub, loop, n, AMP_CELL_INPUT, err);
+    }
+    s0.collapsed_edges = khat->nxe;
+    if (rc == AMP_OK && sub.nf) {
+        vback = amp_alloc(al, sub.nv * sizeof *vback);
+        bmap1 = amp_alloc(al, sub.nv * sizeof *bmap1);
+        if (!vback || !bmap1)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        for (i = 0; i < khat->nv && rc == AMP_OK; i++)
+            if (vmap[i] != UINT32_MAX)
+                vback[vmap[i]] = (uint32_t)i;
+        if (rc == AMP_OK)
+            rc = amp_cx2_build(&sub, err);
+        /* Def. 3.2 on k̂: T(T(k̂)), offsets a quarter of the smallest feature */
+        if (rc == AMP_OK)
+            rc = transform_fitting(&sub, 0.25 * feature_size(&sub), &t1, bmap1, err);
+        if (rc == AMP_OK && !(bmap2 = amp_alloc(al, t1.nv * sizeof *bmap2)))
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        if (rc == AMP_OK)
+            rc = transform_fitting(&t1, 0.25 * feature_size(&t1), &t2, bmap2, err);
+        if (rc == AMP_OK && !(tmap = amp_alloc(al, (t2.nv + 1) * sizeof *tmap)))
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        if (rc == AMP_OK) {
+            /* boundary vertices of k̂ survive both passes: glue them back */
+            for (i = 0; i < t2.nv; i++)
+                tmap[i] = UINT32_MAX;
+            for (i = 0; i < sub.nv; i++) {
+                uint32_t u = bmap1[i];
+                if (u == UINT32_MAX || bmap2[u] == UINT32_MAX) {
+                    rc = amp_fail(err, AMP_ERR_GEOMETRY, 0, "vertex %lu is inside the Class 3 sub-complex (Lemma 3.3)",
+                                  (unsigned long)vback[i]);
+                    break;
+                }
+                tmap[bmap2[u]] = vback[i];
+            }
+        }
+    }
+    /* (K̂ \ k̂) ∪ T(T(k̂)); the free edges ê are inside k̂ and go with it */
+    for (i = 0; i < khat->nv && rc == AMP_OK; i++)
+        rc = amp_cx2_add_vertex(out, khat->v[i], NULL, err);
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++)
+        if (!mark[f])
+            rc = amp_cx2_add_face(out, khat->fidx + khat->fstart[f], amp_cx2_face_size(khat, f), khat->fclass[f], err);
+    for (i = 0; i < t2.nv && rc == AMP_OK; i++)
+        if (tmap[i] == UINT32_MAX)
+            rc = amp_cx2_add_vertex(out, t2.v[i], &tmap[i], err);
+    for (f = 0; f < t2.nf && rc == AMP_OK; f++) {
+        size_t a = t2.fstart[f], n = t2.fstart[f + 1] - a, j;
+        uint32_t *lp = n <= maxn ? loop : NULL;
+        if (!lp && !(lp = amp_alloc(al, n * sizeof *lp))) {
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+            break;
+        }
+        for (j = 0; j < n; j++)
+            lp[j] = tmap[t2.fidx[a + j]];
+        rc = amp_cx2_add_face(out, lp, n, t2.fclass[f], err);
+        if (lp != loop)
+            amp_free(al, lp);
+    }
+    if (rc == AMP_OK)
+        rc = amp_cx2_build(out, err);
+done:
+    if (rc != AMP_OK)
+        amp_cx2_free(out);
+    else if (st)
+        *st = s0;
+    amp_cx2_free(&sub);
+    amp_cx2_free(&t1);
+    amp_cx2_free(&t2);
+    amp_free(al, keys);
+    amp_free(al, cover);
+    amp_free(al, mark);
+    amp_free(al, par);
+    amp_free(al, vmap);
+    amp_free(al, vback);
+    amp_free(al, bmap1);
+    amp_free(al, bmap2);
+    amp_free(al, tmap);
+    amp_free(al, loop);
+    return rc;
+}
+
+amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err)
+{
+    amp_cx2 mid, rep;
+    amp_euler_stats st;
+    amp_status rc;
+    amp_cx2_init(&mid, out->alloc);
+    amp_cx2_init(&rep, out->alloc);
+    /* Def. 3.2: apply the transformation twice */
+    rc = amp_euler_transform(k, o, &mid, &st, err);
+    /* collapsed Class 2 cells (free edges): Lemma 3.3's local repair first,
+     * which also makes the complex pure again for the second pass */
+    if (rc == AMP_OK && st.collapsed_class2) {
+        rc = amp_euler_repair(&mid, &rep, NULL, err);
+        amp_cx2_free(&mid);
+        mid = rep;
+        amp_cx2_init(&rep, out->alloc);
+    }
+    if (rc == AMP_OK)
+        rc = transform_fitting(&mid, 0.25 * fmin(o->offset, feature_size(&mid)), out, NULL, err);
     amp_cx2_free(&mid);
     return rc;
 }

@@ -15,7 +15,10 @@
  * (their end copies merge; Lemma 3.1: degree 2π+4-m), and a Class 2 cell
  * whose edge collapses on both sides becomes a free 1-cell. The generalized
  * transformation T(T(K)) (Def. 3.2) makes the 1-skeleton Euler even when
- * cells have adjacent boundary edges (Fig. 11).
+ * cells have adjacent boundary edges (Fig. 11). Class 2 cells collapsed to
+ * edges leave odd vertices (Lemma 3.1, m odd); amp_euler_repair() replaces
+ * the Class 3 cells around them by their generalized transformation
+ * (Lemma 3.3).
  * Functions are reentrant; inputs are only read.
  */
 #ifndef AMPATH_EULER_H
@@ -48,13 +51,43 @@ typedef struct amp_euler_stats {
 amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
                                amp_error *err);
 
+/** Figures of amp_euler_repair(). */
+typedef struct amp_euler_repair_stats {
+    size_t collapsed_edges; /**< collapsed Class 2 cells (free 1-cells ê) removed */
+    size_t cells;           /**< Class 3 cells of k̂ replaced by T(T(k̂)) */
+    size_t components;      /**< edge-connected components k̂_j of k̂ */
+} amp_euler_repair_stats;
+
+/**
+ * Local repair of Lemma 3.3: in @p khat = T(K) computed with combinatorial
+ * changes, the sub-complex k̂ of Class 3 cells that share an edge ê of a
+ * collapsed Class 2 cell (the free 1-cells of @p khat) is replaced by its
+ * generalized transformation T(T(k̂)) (Def. 3.2, offsets a quarter of the
+ * smallest feature of k̂, halved until valid, no combinatorial changes),
+ * glued back along k̂'s boundary, which both passes keep; the free 1-cells
+ * go with k̂. Result in @p out (emptied first, built on return, a pure
+ * complex). Every vertex of @p out has even degree when the only odd
+ * vertices of @p khat were those of collapsed Class 2 cells (K without
+ * cells having adjacent boundary edges, §1.3); else use
+ * amp_euler_generalized(). The rest of @p khat is copied unchanged (same
+ * vertex indices; new vertices are appended). Without free 1-cells @p out
+ * is a copy. @p st is optional.
+ * Errors: AMP_ERR_ARG when @p out is @p khat; AMP_ERR_STATE when @p khat is
+ * not built; AMP_ERR_GEOMETRY when a free 1-cell is not an edge of Class 3
+ * cells only (not an output of amp_euler_transform), or when k̂ cannot be
+ * transformed; AMP_ERR_NOMEM. On error @p out is empty.
+ */
+amp_status amp_euler_repair(const amp_cx2 *khat, amp_cx2 *out, amp_euler_repair_stats *st, amp_error *err);
+
 /**
  * Generalized Euler transformation (Def. 3.2): T(T(K)). The first pass uses
- * @p o; the second uses an offset small enough for the cells of T(K) (a
- * quarter of min(δ, shortest edge, smallest 2·area/perimeter), halved until
- * valid) without combinatorial changes. If the first pass collapses a Class
- * 2 cell to an edge (Lemma 3.3 case), AMP_ERR_UNSUPPORTED: the local repair
- * of Lemma 3.3 is not implemented.
+ * @p o; if it collapses Class 2 cells to edges, Lemma 3.3's local repair
+ * (amp_euler_repair) is applied to it. The second pass uses an offset small
+ * enough for the cells of that complex (a quarter of min(δ, shortest edge,
+ * smallest 2·area/perimeter), halved until valid) without combinatorial
+ * changes. The result has only even-degree vertices whenever the first
+ * pass succeeds. Errors: those of amp_euler_transform() and
+ * amp_euler_repair().
  */
 amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err);
 
