@@ -22,15 +22,52 @@ typedef struct face_off {
     size_t *alive;  /* surviving edge indices, increasing */
     size_t nalive;
     size_t *corner; /* corner k -> offset vertex index */
-    amp_vec2 *dir, *base; /* unit direction and shifted point of each edge */
+    amp_vec2 *dir, *base; /* unit direction and start point of each edge */
+    amp_vec2 *corner_pt; /* scratch: the same vertices at time 0 */
 } face_off;
 
+/* Vertex between the offset lines of edges e0 and e1 (e1 follows e0) at
+ * offset time t; 0 for a reversal (antiparallel consecutive edges). */
+static int offset_vertex(const face_off *fo, size_t e0, size_t e1, double t, amp_vec2 *out)
+{
+    amp_vec2 d0 = fo->dir[e0], d1 = fo->dir[e1];
+    amp_vec2 p0 = amp_v2(fo->base[e0].x - t * d0.y, fo->base[e0].y + t * d0.x);
+    amp_vec2 p1 = amp_v2(fo->base[e1].x - t * d1.y, fo->base[e1].y + t * d1.x);
+    if (line_meet(p0, d0, p1, d1, out))
+        return 1;
+    /* a straight angle (e.g. a boundary vertex of a Class 3 cell lying on
+     * the segment of its neighbours): the miter is the corner shifted along
+     * the common normal */
+    if (d0.x * d1.x + d0.y * d1.y > 0) {
+        *out = p1;
+        return 1;
+    }
+    return 0;
+}
+
+/* Do segments ab and cd meet (proper crossing or touching)? */
+static int segs_meet(amp_vec2 a, amp_vec2 b, amp_vec2 c, amp_vec2 d)
+{
+    double o1 = amp_v2_orient(a, b, c), o2 = amp_v2_orient(a, b, d), o3 = amp_v2_orient(c, d, a),
+           o4 = amp_v2_orient(c, d, b);
+    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0)))
+        return 1;
+#define ON(p, q, r, o) ((o) == 0 && fmin(p.x, q.x) <= r.x && r.x <= fmax(p.x, q.x) && fmin(p.y, q.y) <= r.y && r.y <= fmax(p.y, q.y))
+    return ON(a, b, c, o1) || ON(a, b, d, o2) || ON(c, d, a, o3) || ON(c, d, b, o4);
+#undef ON
+}
+
 /*
- * Mitered offset of face f by delta (Class 1 cell, §1.3). Without
- * combinatorial changes every edge must keep its direction. With them (§3),
- * for convex cells an edge whose offset reverses is dropped and its
- * neighbours' offset lines are intersected instead, repeatedly, as long as
- * at least 3 edges remain ("we can reduce at most n-3 edges").
+ * Mitered offset of face f by delta (Class 1 cell, §1.3): the wavefront of
+ * the cell's edges moving inward at unit speed, at time delta. Without
+ * combinatorial changes every edge must keep a positive length. With them
+ * (§3) the edge events are simulated in time order: each edge's length is
+ * linear in time between events, the edge that reaches length 0 first is
+ * dropped and its neighbours' offset lines meet instead, as long as at
+ * least 3 edges remain ("we can reduce at most n-3 edges"). This holds for
+ * non-convex cells as well, as long as no reflex corner runs into another
+ * edge (a split event, a topological change): the offset of a non-convex
+ * cell must therefore be a simple polygon, otherwise it is rejected.
  */
 static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb, face_off *fo, amp_error *err)
 {
@@ -42,7 +79,7 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
         if (l == 0)
             return amp_fail(err, AMP_ERR_GEOMETRY, 0, "2-cell %lu has a zero-length edge", (unsigned long)f);
         fo->dir[i] = amp_v2(dx / l, dy / l);
-        fo->base[i] = amp_v2(p.x - delta * dy / l, p.y + delta * dx / l); /* shifted to the left (inside) */
+        fo->base[i] = p;
         fo->alive[i] = i;
         if (amp_v2_orient(p, q, k->v[k->fidx[a + (i + 2) % n]]) < 0)
             convex = 0;
@@ -50,28 +87,28 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
     fo->nalive = n;
     for (;;) {
         size_t worst = n, m = fo->nalive;
-        double wt = 0;
+        double wt = HUGE_VAL;
+        /* pt = vertices at time delta, len0 from the vertices at time 0 of
+         * the same lines (lengths are linear in time) */
         for (j = 0; j < m; j++) {
             size_t e0 = fo->alive[j], e1 = fo->alive[(j + 1) % m];
-            if (line_meet(fo->base[e0], fo->dir[e0], fo->base[e1], fo->dir[e1], &fo->pt[j]))
-                continue;
-            /* a straight angle (e.g. a boundary vertex of a Class 3 cell lying
-             * on the segment of its neighbours): the miter is the corner
-             * shifted along the common normal */
-            if (fo->dir[e0].x * fo->dir[e1].x + fo->dir[e0].y * fo->dir[e1].y > 0)
-                fo->pt[j] = fo->base[e1];
-            else
+            if (!offset_vertex(fo, e0, e1, delta, &fo->pt[j]) || !offset_vertex(fo, e0, e1, 0, &fo->corner_pt[j]))
                 return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu degenerates (parallel edges)",
                                 delta, (unsigned long)f);
         }
         /* an offset edge runs from the vertex before it to the vertex after it */
         for (j = 0; j < m; j++) {
-            size_t e = fo->alive[j];
-            amp_vec2 s = fo->pt[(j + m - 1) % m], t = fo->pt[j];
+            size_t e = fo->alive[j], jp = (j + m - 1) % m;
+            amp_vec2 s = fo->pt[jp], t = fo->pt[j], s0 = fo->corner_pt[jp], t0 = fo->corner_pt[j];
             double len = (t.x - s.x) * fo->dir[e].x + (t.y - s.y) * fo->dir[e].y;
-            if (len <= 1e-12 * (1 + delta) && (worst == n || len < wt)) {
+            double l0 = (t0.x - s0.x) * fo->dir[e].x + (t0.y - s0.y) * fo->dir[e].y, when;
+            if (len > 1e-12 * (1 + delta))
+                continue;
+            /* time at which this edge reaches length 0 */
+            when = l0 - len > 0 ? delta * fmax(l0, 0) / (l0 - len) : 0;
+            if (worst == n || when < wt) {
                 worst = j;
-                wt = len;
+                wt = when;
             }
         }
         if (worst == n)
@@ -80,8 +117,6 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
             return amp_fail(err, AMP_ERR_GEOMETRY, 0,
                             "mitered offset %g of 2-cell %lu changes combinatorially (edge %lu collapses)", delta,
                             (unsigned long)f, (unsigned long)fo->alive[worst]);
-        if (!convex)
-            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "combinatorial change in non-convex 2-cell %lu", (unsigned long)f);
         if (m <= 3)
             return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g makes 2-cell %lu vanish (topological change)",
                             delta, (unsigned long)f);
@@ -102,6 +137,19 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
     if (amp_ring_area(fo->pt, fo->nalive) <= 0)
         return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu is inverted", delta,
                         (unsigned long)f);
+    /* a reflex corner that ran into another edge leaves a self-intersecting
+     * offset: a split (topological change, future work in the paper) */
+    for (i = 0; !convex && i < fo->nalive; i++)
+        for (j = i + 2; j < fo->nalive; j++) {
+            size_t m = fo->nalive;
+            if (i == 0 && j == m - 1)
+                continue;
+            if (segs_meet(fo->pt[(i + m - 1) % m], fo->pt[i], fo->pt[(j + m - 1) % m], fo->pt[j]))
+                return amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                                "mitered offset %g of non-convex 2-cell %lu is not simple (a reflex corner crosses "
+                                "an edge: topological change)",
+                                delta, (unsigned long)f);
+        }
     return AMP_OK;
 }
 
@@ -158,13 +206,14 @@ static amp_status transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *
     fo.corner = amp_alloc(al, maxn * sizeof *fo.corner);
     fo.dir = amp_alloc(al, maxn * sizeof *fo.dir);
     fo.base = amp_alloc(al, maxn * sizeof *fo.base);
+    fo.corner_pt = amp_alloc(al, maxn * sizeof *fo.corner_pt);
     cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *cmap);
     bmap = bmap_out ? bmap_out : amp_alloc(al, (k->nv + 1) * sizeof *bmap);
     loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *loop);
     vstart = amp_calloc(al, k->nv + 2, sizeof *vstart);
     vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *vhe);
     seen = amp_calloc(al, k->nfidx + 1, 1);
-    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !cmap || !bmap || !loop || !vstart || !vhe ||
+    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !fo.corner_pt || !cmap || !bmap || !loop || !vstart || !vhe ||
         !seen) {
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Euler transformation");
         goto done;
@@ -253,6 +302,7 @@ done:
     amp_free(al, fo.corner);
     amp_free(al, fo.dir);
     amp_free(al, fo.base);
+    amp_free(al, fo.corner_pt);
     amp_free(al, cmap);
     if (bmap != bmap_out)
         amp_free(al, bmap);

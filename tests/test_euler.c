@@ -442,9 +442,9 @@ END_TEST
  * 0.02-0.06, a short edge whose two quads both drop it when offset by 0.1
  * (Fig. 9). No cell has two adjacent boundary edges. Returns the number of
  * pinched edges. */
-static size_t pinched_polar_quads(amp_cx2 *k, int nseg, int nring, double jitter, unsigned seed)
+static size_t pinched_polar_quads(amp_cx2 *k, int nseg, int nring, double jitter, unsigned seed, int merge)
 {
-    uint32_t c, v[4];
+    uint32_t c, v[6];
     int r, s;
     size_t pinched = 0;
     amp_cx2_init(k, NULL);
@@ -475,6 +475,16 @@ static size_t pinched_polar_quads(amp_cx2 *k, int nseg, int nring, double jitter
             *q = amp_v2(m.x + (q->x - m.x) * want / len, m.y + (q->y - m.y) * want / len);
             pinched++;
         }
+    /* merge: in the pinched bands, cells s and s+1 with s = 1 mod 3 become
+     * one hexagon whose middle inner corner, pushed 0.3 outward (into it),
+     * is reflex; every vertex keeps degree >= 3 (not in the rim band, where
+     * the middle outer corner would join two boundary edges) */
+    for (r = 2; merge && r + 1 < nring; r += 2)
+        for (s = 2; s < nseg; s += 3) {
+            amp_vec2 *p = &k->v[QV(r, s)];
+            double l = hypot(p->x, p->y);
+            *p = amp_v2(p->x + 0.3 * p->x / l, p->y + 0.3 * p->y / l);
+        }
     for (s = 0; s < nseg; s++) {
         v[0] = c;
         v[1] = QV(1, s);
@@ -483,6 +493,18 @@ static size_t pinched_polar_quads(amp_cx2 *k, int nseg, int nring, double jitter
     }
     for (r = 1; r < nring; r++)
         for (s = 0; s < nseg; s++) {
+            if (merge && r % 2 == 0 && r + 1 < nring && s % 3 == 1 && s + 2 <= nseg) {
+                /* CCW: out along s, the outer arc, in along s+2, the inner arc */
+                v[0] = QV(r, s);
+                v[1] = QV(r + 1, s);
+                v[2] = QV(r + 1, s + 1);
+                v[3] = QV(r + 1, s + 2);
+                v[4] = QV(r, s + 2);
+                v[5] = QV(r, s + 1);
+                ck_assert_int_eq(amp_cx2_add_face(k, v, 6, 0, NULL), AMP_OK);
+                s++;
+                continue;
+            }
             v[0] = QV(r, s);
             v[1] = QV(r + 1, s);
             v[2] = QV(r + 1, s + 1);
@@ -505,7 +527,7 @@ START_TEST(lemma_3_3_makes_random_quad_meshes_with_short_edges_euler)
         amp_euler_stats st;
         amp_euler_repair_stats rs;
         amp_error err;
-        size_t odd, v, i, pinched = pinched_polar_quads(&k, 18, 7, 0.12, seed);
+        size_t odd, v, i, pinched = pinched_polar_quads(&k, 18, 7, 0.12, seed, 0);
         ck_assert_msg(amp_cx2_check(&k, &rep, &err) == AMP_OK, "%s", err.msg);
         amp_cx2_init(&kh, NULL);
         amp_cx2_init(&r, NULL);
@@ -641,6 +663,182 @@ START_TEST(generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim
 }
 END_TEST
 
+static double seg_dist(amp_vec2 p, amp_vec2 a, amp_vec2 b)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, t = ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    return hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
+}
+
+static int cross_sign(amp_vec2 a, amp_vec2 b, amp_vec2 c)
+{
+    double o = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    return (o > 0) - (o < 0);
+}
+
+/*
+ * Independent checker of a mitered offset @p m (nm vertices) of the cell @p c
+ * (n vertices, CCW) by @p d, combinatorial changes allowed: @p m is a simple
+ * CCW polygon inside @p c, no point of it (vertices and 9 points per edge)
+ * is closer than d to the boundary of @p c, and every edge of @p m lies on
+ * the line of some edge of @p c shifted inward by d, in the same direction.
+ * Returns the number of violations.
+ */
+static size_t offset_violations(const amp_vec2 *c, size_t n, const amp_vec2 *m, size_t nm, double d)
+{
+    size_t bad = 0, i, j, e;
+    double tol = 1e-9 * (1 + d);
+    if (amp_ring_area(m, nm) <= 0)
+        bad++;
+    for (i = 0; i < nm; i++)
+        for (j = i + 2; j < nm; j++) {
+            amp_vec2 a = m[i], b = m[(i + 1) % nm], p = m[j], q = m[(j + 1) % nm];
+            if (i == 0 && j == nm - 1)
+                continue;
+            if (cross_sign(a, b, p) * cross_sign(a, b, q) < 0 && cross_sign(p, q, a) * cross_sign(p, q, b) < 0)
+                bad++;
+        }
+    for (i = 0; i < nm; i++) {
+        amp_vec2 a = m[i], b = m[(i + 1) % nm];
+        int on_line = 0;
+        for (j = 0; j <= 10; j++) {
+            amp_vec2 p = amp_v2(a.x + (b.x - a.x) * j / 10.0, a.y + (b.y - a.y) * j / 10.0);
+            if (amp_ring_contains(c, n, p, 0) != 1)
+                bad++;
+            for (e = 0; e < n; e++)
+                if (seg_dist(p, c[e], c[(e + 1) % n]) < d - tol)
+                    bad++;
+        }
+        for (e = 0; e < n && !on_line; e++) {
+            amp_vec2 u = c[e], w = c[(e + 1) % n];
+            double l = hypot(w.x - u.x, w.y - u.y), da, db, cr, dot;
+            da = ((w.x - u.x) * (a.y - u.y) - (w.y - u.y) * (a.x - u.x)) / l; /* left distance */
+            db = ((w.x - u.x) * (b.y - u.y) - (w.y - u.y) * (b.x - u.x)) / l;
+            cr = ((w.x - u.x) * (b.y - a.y) - (w.y - u.y) * (b.x - a.x)) / l;
+            dot = (w.x - u.x) * (b.x - a.x) + (w.y - u.y) * (b.y - a.y);
+            on_line = fabs(da - d) < tol && fabs(db - d) < tol && fabs(cr) < tol && dot > 0;
+        }
+        bad += !on_line;
+    }
+    return bad;
+}
+
+/* Offsets of all cells of K in K̂ = T(K) (Class 1 cell f is face f of K̂). */
+static size_t all_offset_violations(const amp_cx2 *k, const amp_cx2 *kh, double d)
+{
+    amp_vec2 c[16], m[16];
+    size_t f, j, bad = 0;
+    for (f = 0; f < k->nf; f++) {
+        size_t n = amp_cx2_face_size(k, f), nm = amp_cx2_face_size(kh, f);
+        ck_assert_int_eq(kh->fclass[f], AMP_CELL_CLASS1);
+        ck_assert(n <= 16 && nm <= n);
+        for (j = 0; j < n; j++)
+            c[j] = k->v[k->fidx[k->fstart[f] + j]];
+        for (j = 0; j < nm; j++)
+            m[j] = kh->v[kh->fidx[kh->fstart[f] + j]];
+        bad += offset_violations(c, n, m, nm, d);
+    }
+    return bad;
+}
+
+START_TEST(combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair)
+{
+    unsigned seed;
+    size_t total = 0;
+    for (seed = 1; seed <= 8; seed++) {
+        amp_cx2 k, kh, r, g, k9;
+        amp_cx2_report rep;
+        amp_euler_opts o;
+        amp_euler_stats st;
+        amp_error err;
+        size_t odd, f, reflex = 0, pinched = pinched_polar_quads(&k, 18, 7, 0.12, seed, 1);
+        ck_assert_msg(amp_cx2_check(&k, &rep, &err) == AMP_OK, "%s", err.msg);
+        for (f = 0; f < k.nf; f++) {
+            size_t a = k.fstart[f], n = amp_cx2_face_size(&k, f), j;
+            for (j = 0; j < n; j++)
+                reflex += amp_v2_orient(k.v[k.fidx[a + j]], k.v[k.fidx[a + (j + 1) % n]], k.v[k.fidx[a + (j + 2) % n]]) < 0;
+        }
+        ck_assert_uint_ge(reflex, 12); /* the merged cells are non-convex */
+        amp_cx2_init(&kh, NULL);
+        amp_cx2_init(&r, NULL);
+        amp_cx2_init(&g, NULL);
+        amp_cx2_init(&k9, NULL);
+        o.offset = 0.1;
+        o.combinatorial = 1;
+        ck_assert_msg(amp_euler_transform(&k, &o, &kh, &st, &err) == AMP_OK, "seed %u: %s", seed, err.msg);
+        ck_assert_uint_eq(st.collapsed_class2, pinched);
+        total += pinched;
+        /* non-convex cells did drop edges */
+        {
+            size_t dropped = 0;
+            for (f = 0; f < k.nf; f++) {
+                size_t a = k.fstart[f], n = amp_cx2_face_size(&k, f), j, rx = 0;
+                for (j = 0; j < n; j++)
+                    rx += amp_v2_orient(k.v[k.fidx[a + j]], k.v[k.fidx[a + (j + 1) % n]], k.v[k.fidx[a + (j + 2) % n]]) < 0;
+                dropped += rx && amp_cx2_face_size(&kh, f) < n;
+            }
+            ck_assert_uint_gt(dropped, 0);
+        }
+        /* every Class 1 cell is the true mitered offset, dropped edges included */
+        ck_assert_uint_eq(all_offset_violations(&k, &kh, 0.1), 0);
+        /* the checker fails on offsets by another distance and on a moved vertex */
+        ck_assert_uint_gt(all_offset_violations(&k, &kh, 0.11), 0);
+        o.offset = 0.09;
+        ck_assert_int_eq(amp_euler_transform(&k, &o, &k9, NULL, &err), AMP_OK);
+        ck_assert_uint_gt(all_offset_violations(&k, &k9, 0.1), 0);
+        k9.v[k9.fidx[k9.fstart[k.nf / 2]]].x += 0.01;
+        ck_assert_uint_gt(all_offset_violations(&k, &k9, 0.09), 0);
+        o.offset = 0.1;
+        /* odd exactly at the ends of ê, Euler after Lemma 3.3 and after Def. 3.2 */
+        ck_assert_int_eq(amp_cx2_check_even(&kh, &odd, &err), pinched ? AMP_ERR_CHECK : AMP_OK);
+        ck_assert_uint_eq(odd, 2 * pinched);
+        ck_assert_msg(amp_euler_repair(&kh, &r, NULL, &err) == AMP_OK, "seed %u: %s", seed, err.msg);
+        check_repaired(&kh, &r, 1, 0);
+        ck_assert_msg(amp_euler_generalized(&k, &o, &g, &err) == AMP_OK, "seed %u: %s", seed, err.msg);
+        ck_assert_msg(amp_cx2_check(&g, &rep, &err) == AMP_OK, "%s", err.msg);
+        ck_assert_int_eq(rep.euler_char, 1);
+        ck_assert_msg(amp_cx2_check_even(&g, NULL, &err) == AMP_OK, "seed %u: %s", seed, err.msg);
+        amp_cx2_free(&k9);
+        amp_cx2_free(&g);
+        amp_cx2_free(&r);
+        amp_cx2_free(&kh);
+        amp_cx2_free(&k);
+    }
+    ck_assert_uint_gt(total, 12);
+}
+END_TEST
+
+START_TEST(a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change)
+{
+    /* a notch whose reflex corner (2, 0.6) is 0.6 above the bottom edge:
+     * fine at offset 0.2, split at 0.5 */
+    amp_vec2 p[5] = {{0, 0}, {4, 0}, {4, 3}, {2, 0.6}, {0, 3}};
+    amp_cx2 k, kh;
+    amp_euler_opts o;
+    amp_error err;
+    uint32_t idx[5];
+    size_t v;
+    int comb;
+    amp_cx2_init(&k, NULL);
+    amp_cx2_init(&kh, NULL);
+    for (v = 0; v < 5; v++)
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, p[v], &idx[v], NULL), AMP_OK);
+    ck_assert_int_eq(amp_cx2_add_face(&k, idx, 5, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+    for (comb = 0; comb < 2; comb++) {
+        o.combinatorial = comb;
+        o.offset = 0.2;
+        ck_assert_msg(amp_euler_transform(&k, &o, &kh, NULL, &err) == AMP_OK, "%s", err.msg);
+        ck_assert_uint_eq(all_offset_violations(&k, &kh, 0.2), 0);
+        o.offset = 0.5;
+        ck_assert_int_eq(amp_euler_transform(&k, &o, &kh, NULL, &err), AMP_ERR_GEOMETRY);
+        ck_assert_msg(strstr(err.msg, "topological change") != NULL, "%s", err.msg);
+    }
+    amp_cx2_free(&kh);
+    amp_cx2_free(&k);
+}
+END_TEST
+
 START_TEST(bad_inputs_are_rejected_with_reasons)
 {
     amp_cx2 k, kh;
@@ -701,6 +899,8 @@ static Suite *euler_suite(void)
     AMP_ADD_TEST(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
     AMP_ADD_TEST(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
     AMP_ADD_TEST(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
+    AMP_ADD_TEST(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
+    AMP_ADD_TEST(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
     AMP_ADD_TEST(tc, bad_inputs_are_rejected_with_reasons);
     suite_add_tcase(s, tc);
     return s;

@@ -32,7 +32,7 @@ extern "C" {
 
 typedef struct amp_euler_opts {
     double offset;     /**< mitered offset distance δ > 0 (same unit as K) */
-    int combinatorial; /**< 1: allow mitered offsets to drop edges of convex cells (§3) */
+    int combinatorial; /**< 1: allow mitered offsets to drop collapsing edges (§3), convex or not */
 } amp_euler_opts;
 
 typedef struct amp_euler_stats {
@@ -44,9 +44,15 @@ typedef struct amp_euler_stats {
  * Euler transformation K̂ = T(@p k) into @p out (emptied first, built on
  * return). @p k must be a pure complex (no free edges) with CCW faces.
  * Errors: AMP_ERR_ARG (bad offset, free edges in K), AMP_ERR_GEOMETRY when a
- * mitered offset is invalid (edge reversed without combinatorial changes
- * allowed, non-convex cell needing a change, or a cell vanishing), with the
- * face index in the message; AMP_ERR_NOMEM. @p st is optional.
+ * mitered offset is invalid (an edge collapsing without combinatorial
+ * changes allowed, a cell vanishing, or the offset of a non-convex cell not
+ * simple because a reflex corner runs into another edge: the topological
+ * changes the paper leaves to future work), with the face index in the
+ * message; AMP_ERR_NOMEM. @p st is optional.
+ * The mitered offset is the wavefront of the cell's edges moved inward by
+ * δ; with combinatorial changes its edge events are processed in time
+ * order (each edge's length is linear in time between events), for convex
+ * and non-convex cells.
  */
 amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
                                amp_error *err);
