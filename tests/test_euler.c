@@ -40,6 +40,84 @@ static size_t count_class(const amp_cx2 *k, int cls)
     return n;
 }
 
+static double seg_dist(amp_vec2 p, amp_vec2 a, amp_vec2 b)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, t = ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    return hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
+}
+
+static int cross_sign(amp_vec2 a, amp_vec2 b, amp_vec2 c)
+{
+    double o = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    return (o > 0) - (o < 0);
+}
+
+/*
+ * Independent checker of a mitered offset @p m (nm vertices) of the cell @p c
+ * (n vertices, CCW) by @p d, combinatorial changes allowed: @p m is a simple
+ * CCW polygon inside @p c, no point of it (vertices and 9 points per edge)
+ * is closer than d to the boundary of @p c, and every edge of @p m lies on
+ * the line of some edge of @p c shifted inward by d, in the same direction.
+ * Returns the number of violations.
+ */
+static size_t offset_violations(const amp_vec2 *c, size_t n, const amp_vec2 *m, size_t nm, double d)
+{
+    size_t bad = 0, i, j, e;
+    double tol = 1e-9 * (1 + d);
+    if (amp_ring_area(m, nm) <= 0)
+        bad++;
+    for (i = 0; i < nm; i++)
+        for (j = i + 2; j < nm; j++) {
+            amp_vec2 a = m[i], b = m[(i + 1) % nm], p = m[j], q = m[(j + 1) % nm];
+            if (i == 0 && j == nm - 1)
+                continue;
+            if (cross_sign(a, b, p) * cross_sign(a, b, q) < 0 && cross_sign(p, q, a) * cross_sign(p, q, b) < 0)
+                bad++;
+        }
+    for (i = 0; i < nm; i++) {
+        amp_vec2 a = m[i], b = m[(i + 1) % nm];
+        int on_line = 0;
+        for (j = 0; j <= 10; j++) {
+            amp_vec2 p = amp_v2(a.x + (b.x - a.x) * j / 10.0, a.y + (b.y - a.y) * j / 10.0);
+            if (amp_ring_contains(c, n, p, 0) != 1)
+                bad++;
+            for (e = 0; e < n; e++)
+                if (seg_dist(p, c[e], c[(e + 1) % n]) < d - tol)
+                    bad++;
+        }
+        for (e = 0; e < n && !on_line; e++) {
+            amp_vec2 u = c[e], w = c[(e + 1) % n];
+            double l = hypot(w.x - u.x, w.y - u.y), da, db, cr, dot;
+            da = ((w.x - u.x) * (a.y - u.y) - (w.y - u.y) * (a.x - u.x)) / l; /* left distance */
+            db = ((w.x - u.x) * (b.y - u.y) - (w.y - u.y) * (b.x - u.x)) / l;
+            cr = ((w.x - u.x) * (b.y - a.y) - (w.y - u.y) * (b.x - a.x)) / l;
+            dot = (w.x - u.x) * (b.x - a.x) + (w.y - u.y) * (b.y - a.y);
+            on_line = fabs(da - d) < tol && fabs(db - d) < tol && fabs(cr) < tol && dot > 0;
+        }
+        bad += !on_line;
+    }
+    return bad;
+}
+
+/* Offsets of all cells of K in K̂ = T(K) (Class 1 cell f is face f of K̂). */
+static size_t all_offset_violations(const amp_cx2 *k, const amp_cx2 *kh, double d)
+{
+    amp_vec2 c[16], m[16];
+    size_t f, j, bad = 0;
+    for (f = 0; f < k->nf; f++) {
+        size_t n = amp_cx2_face_size(k, f), nm = amp_cx2_face_size(kh, f);
+        ck_assert_int_eq(kh->fclass[f], AMP_CELL_CLASS1);
+        ck_assert(n <= 16 && nm <= n);
+        for (j = 0; j < n; j++)
+            c[j] = k->v[k->fidx[k->fstart[f] + j]];
+        for (j = 0; j < nm; j++)
+            m[j] = kh->v[kh->fidx[kh->fstart[f] + j]];
+        bad += offset_violations(c, n, m, nm, d);
+    }
+    return bad;
+}
+
 /* Polar mesh: a fan of triangles around the centre, then rings of
  * triangles (each quad split in two), every vertex jittered at random.
  * No cell has two adjacent boundary edges. */
@@ -535,6 +613,7 @@ START_TEST(lemma_3_3_makes_random_quad_meshes_with_short_edges_euler)
         o.offset = 0.1;
         o.combinatorial = 1;
         ck_assert_msg(amp_euler_transform(&k, &o, &kh, &st, &err) == AMP_OK, "seed %u: %s", seed, err.msg);
+        ck_assert_uint_eq(all_offset_violations(&k, &kh, 0.1), 0);
         /* every pinched edge collapses on both sides: one free 1-cell each */
         ck_assert_uint_eq(st.collapsed_class2, pinched);
         ck_assert_uint_eq(st.collapsed_edges, 2 * pinched);
@@ -663,84 +742,6 @@ START_TEST(generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim
 }
 END_TEST
 
-static double seg_dist(amp_vec2 p, amp_vec2 a, amp_vec2 b)
-{
-    double dx = b.x - a.x, dy = b.y - a.y, t = ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
-    t = t < 0 ? 0 : (t > 1 ? 1 : t);
-    return hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
-}
-
-static int cross_sign(amp_vec2 a, amp_vec2 b, amp_vec2 c)
-{
-    double o = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    return (o > 0) - (o < 0);
-}
-
-/*
- * Independent checker of a mitered offset @p m (nm vertices) of the cell @p c
- * (n vertices, CCW) by @p d, combinatorial changes allowed: @p m is a simple
- * CCW polygon inside @p c, no point of it (vertices and 9 points per edge)
- * is closer than d to the boundary of @p c, and every edge of @p m lies on
- * the line of some edge of @p c shifted inward by d, in the same direction.
- * Returns the number of violations.
- */
-static size_t offset_violations(const amp_vec2 *c, size_t n, const amp_vec2 *m, size_t nm, double d)
-{
-    size_t bad = 0, i, j, e;
-    double tol = 1e-9 * (1 + d);
-    if (amp_ring_area(m, nm) <= 0)
-        bad++;
-    for (i = 0; i < nm; i++)
-        for (j = i + 2; j < nm; j++) {
-            amp_vec2 a = m[i], b = m[(i + 1) % nm], p = m[j], q = m[(j + 1) % nm];
-            if (i == 0 && j == nm - 1)
-                continue;
-            if (cross_sign(a, b, p) * cross_sign(a, b, q) < 0 && cross_sign(p, q, a) * cross_sign(p, q, b) < 0)
-                bad++;
-        }
-    for (i = 0; i < nm; i++) {
-        amp_vec2 a = m[i], b = m[(i + 1) % nm];
-        int on_line = 0;
-        for (j = 0; j <= 10; j++) {
-            amp_vec2 p = amp_v2(a.x + (b.x - a.x) * j / 10.0, a.y + (b.y - a.y) * j / 10.0);
-            if (amp_ring_contains(c, n, p, 0) != 1)
-                bad++;
-            for (e = 0; e < n; e++)
-                if (seg_dist(p, c[e], c[(e + 1) % n]) < d - tol)
-                    bad++;
-        }
-        for (e = 0; e < n && !on_line; e++) {
-            amp_vec2 u = c[e], w = c[(e + 1) % n];
-            double l = hypot(w.x - u.x, w.y - u.y), da, db, cr, dot;
-            da = ((w.x - u.x) * (a.y - u.y) - (w.y - u.y) * (a.x - u.x)) / l; /* left distance */
-            db = ((w.x - u.x) * (b.y - u.y) - (w.y - u.y) * (b.x - u.x)) / l;
-            cr = ((w.x - u.x) * (b.y - a.y) - (w.y - u.y) * (b.x - a.x)) / l;
-            dot = (w.x - u.x) * (b.x - a.x) + (w.y - u.y) * (b.y - a.y);
-            on_line = fabs(da - d) < tol && fabs(db - d) < tol && fabs(cr) < tol && dot > 0;
-        }
-        bad += !on_line;
-    }
-    return bad;
-}
-
-/* Offsets of all cells of K in K̂ = T(K) (Class 1 cell f is face f of K̂). */
-static size_t all_offset_violations(const amp_cx2 *k, const amp_cx2 *kh, double d)
-{
-    amp_vec2 c[16], m[16];
-    size_t f, j, bad = 0;
-    for (f = 0; f < k->nf; f++) {
-        size_t n = amp_cx2_face_size(k, f), nm = amp_cx2_face_size(kh, f);
-        ck_assert_int_eq(kh->fclass[f], AMP_CELL_CLASS1);
-        ck_assert(n <= 16 && nm <= n);
-        for (j = 0; j < n; j++)
-            c[j] = k->v[k->fidx[k->fstart[f] + j]];
-        for (j = 0; j < nm; j++)
-            m[j] = kh->v[kh->fidx[kh->fstart[f] + j]];
-        bad += offset_violations(c, n, m, nm, d);
-    }
-    return bad;
-}
-
 START_TEST(combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair)
 {
     unsigned seed;
@@ -839,6 +840,43 @@ START_TEST(a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change
 }
 END_TEST
 
+START_TEST(interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two)
+{
+    /* two 3 x 2 cells sharing an edge split by N = (3, 1): a straight angle
+     * in both cells, and a Class 3 cell that would be a digon */
+    amp_vec2 p[7] = {{0, 0}, {3, 0}, {3, 1}, {3, 2}, {0, 2}, {6, 0}, {6, 2}};
+    uint32_t a[5] = {0, 1, 2, 3, 4}, b[5] = {1, 5, 6, 3, 2};
+    amp_cx2 k, k1, k2;
+    amp_euler_opts o;
+    amp_cx2_report rep;
+    amp_error err;
+    size_t v;
+    amp_cx2_init(&k, NULL);
+    amp_cx2_init(&k1, NULL);
+    amp_cx2_init(&k2, NULL);
+    for (v = 0; v < 7; v++)
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, p[v], NULL, NULL), AMP_OK);
+    ck_assert_int_eq(amp_cx2_add_face(&k, a, 5, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_cx2_add_face(&k, b, 5, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+    o.offset = 0.3;
+    o.combinatorial = 0;
+    ck_assert_msg(amp_euler_transform(&k, &o, &k1, NULL, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_uint_eq(all_offset_violations(&k, &k1, 0.3), 0);
+    /* the copies of N in both cells (offset vertex j is the copy of corner
+     * j + 1): degree 3 */
+    ck_assert_uint_eq(degree_of(&k1, k1.fidx[k1.fstart[0] + 1]), 3);
+    ck_assert_uint_eq(degree_of(&k1, k1.fidx[k1.fstart[1] + 3]), 3);
+    ck_assert_msg(amp_euler_generalized(&k, &o, &k2, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_cx2_check(&k2, &rep, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_int_eq(rep.euler_char, 1);
+    ck_assert_msg(amp_cx2_check_even(&k2, NULL, &err) == AMP_OK, "%s", err.msg);
+    amp_cx2_free(&k);
+    amp_cx2_free(&k1);
+    amp_cx2_free(&k2);
+}
+END_TEST
+
 START_TEST(bad_inputs_are_rejected_with_reasons)
 {
     amp_cx2 k, kh;
@@ -894,6 +932,7 @@ static Suite *euler_suite(void)
     AMP_ADD_TEST(tc, generalized_transform_makes_square_tri_and_hex_grids_euler);
     AMP_ADD_TEST(tc, single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two);
     AMP_ADD_TEST(tc, single_cell_with_a_short_edge_drops_it_and_is_euler_after_the_generalized_transform);
+    AMP_ADD_TEST(tc, interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two);
     AMP_ADD_TEST(tc, checkers_fail_on_broken_complexes);
     AMP_ADD_TEST(tc, combinatorial_changes_follow_lemma_3_1_degrees);
     AMP_ADD_TEST(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
