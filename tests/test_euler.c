@@ -58,8 +58,9 @@ static int cross_sign(amp_vec2 a, amp_vec2 b, amp_vec2 c)
  * (n vertices, CCW) by @p d, combinatorial changes allowed: @p m is a simple
  * CCW polygon inside @p c, no point of it (vertices and 9 points per edge)
  * is closer than d to the boundary of @p c, and every edge of @p m lies on
- * the line of some edge of @p c shifted inward by d, in the same direction.
- * Returns the number of violations.
+ * the line of some edge of @p c shifted inward by d, in the same direction;
+ * for a convex cell, @p m has the area of the intersection of the shifted
+ * half-planes. Returns the number of violations.
  */
 static size_t offset_violations(const amp_vec2 *c, size_t n, const amp_vec2 *m, size_t nm, double d)
 {
@@ -96,6 +97,36 @@ static size_t offset_violations(const amp_vec2 *c, size_t n, const amp_vec2 *m, 
             on_line = fabs(da - d) < tol && fabs(db - d) < tol && fabs(cr) < tol && dot > 0;
         }
         bad += !on_line;
+    }
+    /* a convex cell's mitered offset is all of the intersection of its edges'
+     * inner half-planes shifted by d (Sutherland-Hodgman clipping here):
+     * equal areas, so no edge was dropped too early */
+    {
+        amp_vec2 h[2][64];
+        size_t nh = n, cur = 0, convex = 1;
+        for (e = 0; e < n; e++)
+            convex &= cross_sign(c[e], c[(e + 1) % n], c[(e + 2) % n]) >= 0;
+        for (i = 0; i < n; i++)
+            h[0][i] = c[i];
+        for (e = 0; convex && e < n; e++) {
+            amp_vec2 u = c[e], w = c[(e + 1) % n];
+            double l = hypot(w.x - u.x, w.y - u.y);
+            size_t nn = 0;
+            for (i = 0; i < nh; i++) {
+                amp_vec2 p = h[cur][i], q = h[cur][(i + 1) % nh];
+                double sp = ((w.x - u.x) * (p.y - u.y) - (w.y - u.y) * (p.x - u.x)) / l - d;
+                double sq = ((w.x - u.x) * (q.y - u.y) - (w.y - u.y) * (q.x - u.x)) / l - d;
+                ck_assert_uint_lt(nn + 2, 64);
+                if (sp >= 0)
+                    h[1 - cur][nn++] = p;
+                if ((sp >= 0) != (sq >= 0))
+                    h[1 - cur][nn++] = amp_v2(p.x + (q.x - p.x) * sp / (sp - sq), p.y + (q.y - p.y) * sp / (sp - sq));
+            }
+            cur = 1 - cur;
+            nh = nn;
+        }
+        if (convex && fabs(amp_ring_area(h[cur], nh) - amp_ring_area(m, nm)) > 1e-9 * (1 + fabs(amp_ring_area(c, n))))
+            bad++;
     }
     return bad;
 }
@@ -741,6 +772,50 @@ START_TEST(generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim
 }
 END_TEST
 
+START_TEST(offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes)
+{
+    unsigned seed = 4242;
+    int trial, ok = 0, changed = 0;
+    for (trial = 0; trial < 300; trial++) {
+        amp_vec2 pts[12], hull[12];
+        size_t n, j;
+        uint32_t idx[12];
+        amp_cx2 k, kh;
+        amp_euler_opts o;
+        amp_euler_stats st;
+        amp_error err;
+        for (j = 0; j < 12; j++) {
+            double t, rr;
+            seed = seed * 1103515245u + 12345u;
+            t = 2 * PI * ((seed >> 8) % 10000) / 10000.0;
+            seed = seed * 1103515245u + 12345u;
+            rr = 1 + 0.4 * ((seed >> 8) % 1000) / 1000.0;
+            pts[j] = amp_v2(rr * 3 * cos(t), rr * 2 * sin(t));
+        }
+        ck_assert_int_eq(amp_convex_hull(pts, 12, NULL, hull, &n, NULL), AMP_OK);
+        amp_cx2_init(&k, NULL);
+        amp_cx2_init(&kh, NULL);
+        for (j = 0; j < n; j++)
+            ck_assert_int_eq(amp_cx2_add_vertex(&k, hull[j], &idx[j], NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_add_face(&k, idx, n, 0, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+        seed = seed * 1103515245u + 12345u;
+        o.offset = 0.1 + 1.2 * ((seed >> 8) % 1000) / 1000.0;
+        o.combinatorial = 1;
+        if (amp_euler_transform(&k, &o, &kh, &st, &err) == AMP_OK) {
+            ck_assert_msg(all_offset_violations(&k, &kh, o.offset) == 0, "trial %d", trial);
+            ok++;
+            changed += st.collapsed_edges > 1;
+        } else /* only the cell vanishing (n - 3 edges gone) is refused */
+            ck_assert_msg(strstr(err.msg, "vanish") != NULL, "%s", err.msg);
+        amp_cx2_free(&kh);
+        amp_cx2_free(&k);
+    }
+    ck_assert_int_gt(ok, 100);
+    ck_assert_int_gt(changed, 30); /* several edges dropped in one cell */
+}
+END_TEST
+
 START_TEST(combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair)
 {
     unsigned seed;
@@ -926,6 +1001,7 @@ static Suite *euler_suite(void)
     AMP_ADD_TEST(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
     AMP_ADD_TEST(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
     AMP_ADD_TEST(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
+    AMP_ADD_TEST(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
     AMP_ADD_TEST(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
     AMP_ADD_TEST(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
     AMP_ADD_TEST(tc, bad_inputs_are_rejected_with_reasons);
