@@ -816,6 +816,58 @@ START_TEST(offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_p
 }
 END_TEST
 
+START_TEST(offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes)
+{
+    unsigned seed = 777;
+    int trial, ok = 0, dropped = 0, split = 0;
+    for (trial = 0; trial < 300; trial++) {
+        amp_vec2 pts[12];
+        size_t n = 8 + trial % 5, j;
+        uint32_t idx[12];
+        amp_cx2 k, kh;
+        amp_euler_opts o;
+        amp_euler_stats st;
+        amp_error err;
+        int reflex = 0;
+        amp_cx2_init(&k, NULL);
+        amp_cx2_init(&kh, NULL);
+        /* star-shaped around the origin: vertex j at a random angle in
+         * sector j (0.95 of it, so neighbours come very close at times and
+         * leave short edges) and a random radius */
+        for (j = 0; j < n; j++) {
+            double t, rr;
+            seed = seed * 1103515245u + 12345u;
+            t = 2 * PI * (j + 0.95 * ((seed >> 8) % 1000) / 1000.0) / n;
+            seed = seed * 1103515245u + 12345u;
+            rr = 1 + 2 * ((seed >> 8) % 1000) / 1000.0;
+            pts[j] = amp_v2(rr * cos(t), rr * sin(t));
+        }
+        for (j = 0; j < n; j++)
+            ck_assert_int_eq(amp_cx2_add_vertex(&k, pts[j], &idx[j], NULL), AMP_OK);
+        for (j = 0; j < n; j++)
+            reflex += cross_sign(pts[j], pts[(j + 1) % n], pts[(j + 2) % n]) < 0;
+        ck_assert_int_eq(amp_cx2_add_face(&k, idx, n, 0, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+        seed = seed * 1103515245u + 12345u;
+        o.offset = 0.05 + 0.75 * ((seed >> 8) % 1000) / 1000.0;
+        o.combinatorial = 1;
+        if (amp_euler_transform(&k, &o, &kh, &st, &err) == AMP_OK) {
+            ck_assert_msg(all_offset_violations(&k, &kh, o.offset) == 0, "trial %d", trial);
+            ok++;
+            dropped += reflex && st.collapsed_edges > 0;
+        } else {
+            ck_assert_msg(strstr(err.msg, "topological change") != NULL, "%s", err.msg);
+            split += strstr(err.msg, "not simple") != NULL;
+        }
+        amp_cx2_free(&kh);
+        amp_cx2_free(&k);
+    }
+    ck_assert_int_gt(ok, 100);
+    ck_assert_msg(dropped > 30, "ok %d dropped %d split %d", ok, dropped, split);
+    ck_assert_int_gt(split, 0);    /* and splits detected */
+}
+END_TEST
+
 START_TEST(combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair)
 {
     unsigned seed;
@@ -1002,6 +1054,7 @@ static Suite *euler_suite(void)
     AMP_ADD_TEST(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
     AMP_ADD_TEST(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
     AMP_ADD_TEST(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
+    AMP_ADD_TEST(tc, offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes);
     AMP_ADD_TEST(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
     AMP_ADD_TEST(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
     AMP_ADD_TEST(tc, bad_inputs_are_rejected_with_reasons);
