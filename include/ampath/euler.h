@@ -1,6 +1,6 @@
 /*
  * ampath/euler.h — the Euler transformation of planar 2-complexes
- * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2).
+ * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2, Lemma 3.3).
  *
  * K̂ = T(K) consists of
  *   Class 1: the mitered offset f̂ of every 2-cell f of K (offset distance δ);
@@ -91,8 +91,9 @@ amp_status amp_euler_repair(const amp_cx2 *khat, amp_cx2 *out, amp_euler_repair_
  * (amp_euler_repair) is applied to it. The second pass uses an offset small
  * enough for the cells of that complex (a quarter of min(δ, shortest edge,
  * smallest 2·area/perimeter), halved until valid) without combinatorial
- * changes. The result has only even-degree vertices whenever the first
- * pass succeeds. Errors: those of amp_euler_transform() and
+ * changes (its input has no cell with two adjacent boundary edges), so on
+ * success every vertex of @p out has even degree (Def. 3.2; the tests check
+ * it with amp_cx2_check_even). Errors: those of amp_euler_transform() and
  * amp_euler_repair().
  */
 amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err);
