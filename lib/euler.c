@@ -1,5 +1,5 @@
 /* The Euler transformation of planar 2-complexes
- * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2). */
+ * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2, Lemma 3.3). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,15 +22,52 @@ typedef struct face_off {
     size_t *alive;  /* surviving edge indices, increasing */
     size_t nalive;
     size_t *corner; /* corner k -> offset vertex index */
-    amp_vec2 *dir, *base; /* unit direction and shifted point of each edge */
+    amp_vec2 *dir, *base; /* unit direction and start point of each edge */
+    amp_vec2 *corner_pt; /* scratch: the same vertices at time 0 */
 } face_off;
 
+/* Vertex between the offset lines of edges e0 and e1 (e1 follows e0) at
+ * offset time t; 0 for a reversal (antiparallel consecutive edges). */
+static int offset_vertex(const face_off *fo, size_t e0, size_t e1, double t, amp_vec2 *out)
+{
+    amp_vec2 d0 = fo->dir[e0], d1 = fo->dir[e1];
+    amp_vec2 p0 = amp_v2(fo->base[e0].x - t * d0.y, fo->base[e0].y + t * d0.x);
+    amp_vec2 p1 = amp_v2(fo->base[e1].x - t * d1.y, fo->base[e1].y + t * d1.x);
+    if (line_meet(p0, d0, p1, d1, out))
+        return 1;
+    /* a straight angle (e.g. a boundary vertex of a Class 3 cell lying on
+     * the segment of its neighbours): the miter is the corner shifted along
+     * the common normal */
+    if (d0.x * d1.x + d0.y * d1.y > 0) {
+        *out = p1;
+        return 1;
+    }
+    return 0;
+}
+
+/* Do segments ab and cd meet (proper crossing or touching)? */
+static int segs_meet(amp_vec2 a, amp_vec2 b, amp_vec2 c, amp_vec2 d)
+{
+    double o1 = amp_v2_orient(a, b, c), o2 = amp_v2_orient(a, b, d), o3 = amp_v2_orient(c, d, a),
+           o4 = amp_v2_orient(c, d, b);
+    if (((o1 > 0 && o2 < 0) || (o1 < 0 && o2 > 0)) && ((o3 > 0 && o4 < 0) || (o3 < 0 && o4 > 0)))
+        return 1;
+#define ON(p, q, r, o) ((o) == 0 && fmin(p.x, q.x) <= r.x && r.x <= fmax(p.x, q.x) && fmin(p.y, q.y) <= r.y && r.y <= fmax(p.y, q.y))
+    return ON(a, b, c, o1) || ON(a, b, d, o2) || ON(c, d, a, o3) || ON(c, d, b, o4);
+#undef ON
+}
+
 /*
- * Mitered offset of face f by delta (Class 1 cell, §1.3). Without
- * combinatorial changes every edge must keep its direction. With them (§3),
- * for convex cells an edge whose offset reverses is dropped and its
- * neighbours' offset lines are intersected instead, repeatedly, as long as
- * at least 3 edges remain ("we can reduce at most n-3 edges").
+ * Mitered offset of face f by delta (Class 1 cell, §1.3): the wavefront of
+ * the cell's edges moving inward at unit speed, at time delta. Without
+ * combinatorial changes every edge must keep a positive length. With them
+ * (§3) the edge events are simulated in time order: each edge's length is
+ * linear in time between events, the edge that reaches length 0 first is
+ * dropped and its neighbours' offset lines meet instead, as long as at
+ * least 3 edges remain ("we can reduce at most n-3 edges"). This holds for
+ * non-convex cells as well, as long as no reflex corner runs into another
+ * edge (a split event, a topological change): the offset of a non-convex
+ * cell must therefore be a simple polygon, otherwise it is rejected.
  */
 static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb, face_off *fo, amp_error *err)
 {
@@ -42,7 +79,7 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
         if (l == 0)
             return amp_fail(err, AMP_ERR_GEOMETRY, 0, "2-cell %lu has a zero-length edge", (unsigned long)f);
         fo->dir[i] = amp_v2(dx / l, dy / l);
-        fo->base[i] = amp_v2(p.x - delta * dy / l, p.y + delta * dx / l); /* shifted to the left (inside) */
+        fo->base[i] = p;
         fo->alive[i] = i;
         if (amp_v2_orient(p, q, k->v[k->fidx[a + (i + 2) % n]]) < 0)
             convex = 0;
@@ -50,28 +87,28 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
     fo->nalive = n;
     for (;;) {
         size_t worst = n, m = fo->nalive;
-        double wt = 0;
+        double wt = HUGE_VAL;
+        /* pt = vertices at time delta, len0 from the vertices at time 0 of
+         * the same lines (lengths are linear in time) */
         for (j = 0; j < m; j++) {
             size_t e0 = fo->alive[j], e1 = fo->alive[(j + 1) % m];
-            if (line_meet(fo->base[e0], fo->dir[e0], fo->base[e1], fo->dir[e1], &fo->pt[j]))
-                continue;
-            /* a straight angle (e.g. a boundary vertex of a Class 3 cell lying
-             * on the segment of its neighbours): the miter is the corner
-             * shifted along the common normal */
-            if (fo->dir[e0].x * fo->dir[e1].x + fo->dir[e0].y * fo->dir[e1].y > 0)
-                fo->pt[j] = fo->base[e1];
-            else
+            if (!offset_vertex(fo, e0, e1, delta, &fo->pt[j]) || !offset_vertex(fo, e0, e1, 0, &fo->corner_pt[j]))
                 return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu degenerates (parallel edges)",
                                 delta, (unsigned long)f);
         }
         /* an offset edge runs from the vertex before it to the vertex after it */
         for (j = 0; j < m; j++) {
-            size_t e = fo->alive[j];
-            amp_vec2 s = fo->pt[(j + m - 1) % m], t = fo->pt[j];
+            size_t e = fo->alive[j], jp = (j + m - 1) % m;
+            amp_vec2 s = fo->pt[jp], t = fo->pt[j], s0 = fo->corner_pt[jp], t0 = fo->corner_pt[j];
             double len = (t.x - s.x) * fo->dir[e].x + (t.y - s.y) * fo->dir[e].y;
-            if (len <= 1e-12 * (1 + delta) && (worst == n || len < wt)) {
+            double l0 = (t0.x - s0.x) * fo->dir[e].x + (t0.y - s0.y) * fo->dir[e].y, when;
+            if (len > 1e-12 * (1 + delta))
+                continue;
+            /* time at which this edge reaches length 0 */
+            when = l0 - len > 0 ? delta * fmax(l0, 0) / (l0 - len) : 0;
+            if (worst == n || when < wt) {
                 worst = j;
-                wt = len;
+                wt = when;
             }
         }
         if (worst == n)
@@ -80,8 +117,6 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
             return amp_fail(err, AMP_ERR_GEOMETRY, 0,
                             "mitered offset %g of 2-cell %lu changes combinatorially (edge %lu collapses)", delta,
                             (unsigned long)f, (unsigned long)fo->alive[worst]);
-        if (!convex)
-            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "combinatorial change in non-convex 2-cell %lu", (unsigned long)f);
         if (m <= 3)
             return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g makes 2-cell %lu vanish (topological change)",
                             delta, (unsigned long)f);
@@ -102,6 +137,19 @@ static amp_status miter_face(const amp_cx2 *k, size_t f, double delta, int comb,
     if (amp_ring_area(fo->pt, fo->nalive) <= 0)
         return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mitered offset %g of 2-cell %lu is inverted", delta,
                         (unsigned long)f);
+    /* a reflex corner that ran into another edge leaves a self-intersecting
+     * offset: a split (topological change, future work in the paper) */
+    for (i = 0; !convex && i < fo->nalive; i++)
+        for (j = i + 2; j < fo->nalive; j++) {
+            size_t m = fo->nalive;
+            if (i == 0 && j == m - 1)
+                continue;
+            if (segs_meet(fo->pt[(i + m - 1) % m], fo->pt[i], fo->pt[(j + m - 1) % m], fo->pt[j]))
+                return amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                                "mitered offset %g of non-convex 2-cell %lu is not simple (a reflex corner crosses "
+                                "an edge: topological change)",
+                                delta, (unsigned long)f);
+        }
     return AMP_OK;
 }
 
@@ -125,8 +173,12 @@ static amp_status add_cell(amp_cx2 *out, uint32_t *v, size_t n, int cls, int *co
     return AMP_OK;
 }
 
-amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
-                               amp_error *err)
+/* T(K) (§1.3). @p bmap_out (optional, k->nv entries) receives, for every
+ * boundary vertex of K, its index in K̂ (UINT32_MAX for the others): the
+ * boundary of K is kept as it is, which is what lets Lemma 3.3 glue a
+ * transformed sub-complex back into its surroundings. */
+static amp_status transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                            uint32_t *bmap_out, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
     amp_euler_stats s0;
@@ -154,13 +206,14 @@ amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx
     fo.corner = amp_alloc(al, maxn * sizeof *fo.corner);
     fo.dir = amp_alloc(al, maxn * sizeof *fo.dir);
     fo.base = amp_alloc(al, maxn * sizeof *fo.base);
+    fo.corner_pt = amp_alloc(al, maxn * sizeof *fo.corner_pt);
     cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *cmap);
-    bmap = amp_alloc(al, (k->nv + 1) * sizeof *bmap);
+    bmap = bmap_out ? bmap_out : amp_alloc(al, (k->nv + 1) * sizeof *bmap);
     loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *loop);
     vstart = amp_calloc(al, k->nv + 2, sizeof *vstart);
     vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *vhe);
     seen = amp_calloc(al, k->nfidx + 1, 1);
-    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !cmap || !bmap || !loop || !vstart || !vhe ||
+    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !fo.corner_pt || !cmap || !bmap || !loop || !vstart || !vhe ||
         !seen) {
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Euler transformation");
         goto done;
@@ -249,8 +302,10 @@ done:
     amp_free(al, fo.corner);
     amp_free(al, fo.dir);
     amp_free(al, fo.base);
+    amp_free(al, fo.corner_pt);
     amp_free(al, cmap);
-    amp_free(al, bmap);
+    if (bmap != bmap_out)
+        amp_free(al, bmap);
     amp_free(al, loop);
     amp_free(al, vstart);
     amp_free(al, vhe);
@@ -258,6 +313,12 @@ done:
     if (st)
         *st = s0;
     return rc;
+}
+
+amp_status amp_euler_transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_euler_stats *st,
+                               amp_error *err)
+{
+    return transform(k, o, out, st, NULL, err);
 }
 
 /* A quarter of the smallest feature of k: shortest edge and 2*area/perimeter. */
@@ -282,32 +343,245 @@ static double feature_size(const amp_cx2 *k)
     return best;
 }
 
-amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err)
+/* T(K) without combinatorial changes at offset delta, halved (up to 8
+ * times) until every mitered offset is valid: the passes of Def. 3.2 after
+ * the first one only need some offset small enough for their cells. */
+static amp_status transform_fitting(const amp_cx2 *k, double delta, amp_cx2 *out, uint32_t *bmap, amp_error *err)
 {
-    amp_cx2 mid;
-    amp_euler_stats st;
-    amp_euler_opts o2;
-    amp_status rc;
+    amp_euler_opts o;
+    amp_status rc = AMP_ERR_GEOMETRY;
     int tries;
-    amp_cx2_init(&mid, out->alloc);
-    /* Def. 3.2: apply the transformation twice */
-    rc = amp_euler_transform(k, o, &mid, &st, err);
-    if (rc == AMP_OK && st.collapsed_class2)
-        rc = amp_fail(err, AMP_ERR_UNSUPPORTED, 0,
-                      "%lu Class 2 cells collapsed to edges: the local repair of Lemma 3.3 is not implemented",
-                      (unsigned long)st.collapsed_class2);
-    if (rc != AMP_OK) {
-        amp_cx2_free(&mid);
-        return rc;
-    }
-    o2.combinatorial = 0;
-    o2.offset = 0.25 * fmin(o->offset, feature_size(&mid));
+    o.combinatorial = 0;
+    o.offset = delta;
     for (tries = 0; tries < 8; tries++) {
-        rc = amp_euler_transform(&mid, &o2, out, NULL, err);
+        rc = transform(k, &o, out, NULL, bmap, err);
         if (rc != AMP_ERR_GEOMETRY)
             break;
-        o2.offset *= 0.5;
+        o.offset *= 0.5;
     }
+    return rc;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t s = *(const uint64_t *)a, t = *(const uint64_t *)b;
+    return s < t ? -1 : (s > t ? 1 : 0);
+}
+
+static uint64_t edge_key(uint32_t a, uint32_t b)
+{
+    return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
+}
+
+static size_t uf_find(size_t *par, size_t x)
+{
+    while (par[x] != x)
+        x = par[x] = par[par[x]];
+    return x;
+}
+
+/*
+ * Lemma 3.3. k̂ = the Class 3 cells sharing a collapsed Class 2 edge ê (in
+ * T(K), ê joins the merged copies P_f = Q_f and P_g = Q_g, so it is the edge
+ * between the Class 3 cells of P and Q, and the free 1-cell only repeats it).
+ * Every vertex of k̂ lies on its boundary (it is a copy in a Class 1 cell or
+ * a boundary vertex of K, never surrounded by Class 3 cells alone) and has an
+ * even number of K̂ edges outside k̂ (proof of Lemma 3.3). T(T(k̂)) (Def. 3.2)
+ * keeps k̂'s boundary vertices and edges and gives each of them degree 4 per
+ * fan, so (K̂ \ k̂) ∪ T(T(k̂)) has even degrees wherever T(K) had only the
+ * odd vertices of collapsed Class 2 cells. The components k̂_j are
+ * transformed together: T is local (one cell per cell, edge and vertex of
+ * k̂, fans taken one by one at a vertex shared by two components), so this
+ * equals transforming each k̂_j (each k̃_i) on its own.
+ */
+amp_status amp_euler_repair(const amp_cx2 *khat, amp_cx2 *out, amp_euler_repair_stats *st, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    amp_euler_repair_stats s0;
+    amp_cx2 sub, t1, t2;
+    uint64_t *keys = NULL;
+    unsigned char *mark = NULL, *cover = NULL;
+    uint32_t *vmap = NULL, *vback = NULL, *bmap1 = NULL, *bmap2 = NULL, *tmap = NULL, *loop = NULL;
+    size_t *par = NULL;
+    size_t i, f, h, maxn = 3;
+    amp_status rc = AMP_OK;
+    memset(&s0, 0, sizeof s0);
+    if (st)
+        *st = s0;
+    if (out == khat)
+        return amp_fail(err, AMP_ERR_ARG, 0, "Lemma 3.3 repair needs distinct input and output complexes");
+    amp_cx2_free(out);
+    if (!khat->built || (khat->nf && !khat->he_twin))
+        return amp_fail(err, AMP_ERR_STATE, 0, "complex topology not built (amp_cx2_build)");
+    amp_cx2_init(&sub, al);
+    amp_cx2_init(&t1, al);
+    amp_cx2_init(&t2, al);
+    for (f = 0; f < khat->nf; f++)
+        if (amp_cx2_face_size(khat, f) > maxn)
+            maxn = amp_cx2_face_size(khat, f);
+    keys = amp_alloc(al, (khat->nxe + 1) * sizeof *keys);
+    cover = amp_calloc(al, khat->nxe + 1, 1);
+    mark = amp_calloc(al, khat->nf + 1, 1);
+    par = amp_alloc(al, (khat->nf + 1) * sizeof *par);
+    vmap = amp_alloc(al, (khat->nv + 1) * sizeof *vmap);
+    loop = amp_alloc(al, (maxn + 1) * sizeof *loop);
+    if (!keys || !cover || !mark || !par || !vmap || !loop) {
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        goto done;
+    }
+    for (i = 0; i < khat->nxe; i++)
+        keys[i] = edge_key(khat->xedge[2 * i], khat->xedge[2 * i + 1]);
+    if (khat->nxe > 1)
+        qsort(keys, khat->nxe, sizeof *keys, cmp_u64);
+    /* k̂: the cells with a collapsed edge ê */
+    for (h = 0; h < khat->nfidx && khat->nxe; h++) {
+        uint64_t key = edge_key(khat->fidx[h], khat->fidx[amp_cx2_he_next(khat, h)]);
+        const uint64_t *hit = bsearch(&key, keys, khat->nxe, sizeof *keys, cmp_u64);
+        if (!hit)
+            continue;
+        f = khat->he_face[h];
+        if (khat->fclass[f] != AMP_CELL_CLASS3) {
+            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                          "free edge %lu-%lu lies on a 2-cell of class %d, not between Class 3 cells (Lemma 3.3)",
+                          (unsigned long)(key >> 32), (unsigned long)(key & 0xffffffffu), khat->fclass[f]);
+            goto done;
+        }
+        mark[f] = 1;
+        cover[hit - keys] = 1;
+    }
+    for (i = 0; i < khat->nxe; i++)
+        if (!cover[i]) {
+            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                          "free edge %lu-%lu is in no 2-cell: not a Class 2 cell collapsed between Class 3 cells "
+                          "(Lemma 3.3)",
+                          (unsigned long)(keys[i] >> 32), (unsigned long)(keys[i] & 0xffffffffu));
+            goto done;
+        }
+    /* components k̂_j: marked cells joined by shared edges */
+    for (f = 0; f < khat->nf; f++)
+        par[f] = f;
+    for (h = 0; h < khat->nfidx; h++) {
+        size_t t = khat->he_twin[h];
+        if (t != AMP_CX2_NONE && mark[khat->he_face[h]] && mark[khat->he_face[t]])
+            par[uf_find(par, khat->he_face[h])] = uf_find(par, khat->he_face[t]);
+    }
+    /* the sub-complex k̂ on its own vertices */
+    for (i = 0; i < khat->nv; i++)
+        vmap[i] = UINT32_MAX;
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++) {
+        size_t a = khat->fstart[f], n = khat->fstart[f + 1] - a, j;
+        if (!mark[f])
+            continue;
+        s0.cells++;
+        s0.components += uf_find(par, f) == f;
+        for (j = 0; j < n && rc == AMP_OK; j++) {
+            uint32_t v = khat->fidx[a + j];
+            if (vmap[v] == UINT32_MAX)
+                rc = amp_cx2_add_vertex(&sub, khat->v[v], &vmap[v], err);
+            loop[j] = vmap[v];
+        }
+        if (rc == AMP_OK)
+            rc = amp_cx2_add_face(&sub, loop, n, AMP_CELL_INPUT, err);
+    }
+    s0.collapsed_edges = khat->nxe;
+    if (rc == AMP_OK && sub.nf) {
+        vback = amp_alloc(al, sub.nv * sizeof *vback);
+        bmap1 = amp_alloc(al, sub.nv * sizeof *bmap1);
+        if (!vback || !bmap1)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        for (i = 0; i < khat->nv && rc == AMP_OK; i++)
+            if (vmap[i] != UINT32_MAX)
+                vback[vmap[i]] = (uint32_t)i;
+        if (rc == AMP_OK)
+            rc = amp_cx2_build(&sub, err);
+        /* Def. 3.2 on k̂: T(T(k̂)), offsets a quarter of the smallest feature */
+        if (rc == AMP_OK)
+            rc = transform_fitting(&sub, 0.25 * feature_size(&sub), &t1, bmap1, err);
+        if (rc == AMP_OK && !(bmap2 = amp_alloc(al, t1.nv * sizeof *bmap2)))
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        if (rc == AMP_OK)
+            rc = transform_fitting(&t1, 0.25 * feature_size(&t1), &t2, bmap2, err);
+        if (rc == AMP_OK && !(tmap = amp_alloc(al, (t2.nv + 1) * sizeof *tmap)))
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+        if (rc == AMP_OK) {
+            /* boundary vertices of k̂ survive both passes: glue them back */
+            for (i = 0; i < t2.nv; i++)
+                tmap[i] = UINT32_MAX;
+            for (i = 0; i < sub.nv; i++) {
+                uint32_t u = bmap1[i];
+                if (u == UINT32_MAX || bmap2[u] == UINT32_MAX) {
+                    rc = amp_fail(err, AMP_ERR_GEOMETRY, 0, "vertex %lu is inside the Class 3 sub-complex (Lemma 3.3)",
+                                  (unsigned long)vback[i]);
+                    break;
+                }
+                tmap[bmap2[u]] = vback[i];
+            }
+        }
+    }
+    /* (K̂ \ k̂) ∪ T(T(k̂)); the free edges ê are inside k̂ and go with it */
+    for (i = 0; i < khat->nv && rc == AMP_OK; i++)
+        rc = amp_cx2_add_vertex(out, khat->v[i], NULL, err);
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++)
+        if (!mark[f])
+            rc = amp_cx2_add_face(out, khat->fidx + khat->fstart[f], amp_cx2_face_size(khat, f), khat->fclass[f], err);
+    for (i = 0; i < t2.nv && rc == AMP_OK; i++)
+        if (tmap[i] == UINT32_MAX)
+            rc = amp_cx2_add_vertex(out, t2.v[i], &tmap[i], err);
+    for (f = 0; f < t2.nf && rc == AMP_OK; f++) {
+        size_t a = t2.fstart[f], n = t2.fstart[f + 1] - a, j;
+        uint32_t *lp = n <= maxn ? loop : NULL;
+        if (!lp && !(lp = amp_alloc(al, n * sizeof *lp))) {
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+            break;
+        }
+        for (j = 0; j < n; j++)
+            lp[j] = tmap[t2.fidx[a + j]];
+        rc = amp_cx2_add_face(out, lp, n, t2.fclass[f], err);
+        if (lp != loop)
+            amp_free(al, lp);
+    }
+    if (rc == AMP_OK)
+        rc = amp_cx2_build(out, err);
+done:
+    if (rc != AMP_OK)
+        amp_cx2_free(out);
+    else if (st)
+        *st = s0;
+    amp_cx2_free(&sub);
+    amp_cx2_free(&t1);
+    amp_cx2_free(&t2);
+    amp_free(al, keys);
+    amp_free(al, cover);
+    amp_free(al, mark);
+    amp_free(al, par);
+    amp_free(al, vmap);
+    amp_free(al, vback);
+    amp_free(al, bmap1);
+    amp_free(al, bmap2);
+    amp_free(al, tmap);
+    amp_free(al, loop);
+    return rc;
+}
+
+amp_status amp_euler_generalized(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *out, amp_error *err)
+{
+    amp_cx2 mid, rep;
+    amp_euler_stats st;
+    amp_status rc;
+    amp_cx2_init(&mid, out->alloc);
+    amp_cx2_init(&rep, out->alloc);
+    /* Def. 3.2: apply the transformation twice */
+    rc = amp_euler_transform(k, o, &mid, &st, err);
+    /* collapsed Class 2 cells (free edges): Lemma 3.3's local repair first,
+     * which also makes the complex pure again for the second pass */
+    if (rc == AMP_OK && st.collapsed_class2) {
+        rc = amp_euler_repair(&mid, &rep, NULL, err);
+        amp_cx2_free(&mid);
+        mid = rep;
+        amp_cx2_init(&rep, out->alloc);
+    }
+    if (rc == AMP_OK)
+        rc = transform_fitting(&mid, 0.25 * fmin(o->offset, feature_size(&mid)), out, NULL, err);
     amp_cx2_free(&mid);
     return rc;
 }

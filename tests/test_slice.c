@@ -260,6 +260,13 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid tri --json", stl);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"euler\":true") != NULL, "%s", out);
+    /* one pass with combinatorial changes: the lattice never collapses a
+     * Class 2 cell, so Lemma 3.3 repairs nothing; rim cells stay odd */
+    snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid hex --single --combinatorial --json", stl);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"collapsed_class2\":0") != NULL && strstr(out, "\"repaired_cells\":0") != NULL &&
+                      strstr(out, "\"euler\":false") != NULL,
+                  "%s", out);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid pentagon", stl);
     ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
     remove(stl);

@@ -16,14 +16,17 @@ const char cmd_euler_usage[] =
     "  --grid KIND        square (default), tri or hex lattice covering the convex hull of the\n"
     "                     union of all layers' polygons (paper 2 §2.2 steps 2-3)\n"
     "  --offset D         mitered offset of the transformation in mm (default: S/5)\n"
-    "  --single           apply the transformation once (§1.3); the default is the generalized\n"
+    "  --single           apply the transformation once (§1.3), plus Lemma 3.3's local repair\n"
+    "                     where Class 2 cells collapse; the default is the generalized\n"
     "                     transformation T(T(K)) (Def. 3.2), Euler even at rim cells with\n"
     "                     adjacent boundary edges\n"
-    "  --combinatorial    let mitered offsets drop collapsing edges (§3, Lemma 3.1)\n"
+    "  --combinatorial    let mitered offsets drop collapsing edges (§3, Lemma 3.1); Class 2\n"
+    "                     cells collapsed to edges are repaired (Lemma 3.3)\n"
     "  --layer-index I    layer whose polygons are drawn (default: the middle layer); --z Z picks\n"
     "                     the layer cut nearest to Z mm\n"
     "  -o OUT.svg         the picture: layer polygons (purple), K (grey), K-hat (green)\n"
-    "  --json             figures: cells, edges and vertices of K and K-hat, odd vertices, time\n"
+    "  --json             figures: cells, edges and vertices of K and K-hat, odd vertices,\n"
+    "                     collapsed Class 2 cells and repaired Class 3 cells (--single), time\n"
     "Exit status 1 when the generalized transformation leaves a vertex of odd degree.\n";
 
 static void report(cli_json *j, const char *key, const amp_cx2_report *r)
@@ -46,7 +49,9 @@ int cmd_euler(int argc, char **argv)
     const char *pos[1], *out = NULL, *grid = "square";
     amp_mesh m;
     amp_slices sl;
-    amp_cx2 k, kh;
+    amp_cx2 k, kh, k1;
+    amp_euler_stats est;
+    amp_euler_repair_stats ers;
     amp_cx2_report rk, rh;
     amp_euler_opts eo;
     amp_grid_kind kind;
@@ -82,6 +87,9 @@ int cmd_euler(int argc, char **argv)
     amp_slices_init(&sl, NULL);
     amp_cx2_init(&k, NULL);
     amp_cx2_init(&kh, NULL);
+    amp_cx2_init(&k1, NULL);
+    memset(&est, 0, sizeof est);
+    memset(&ers, 0, sizeof ers);
     amp_error_clear(&err);
     rc = slicetool_load("euler", pos[0], layer, first, &m, &sl, &flipped);
     if (rc != CLI_OK)
@@ -108,7 +116,12 @@ int cmd_euler(int argc, char **argv)
     eo.combinatorial = comb;
     /* steps 3-4: K, then K̂ */
     if (amp_convex_hull(pts, npts, NULL, hull, &nh, &err) != AMP_OK || amp_cx2_grid(&k, hull, nh, cell, kind, &err) != AMP_OK ||
-        (single ? amp_euler_transform(&k, &eo, &kh, NULL, &err) : amp_euler_generalized(&k, &eo, &kh, &err)) != AMP_OK) {
+        (single ? amp_euler_transform(&k, &eo, &k1, &est, &err) : amp_euler_generalized(&k, &eo, &kh, &err)) != AMP_OK) {
+        rc = cli_fail_err("euler", &err);
+        goto done;
+    }
+    /* one pass: collapsed Class 2 cells get Lemma 3.3's local repair */
+    if (single && amp_euler_repair(&k1, &kh, &ers, &err) != AMP_OK) {
         rc = cli_fail_err("euler", &err);
         goto done;
     }
@@ -159,6 +172,10 @@ int cmd_euler(int argc, char **argv)
         cli_json_num(&j, "cell", cell);
         cli_json_num(&j, "offset", eo.offset);
         cli_json_str(&j, "transform", single ? "single" : "generalized");
+        if (single) {
+            cli_json_int(&j, "collapsed_class2", (long long)est.collapsed_class2);
+            cli_json_int(&j, "repaired_cells", (long long)ers.cells);
+        }
         report(&j, "K", &rk);
         report(&j, "K_hat", &rh);
         cli_json_bool(&j, "euler", rh.odd_vertices == 0);
@@ -175,6 +192,7 @@ done:
     amp_free(NULL, hull);
     amp_cx2_free(&k);
     amp_cx2_free(&kh);
+    amp_cx2_free(&k1);
     amp_slices_free(&sl);
     amp_mesh_free(&m);
     return rc;
