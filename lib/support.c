@@ -180,6 +180,14 @@ static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_hea
     return best;
 }
 
+/* Support fragment f has no gouge-free slot: mark it left out and count it. */
+static void leave_out(const amp_fragments *fs, uint32_t *late, size_t f, amp_support_stats *s)
+{
+    late[f] = LEFT_OUT;
+    s->conflicts++;
+    s->trimmed += amp_v3_dist(fs->frag[f].p0, fs->frag[f].p1);
+}
+
 /* A piece of a support row: fragments [f0, f1) printed together just before object path pos. */
 typedef struct piece {
     size_t f0, f1;
@@ -425,9 +433,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
                 }
                 if (nany && nlo != NOPATH && nhi >= nlo) {
                     if (f == pc.f0) { /* no slot even alone */
-                        late[f] = LEFT_OUT;
-                        s.conflicts++;
-                        s.trimmed += amp_v3_dist(fs.frag[f].p0, fs.frag[f].p1);
+                        leave_out(&fs, late, f, &s);
                         pc.f0 = f + 1;
                         continue;
                     }
@@ -455,11 +461,8 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     for (i = 0; i < npc; i++) {
         size_t f;
         for (f = pcs[i].f0; f < pcs[i].f1; f++)
-            if (late[f] != NOPATH && late[f] != LEFT_OUT && pcs[i].pos != NOPATH && late[f] >= pcs[i].pos) {
-                late[f] = LEFT_OUT;
-                s.conflicts++;
-                s.trimmed += amp_v3_dist(fs.frag[f].p0, fs.frag[f].p1);
-            }
+            if (late[f] != NOPATH && late[f] != LEFT_OUT && pcs[i].pos != NOPATH && late[f] >= pcs[i].pos)
+                leave_out(&fs, late, f, &s);
     }
     /* emit: the pieces of object path k (in the order they were made) right before it, unplaced ones last */
     {
