@@ -38,7 +38,18 @@ amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err)
     ps->paths[ps->npaths].role = role;
     ps->paths[ps->npaths].first = ps->nverts;
     ps->paths[ps->npaths].n = 0;
+    ps->paths[ps->npaths].h = 0.0;
     ps->npaths++;
+    return AMP_OK;
+}
+
+amp_status amp_pathset_set_height(amp_pathset *ps, double h, amp_error *err)
+{
+    if (ps->npaths == 0)
+        return amp_fail(err, AMP_ERR_STATE, 0, "amp_pathset_set_height: no path begun");
+    if (!isfinite(h) || h < 0.0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "bead height %g is negative or not finite", h);
+    ps->paths[ps->npaths - 1].h = h;
     return AMP_OK;
 }
 
@@ -80,6 +91,7 @@ amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_erro
         amp_status st = amp_pathset_add(dst, src->paths[i].role, amp_pathset_path_verts(src, i), src->paths[i].n, err);
         if (st != AMP_OK)
             return st;
+        dst->paths[dst->npaths - 1].h = src->paths[i].h;
     }
     return AMP_OK;
 }
@@ -104,9 +116,18 @@ double amp_pathset_length(const amp_pathset *ps, int role)
     return len;
 }
 
-double amp_pathset_volume(const amp_pathset *ps, int role)
+double amp_bead_area(double r, double h)
 {
     const double pi = 3.14159265358979323846;
+    double w = 2.0 * r;
+    /* SPEC §5: a slicer's rounded rectangle; narrower than high it is a tube */
+    if (h > 0.0 && w >= h)
+        return (w - h) * h + pi * 0.25 * h * h;
+    return pi * r * r;
+}
+
+double amp_pathset_volume(const amp_pathset *ps, int role)
+{
     double vol = 0.0;
     size_t i, k;
     for (i = 0; i < ps->npaths; i++) {
@@ -115,7 +136,7 @@ double amp_pathset_volume(const amp_pathset *ps, int role)
             continue;
         for (k = 1; k < ps->paths[i].n; k++) {
             double r = 0.5 * (v[k - 1].r + v[k].r);
-            vol += pi * r * r * amp_v3_dist(v[k - 1].p, v[k].p);
+            vol += amp_bead_area(r, ps->paths[i].h) * amp_v3_dist(v[k - 1].p, v[k].p);
         }
     }
     return vol;
@@ -180,8 +201,9 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
         if (amp_lex_is(&lx, 0, "path")) {
             amp_role role;
             long n;
-            if (lx.ntok != 3) {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n>'", lx.line);
+            double h = 0.0;
+            if (lx.ntok != 3 && lx.ntok != 4) {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n> [<h>]'", lx.line);
                 break;
             }
             if (amp_lex_is(&lx, 1, "object"))
@@ -194,11 +216,18 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
                 break;
             }
             st = amp_lex_long(&lx, 2, 0, (long)AMP_PATH_MAX_VERTS, &n, err);
+            if (st == AMP_OK && lx.ntok == 4)
+                st = amp_lex_double(&lx, 3, &h, err);
             if (st != AMP_OK)
                 break;
+            if (lx.ntok == 4 && !(h > 0.0)) {
+                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: bead height %g must be positive", lx.line, h);
+                break;
+            }
             st = amp_pathset_begin(ps, role, err);
             if (st != AMP_OK)
                 break;
+            ps->paths[ps->npaths - 1].h = h;
             remaining = n;
             continue;
         }
@@ -259,8 +288,11 @@ amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sin
         st = write_comment(comment, sink, user);
     for (i = 0; st == AMP_OK && i < ps->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        st = amp_sinkf(sink, user, "path %s %lu\n", ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object",
-                       (unsigned long)ps->paths[i].n);
+        const char *role = ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object";
+        if (ps->paths[i].h > 0.0)
+            st = amp_sinkf(sink, user, "path %s %lu %.10g\n", role, (unsigned long)ps->paths[i].n, ps->paths[i].h);
+        else
+            st = amp_sinkf(sink, user, "path %s %lu\n", role, (unsigned long)ps->paths[i].n);
         for (k = 0; st == AMP_OK && k < ps->paths[i].n; k++)
             st = amp_sinkf(sink, user, "%.10g %.10g %.10g %.10g\n", v[k].p.x, v[k].p.y, v[k].p.z, v[k].r);
     }

@@ -48,6 +48,42 @@ START_TEST(roundtrip_preserves_paths_roles_and_radii)
 }
 END_TEST
 
+START_TEST(bead_height_roundtrips_and_sets_the_planar_cross_section)
+{
+    const double pi = 3.14159265358979323846;
+    amp_pathset ps, back, copy;
+    amp_buf buf;
+    amp_error err;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&back, NULL);
+    amp_pathset_init(&copy, NULL);
+    amp_buf_init(&buf, NULL);
+    /* a 10 mm planar bead 0.45 wide, 0.2 high, then the same line as a tube */
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_set_height(&ps, 0.2, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(0, 0, 0.2), 0.225, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(10, 0, 0.2), 0.225, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_add(&ps, AMP_ROLE_OBJECT, ps.verts, 2, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_set_height(&ps, -1, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_pathset_write(&ps, NULL, amp_buf_sink, &buf, &err), AMP_OK);
+    ck_assert_ptr_nonnull(strstr(buf.data, "path object 2 0.2\n"));
+    ck_assert_ptr_nonnull(strstr(buf.data, "path object 2\n"));
+    ck_assert_int_eq(amp_pathset_parse(&back, buf.data, buf.len, &err), AMP_OK);
+    ck_assert_double_eq(back.paths[0].h, 0.2);
+    ck_assert_double_eq(back.paths[1].h, 0.0);
+    ck_assert_int_eq(amp_pathset_append(&copy, &back, &err), AMP_OK);
+    ck_assert_double_eq(copy.paths[0].h, 0.2);
+    /* rounded rectangle (w - h) h + pi (h/2)^2, against pi r^2 for the tube */
+    ck_assert_near(amp_bead_area(0.225, 0.2), 0.25 * 0.2 + pi * 0.01, 1e-15);
+    ck_assert_near(amp_bead_area(0.05, 0.2), pi * 0.0025, 1e-15);
+    ck_assert_near(amp_pathset_volume(&copy, -1), 10 * (0.25 * 0.2 + pi * 0.01) + 10 * pi * 0.225 * 0.225, 1e-12);
+    amp_buf_free(&buf);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&back);
+    amp_pathset_free(&copy);
+}
+END_TEST
+
 START_TEST(parser_accepts_comments_crlf_and_blank_lines)
 {
     amp_pathset ps;
@@ -83,6 +119,10 @@ static const struct bad_case {
     {"ampath-paths 1\npath object 1\n0 x1 0 0.5\n", 3, "not a number"},
     {"ampath-paths 1\n0 0 0 0.5\n", 2, "path <role>"},
     {"ampath-paths 1\npath object 99999999999999999999\n", 2, "integer"},
+    {"ampath-paths 1\npath object 1 0\n0 0 0 0.5\n", 2, "must be positive"},
+    {"ampath-paths 1\npath object 1 -0.2\n0 0 0 0.5\n", 2, "must be positive"},
+    {"ampath-paths 1\npath object 1 nan\n0 0 0 0.5\n", 2, "not finite"},
+    {"ampath-paths 1\npath object 1 0.2 7\n0 0 0 0.5\n", 2, "path <role>"},
 };
 
 START_TEST(parser_rejects_malformed_input_with_line_numbers)
@@ -182,6 +222,7 @@ static Suite *paths_suite(void)
     Suite *s = suite_create("paths");
     TCase *tc = tcase_create("amp");
     tcase_add_test(tc, roundtrip_preserves_paths_roles_and_radii);
+    tcase_add_test(tc, bead_height_roundtrips_and_sets_the_planar_cross_section);
     tcase_add_test(tc, parser_accepts_comments_crlf_and_blank_lines);
     tcase_add_loop_test(tc, parser_rejects_malformed_input_with_line_numbers, 0,
                         (int)(sizeof bad_cases / sizeof bad_cases[0]));

@@ -34,11 +34,17 @@ typedef struct amp_pvert {
     double r;
 } amp_pvert;
 
-/** One path: @p n vertices starting at index @p first of amp_pathset.verts. */
+/**
+ * One path: @p n vertices starting at index @p first of amp_pathset.verts.
+ * @p h > 0 makes it a planar bead of that height (mm): a layer of height h
+ * and width 2r (the continuous tool-path pipeline); h = 0 is a round tube of
+ * radius r (the volumetric paper's deposition model, [P1 §5.2]).
+ */
 typedef struct amp_path {
     amp_role role;
     size_t first;
     size_t n;
+    double h;
 } amp_path;
 
 /** Paths in print order sharing one vertex array. */
@@ -72,10 +78,17 @@ amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err);
  */
 amp_status amp_pathset_push(amp_pathset *ps, amp_vec3 p, double r, amp_error *err);
 
-/** Append a whole path (copies @p n vertices). Same errors as begin + push. */
+/**
+ * Make the last path a planar bead of height @p h mm (h > 0), or a tube again
+ * (h = 0). AMP_ERR_STATE if there is no path, AMP_ERR_ARG for a negative or
+ * non-finite @p h.
+ */
+amp_status amp_pathset_set_height(amp_pathset *ps, double h, amp_error *err);
+
+/** Append a whole path (copies @p n vertices; a tube, h = 0). Same errors as begin + push. */
 amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, size_t n, amp_error *err);
 
-/** Append copies of all paths of @p src to @p dst. */
+/** Append copies of all paths of @p src to @p dst (roles and bead heights kept). */
 amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err);
 
 /** Vertices of path @p i (no bounds check beyond an assert-free contract: i < npaths). */
@@ -89,16 +102,24 @@ static inline amp_pvert *amp_pathset_path_verts(const amp_pathset *ps, size_t i)
 double amp_path_length(const amp_pathset *ps, size_t i);
 /** Total length of all paths with @p role (role < 0: all paths). */
 double amp_pathset_length(const amp_pathset *ps, int role);
-/** Σ π r² L over all segments (r = mean of the segment's end radii): the deposited volume in mm³. */
+/**
+ * Σ A L over all segments (r = mean of the segment's end radii): the deposited
+ * volume in mm³, with A = π r² for a tube and, for a planar bead of height h
+ * and width w = 2r >= h, the rounded rectangle A = (w - h) h + π (h/2)²
+ * (w < h: π r²). Pseudo edges (r = 0) deposit nothing.
+ */
 double amp_pathset_volume(const amp_pathset *ps, int role);
+/** Cross-section (mm²) of a bead of radius @p r: a tube (h = 0) or a planar bead of height @p h (SPEC §5). */
+double amp_bead_area(double r, double h);
 /** Bounding box of all vertices (empty box when there are none). */
 amp_box3 amp_pathset_bbox(const amp_pathset *ps);
 
 /**
  * Parse `.amp` text (SPEC §3) of @p len bytes and append its paths to @p ps.
- * Accepts LF and CRLF, comments (`#` to end of line) anywhere, blank lines.
+ * Accepts LF and CRLF, comments (`#` to end of line) anywhere, blank lines,
+ * `path <role> <n>` and `path <role> <n> <h>` (planar bead height, > 0).
  * Errors (AMP_ERR_PARSE with the 1-based line in err->line): missing or wrong
- * header, unknown role, bad or missing vertex count, wrong number of fields,
+ * header, unknown role, bad or missing vertex count, bad bead height, wrong number of fields,
  * non-numeric or non-finite numbers, negative radius, fewer vertices than
  * announced, lines over 4096 bytes. On error @p ps is left as it was before
  * the call. The text need not be NUL-terminated.
@@ -109,8 +130,8 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
 amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err);
 
 /**
- * Write @p ps as `.amp` text through @p sink. Coordinates are written with
- * 10 significant digits (sub-micron for parts up to 1 m). @p comment, if not
+ * Write @p ps as `.amp` text through @p sink (`path <role> <n> [<h>]`, h
+ * only for planar beads). Coordinates are written with 10 significant digits (sub-micron for parts up to 1 m). @p comment, if not
  * NULL, is written as `# ` lines after the header (newlines allowed).
  */
 amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err);
