@@ -85,6 +85,7 @@ void cli_progress_end(cli_progress *p);
 double cli_now(void);
 
 /* ---- loaders that print their own errors (return CLI_OK or CLI_USAGE) ---- */
+/* cli_load_paths: on failure @p ps is freed (empty again), so callers may just return. */
 int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps);
 int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment);
 /*
