@@ -466,6 +466,130 @@ START_TEST(commands_exit_2_on_a_bad_path_file)
 }
 END_TEST
 
+/* ---- bounded work: ranges and estimates refuse before working (exit 2, the estimate said) ---- */
+
+/* Run the tool, expect @p rc, and (when @p needle) a message containing it. */
+static void expect_tool(const char *args, int rc, const char *needle)
+{
+    char out[8192];
+    int got = amp_test_run_tool_ex(args, NULL, 1, out, sizeof out);
+    ck_assert_msg(got == rc, "ampath %s: exit %d, expected %d; output: %.300s", args, got, rc, out);
+    if (needle)
+        ck_assert_msg(strstr(out, needle) != NULL, "ampath %s: no '%s' in: %.300s", args, needle, out);
+}
+
+START_TEST(nonsense_numbers_are_refused_by_the_option_parser)
+{
+    const char *dir = scratch_dir("ranges");
+    char args[1000], amp[300], stl[300], gc[300];
+    struct stat st;
+    snprintf(amp, sizeof amp, "%s/p.amp", dir);
+    snprintf(stl, sizeof stl, "%s/m.stl", dir);
+    snprintf(gc, sizeof gc, "%s/out.gcode", dir);
+    put_file(amp, "ampath-paths 1\npath object 2\n0 0 0.2 0.25\n10 0 0.2 0.25\n");
+    snprintf(args, sizeof args, "model twisted-bridge -o %s", stl);
+    expect_tool(args, 0, NULL);
+    /* --feed 1e-300 wrote F0 and estimated 2 s */
+    snprintf(args, sizeof args, "gcode %s --feed 1e-300 -o %s", amp, gc);
+    expect_tool(args, 2, "--feed must lie in");
+    ck_assert_int_ne(stat(gc, &st), 0); /* nothing written */
+    snprintf(args, sizeof args, "gcode %s --feed 0.1 -o %s", amp, gc); /* the bound itself is fine */
+    expect_tool(args, 0, NULL);
+    /* --layer 1e308 gave 0 layers and exit 0; 5.7e-6 reached 6.7 GB */
+    snprintf(args, sizeof args, "slice %s --layer 1e308", stl);
+    expect_tool(args, 2, "--layer must lie in");
+    snprintf(args, sizeof args, "slice %s --layer 5.7e-6", stl);
+    expect_tool(args, 2, "--layer must lie in");
+    snprintf(args, sizeof args, "field %s --field box --spacing 1e-300", stl);
+    expect_tool(args, 2, "--spacing must lie in");
+    expect_tool("cover vase --eps 1e-300 -o /dev/null", 2, "--eps must lie in");
+    expect_tool("model helix --tol 1e-9 -o /dev/null.stl", 2, "--tol must lie in");
+    expect_tool("preview x.amp --width 10 -o x.png", 2, "--width must lie in");
+    remove_dir(dir);
+}
+END_TEST
+
+START_TEST(cover_refuses_beyond_its_curve_estimate)
+{
+    const char *dir = scratch_dir("coverlimit");
+    char args[600], spl[300];
+    amp_spline v;
+    amp_error err;
+    amp_buf b;
+    size_t i;
+    FILE *f;
+    /* minutes or all memory before: now refused at once with the Lemma A.2 estimate */
+    expect_tool("cover helix --eps 0.02 -o /dev/null", 2, "refused: about");
+    expect_tool("cover helix --eps 0.02 -o /dev/null", 2, "--max-curves");
+    /* the estimate for vase at eps 2 is a few hundred curves (298 made): the limit decides */
+    expect_tool("cover vase --eps 2 --max-curves 100 -o /dev/null", 2, "refused: about");
+    expect_tool("cover vase --eps 2 --max-curves 5000 -o /dev/null", 0, NULL);
+    /* a trivariate 1e5 times the helix (kilometres) at eps 1 mm */
+    amp_error_clear(&err);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &v, &err), AMP_OK);
+    for (i = 0; i < v.ncp; i++) {
+        double w;
+        amp_vec3 p = amp_spline_cp_get(&v, i, &w);
+        amp_spline_cp_set(&v, i, amp_v3_scale(p, 1e5), w);
+    }
+    amp_buf_init(&b, NULL);
+    ck_assert_int_eq(amp_spline_write(&v, 1, amp_buf_sink, &b, &err), AMP_OK);
+    snprintf(spl, sizeof spl, "%s/huge.spl", dir);
+    f = fopen(spl, "w");
+    ck_assert_ptr_nonnull(f);
+    ck_assert_uint_eq(fwrite(b.data, 1, b.len, f), b.len);
+    ck_assert_int_eq(fclose(f), 0);
+    amp_buf_free(&b);
+    amp_spline_free(&v);
+    snprintf(args, sizeof args, "cover %s --eps 1 -o /dev/null", spl);
+    expect_tool(args, 2, "refused: about");
+    remove_dir(dir);
+}
+END_TEST
+
+START_TEST(slicing_refuses_beyond_its_segment_estimate)
+{
+    const char *dir = scratch_dir("slicelimit");
+    char args[600], tall[300], stl[300];
+    snprintf(tall, sizeof tall, "%s/tall.stl", dir);
+    snprintf(stl, sizeof stl, "%s/m.stl", dir);
+    /* a tetrahedron 100 m high: 1e8 layers of 1 um */
+    put_file(tall, "solid tall\n"
+                   "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 10 0\nvertex 10 0 0\nendloop\nendfacet\n"
+                   "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 10 0 0\nvertex 0 0 100000\nendloop\nendfacet\n"
+                   "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0 100000\nvertex 0 10 0\nendloop\nendfacet\n"
+                   "facet normal 0 0 0\nouter loop\nvertex 10 0 0\nvertex 0 10 0\nvertex 0 0 100000\nendloop\nendfacet\n"
+                   "endsolid tall\n");
+    snprintf(args, sizeof args, "slice %s --layer 0.001", tall);
+    expect_tool(args, 2, "refused: about 4e+08 section segments");
+    snprintf(args, sizeof args, "euler %s --layer 0.001 --cell 1 -o %s/e.svg", tall, dir);
+    expect_tool(args, 2, "--max-segments");
+    snprintf(args, sizeof args, "slice %s --layer 1", tall); /* 1e5 layers: within the default limit */
+    expect_tool(args, 0, NULL);
+    snprintf(args, sizeof args, "model twisted-bridge -o %s", stl);
+    expect_tool(args, 0, NULL);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --max-segments 1000", stl);
+    expect_tool(args, 2, "refused: about");
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --max-segments 1e5", stl);
+    expect_tool(args, 0, NULL);
+    remove_dir(dir);
+}
+END_TEST
+
+START_TEST(an_oversized_mesh_is_refused_by_the_tool_at_once)
+{
+    const char *path = amp_test_tmp("sparse2.stl");
+    char args[600];
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    ck_assert_int_ge(fd, 0);
+    ck_assert_int_eq(ftruncate(fd, (off_t)2147483648.0), 0);
+    close(fd);
+    snprintf(args, sizeof args, "slice %s --layer 1", path);
+    expect_tool(args, 2, "2147483648 bytes, larger than the limit of 1073741824 bytes");
+    remove(path);
+}
+END_TEST
+
 Suite *io_suite(void);
 Suite *io_suite(void)
 {
@@ -487,6 +611,10 @@ Suite *io_suite(void)
     AMP_ADD_TEST(t, tool_writers_keep_the_old_file_on_a_full_disk);
     AMP_ADD_TEST(t, tool_writes_dev_full_with_enospc_and_dev_null_fine);
     AMP_ADD_TEST(t, commands_exit_2_on_a_bad_path_file);
+    AMP_ADD_TEST(t, nonsense_numbers_are_refused_by_the_option_parser);
+    AMP_ADD_TEST(t, cover_refuses_beyond_its_curve_estimate);
+    AMP_ADD_TEST(t, slicing_refuses_beyond_its_segment_estimate);
+    AMP_ADD_TEST(t, an_oversized_mesh_is_refused_by_the_tool_at_once);
     suite_add_tcase(s, w);
     suite_add_tcase(s, r);
     suite_add_tcase(s, t);
