@@ -41,7 +41,7 @@ typedef struct cli_range {
 } cli_range;
 
 static const cli_range cli_ranges[] = {
-    {"model", "tol", 1e-3, 10},    /* mesh tessellation tolerance: smaller means runaway triangle counts */
+    {"model", "tol", 0.005, 1},    /* mesh tessellation tolerance (as amp_mesh_model): smaller means runaway triangle counts */
     {NULL, "tol", 1e-12, 100},     /* check: the inside test's distance tolerance */
     {NULL, "eps", 1e-4, 1e4},      /* coverage bound; the work estimate of cover refuses most small values */
     {NULL, "chord-tol", 1e-6, 100},
