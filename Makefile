@@ -1,4 +1,4 @@
-# ampath — plain GNU make. Targets: all (default), check, demo, bench, cross, fuzz,
+# ampath — plain GNU make. Targets: all (default), check, demo, bench, cross, fuzz, fuzz-selftest,
 # install, uninstall, clean. Honours CC, CFLAGS, LDFLAGS, PREFIX, DESTDIR, OPENMP=0.
 #
 # Sources are found by name, so a new module needs no edit here:
@@ -86,7 +86,7 @@ TEST_PKGS := $(BUILD_PKGS) check
 CROSS_PKGS := gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
 FUZZ_PKGS := clang libclang-rt-14-dev
 
-.PHONY: all check test-run demo bench soak cross fuzz install uninstall clean deps-present deps-build deps-test FORCE
+.PHONY: all check test-run demo bench soak cross fuzz fuzz-selftest install uninstall clean deps-present deps-build deps-test FORCE
 .DELETE_ON_ERROR:
 .SECONDARY:
 
@@ -226,18 +226,26 @@ cross:
 		awk '{print "cross (Cortex-M4F): libampath.a text " $$1 " B, data " $$2 " B, bss " $$3 " B"}'
 
 # ---- fuzzing (clang libFuzzer): make fuzz FUZZ_SECONDS=60 ----
+# tests/fuzz/run.sh makes a seed corpus from the built-in models with the tool, runs every
+# target and fails on the first finding (crash, ASan, or UBSan: -fno-sanitize-recover).
+# FUZZ_PLANT=trap|ubsan builds the targets with a planted defect (in build/fuzz-PLANT);
+# `make fuzz-selftest` proves that make fuzz then fails.
 FUZZ_SECONDS ?= 30
+FUZZ_PLANT ?=
 FUZZ_SRC := $(sort $(wildcard tests/fuzz/fuzz_*.c))
-FUZZ_BIN := $(FUZZ_SRC:tests/fuzz/%.c=build/fuzz/%)
-build/fuzz/%: tests/fuzz/%.c $(LIB_SRC)
+FUZZ_DIR := build/fuzz$(if $(FUZZ_PLANT),-$(FUZZ_PLANT))
+FUZZ_BIN := $(FUZZ_SRC:tests/fuzz/%.c=$(FUZZ_DIR)/%)
+FUZZ_FLAGS := -std=c99 -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+	$(if $(FUZZ_PLANT),-DAMP_FUZZ_PLANT_$(shell echo $(FUZZ_PLANT) | tr a-z A-Z))
+$(FUZZ_DIR)/%: tests/fuzz/%.c $(LIB_SRC)
 	@mkdir -p $(dir $@)
-	clang -std=c99 -g -O1 -fsanitize=fuzzer,address,undefined -Iinclude $< $(LIB_SRC) -o $@ -lm
-fuzz:
+	clang $(FUZZ_FLAGS) -Iinclude $< $(LIB_SRC) -o $@ -lm
+fuzz: all
 	@sh tools/deps.sh $(FUZZ_PKGS)
 	@$(MAKE) --no-print-directory $(FUZZ_BIN)
-	@for f in $(FUZZ_BIN); do mkdir -p build/fuzz/corpus-$$(basename $$f); \
-		echo "== $$f for $(FUZZ_SECONDS) s"; \
-		$$f -max_total_time=$(FUZZ_SECONDS) -max_len=65536 build/fuzz/corpus-$$(basename $$f) 2>&1 | tail -n 3 || exit 1; done
+	@sh tests/fuzz/run.sh $(abspath $(AMPATH)) $(FUZZ_SECONDS) $(FUZZ_DIR) $(FUZZ_BIN)
+fuzz-selftest: all
+	@MAKE="$(MAKE)" sh tests/fuzz/plant_test.sh
 
 # ---- install ----
 HEADERS := $(sort $(wildcard include/ampath/*.h))

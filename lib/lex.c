@@ -19,13 +19,14 @@ static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == 
 int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *err)
 {
     while (lx->pos < lx->len) {
-        size_t start = lx->pos, end, i;
+        size_t start = lx->pos, end, i, raw;
         const char *nl = memchr(lx->buf + start, '\n', lx->len - start);
         end = nl ? (size_t)(nl - lx->buf) : lx->len;
         lx->pos = nl ? end + 1 : lx->len;
         lx->line++;
         if (memchr(lx->buf + start, '\0', end - start))
             return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: NUL byte in text", lx->line);
+        raw = end - start - (end > start && lx->buf[end - 1] == '\r'); /* CRLF: the CR is the newline's */
         if (lx->strip_comments) {
             const char *h = memchr(lx->buf + start, '#', end - start);
             if (h)
@@ -33,6 +34,12 @@ int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *er
         }
         for (i = start; i < end && is_space(lx->buf[i]); i++)
             ;
+        /* The documented 4,096-byte line limit holds for every physical line: a long
+         * comment or blank line is refused here, a long content line by amp_lex_next (only
+         * a .spl knots line, without comment, may be longer; see lex.h). */
+        if (raw > AMP_LEX_MAX_LINE && (i == end || end - start != raw))
+            return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: longer than %d bytes", lx->line,
+                            AMP_LEX_MAX_LINE);
         if (i < end) {
             *line = lx->buf + start;
             *len = end - start;

@@ -38,8 +38,11 @@ int amp_lex_next(amp_lex *lx, amp_error *err);
 /**
  * Advance to the next line with at least one token and return it unsplit in
  * *line / *len (comment stripped when asked; no length or field limit, for
- * long numeric lines such as .spl knot vectors). Returns 1, 0 at end of input,
- * or a negative amp_status (NUL byte). Tokens are not set; see amp_lex_split().
+ * long numeric lines such as .spl knot vectors). Blank lines and lines with a
+ * comment longer than AMP_LEX_MAX_LINE bytes (newline excluded) are refused:
+ * only a content line without comment may exceed it, for the caller to judge.
+ * Returns 1, 0 at end of input, or a negative amp_status (NUL byte, over-long
+ * comment or blank line). Tokens are not set; see amp_lex_split().
  */
 int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *err);
 

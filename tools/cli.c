@@ -26,6 +26,87 @@ int cli_fail_err(const char *cmd, const amp_error *err)
     return cli_fail(cmd, CLI_USAGE, "%s", err->msg[0] ? err->msg : amp_strerror(err->status));
 }
 
+/*
+ * Accepted ranges of the numeric options, by name (and command where one name means
+ * different things), checked once here for every command (issue 21): a value outside is
+ * refused with exit 2 before any work, instead of `--feed 1e-300` writing F0 or
+ * `--layer 1e308` giving 0 layers. The bounds are physical plausibility for an FDM printer
+ * and its geometry (mm, mm/s, degrees, C), generous on both sides; the first match wins.
+ * Options not listed (seeds, indices) take any value their command accepts.
+ */
+typedef struct cli_range {
+    const char *cmd; /* NULL: every command */
+    const char *name;
+    double lo, hi;
+} cli_range;
+
+static const cli_range cli_ranges[] = {
+    {"model", "tol", 0.005, 1},    /* mesh tessellation tolerance (as amp_mesh_model): smaller means runaway triangle counts */
+    {NULL, "tol", 1e-12, 100},     /* check: the inside test's distance tolerance */
+    {NULL, "eps", 1e-4, 1e4},      /* coverage bound; the work estimate of cover refuses most small values */
+    {NULL, "chord-tol", 1e-6, 100},
+    {NULL, "layer", 1e-3, 100},
+    {NULL, "first-layer", 0, 100}, /* 0: same as --layer */
+    {NULL, "radius", 1e-3, 100},
+    {NULL, "nominal", 1e-3, 100},
+    {NULL, "min", 1e-3, 100},
+    {NULL, "max", 1e-3, 100},
+    {NULL, "fragment", 1e-3, 1e4},
+    {NULL, "volume", 1e-9, 1e15},
+    {NULL, "spacing", 1e-3, 1e4},
+    {NULL, "step", 1e-3, 1e4},
+    {NULL, "min-len", 0, 1e4},
+    {NULL, "side", 1e-2, 1e4},
+    {NULL, "min-gap", 0, 1e4},
+    {NULL, "cell", 1e-3, 1e4},
+    {NULL, "offset", 1e-4, 1e4},
+    {NULL, "z", -1e5, 1e5},
+    {NULL, "z-offs", -1e4, 1e4},
+    {NULL, "theta", -360, 360},
+    {NULL, "cells", 1, 64},
+    {NULL, "min-depth", 0, 30},
+    {NULL, "samples", 0, 1e9},
+    {NULL, "width", 200, 8000},
+    {NULL, "lookahead", 1, 16},
+    {NULL, "max-edges", 0, 1e9},
+    {NULL, "object", 0, 1e6},
+    /* printing (gcode) */
+    {NULL, "filament", 0.5, 5},
+    {NULL, "flow", 0.01, 10},
+    {NULL, "max-flow", 0.1, 1000},
+    {NULL, "feed", 0.1, 1000},
+    {NULL, "travel-feed", 0.1, 2000},
+    {NULL, "retract", 0, 100},
+    {NULL, "retract-speed", 0.1, 1000},
+    {NULL, "z-hop", 0, 100},
+    {NULL, "corridor", 0, 1000},
+    {NULL, "end-lift", 0, 1000},
+    {NULL, "hotend", 0, 500},
+    {NULL, "bed", 0, 200},
+    {NULL, "accel", 1, 1e6},
+    {NULL, "junction-deviation", 0, 100},
+    {NULL, "max-feed-xy", 0.1, 1e4},
+    {NULL, "max-feed-z", 0.1, 1e4},
+    {NULL, "max-feed-e", 0.1, 1e4},
+    /* work limits */
+    {NULL, "max-curves", 1, 1e15},
+    {NULL, "max-segments", 1, 1e15},
+};
+
+static int check_range(const char *cmd, const cli_opt *o, double v, const char *val)
+{
+    size_t i;
+    for (i = 0; i < sizeof cli_ranges / sizeof cli_ranges[0]; i++) {
+        const cli_range *r = &cli_ranges[i];
+        if (strcmp(r->name, o->name) != 0 || (r->cmd && strcmp(r->cmd, cmd) != 0))
+            continue;
+        if (v < r->lo || v > r->hi)
+            return cli_fail(cmd, CLI_USAGE, "--%s must lie in [%g, %g], got '%s'", o->name, r->lo, r->hi, val);
+        return CLI_OK;
+    }
+    return CLI_OK;
+}
+
 static int set_value(const char *cmd, cli_opt *o, const char *val)
 {
     char *end;
@@ -39,6 +120,8 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
         d = strtod(val, &end);
         if (end == val || *end || !isfinite(d))
             return cli_fail(cmd, CLI_USAGE, "--%s expects a number, got '%s'", o->name, val);
+        if (check_range(cmd, o, d, val) != CLI_OK)
+            return CLI_USAGE;
         *(double *)o->dst = d;
         return CLI_OK;
     }
@@ -48,6 +131,8 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
         l = strtol(val, &end, 10);
         if (end == val || *end || errno)
             return cli_fail(cmd, CLI_USAGE, "--%s expects an integer, got '%s'", o->name, val);
+        if (check_range(cmd, o, (double)l, val) != CLI_OK)
+            return CLI_USAGE;
         *(long *)o->dst = l;
         return CLI_OK;
     }
@@ -55,6 +140,30 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
         break;
     }
     return cli_fail(cmd, CLI_USAGE, "--%s takes no value", o->name);
+}
+
+/* ---- work limits (issue 21): estimated before the work, overridable per run ---- */
+cli_limits cli_work = {CLI_DEFAULT_MAX_CURVES, CLI_DEFAULT_MAX_SEGMENTS};
+
+/* The --max-... options of the commands that estimate their work: accepted next to the
+ * command's own table, so that the commands sharing a loader need no option of their own. */
+static cli_opt *work_limit_opt(const char *cmd, const char *name, size_t len)
+{
+    static cli_opt curves = {"max-curves", CLI_DOUBLE, &cli_work.max_curves, 0};
+    static cli_opt segments = {"max-segments", CLI_DOUBLE, &cli_work.max_segments, 0};
+    cli_opt *o = NULL;
+    if (strcmp(cmd, "cover") == 0)
+        o = &curves;
+    else if (strcmp(cmd, "slice") == 0 || strcmp(cmd, "euler") == 0 || strcmp(cmd, "check") == 0)
+        o = &segments;
+    return o && strlen(o->name) == len && strncmp(o->name, name, len) == 0 ? o : NULL;
+}
+
+int cli_work_refuse(const char *cmd, const char *what, double estimate, double limit, const char *option)
+{
+    return cli_fail(cmd, CLI_USAGE,
+                    "refused: about %.3g %s estimated, more than the limit of %.3g (raise it with --%s N)", estimate,
+                    what, limit, option);
 }
 
 int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
@@ -74,6 +183,8 @@ int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char 
             while (o && o->name && !(strlen(o->name) == len && strncmp(o->name, name, len) == 0))
                 o++;
             if (!o || !o->name)
+                o = work_limit_opt(cmd, name, len);
+            if (!o)
                 return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see 'ampath help %s')", a, cmd);
             o->seen = 1;
             if (o->kind == CLI_FLAG) {
@@ -273,8 +384,12 @@ int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps)
 {
     amp_error err;
     amp_error_clear(&err);
-    if (amp_pathset_read_file(ps, file, &err) != AMP_OK)
+    if (amp_pathset_read_file(ps, file, &err) != AMP_OK) {
+        /* the parser keeps what it had grown: release it here, once for every command,
+         * so that a bad input exits 2 and not 1 with a leak report under ASan (issue 21) */
+        amp_pathset_free(ps);
         return cli_fail_err(cmd, &err);
+    }
     return CLI_OK;
 }
 

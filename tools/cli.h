@@ -33,11 +33,31 @@ typedef struct cli_opt {
  * Parse argv[1..argc-1] of command @p cmd: options anywhere, the rest are
  * positionals stored in pos[0..*npos-1]. "--" ends options. Prints a one-line
  * reason and returns CLI_USAGE on unknown options, missing or malformed values,
+ * numeric values outside the option's range (one table in cli.c, by option name),
  * or a positional count outside [min_pos, max_pos]; otherwise CLI_OK.
+ * Also accepts the work limits (cli_work) of the commands that estimate.
  * The option table ends with an entry whose name is NULL.
  */
 int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
               int *npos);
+
+/*
+ * Work limits (issue 21): commands whose work grows without bound with a small
+ * tolerance or a large input estimate it first and refuse (exit 2, the estimate
+ * in the message) above these limits, which --max-curves N (cover) and
+ * --max-segments N (slice, euler, check) raise for one run. Documented in the
+ * README section "Limits" and ampath(1).
+ */
+#define CLI_DEFAULT_MAX_CURVES 1e6   /* covering curves of cover (Lemma A.2 estimate) */
+#define CLI_DEFAULT_MAX_SEGMENTS 2e7 /* section segments over all layers: slice, euler, check --mesh */
+typedef struct cli_limits {
+    double max_curves;
+    double max_segments;
+} cli_limits;
+extern cli_limits cli_work; /* set by cli_parse from --max-curves / --max-segments */
+
+/** "ampath CMD: refused: about E WHAT estimated, more than the limit of L (raise it with --OPTION N)"; CLI_USAGE. */
+int cli_work_refuse(const char *cmd, const char *what, double estimate, double limit, const char *option);
 
 /** Print "ampath CMD: message" to stderr and return @p code. */
 int cli_fail(const char *cmd, int code, const char *fmt, ...)
@@ -85,6 +105,7 @@ void cli_progress_end(cli_progress *p);
 double cli_now(void);
 
 /* ---- loaders that print their own errors (return CLI_OK or CLI_USAGE) ---- */
+/* cli_load_paths: on failure @p ps is freed (empty again), so callers may just return. */
 int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps);
 int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, const char *comment);
 /*

@@ -146,7 +146,7 @@ int cmd_euler(int argc, char **argv)
             y1 = fmax(y1, k.v[i].y);
         }
         if (svg_open(&s, out, x0, y0, x1, y1) != 0) {
-            rc = cli_fail("euler", CLI_USAGE, "cannot write '%s'", out);
+            rc = cli_fail_err("euler", &s.err);
             goto done;
         }
         svg_polyset(&s, &sl.layers[li].polys, "#eadcf7", "#5b2a86", 2.0);
@@ -159,7 +159,7 @@ int cmd_euler(int argc, char **argv)
         snprintf(line, sizeof line, "layer %ld at z = %.4g mm", li, sl.layers[li].z_cut);
         svg_text(&s, 1, line);
         if (svg_close(&s) != 0) {
-            rc = cli_fail("euler", CLI_USAGE, "writing '%s' failed", out);
+            rc = cli_fail_err("euler", &s.err);
             goto done;
         }
     }

@@ -49,28 +49,25 @@ static int read_text(const char *file, char **text)
     return CLI_OK;
 }
 
+/* Through the one safe writer (issue 21): symlinks followed, devices written directly, a
+ * unique temporary renamed into place only after a complete, synced write. */
 static int write_gcode(const char *out, const amp_pathset *ps, const amp_gcode_opts *o, amp_gcode_stats *st)
 {
-    char tmp[4096];
-    FILE *f;
+    amp_out f;
     amp_error err;
     amp_status s;
     amp_error_clear(&err);
-    if (strlen(out) + 5 > sizeof tmp)
-        return cli_fail("gcode", CLI_USAGE, "output file name too long");
-    snprintf(tmp, sizeof tmp, "%s.tmp", out);
-    f = fopen(tmp, "wb");
-    if (!f)
-        return cli_fail("gcode", CLI_USAGE, "%s: %s", tmp, strerror(errno));
-    s = amp_gcode_write(ps, o, amp_file_sink, f, st, &err);
-    if (fclose(f) != 0 && s == AMP_OK)
-        s = amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", tmp, strerror(errno));
-    if (s == AMP_OK && rename(tmp, out) != 0)
-        s = amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", out, strerror(errno));
+    if (amp_out_open(&f, out, &err) != AMP_OK)
+        return cli_fail_err("gcode", &err);
+    s = amp_gcode_write(ps, o, amp_out_sink, &f, st, &err);
     if (s != AMP_OK) {
-        remove(tmp);
+        if (f.werr)
+            amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));
+        amp_out_abort(&f);
         return cli_fail_err("gcode", &err);
     }
+    if (amp_out_commit(&f, &err) != AMP_OK)
+        return cli_fail_err("gcode", &err);
     return CLI_OK;
 }
 

@@ -59,6 +59,12 @@ static int write_mesh_model(const char *name, const char *out, double tol, int j
     return CLI_OK;
 }
 
+/* amp_writer_fn for amp_write_file_atomic(): the trivariate with its header */
+static amp_status spline_writer(void *ctx, amp_sink_fn sink, void *user, amp_error *err)
+{
+    return amp_spline_write(ctx, 1, sink, user, err);
+}
+
 static int ends_with(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);
@@ -72,7 +78,6 @@ int cmd_model(int argc, char **argv)
     double tol = 0.0;
     amp_spline s;
     amp_error err;
-    FILE *f;
     cli_opt opts[] = {{"output", CLI_STR, &out, 0}, {"json", CLI_FLAG, &json, 0}, {"tol", CLI_DOUBLE, &tol, 0}, {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("model", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -84,14 +89,9 @@ int cmd_model(int argc, char **argv)
     amp_error_clear(&err);
     if (amp_trivariate_model(pos[0], NULL, &s, &err) != AMP_OK)
         return cli_fail_err("model", &err);
-    f = fopen(out, "wb");
-    if (!f) {
+    if (amp_write_file_atomic(out, spline_writer, &s, &err) != AMP_OK) {
         amp_spline_free(&s);
-        return cli_fail("model", CLI_USAGE, "cannot write %s", out);
-    }
-    if (amp_spline_write(&s, 1, amp_file_sink, f, &err) != AMP_OK || fclose(f) != 0) {
-        amp_spline_free(&s);
-        return cli_fail("model", CLI_USAGE, "writing %s failed", out);
+        return cli_fail_err("model", &err);
     }
     if (json) {
         cli_json j;

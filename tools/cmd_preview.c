@@ -29,9 +29,9 @@ int cmd_preview(int argc, char **argv)
     int json = 0, npos = 0, rc, png, failed;
     amp_pathset ps;
     render_stats st;
-    char tmp[4096];
     double t0;
-    FILE *f;
+    amp_out f;
+    amp_error err;
     cli_opt opts[] = {{"output", CLI_STR, &out, 0},
                       {"width", CLI_LONG, &width, 0},
                       {"json", CLI_FLAG, &json, 0},
@@ -49,8 +49,6 @@ int cmd_preview(int argc, char **argv)
         return cli_fail("preview", CLI_USAGE, "%s: the output must end in .png or .svg", out);
     if (width < 200 || width > 8000)
         return cli_fail("preview", CLI_USAGE, "--width must lie in 200..8000, got %ld", width);
-    if (strlen(out) + 5 > sizeof tmp)
-        return cli_fail("preview", CLI_USAGE, "output file name too long");
     amp_pathset_init(&ps, NULL);
     rc = cli_load_paths("preview", pos[0], &ps);
     if (rc != CLI_OK)
@@ -60,19 +58,20 @@ int cmd_preview(int argc, char **argv)
         return cli_fail("preview", CLI_USAGE, "%s: no paths to draw", pos[0]);
     }
     t0 = cli_now();
-    snprintf(tmp, sizeof tmp, "%s.tmp", out);
-    f = fopen(tmp, "wb");
-    if (!f) {
+    amp_error_clear(&err);
+    if (amp_out_open(&f, out, &err) != AMP_OK) {
         amp_pathset_free(&ps);
-        return cli_fail("preview", CLI_USAGE, "%s: %s", tmp, strerror(errno));
+        return cli_fail_err("preview", &err);
     }
-    failed = png ? render_png(&ps, (int)width, f, &st) : render_svg(&ps, (int)width, f, &st);
-    if (fclose(f) != 0)
-        failed = 1;
-    if (failed || rename(tmp, out) != 0) {
-        remove(tmp);
+    failed = png ? render_png(&ps, (int)width, f.f, &st) : render_svg(&ps, (int)width, f.f, &st);
+    if (failed && !ferror(f.f)) { /* the renderer ran out of memory; nothing failed to write */
+        amp_out_abort(&f);
         amp_pathset_free(&ps);
-        return cli_fail("preview", CLI_USAGE, "%s: writing failed (out of memory or disk full)", out);
+        return cli_fail("preview", CLI_USAGE, "%s: out of memory", out);
+    }
+    if (amp_out_commit(&f, &err) != AMP_OK) {
+        amp_pathset_free(&ps);
+        return cli_fail_err("preview", &err);
     }
     if (json) {
         cli_json j;

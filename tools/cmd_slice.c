@@ -95,7 +95,7 @@ static int write_svg(const char *file, const amp_slices *sl, long li, double rad
         return cli_fail_err("slice", &err);
     if (svg_open(&s, file, x0, y0, x1, y1) != 0) {
         amp_polyset_free(&inset);
-        return cli_fail("slice", CLI_USAGE, "cannot write '%s'", file);
+        return cli_fail_err("slice", &s.err);
     }
     svg_polyset(&s, &L->polys, "#d9c8f0", "#5b2a86", 1.5);
     svg_polyset(&s, &inset, "none", "#c0392b", 1.0);
@@ -106,7 +106,7 @@ static int write_svg(const char *file, const amp_slices *sl, long li, double rad
     svg_text(&s, 1, line);
     amp_polyset_free(&inset);
     if (svg_close(&s) != 0)
-        return cli_fail("slice", CLI_USAGE, "writing '%s' failed", file);
+        return cli_fail_err("slice", &s.err);
     return CLI_OK;
 }
 

@@ -3,6 +3,21 @@
 
 #include "slicetool.h"
 
+/* Work before slicing (issue 21): every triangle gives one section segment per layer plane
+ * it spans, and every layer costs a little on its own, so layers + the sum over triangles of
+ * (z extent / H + 1) bounds the segments the slicer will store. */
+double slicetool_estimate(const amp_mesh *m, double layer)
+{
+    amp_box3 b = amp_mesh_bbox(m);
+    double total = (b.max.z - b.min.z) / layer + 1;
+    size_t t;
+    for (t = 0; t < m->ntris; t++) {
+        double z0 = m->verts[m->tris[t].v[0]].z, z1 = m->verts[m->tris[t].v[1]].z, z2 = m->verts[m->tris[t].v[2]].z;
+        total += (fmax(z0, fmax(z1, z2)) - fmin(z0, fmin(z1, z2))) / layer + 1;
+    }
+    return total;
+}
+
 int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
                    size_t *flipped)
 {
@@ -15,6 +30,9 @@ int slicetool_load(const char *cmd, const char *file, double layer, double first
         return cli_fail(cmd, CLI_USAGE, "--first-layer must be a positive height in mm");
     if (amp_mesh_read_stl_file(m, file, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
+    if (slicetool_estimate(m, layer) > cli_work.max_segments)
+        return cli_work_refuse(cmd, "section segments", slicetool_estimate(m, layer), cli_work.max_segments,
+                               "max-segments");
     /* the slicer chains segments by their direction: orientation must agree */
     if (amp_mesh_orient(m, flipped, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);

@@ -8,11 +8,15 @@
 /**
  * Read @p file, make its orientation consistent (amp_mesh_orient) and slice
  * it with layer height @p layer and first layer @p first (<= 0: same).
+ * Refuses (CLI_USAGE) when slicetool_estimate() exceeds cli_work.max_segments.
  * Prints its own error; returns CLI_OK or CLI_USAGE. *flipped receives the
  * number of triangles turned.
  */
 int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
                    size_t *flipped);
+
+/** Estimated section segments over all layers of slicing @p m at height @p layer (see cli_work). */
+double slicetool_estimate(const amp_mesh *m, double layer);
 
 /**
  * Layer to draw: @p index if >= 0, else the layer whose cutting height is

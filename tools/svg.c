@@ -11,9 +11,11 @@ int svg_open(svg_doc *s, const char *path, double xmin, double ymin, double xmax
     if (!(h > 0))
         h = 1;
     m = 0.05 * (w > h ? w : h);
-    s->f = fopen(path, "w");
-    if (!s->f)
+    amp_error_clear(&s->err);
+    s->f = NULL;
+    if (amp_out_open(&s->out, path, &s->err) != AMP_OK)
         return -1;
+    s->f = s->out.f;
     s->x0 = xmin - m;
     s->y1 = ymax + m;
     s->px = (w > h ? w : h) / 500.0;
@@ -79,11 +81,7 @@ void svg_text(svg_doc *s, int line, const char *text)
 
 int svg_close(svg_doc *s)
 {
-    int bad;
     fprintf(s->f, "</svg>\n");
-    bad = ferror(s->f);
-    if (fclose(s->f) != 0)
-        bad = 1;
     s->f = NULL;
-    return bad ? -1 : 0;
+    return amp_out_commit(&s->out, &s->err) == AMP_OK ? 0 : -1;
 }

@@ -1,6 +1,8 @@
 /* libFuzzer target: the .amp parser (SPEC §3), and a write/parse round trip of what it accepted. */
+#include <limits.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "ampath/ampath.h"
 
@@ -11,6 +13,19 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     amp_pathset ps, back;
     amp_error err;
     amp_buf buf;
+#if defined(AMP_FUZZ_PLANT_TRAP)
+    /* make fuzz-selftest: a planted crash on any input that looks like a path file (every seed) */
+    if (size >= 6 && memcmp(data, "ampath", 6) == 0)
+        __builtin_trap();
+#elif defined(AMP_FUZZ_PLANT_UBSAN)
+    /* make fuzz-selftest: planted undefined behaviour (signed overflow) on the same inputs */
+    if (size >= 6 && memcmp(data, "ampath", 6) == 0) {
+        volatile int big = INT_MAX;
+        int sum = big + (int)size;
+        if (sum == 42)
+            return 1;
+    }
+#endif
     amp_pathset_init(&ps, NULL);
     if (amp_pathset_parse(&ps, (const char *)data, size, &err) == AMP_OK) {
         amp_pathset_init(&back, NULL);
