@@ -1164,6 +1164,52 @@ START_TEST(log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr)
 }
 END_TEST
 
+/* The Python client of docs/bridge.md, extracted and run as it stands: the documented example works. */
+START_TEST(python_example_in_the_docs_follows_a_job_to_its_end)
+{
+    vpr v;
+    dmn d;
+    static char doc[1 << 17];
+    char script[256], out[256], cmd[1200];
+    const char *job = make_job("job.gcode", 60, NULL), *a, *b;
+    FILE *f = fopen("docs/bridge.md", "r");
+    size_t n;
+    int rc;
+    ck_assert_msg(f != NULL, "docs/bridge.md not found: run from the source tree (make check does)");
+    n = fread(doc, 1, sizeof doc - 1, f);
+    fclose(f);
+    doc[n] = '\0';
+    a = strstr(doc, "```python\n");
+    ck_assert_ptr_nonnull(a);
+    a += strlen("```python\n");
+    b = strstr(a, "```");
+    ck_assert_ptr_nonnull(b);
+    snprintf(script, sizeof script, "%s", amp_test_tmp("follow.py"));
+    write_file(script, a, (size_t)(b - a));
+    if (system("python3 -c 'import json, socket' >/dev/null 2>&1") != 0) {
+        fprintf(stderr, "python_example_in_the_docs_follows_a_job_to_its_end: no python3, not run\n");
+        return;
+    }
+    vp_start(&v, "a", "--turnaround 2");
+    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
+    snprintf(out, sizeof out, "%s", amp_test_tmp("follow.out"));
+    snprintf(cmd, sizeof cmd, "python3 %s %s %s > %s 2>&1", script, d.sock, job, out);
+    rc = system(cmd);
+    ck_assert_msg(WIFEXITED(rc) && WEXITSTATUS(rc) == 0, "exit %d: %s", WEXITSTATUS(rc), slurp(out));
+    ck_assert_msg(strstr(slurp(out), "done - resume with --resume-from 65") != NULL, "%s", slurp(out));
+    ck_assert_msg(strstr(slurp(out), "/63 (") != NULL, "%s",
+                  slurp(out));
+    /* refused jobs end it with the reason */
+    snprintf(cmd, sizeof cmd, "python3 %s %s /dev/zero > %s 2>&1", script, d.sock, out);
+    rc = system(cmd);
+    ck_assert_msg(WIFEXITED(rc) && WEXITSTATUS(rc) == 1, "exit %d: %s", WEXITSTATUS(rc), slurp(out));
+    ck_assert_ptr_nonnull(strstr(slurp(out), "refused: /dev/zero is not a regular file"));
+    daemon_quit(&d);
+    vp_stop(&v);
+    assert_executed_equals_job(&v, job, -1);
+}
+END_TEST
+
 static Suite *daemon_suite(void)
 {
     Suite *s = suite_create("daemon");
@@ -1192,6 +1238,7 @@ static Suite *daemon_suite(void)
     AMP_ADD_TEST(tc, job_piped_on_stdin_is_refused_and_a_redirected_file_runs);
     AMP_ADD_TEST(tc, only_gcode_is_submitted_and_nothing_is_sent_before_the_check);
     AMP_ADD_TEST(tc, log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr);
+    AMP_ADD_TEST(tc, python_example_in_the_docs_follows_a_job_to_its_end);
     suite_add_tcase(s, tc);
     return s;
 }
