@@ -515,6 +515,7 @@ static void daemon_quit(dmn *d)
     const char *r = ask(d->sock, "quit");
     ck_assert_msg(strncmp(r, "ok bye", 6) == 0, "%s", r);
     ck_assert_int_eq(wait_exit(d->pid), 0);
+    ck_assert_msg(strstr(slurp(d->err), "Sanitizer") == NULL, "%s", slurp(d->err));
 }
 
 /* Job: a header then n unique moves (as tests/test_bridge.c). */
@@ -587,7 +588,7 @@ START_TEST(json_client_subscribes_and_follows_a_whole_job)
     cli c;
     static br_jobj o;
     char line[8192], why[200], req2[600];
-    const char *job = make_job("job.gcode", 200, NULL);
+    const char *job = make_job("my job.gcode", 200, NULL); /* a path with a space, in JSON */
     long last_acked = -1, nprog = 0, total = -1;
     int saw_printing = 0, saw_done_state = 0, ended = 0;
     vp_start(&v, "a", "--turnaround 3");
@@ -652,7 +653,6 @@ START_TEST(client_that_never_reads_is_dropped_while_printing_goes_on)
     const char *job = make_job("job.gcode", 300, NULL);
     char chunk[7 * 512], line[8192];
     double t0;
-    long before;
     int i, dropped = 0;
     vp_start(&v, "a", "--turnaround 5");
     ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
@@ -674,9 +674,8 @@ START_TEST(client_that_never_reads_is_dropped_while_printing_goes_on)
         }
     }
     ck_assert_msg(dropped, "the daemon kept a client that never reads");
-    /* meanwhile everyone else is served and the job goes on to the end */
-    before = (long)status_num(d.sock, "acked", NULL, 0);
-    wait_acked(d.sock, before + 1);
+    /* meanwhile everyone else is served and the job goes on to the end (a daemon blocked in write()
+       towards the flooder would never get there) */
     wait_state(d.sock, NULL);
     ck_assert_ptr_nonnull(strstr(ask(d.sock, "status"), "ok state=done"));
     cli_close(flood);
@@ -812,18 +811,20 @@ static void sigterm_mid_job(int keep_hot)
     vpr v;
     dmn d;
     char opts[256], line[600];
-    const char *job = make_job("job.gcode", 300, NULL), *out, *p;
+    const char *job = make_job("a \"quoted\" job.gcode", 1000, NULL), *out, *p; /* 10 s: stopped long before */
     long last = 0, resume = 0;
     int rc;
     static lines ex;
     vp_start(&v, "a", "--turnaround 10");
     snprintf(opts, sizeof opts, "%s%s", FAST, keep_hot ? " --keep-hot" : "");
     ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), opts, NULL), -1);
-    snprintf(line, sizeof line, "submit %s", job);
+    /* a path with spaces and quotes, in the plain form */
+    snprintf(line, sizeof line, "submit \"%.*s\\\"quoted\\\" job.gcode\"", (int)(strstr(job, "\"") - job), job);
     ck_assert_ptr_nonnull(strstr(ask(d.sock, line), "ok started"));
     wait_acked(d.sock, 20);
     kill(d.pid, SIGTERM); /* what systemctl stop sends */
     rc = wait_exit(d.pid);
+    ck_assert_msg(strstr(slurp(d.err), "Sanitizer") == NULL, "%s", slurp(d.err));
     out = slurp(d.out);
     ck_assert_msg(rc == 1, "exit %d: %s", rc, out);
     ck_assert_msg(strstr(out, "stopped: interrupted") != NULL, "%s", out);
@@ -831,7 +832,7 @@ static void sigterm_mid_job(int keep_hot)
     ck_assert_ptr_nonnull(p);
     ck_assert_int_eq(sscanf(p, "last acknowledged job line %ld; resume with --resume-from %ld", &last, &resume), 2);
     ck_assert_int_eq(resume, last + 1);
-    ck_assert_int_lt(last, 304);
+    ck_assert_int_lt(last, 1004);
     ck_assert_int_eq(access(d.sock, F_OK), -1); /* its socket is gone */
     vp_stop(&v);
     /* the lines in flight were acknowledged: the printer ran exactly the moves up to the reported line */
@@ -877,7 +878,7 @@ START_TEST(cancel_finishes_the_lines_in_flight_then_turns_heaters_off)
     vpr v;
     dmn d;
     char line[600];
-    const char *job = make_job("job.gcode", 300, NULL), *r;
+    const char *job = make_job("job.gcode", 1000, NULL), *r;
     long last;
     vp_start(&v, "a", "--turnaround 10");
     ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
@@ -1111,12 +1112,14 @@ START_TEST(only_gcode_is_submitted_and_nothing_is_sent_before_the_check)
         size_t n;
         const char *why;
     } bad[] = {
-        {"passwd.gcode", "G90\nroot:x:0:0:root:/root:/bin/bash\n", 39, "not a G-code command"},
-        {"star.gcode", "G90\nG1 X10 Y10\nM117 50*2\n", 25, "'*' in a command"},
-        {"ctl.gcode", "G90\nG1 X1\x1b[2J\n", 14, "control byte 0x1b"},
-        {"nul.gcode", "G90\nG1 X1\0junk\nG1 X2\n", 21, "NUL byte"},
-        {"empty.gcode", "; nothing but comments\n\n   \n", 28, "no commands to send"},
-        {"words.gcode", "The quick brown fox\n", 20, "not a G-code command"},
+#define TXT(s) s, sizeof s - 1
+        {"passwd.gcode", TXT("G90\nroot:x:0:0:root:/root:/bin/bash\n"), "not a G-code command"},
+        {"star.gcode", TXT("G90\nG1 X10 Y10\nM117 50*2\n"), "'*' in a command"},
+        {"ctl.gcode", TXT("G90\nG1 X1\x1b[2J\n"), "control byte 0x1b"},
+        {"nul.gcode", TXT("G90\nG1 X1\0junk\nG1 X2\n"), "NUL byte"},
+        {"empty.gcode", TXT("; nothing but comments\n\n   \n"), "no commands to send"},
+        {"words.gcode", TXT("The quick brown fox\n"), "not a G-code command"},
+#undef TXT
     };
     vpr v;
     dmn d;
