@@ -138,7 +138,7 @@ static int link_lock(br_link *l, char *why, size_t whylen)
 {
     if (flock(l->fd, LOCK_EX | LOCK_NB) != 0) {
         snprintf(why, whylen, "%s is in use by another program (it holds a lock on the device): %s", l->real,
-                 errno == EWOULDBLOCK ? "another ampath-bridge, OctoPrint or a terminal" : strerror(errno));
+                 errno == EWOULDBLOCK ? "another ampath-bridge, or a host such as OctoPrint" : strerror(errno));
         return -1;
     }
     if (!l->is_pty)
