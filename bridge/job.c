@@ -2,11 +2,17 @@
  * job.c — job sources of ampath-bridge: .gcode files, checked whole before the
  * first byte goes out, and the safe-restart preamble for --resume-from.
  */
+#define _DEFAULT_SOURCE
+#define _POSIX_C_SOURCE 200809L
+
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "bridge.h"
 
@@ -181,6 +187,88 @@ static void build_preamble(br_job *j, const job_state *st)
         pre(j, "G1 F%.0f", st->f, 0);
 }
 
+/* Issue 21: a job is a regular file. A FIFO would block the daemon in open(), /dev/zero would never end,
+   and neither can be read twice (checked whole, then sent). Opened without blocking to find out. */
+static int check_source(const char *path, char *why, size_t whylen)
+{
+    struct stat st;
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY);
+    if (fd < 0) {
+        snprintf(why, whylen, "%s: %s", path, strerror(errno));
+        return -1;
+    }
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        snprintf(why, whylen,
+                 "%s is not a regular file (a pipe or device cannot be checked before sending): save the job to a "
+                 "file first",
+                 path);
+        return -1;
+    }
+    close(fd);
+    return 0;
+}
+
+/* G1, M104, T0, G29.1, G1X10 (no spaces): a letter, a number, then a space, a letter or the end. */
+static int classic_command(const char *c)
+{
+    const unsigned char *u = (const unsigned char *)c;
+    size_t i = 1;
+    if (!isalpha(u[0]) || !isdigit(u[1]))
+        return 0;
+    while (isdigit(u[i]))
+        i++;
+    if (u[i] == '.' && isdigit(u[i + 1]))
+        for (i++; isdigit(u[i]); i++)
+            ;
+    return u[i] == '\0' || u[i] == ' ' || u[i] == '\t' || isalpha(u[i]) || u[i] == '-';
+}
+
+/* Klipper's extended commands: NAME or NAME KEY=VALUE ... (SET_VELOCITY_LIMIT ACCEL=500, PRINT_START). */
+static int extended_command(const char *c)
+{
+    const unsigned char *u = (const unsigned char *)c;
+    size_t i = 0;
+    if (!isalpha(u[0]) && u[0] != '_')
+        return 0;
+    while (isalnum(u[i]) || u[i] == '_')
+        i++;
+    if (u[i] == '\0')
+        return 1;
+    if (u[i] != ' ' && u[i] != '\t')
+        return 0;
+    while (u[i] == ' ' || u[i] == '\t')
+        i++;
+    for (; u[i] && u[i] != ' ' && u[i] != '\t'; i++)
+        if (u[i] == '=')
+            return 1;
+    return 0;
+}
+
+/* Issue 21: a job must parse as G-code before anything is sent (`submit /etc/shadow` must not stream a
+   password file to the printer); '*' would end the checksummed part of a Marlin line early. */
+static int check_command(const char *c, amp_proto_flavor flavor, char *bad, size_t cap)
+{
+    const unsigned char *u = (const unsigned char *)c;
+    size_t i;
+    for (i = 0; u[i]; i++)
+        if ((u[i] < 0x20 && u[i] != '\t') || u[i] == 0x7f) {
+            snprintf(bad, cap, "control byte 0x%02x in a command", u[i]);
+            return -1;
+        }
+    if (!classic_command(c) && !(flavor == AMP_PROTO_KLIPPER && extended_command(c))) {
+        snprintf(bad, cap, "not a G-code command (%s)",
+                 flavor == AMP_PROTO_KLIPPER ? "a letter and a number such as G1, or NAME KEY=VALUE"
+                                             : "a letter and a number such as G1 or M104");
+        return -1;
+    }
+    if (strchr(c, '*')) {
+        snprintf(bad, cap, "'*' in a command (it would end the checksummed part of the line)");
+        return -1;
+    }
+    return 0;
+}
+
 int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resume_from, char *why, size_t whylen)
 {
     char buf[JOB_LINE_MAX];
@@ -190,6 +278,8 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
     memset(&st, 0, sizeof st);
     snprintf(j->path, sizeof j->path, "%s", path);
     j->first_line = resume_from > 1 ? resume_from : 1;
+    if (check_source(path, why, whylen) != 0)
+        return -1;
     if (ends_with(path, ".amp")) {
         if (open_amp(j, path, flavor, why, whylen) != 0)
             return -1;
@@ -202,8 +292,9 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
     }
     /* first pass: count, check every line fits the printer, and track the state for a resume */
     for (;;) {
-        char *c;
+        char *c, bad[160];
         size_t n;
+        long pos0 = j->is_amp ? 0 : ftell(j->f);
         int r = job_read(j, buf, sizeof buf);
         if (r < 0) {
             snprintf(why, whylen, "%s: read error", path);
@@ -213,6 +304,10 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
             break;
         n = strlen(buf);
         line++;
+        if (!j->is_amp && ftell(j->f) - pos0 != (long)n) {
+            snprintf(why, whylen, "%s:%ld: NUL byte: not a G-code text file; nothing was sent", path, line);
+            goto fail;
+        }
         if (!j->is_amp && n == sizeof buf - 1 && buf[n - 1] != '\n') {
             snprintf(why, whylen, "%s:%ld: line longer than %d bytes", path, line, JOB_LINE_MAX - 2);
             goto fail;
@@ -220,6 +315,10 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
         c = clean(buf);
         if (*c == '\0')
             continue;
+        if (!j->is_amp && check_command(c, flavor, bad, sizeof bad) != 0) {
+            snprintf(why, whylen, "%s:%ld: %s; nothing was sent", path, line, bad);
+            goto fail;
+        }
         if (line < j->first_line) {
             track(&st, c);
             continue;
@@ -237,6 +336,10 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
     }
     if (resume_from > line + 1) {
         snprintf(why, whylen, "%s: --resume-from %ld is past the end (%ld lines)", path, resume_from, line);
+        goto fail;
+    }
+    if (j->total == 0) {
+        snprintf(why, whylen, "%s: no commands to send%s", path, resume_from > 1 ? " from that line" : "");
         goto fail;
     }
     if (resume_from > 1)

@@ -17,6 +17,8 @@
 #include <libserialport.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <termios.h>
@@ -103,7 +105,7 @@ static int open_sp(br_link *l, long baud, char *why, size_t whylen)
     return 0;
 }
 
-int br_link_open(br_link *l, const char *path, long baud, char *why, size_t whylen)
+static int link_open(br_link *l, const char *path, long baud, char *why, size_t whylen)
 {
     memset(l, 0, sizeof *l);
     l->fd = -1;
@@ -128,8 +130,37 @@ int br_link_open(br_link *l, const char *path, long baud, char *why, size_t whyl
     return -1;
 }
 
+/* Issue 21: two programs must never share a printer. flock() is what pyserial's exclusive=True (OctoPrint)
+   and other hosts take; TIOCEXCL refuses any further open() (root excepted). TIOCEXCL only on real serial
+   ports: their flag ends with the last close, while a pty whose other end keeps the slave open (Klipper,
+   the virtual printer) would stay exclusive after a crashed bridge and lock out its successor. */
+static int link_lock(br_link *l, char *why, size_t whylen)
+{
+    if (flock(l->fd, LOCK_EX | LOCK_NB) != 0) {
+        snprintf(why, whylen, "%s is in use by another program (it holds a lock on the device): %s", l->real,
+                 errno == EWOULDBLOCK ? "another ampath-bridge, or a host such as OctoPrint" : strerror(errno));
+        return -1;
+    }
+    if (!l->is_pty)
+        ioctl(l->fd, TIOCEXCL);
+    return 0;
+}
+
+int br_link_open(br_link *l, const char *path, long baud, char *why, size_t whylen)
+{
+    if (link_open(l, path, baud, why, whylen) != 0)
+        return -1;
+    if (link_lock(l, why, whylen) != 0) {
+        br_link_close(l);
+        return -1;
+    }
+    return 0;
+}
+
 void br_link_close(br_link *l)
 {
+    if (l->fd >= 0 && !l->is_pty)
+        ioctl(l->fd, TIOCNXCL);
     if (l->sp) {
         sp_close((struct sp_port *)l->sp);
         sp_free_port((struct sp_port *)l->sp);

@@ -1,21 +1,20 @@
 /*
  * ampath-bridge — stream a job to a Marlin or Klipper printer (SPEC §8).
  * One-shot: `ampath-bridge DEVICE JOB [options]`; daemon: `--daemon` with a
- * Unix control socket (mode 0600). See docs/bridge.md and ampath-bridge(1).
+ * Unix control socket (mode 0600), in daemon.c. This file: options and the
+ * one-shot run. See docs/bridge.md and ampath-bridge(1).
  */
 #define _DEFAULT_SOURCE
 #define _POSIX_C_SOURCE 200809L
 
 #include <errno.h>
+#include <fcntl.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/socket.h>
-#include <sys/stat.h>
-#include <sys/un.h>
 #include <unistd.h>
 
-#include "bridge.h"
+#include "daemon.h"
 
 static const char usage[] =
     "usage: ampath-bridge DEVICE [JOB] [options]\n"
@@ -34,13 +33,16 @@ static const char usage[] =
     "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60)\n"
     "  --resume-from LINE   start the job at file line LINE after a safe restart (lift, home X Y,\n"
     "                       re-heat, return); use the line the bridge reported when it stopped\n"
-    "  --log FILE           protocol log (every line sent and received, events)\n"
+    "  --log FILE           protocol log (every line sent and received, events), created 0600\n"
     "  --quiet              no progress line and no printer messages on stderr\n"
+    "  --keep-hot           after a signal or cancel, leave the heaters on (default: M104 S0, M140 S0, M107)\n"
     "  --daemon             keep the port open and take commands on --socket\n"
-    "  --socket PATH        control socket for --daemon (default $XDG_RUNTIME_DIR/ampath-bridge.sock or\n"
-    "                       /tmp/ampath-bridge-UID.sock), created with mode 0600\n"
-    "Control socket: one command per line, one reply line ('ok ...' or 'error ...'):\n"
-    "  submit PATH [LINE] | status | pause | resume | cancel | estop | quit\n"
+    "  --socket PATH        control socket for --daemon (default $XDG_RUNTIME_DIR/ampath-bridge.sock, or\n"
+    "                       ${TMPDIR:-/tmp}/ampath-bridge-UID/ctl.sock in a private 0700 directory), mode 0600\n"
+    "  --client-timeout S   close control clients idle for S seconds (default 600; subscribers exempt)\n"
+    "Control socket: one command per line, one reply line ('ok ...' or 'error ...'), or one JSON object:\n"
+    "  submit PATH [LINE] | status | pause | resume | cancel | estop | subscribe | unsubscribe | help | quit\n"
+    "  (a PATH with spaces in double quotes; {\"cmd\":\"submit\",\"path\":\"/a b/job.gcode\",\"id\":1})\n"
     "Exit status: 0 job done, 1 job stopped (reset, shutdown, interrupted, device lost), 2 bad usage or input.\n";
 
 static volatile sig_atomic_t sig_count;
@@ -58,183 +60,6 @@ static int fail(const char *fmt, const char *a)
     return 2;
 }
 
-static void report(br_session *s)
-{
-    printf("sent %ld commands (moves and others), acknowledged %ld\n", s->sent_moves, s->acked_moves);
-    if (s->stop != BR_DONE) {
-        printf("stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
-               br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,
-               s->first_unacked_job_line);
-    }
-    fflush(stdout);
-}
-
-/* ---- daemon ---- */
-#define MAXCL 4
-typedef struct client {
-    int fd;
-    char buf[1024];
-    size_t len;
-} client;
-
-static void reply(int fd, const char *msg)
-{
-    size_t n = strlen(msg);
-    ssize_t w = write(fd, msg, n);
-    (void)w;
-}
-
-static int command(br_session *s, client *c, char *line)
-{
-    char out[1200], why[512];
-    char *arg = strchr(line, ' ');
-    if (arg)
-        *arg++ = '\0';
-    if (strcmp(line, "status") == 0) {
-        br_session_status(s, out, sizeof out - 8);
-        strcat(out, "\n");
-        memmove(out + 3, out, strlen(out) + 1);
-        memcpy(out, "ok ", 3);
-        reply(c->fd, out);
-    } else if (strcmp(line, "submit") == 0) {
-        char *path = arg ? strtok(arg, " ") : NULL, *from = path ? strtok(NULL, " ") : NULL;
-        if (!path)
-            reply(c->fd, "error submit needs a job path\n");
-        else if (s->have_job && s->stop == BR_RUNNING)
-            reply(c->fd, "error a job is running\n");
-        else {
-            if (s->have_job)
-                br_job_close(&s->job);
-            s->have_job = 0;
-            if (br_session_start_job(s, path, from ? atol(from) : 1, why, sizeof why) != 0) {
-                snprintf(out, sizeof out, "error %s\n", why);
-                reply(c->fd, out);
-            } else {
-                snprintf(out, sizeof out, "ok started %s (%ld commands)\n", path, s->job.total);
-                reply(c->fd, out);
-            }
-        }
-    } else if (strcmp(line, "pause") == 0) {
-        s->paused = 1;
-        reply(c->fd, "ok paused (lines in flight finish)\n");
-    } else if (strcmp(line, "resume") == 0) {
-        s->paused = 0;
-        reply(c->fd, "ok resumed\n");
-    } else if (strcmp(line, "cancel") == 0) {
-        if (s->have_job && s->stop == BR_RUNNING) {
-            br_session_request_stop(s, BR_CANCELLED);
-            reply(c->fd, "ok cancelling (lines in flight finish)\n");
-        } else
-            reply(c->fd, "error no job running\n");
-    } else if (strcmp(line, "estop") == 0) {
-        amp_proto_estop(&s->p);
-        reply(c->fd, "ok emergency stop (M112) sent\n");
-    } else if (strcmp(line, "quit") == 0) {
-        reply(c->fd, "ok bye\n");
-        return 1;
-    } else {
-        reply(c->fd, "error unknown command (submit PATH [LINE] | status | pause | resume | cancel | estop | quit)\n");
-    }
-    return 0;
-}
-
-static int run_daemon(br_session *s, const char *sockpath)
-{
-    struct sockaddr_un sa;
-    client cl[MAXCL];
-    int lfd, i, quit = 0;
-    mode_t old;
-    memset(&sa, 0, sizeof sa);
-    sa.sun_family = AF_UNIX;
-    if (strlen(sockpath) >= sizeof sa.sun_path)
-        return fail("socket path too long: %s", sockpath);
-    strcpy(sa.sun_path, sockpath);
-    lfd = socket(AF_UNIX, SOCK_STREAM, 0);
-    unlink(sockpath);
-    old = umask(077); /* created 0600 from the start: no window where others could connect */
-    if (lfd < 0 || bind(lfd, (struct sockaddr *)&sa, sizeof sa) != 0 || listen(lfd, 4) != 0) {
-        umask(old);
-        return fail("cannot create the control socket %s", sockpath);
-    }
-    umask(old);
-    chmod(sockpath, 0600);
-    for (i = 0; i < MAXCL; i++)
-        cl[i].fd = -1;
-    fprintf(stderr, "ampath-bridge: daemon on %s, control socket %s\n", s->link.real, sockpath);
-    while (!quit && sig_count == 0) {
-        struct pollfd ex[1 + MAXCL];
-        int n = 0, idx[MAXCL];
-        ex[n].fd = lfd;
-        ex[n].events = POLLIN;
-        n++;
-        for (i = 0; i < MAXCL; i++)
-            if (cl[i].fd >= 0) {
-                ex[n].fd = cl[i].fd;
-                ex[n].events = POLLIN;
-                idx[n - 1] = i;
-                n++;
-            }
-        br_session_step(s, ex, n, 200);
-        if (s->have_job && s->stop != BR_RUNNING) {
-            char st[600];
-            br_session_status(s, st, sizeof st);
-            fprintf(stderr, "ampath-bridge: job ended: %s\n", st);
-            report(s);
-            br_job_close(&s->job);
-            s->job.f = NULL;
-            s->have_job = 0;
-        }
-        if (ex[0].revents & POLLIN) {
-            int fd = accept(lfd, NULL, NULL);
-            for (i = 0; i < MAXCL && fd >= 0; i++)
-                if (cl[i].fd < 0) {
-                    cl[i].fd = fd;
-                    cl[i].len = 0;
-                    fd = -1;
-                }
-            if (fd >= 0) {
-                reply(fd, "error too many clients\n");
-                close(fd);
-            }
-        }
-        for (i = 1; i < n; i++) {
-            client *c = &cl[idx[i - 1]];
-            ssize_t r;
-            char *nl;
-            if (!(ex[i].revents & (POLLIN | POLLHUP)))
-                continue;
-            r = read(c->fd, c->buf + c->len, sizeof c->buf - 1 - c->len);
-            if (r <= 0) {
-                close(c->fd);
-                c->fd = -1;
-                continue;
-            }
-            c->len += (size_t)r;
-            c->buf[c->len] = '\0';
-            while ((nl = strchr(c->buf, '\n')) != NULL) {
-                *nl = '\0';
-                if (nl > c->buf && nl[-1] == '\r')
-                    nl[-1] = '\0';
-                if (command(s, c, c->buf))
-                    quit = 1;
-                memmove(c->buf, nl + 1, c->len - (size_t)(nl + 1 - c->buf) + 1);
-                c->len -= (size_t)(nl + 1 - c->buf);
-            }
-            if (c->len >= sizeof c->buf - 1) {
-                reply(c->fd, "error line too long\n");
-                c->len = 0;
-            }
-        }
-    }
-    for (i = 0; i < MAXCL; i++)
-        if (cl[i].fd >= 0)
-            close(cl[i].fd);
-    close(lfd);
-    unlink(sockpath);
-    br_session_close(s);
-    return 0;
-}
-
 static int parse_num(const char *s, double *v)
 {
     char *end;
@@ -242,17 +67,97 @@ static int parse_num(const char *s, double *v)
     return end != s && *end == '\0';
 }
 
+/* The log holds the job and the printer's words: private from the start (issue 21). */
+static FILE *open_log(const char *path)
+{
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_NOCTTY, 0600);
+    FILE *f = fd >= 0 ? fdopen(fd, "w") : NULL;
+    if (!f && fd >= 0)
+        close(fd);
+    return f;
+}
+
+/* The socket is taken before the device is opened: a refused second daemon must not touch the printer
+   (opening a serial port resets many boards). */
+static int run_daemon(const br_cfg *cfg, const br_daemon_opts *o, const char *job, long resume_from)
+{
+    br_listener ls;
+    br_session *s;
+    char why[600], path[PATH_MAX];
+    if (o->sockpath)
+        snprintf(path, sizeof path, "%s", o->sockpath);
+    if ((!o->sockpath && br_sock_default(path, sizeof path, why, sizeof why) != 0) ||
+        br_sock_listen(&ls, path, why, sizeof why) != 0)
+        return fail("%s", why);
+    s = calloc(1, sizeof *s);
+    if (!s || br_session_open(s, cfg, why, sizeof why) != 0 ||
+        (job && br_session_start_job(s, job, resume_from, why, sizeof why) != 0)) {
+        if (s && s->link.fd >= 0)
+            br_session_close(s);
+        free(s);
+        br_sock_close(&ls);
+        return fail("%s", s ? why : "out of memory");
+    }
+    {
+        int rc = br_daemon_run(s, &ls, o, &sig_count);
+        free(s);
+        return rc;
+    }
+}
+
+static int one_shot(const br_cfg *cfg, const char *job, long resume_from, int keep_hot)
+{
+    br_session *s = calloc(1, sizeof *s);
+    char why[600];
+    double t_stop = 0, limit = 2.0 * (double)cfg->timeout_ms / 1000.0 + 1.0;
+    int rc;
+    if (!s)
+        return fail("%s", "out of memory");
+    if (br_session_open(s, cfg, why, sizeof why) != 0) {
+        free(s);
+        return fail("%s", why);
+    }
+    if (br_session_start_job(s, job, resume_from, why, sizeof why) != 0) {
+        br_session_close(s);
+        free(s);
+        return fail("%s", why);
+    }
+    while (s->stop == BR_RUNNING) {
+        br_session_step(s, NULL, 0, 1000);
+        if (sig_count == 1 && !s->stopping) {
+            fprintf(stderr, "\nampath-bridge: stopping after the lines in flight (signal again to stop now)\n");
+            br_session_request_stop(s, BR_INTERRUPTED);
+            t_stop = br_now();
+        }
+        if (s->stopping && s->stop == BR_RUNNING && (sig_count > 1 || br_now() - t_stop > limit)) {
+            s->stop = BR_INTERRUPTED;
+            snprintf(s->stop_text, sizeof s->stop_text, "lines in flight not all acknowledged");
+        }
+    }
+    /* a job that sent nothing is never "done" */
+    rc = s->stop == BR_DONE && s->acked_moves > 0 ? 0 : 1;
+    br_report(s, stdout);
+    if (s->stop == BR_INTERRUPTED && !keep_hot) {
+        int r = br_safe_end(s, limit < 10 ? limit : 10, &sig_count, 2);
+        printf("safe end (heaters and fan off: M104 S0, M140 S0, M107): %s\n",
+               r == 1 ? "acknowledged by the printer" : "NOT confirmed by the printer");
+    }
+    br_session_close(s);
+    free(s);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
     br_cfg cfg;
-    br_session *s;
+    br_daemon_opts dopts;
     const char *pos[2] = {NULL, NULL}, *logpath = NULL, *sockpath = NULL;
-    char why[512], defsock[PATH_MAX];
     long resume_from = 1;
     int npos = 0, i, daemon = 0, quiet = 0, rc;
-    double t_stop = 0;
 
     br_cfg_default(&cfg);
+    memset(&dopts, 0, sizeof dopts);
+    dopts.idle_s = 600;
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         double d;
@@ -267,6 +172,13 @@ int main(int argc, char **argv)
             return 0;
         } else if (strcmp(a, "--daemon") == 0) {
             daemon = 1;
+        } else if (strcmp(a, "--keep-hot") == 0) {
+            dopts.keep_hot = 1;
+        } else if (strcmp(a, "--client-timeout") == 0) {
+            NEEDVAL;
+            if (!parse_num(val, &d) || d <= 0 || d > 86400)
+                return fail("bad --client-timeout %s", val);
+            dopts.idle_s = d;
         } else if (strcmp(a, "--quiet") == 0) {
             quiet = 1;
         } else if (strcmp(a, "--no-resend-ok") == 0) {
@@ -354,60 +266,14 @@ int main(int argc, char **argv)
     cfg.device = pos[0];
     cfg.quiet = quiet;
     cfg.progress = !quiet && isatty(2);
-    if (logpath && !(cfg.log = fopen(logpath, "w")))
+    if (logpath && !(cfg.log = open_log(logpath)))
         return fail("cannot write the log %s", logpath);
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     signal(SIGPIPE, SIG_IGN);
-    s = calloc(1, sizeof *s);
-    if (!s)
-        return fail("%s", "out of memory");
-    if (br_session_open(s, &cfg, why, sizeof why) != 0) {
-        free(s);
-        return fail("%s", why);
-    }
-    if (daemon) {
-        if (!sockpath) {
-            const char *rt = getenv("XDG_RUNTIME_DIR");
-            if (rt && *rt)
-                snprintf(defsock, sizeof defsock, "%s/ampath-bridge.sock", rt);
-            else
-                snprintf(defsock, sizeof defsock, "/tmp/ampath-bridge-%ld.sock", (long)getuid());
-            sockpath = defsock;
-        }
-        if (npos == 2 && br_session_start_job(s, pos[1], resume_from, why, sizeof why) != 0) {
-            br_session_close(s);
-            free(s);
-            return fail("%s", why);
-        }
-        rc = run_daemon(s, sockpath);
-        free(s);
-        if (cfg.log)
-            fclose(cfg.log);
-        return rc;
-    }
-    if (br_session_start_job(s, pos[1], resume_from, why, sizeof why) != 0) {
-        br_session_close(s);
-        free(s);
-        return fail("%s", why);
-    }
-    while (s->stop == BR_RUNNING) {
-        br_session_step(s, NULL, 0, 1000);
-        if (sig_count == 1 && !s->stopping) {
-            fprintf(stderr, "\nampath-bridge: stopping after the lines in flight (signal again to stop now)\n");
-            br_session_request_stop(s, BR_INTERRUPTED);
-            t_stop = br_now();
-        }
-        if (s->stopping && s->stop == BR_RUNNING &&
-            (sig_count > 1 || br_now() - t_stop > 2.0 * (double)cfg.timeout_ms / 1000.0 + 1.0)) {
-            s->stop = BR_INTERRUPTED;
-            snprintf(s->stop_text, sizeof s->stop_text, "lines in flight not all acknowledged");
-        }
-    }
-    report(s);
-    rc = s->stop == BR_DONE ? 0 : 1;
-    br_session_close(s);
-    free(s);
+    dopts.sockpath = sockpath;
+    rc = daemon ? run_daemon(&cfg, &dopts, npos == 2 ? pos[1] : NULL, resume_from)
+                : one_shot(&cfg, pos[1], resume_from, dopts.keep_hot);
     if (cfg.log)
         fclose(cfg.log);
     return rc;

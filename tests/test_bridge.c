@@ -504,7 +504,7 @@ START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
     ck_assert_ptr_nonnull(strstr(reply, "ok"));
     msleep(200);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
-    ck_assert_msg(strstr(reply, "stop=printer shutdown") != NULL, "%s", reply);
+    ck_assert_msg(strstr(reply, "stop=\"printer shutdown\"") != NULL, "%s", reply);
     ck_assert_int_eq(ctl(sock, "quit\n", reply, sizeof reply), 0);
     waitpid(pid, &status, 0);
     vp_stop(&v);
