@@ -418,7 +418,7 @@ static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *e
     if (st == AMP_OK)
         st = fit_axis(o, 'Y', js->bb.min.y + off.y, js->bb.max.y + off.y, o->bed_min_y, o->bed_max_y, err);
     if (st == AMP_OK)
-        st = fit_axis(o, 'Z', fmin(js->zlow, js->bb.min.z) + off.z, js->bb.max.z + off.z, 0.0, o->max_height, err);
+        st = fit_axis(o, 'Z', js->bb.min.z + off.z, js->bb.max.z + off.z, 0.0, o->max_height, err);
     if (st != AMP_OK)
         return st;
     it->zmax = o->max_height - off.z;
@@ -580,6 +580,8 @@ static void move_travel(amp_gcode_iter *it, lb *l, amp_vec3 to, int xy, double v
     }
     if (z)
         put_coord(it, l, 'Z', to.z);
+    if (!xy) /* a lift or descent: at the z axis' speed */
+        v = fmin(v, it->o.max_feed_z);
     feed = put_feed(it, l, llround(v * 600.0));
     it->stats.travel_length += len;
     it->stats.travel_moves++;
@@ -792,7 +794,7 @@ static int header_line(amp_gcode_iter *it, lb *l, size_t k)
         return 1;
     case 6: lb_fmt(l, "; filament used %f1 mm (%f1 mm3)", e->filament_length, e->filament_volume); return 1;
     case 7:
-        lb_fmt(l, "; paths %u printed, %u skipped, %u segments (%u input), %f1 mm printed", (unsigned long)e->paths,
+        lb_fmt(l, "; paths %u (%u skipped), %u segments of %u, %f1 mm printed", (unsigned long)e->paths,
                (unsigned long)e->paths_skipped, (unsigned long)e->segments, (unsigned long)e->input_segments,
                e->print_length);
         return 1;
@@ -1080,6 +1082,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
         return 0;
     case PS_UNRETRACT:
         it->sub = PS_SEGS;
+        amp_gc_plan_flush(it); /* the head stops where it starts to print (an unretract usually sits there) */
         if (it->retracted) {
             move_e(it, l, +1);
             return 1;

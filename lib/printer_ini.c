@@ -91,11 +91,28 @@ static int first_number(const char *v, size_t n, double *out, int *pct)
     return k > 0 && *end == '\0' && isfinite(*out);
 }
 
+/* A decimal number up to @p stop (strtod alone would read "0x0" as hexadecimal); advances *s. */
+static int dec_number(const char **s, char stop, double *out)
+{
+    char buf[48], *end;
+    size_t k = 0;
+    while (**s == ' ' || **s == '"')
+        (*s)++;
+    while (**s && **s != stop && **s != ',' && **s != 'x' && **s != 'X' && k + 1 < sizeof buf)
+        buf[k++] = *(*s)++;
+    while (k > 0 && (buf[k - 1] == ' ' || buf[k - 1] == '"'))
+        k--;
+    buf[k] = '\0';
+    *out = strtod(buf, &end);
+    return k > 0 && *end == '\0' && isfinite(*out);
+}
+
 /* bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline. */
 static int bed_shape(amp_printer *p, const char *v, size_t n)
 {
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-    char buf[1024], *s, *end;
+    char buf[1024];
+    const char *s;
     int pts = 0;
     if (n >= sizeof buf)
         return 0;
@@ -107,14 +124,11 @@ static int bed_shape(amp_printer *p, const char *v, size_t n)
             s++;
         if (!*s)
             break;
-        x = strtod(s, &end);
-        if (end == s || (*end != 'x' && *end != 'X'))
+        if (!dec_number(&s, 'x', &x) || (*s != 'x' && *s != 'X'))
             return 0;
-        s = end + 1;
-        y = strtod(s, &end);
-        if (end == s || !isfinite(x) || !isfinite(y))
+        s++;
+        if (!dec_number(&s, ',', &y))
             return 0;
-        s = end;
         x0 = x < x0 ? x : x0;
         x1 = x > x1 ? x : x1;
         y0 = y < y0 ? y : y0;
@@ -289,6 +303,7 @@ amp_status amp_printer_parse_ini(amp_printer *p, const char *text, size_t len, c
         return st;
     memset(&c, 0, sizeof c);
     c.fan_min = p->fan_percent;
+    p->model[0] = '\0';
     if (name) {
         size_t n = strlen(name) < sizeof p->name - 1 ? strlen(name) : sizeof p->name - 1;
         memcpy(p->name, name, n);
