@@ -701,7 +701,7 @@ static void travel_hull(amp_gcode_iter *it)
             /* monotone chain: drop corners that lie on or below the chord of their neighbours */
             while (n >= 2 && (it->hull_t[n - 1] - it->hull_t[n - 2]) * (pz - it->hull_z[n - 2]) -
                                      (it->hull_z[n - 1] - it->hull_z[n - 2]) * (pt - it->hull_t[n - 2]) >=
-                                 0.0)
+                                 -1e-6) /* float tops of the grid: 1 nm bumps are not corners */
                 n--;
             if (n >= 1 && pt <= it->hull_t[n - 1]) { /* same fraction: keep the higher point */
                 if (pz > it->hull_z[n - 1])

@@ -20,6 +20,7 @@ typedef struct seg {
 
 typedef struct gsim {
     int klipper;      /* accept only Klipper's documented commands */
+    int xy_known;
     int rel_e, have_e_mode, g90, homed, heated, line_no, last_path;
     amp_box3 box;     /* every position a move went to */
     double first_e_z; /* z of the first extrusion */
@@ -202,10 +203,9 @@ static int gsim_line(gsim *s, const char *line)
             BAD("line %d: G1 without E", s->line_no);
         }
         s->pos = to;
-        if (s->homed && have['X' - 'A'] && have['Y' - 'A'])
+        s->xy_known |= have['X' - 'A'] && have['Y' - 'A'];
+        if (s->homed && s->xy_known) /* before the first XY move after homing only z is known */
             s->box = amp_box3_add(s->box, to);
-        else if (s->homed && have['Z' - 'A']) /* a lift: z is known, x and y are those of the last move */
-            s->box = amp_box3_add(s->box, amp_box3_is_empty(s->box) ? amp_v3(s->box.min.x, s->box.min.y, to.z) : to);
     }
     return 1;
 }
@@ -885,6 +885,425 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
 }
 END_TEST
 
+
+/* ------------------------------------------------------------------ issue 14: print-ready jobs */
+
+/*
+ * @p layers planar layers of height @p h filling the square [x0, x0+S] x [y0, y0+S]:
+ * per layer one boustrophedon path of lines spacing 2r (bead width w = 2r), at z = z0 + (i+1) h.
+ */
+static void planar_square(amp_pathset *ps, double x0, double y0, double z0, double S, int layers, double h, double r)
+{
+    int i, k, K = (int)floor(S / (2 * r));
+    for (i = 0; i < layers; i++) {
+        double z = z0 + (i + 1) * h;
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, h, NULL);
+        for (k = 0; k < K; k++) {
+            double y = y0 + r + 2 * r * k, xa = x0 + r, xb = x0 + S - r;
+            amp_pathset_push(ps, amp_v3(k % 2 ? xb : xa, y, z), r, NULL);
+            amp_pathset_push(ps, amp_v3(k % 2 ? xa : xb, y, z), r, NULL);
+        }
+    }
+}
+
+/* Parse @p text; assert it is accepted and every position lies in the bed box of @p o. */
+static void run_in_bed(gsim *s, const char *text, const amp_gcode_opts *o)
+{
+    gsim_init(s);
+    s->klipper = o->flavor == AMP_FLAVOR_KLIPPER;
+    ck_assert_msg(gsim_run(s, text), "%s", s->why);
+    ck_assert_msg(s->box.min.x >= o->bed_min_x && s->box.max.x <= o->bed_max_x && s->box.min.y >= o->bed_min_y &&
+                      s->box.max.y <= o->bed_max_y && s->box.min.z >= 0 && s->box.max.z <= o->max_height,
+                  "moves span %g..%g x %g..%g x %g..%g outside the bed", s->box.min.x, s->box.max.x, s->box.min.y,
+                  s->box.max.y, s->box.min.z, s->box.max.z);
+}
+
+static double gsim_filament(const gsim *s)
+{
+    double e = 0;
+    size_t k;
+    for (k = 0; k < s->nsegs; k++)
+        e += s->segs[k].e;
+    return e;
+}
+
+START_TEST(planar_beads_extrude_the_rounded_rectangle)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim s;
+    char *text;
+    const double S = 20, h = 0.2, r = 0.225, fil = PI * 1.75 * 1.75 / 4;
+    double part = S * S * 5 * h, vol, ext;
+    size_t i;
+    amp_pathset_init(&ps, NULL);
+    planar_square(&ps, -10, -10, 0, S, 5, h, r);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    text = gen(&ps, &o, NULL);
+    run_in_bed(&s, text, &o);
+    vol = amp_pathset_volume(&ps, -1);
+    ext = gsim_filament(&s) * fil;
+    /* within 3 % of the beads' volume (here only the 5-decimal rounding of E) */
+    ck_assert_msg(fabs(ext / vol - 1) < 0.03, "extruded %g mm3, beads %g mm3", ext, vol);
+    /* and never more than 1.05 x the part; a slicer-like fill of a solid square is a little below it */
+    ck_assert_msg(ext <= 1.05 * part && ext >= 0.85 * part, "extruded %g mm3 for a part of %g mm3", ext, part);
+    gsim_free(&s);
+    free(text);
+    /* the same paths as round tubes of radius r (the volumetric paper's model) overfill by ~75 %: the check bites */
+    for (i = 0; i < ps.npaths; i++)
+        ps.paths[i].h = 0;
+    text = gen(&ps, &o, NULL);
+    run_in_bed(&s, text, &o);
+    ck_assert_double_gt(gsim_filament(&s) * fil, 1.5 * part);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(placement_centres_the_job_and_rests_it_on_the_bed)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text;
+    double lowest = HUGE_VAL;
+    size_t k;
+    /* planar: a job far off the bed, floating at z 7: the first layer comes down to its height, 0.2 mm */
+    amp_pathset_init(&ps, NULL);
+    planar_square(&ps, -300, 410, 7, 30, 4, 0.2, 0.25);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER);
+    o.bed_max_x = 250; /* a Prusa-sized bed */
+    o.bed_max_y = 210;
+    text = gen(&ps, &o, &st);
+    run_in_bed(&s, text, &o);
+    ck_assert_double_eq_tol(s.first_e_z, 0.2, 1e-6);
+    ck_assert_double_eq_tol(st.first_layer_z, 0.2, 1e-9);
+    ck_assert_double_eq_tol(0.5 * (s.box.min.x + s.box.max.x), 125, 0.3); /* travels start at the bed centre too */
+    ck_assert_double_eq_tol(0.5 * (st.bbox.min.x + st.bbox.max.x), 125, 1e-9);
+    ck_assert_double_eq_tol(0.5 * (st.bbox.min.y + st.bbox.max.y), 105, 1e-9);
+    ck_assert_ptr_nonnull(strstr(text, "; bounding box "));
+    ck_assert_ptr_nonnull(strstr(text, "; placed on the bed, offset "));
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+    /* tubes: the lowest bead rests on the bed (z - r = 0), r read back from E and L */
+    demo_like(&ps);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    text = gen(&ps, &o, &st);
+    run_in_bed(&s, text, &o);
+    for (k = 0; k < s.nsegs; k++) {
+        double len = amp_v3_dist(s.segs[k].a, s.segs[k].b), r;
+        if (len < 1e-6 || s.segs[k].e <= 0)
+            continue;
+        r = sqrt(s.segs[k].e * 0.25 * 1.75 * 1.75 / len);
+        lowest = fmin(lowest, fmin(s.segs[k].a.z, s.segs[k].b.z) - r);
+    }
+    ck_assert_double_eq_tol(lowest, 0, 0.01);
+    /* a checker that would not notice a move off the bed is no checker */
+    {
+        size_t n = strlen(text);
+        char *bad = malloc(n + 32);
+        memcpy(bad, text, n);
+        strcpy(bad + n, "G0 X-5 Y10 F6000\n");
+        gsim_free(&s);
+        gsim_init(&s);
+        ck_assert(gsim_run(&s, bad));
+        ck_assert_double_lt(s.box.min.x, o.bed_min_x);
+        free(bad);
+    }
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(place_origin_keeps_coordinates_and_place_at_moves_the_centre)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    amp_pathset_init(&ps, NULL);
+    planar_square(&ps, 10, 20, 0, 30, 2, 0.2, 0.25);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.place = AMP_PLACE_ORIGIN;
+    free(gen(&ps, &o, &st));
+    ck_assert_double_eq_tol(st.bbox.min.x, 10.25, 1e-9);
+    ck_assert_double_eq_tol(st.bbox.min.z, 0.2, 1e-9);
+    o.place = AMP_PLACE_AT;
+    o.place_x = 50;
+    o.place_y = 60;
+    free(gen(&ps, &o, &st));
+    ck_assert_double_eq_tol(0.5 * (st.bbox.min.x + st.bbox.max.x), 50, 1e-9);
+    ck_assert_double_eq_tol(0.5 * (st.bbox.min.y + st.bbox.max.y), 60, 1e-9);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    amp_error err;
+    const char *in = amp_test_tmp("big.amp"), *out = amp_test_tmp("big.gcode");
+    char args[1024], tmp[1024];
+    FILE *f;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(230, 0, 0.3), 0.3, NULL);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_RANGE);
+    ck_assert_msg(strstr(err.msg, " X spans") && strstr(err.msg, "10.000 mm over") && strstr(err.msg, "generic"), "%s",
+                  err.msg);
+    /* it fits a bigger bed */
+    o.bed_max_x = 250;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_OK);
+    /* too tall */
+    amp_pathset_push(&ps, amp_v3(0, 5, 260), 0.3, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_RANGE);
+    ck_assert_msg(strstr(err.msg, " Z spans"), "%s", err.msg);
+    /* placed at a point too near the edge: Y over */
+    ps.verts[2].p = amp_v3(0, 5, 0.3);
+    o.place = AMP_PLACE_AT;
+    o.place_x = 125;
+    o.place_y = 218;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_RANGE);
+    ck_assert_msg(strstr(err.msg, " Y spans"), "%s", err.msg);
+    /* the command: exit 2, a one-line reason, no file (and no temporary) */
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    remove(out);
+    snprintf(args, sizeof args, "gcode %s -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_ptr_null(fopen(out, "rb"));
+    snprintf(tmp, sizeof tmp, "%s.tmp", out);
+    ck_assert_ptr_null(fopen(tmp, "rb"));
+    snprintf(args, sizeof args, "gcode %s --printer prusa-mk3s --place 125,208 -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_ptr_null(fopen(out, "rb"));
+    snprintf(args, sizeof args, "gcode %s --printer voron-350 -o %s", in, out); /* fits a 350 mm bed */
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    f = fopen(out, "rb");
+    ck_assert_ptr_nonnull(f);
+    fclose(f);
+    snprintf(args, sizeof args, "gcode %s --place 1,2,3 -o %s", in, out);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    remove(out);
+    remove(in);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+/* Distance from p to the polyline of written extrusions s->segs[a..b). */
+static double dist_to_written(const gsim *s, size_t a, size_t b, amp_vec3 p)
+{
+    double best = HUGE_VAL, t;
+    size_t k;
+    for (k = a; k < b; k++)
+        best = fmin(best, sqrt(amp_v3_seg_dist2(p, s->segs[k].a, s->segs[k].b, &t)));
+    return best;
+}
+
+START_TEST(simplified_paths_stay_within_tolerance_without_micro_segments)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text;
+    size_t k, n = 6000, shortest_at = 0;
+    double shortest = HUGE_VAL, worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    amp_pathset_init(&ps, NULL);
+    /* a 30 mm arc of radius 10 sampled every 5 um (below a motor step), radius 0.3 +- 0.05 slowly */
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k <= n; k++) {
+        double a = 3.0 * k / n;
+        amp_pathset_push(&ps, amp_v3(10 * cos(a), 10 * sin(a), 0.3 + 0.5 * a), 0.3 + 0.05 * sin(2 * a), NULL);
+    }
+    /* a whole path of 15 um: written as one segment */
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(0.005, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(0.015, 0, 0.3), 0.3, NULL);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    o.place = AMP_PLACE_ORIGIN;
+    o.bed_min_x = o.bed_min_y = -50;
+    text = gen(&ps, &o, &st);
+    run_in_bed(&s, text, &o);
+    ck_assert_uint_eq(st.input_segments, n + 2);
+    ck_assert_uint_lt(st.segments * 20, st.input_segments); /* lines saved */
+    ck_assert_uint_eq(s.nsegs, st.segments);
+    for (k = 0; k + 1 < s.nsegs; k++) {
+        double len = amp_v3_dist(s.segs[k].a, s.segs[k].b);
+        if (len < shortest) {
+            shortest = len;
+            shortest_at = k;
+        }
+    }
+    ck_assert_msg(shortest >= 0.02 - 1e-3, "segment %lu is %g mm long", (unsigned long)shortest_at, shortest);
+    ck_assert_double_eq_tol(amp_v3_dist(s.segs[s.nsegs - 1].a, s.segs[s.nsegs - 1].b), 0.015, 1e-3);
+    /* every input vertex lies within the chord tolerance of what was written (+ the 3-decimal rounding) */
+    for (k = 0; k <= n; k++)
+        worst = fmax(worst, dist_to_written(&s, 0, s.nsegs - 1, ps.verts[k].p));
+    ck_assert_msg(worst <= o.chord_tol + 1e-3, "input vertex %g mm from the written path", worst);
+    /* and the plastic is that of the input beads */
+    ck_assert_double_eq_tol(gsim_filament(&s) * fil / amp_pathset_volume(&ps, -1), 1, 1e-3);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+/* Line (1-based) of the first occurrence of @p what at a line start in @p text after line @p after; 0 if none. */
+static size_t line_of(const char *text, const char *what, size_t after)
+{
+    size_t line = 1;
+    const char *p = text;
+    while (*p) {
+        if (line > after && strncmp(p, what, strlen(what)) == 0)
+            return line;
+        p = strchr(p, '\n');
+        if (!p)
+            break;
+        p++;
+        line++;
+    }
+    return 0;
+}
+
+START_TEST(first_layer_temperatures_and_fan_come_in_order)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim s;
+    char *text;
+    size_t l2, k;
+    int off;
+    amp_pathset_init(&ps, NULL);
+    planar_square(&ps, 0, 0, 0, 20, 4, 0.2, 0.25);
+    for (off = 1; off <= 2; off++) {
+        amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+        o.fan_off_layers = off;
+        o.fan_speed = 0.5;
+        o.first_layer_bed_temp = 65;
+        text = gen(&ps, &o, NULL);
+        run_in_bed(&s, text, &o);
+        /* start: first-layer temperatures, homing, waiting, then the fan is off before anything is printed */
+        ck_assert_uint_lt(line_of(text, "M140 S65", 0), line_of(text, "M104 S215", 0));
+        ck_assert_uint_lt(line_of(text, "M104 S215", 0), line_of(text, "G28", 0));
+        ck_assert_uint_lt(line_of(text, "G28", 0), line_of(text, "M190 S65", 0));
+        ck_assert_uint_lt(line_of(text, "M109 S215", 0), line_of(text, "M107", 0));
+        ck_assert_uint_lt(line_of(text, "M107", 0), s.first_ext_line);
+        /* the first layer at first-layer speed, the others at print speed */
+        for (k = 0; k < s.nsegs; k++)
+            ck_assert_double_eq_tol(s.segs[k].feed, s.segs[k].b.z < 0.21 ? o.first_layer_feed : o.print_feed, 1e-9);
+        /* after the first layer: the other temperatures (bed 60 now), without waiting */
+        l2 = line_of(text, "; path 1 ", 0);
+        ck_assert_uint_gt(line_of(text, "M104 S210", 0), l2);
+        ck_assert_uint_gt(line_of(text, "M140 S60", 0), l2);
+        ck_assert_uint_lt(line_of(text, "M140 S60", 0), line_of(text, "G1 X", l2));
+        /* the fan (half speed: S128) at the start of layer off + 1, off after the last extrusion */
+        ck_assert_uint_gt(s.fan_on_line, line_of(text, off == 1 ? "; path 1 " : "; path 2 ", 0));
+        ck_assert_uint_lt(s.fan_on_line, line_of(text, off == 1 ? "; path 2 " : "; path 3 ", 0));
+        ck_assert_uint_eq(s.fan_on_line, line_of(text, "M106 S128", 0));
+        ck_assert_uint_gt(s.fan_off_line, s.last_ext_line);
+        gsim_free(&s);
+        free(text);
+    }
+    /* no fan: no fan commands at all */
+    o.fan_speed = 0;
+    text = gen(&ps, &o, NULL);
+    ck_assert_ptr_null(strstr(text, "M106"));
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(travels_go_straight_over_nothing_and_over_material_only_where_it_is)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text, *p;
+    size_t near, k;
+    int diagonal = 0;
+    amp_pathset_init(&ps, NULL);
+    /* two short planar beads 30 mm apart at z 0.3: the travel between them crosses nothing */
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_set_height(&ps, 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(5, 0, 0.3), 0.3, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_set_height(&ps, 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(35, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(40, 0, 0.3), 0.3, NULL);
+    raw_opts(&o, AMP_FLAVOR_MARLIN);
+    text = gen(&ps, &o, &st);
+    p = strstr(text, "; path 1 ");
+    ck_assert_ptr_nonnull(p);
+    /* retract, lift by z-hop above the layer, one straight move, descend, unretract */
+    ck_assert_msg(strncmp(strchr(p, '\n') + 1, "G1 E", 4) == 0, "%s", p);
+    p = strchr(strchr(p, '\n') + 1, '\n') + 1;
+    ck_assert(strncmp(p, "G0 Z0.7", 7) == 0);
+    p = strchr(p, '\n') + 1;
+    ck_assert(strncmp(p, "G0 X35 Y0", 9) == 0);
+    p = strchr(p, '\n') + 1;
+    ck_assert(strncmp(p, "G0 Z0.3", 7) == 0);
+    free(text);
+    /* a short hop (1 mm) is not retracted */
+    ps.verts[2].p.x = ps.verts[1].p.x + 1;
+    o.retract_min_travel = 2;
+    free(gen(&ps, &o, &st));
+    ck_assert_uint_eq(st.retractions, 1); /* only the final one */
+    /* a 6 mm tower in the middle of the way: the travel climbs over it and comes down again, never lower */
+    ps.verts[2].p.x = 35;
+    amp_pathset_free(&ps);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(5, 0, 0.3), 0.3, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < 20; k++)
+        amp_pathset_push(&ps, amp_v3(20 + (k % 2), 0, 0.3 * (k + 1)), 0.3, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(5, 1, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 1, 0.3), 0.3, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(35, 0, 0.3), 0.3, NULL);
+    amp_pathset_push(&ps, amp_v3(40, 0, 0.3), 0.3, NULL);
+    text = gen(&ps, &o, &st);
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    ck_assert_int_eq(count_gouges(&s, o.filament_diameter, o.flow, 1.0, o.z_hop, &near), 0);
+    ck_assert_uint_gt(near, 5);
+    ck_assert_double_ge(st.max_travel_z, 6.0 + 0.3 + 0.4 - 1e-9);
+    for (k = 0; k < s.ntrav; k++)
+        diagonal += s.travels[k].a.z != s.travels[k].b.z;
+    ck_assert_int_ge(diagonal, 2); /* up and down the flanks, not lifted to the top over the whole way */
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(klipper_reader_rejects_marlin_only_commands)
+{
+    static const char *const marlin_only[] = {"G28\nG21\n", "G28\nM900 K0.05\n", "G28\nM569 S1 X\n"};
+    size_t i;
+    for (i = 0; i < sizeof marlin_only / sizeof marlin_only[0]; i++) {
+        gsim s;
+        gsim_init(&s);
+        s.klipper = 1;
+        ck_assert_msg(!gsim_run(&s, marlin_only[i]), "case %lu accepted", (unsigned long)i);
+        gsim_free(&s);
+    }
+}
+END_TEST
+
 static Suite *gcode_suite(void)
 {
     Suite *s = suite_create("gcode");
@@ -903,6 +1322,14 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, sink_failure_stops_the_writer);
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
+    tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);
+    tcase_add_test(tc, placement_centres_the_job_and_rests_it_on_the_bed);
+    tcase_add_test(tc, place_origin_keeps_coordinates_and_place_at_moves_the_centre);
+    tcase_add_test(tc, a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow);
+    tcase_add_test(tc, simplified_paths_stay_within_tolerance_without_micro_segments);
+    tcase_add_test(tc, first_layer_temperatures_and_fan_come_in_order);
+    tcase_add_test(tc, travels_go_straight_over_nothing_and_over_material_only_where_it_is);
+    tcase_add_test(tc, klipper_reader_rejects_marlin_only_commands);
     tcase_set_timeout(tc, 300);
     suite_add_tcase(s, tc);
     return s;
