@@ -605,13 +605,17 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
         grid_walk(it, va->p, vb->p, r, top, 0);
 }
 
-/* The written segment from vertex k to vertex j of the current path (SPEC §5, clean segments). */
-static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j)
+/*
+ * The written segment from vertex k to vertex j of the current path (SPEC §5,
+ * clean segments): a straight G1, or with @p arc a G2/G3 along it.
+ */
+static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_gc_arc *arc)
 {
     const amp_path *p = &it->ps->paths[it->path];
     const amp_pvert *v = amp_pathset_path_verts(it->ps, it->path);
     amp_vec3 a = v[k].p, b = v[j].p, d = amp_v3_sub(b, a);
-    double len = amp_v3_len(d), vol = 0.0, de, feed, area, base = it->path_first ? it->o.first_layer_feed : it->o.print_feed;
+    double len = arc ? arc->len : amp_v3_len(d), vol = 0.0, de, feed, area;
+    double base = it->path_first ? it->o.first_layer_feed : it->o.print_feed;
     long long fu = llround(base * 600.0);
     size_t m;
     /* E = flow * sum A L / (pi (d/2)^2) over the input segments replaced: the volume stays exact */
@@ -629,10 +633,15 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j)
             fu = 1;
         it->stats.lowered_feed_segments++;
     }
-    lb_str(l, "G1");
+    lb_str(l, arc ? (arc->cw ? "G2" : "G3") : "G1");
     put_coord(it, l, 'X', b.x);
     put_coord(it, l, 'Y', b.y);
     put_coord(it, l, 'Z', b.z);
+    if (arc) { /* the centre relative to the start, as G2/G3 take it */
+        lb_num(l, 'I', arc->cx - a.x, 3);
+        lb_num(l, 'J', arc->cy - a.y, 3);
+        it->stats.arcs++;
+    }
     it->e_exact += de;
     put_e(it, l);
     feed = put_feed(it, l, fu);
@@ -644,7 +653,8 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j)
     if (de > 0.0 && !it->printed_any)
         it->stats.first_layer_z = fmin(a.z, b.z) + it->off.z;
     it->stats.bbox = amp_box3_add(amp_box3_add(it->stats.bbox, amp_v3_add(a, it->off)), amp_v3_add(b, it->off));
-    amp_gc_plan_move(it, d, len, feed, de, 0);
+    /* an arc enters the planner as one block of its length along its chord */
+    amp_gc_plan_move(it, arc && amp_v3_len(d) > 0.0 ? amp_v3_scale(d, len / amp_v3_len(d)) : d, len, feed, de, 0);
     it->pos = b;
     if (de > 0.0)
         it->printed_any = 1;
@@ -1090,8 +1100,13 @@ static int step_path(amp_gcode_iter *it, lb *l)
         return 0;
     default: /* PS_SEGS: it->seg is the vertex the head is at */
         if (it->seg + 1 < p->n && next_segment(ps, it->path, it->seg) + 1 < p->n) {
+            amp_gc_arc arc;
+            int use_arc;
             it->nxt = next_vertex(it, it->path, it->seg);
-            move_print(it, l, it->seg, it->nxt);
+            use_arc = o->arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, o, &arc);
+            if (use_arc)
+                it->nxt = arc.end;
+            move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
             it->seg = it->nxt;
             return 1;
         }

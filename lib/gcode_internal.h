@@ -18,4 +18,19 @@ void amp_gc_plan_single(amp_gcode_iter *it, double len, double v);
 /* Execute every planned block and come to rest. */
 void amp_gc_plan_flush(amp_gcode_iter *it);
 
+/* A helical arc from the current vertex to vertex @p end: centre (cx, cy), clockwise or not, length in XYZ. */
+typedef struct amp_gc_arc {
+    double cx, cy, len;
+    int cw;
+    size_t end;
+} amp_gc_arc;
+
+/*
+ * The longest arc from vertex @p k of the path @p v (n vertices) that keeps
+ * every vertex within o->chord_tol (and its radius within o->radius_tol) and
+ * reaches beyond @p line_end (the end of the straight segment the writer would
+ * take); 1 with *arc filled, 0 when no such arc exists (gcode_arc.c).
+ */
+int amp_gc_fit_arc(const amp_pvert *v, size_t n, size_t k, size_t line_end, const amp_gcode_opts *o, amp_gc_arc *arc);
+
 #endif

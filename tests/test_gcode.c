@@ -14,12 +14,15 @@
 
 typedef struct seg {
     amp_vec3 a, b;
+    int arc;        /* 2 or 3: G2/G3 around centre (cx, cy) */
+    double cx, cy;
     double e, feed; /* feed mm/s */
     size_t before;  /* travels: number of extrusion segments printed before */
 } seg;
 
 typedef struct gsim {
     int klipper;      /* accept only Klipper's documented commands */
+    int arcs;         /* accept G2/G3 (firmware with arc support) */
     int xy_known;
     int rel_e, have_e_mode, g90, homed, heated, line_no, last_path;
     amp_box3 box;     /* every position a move went to */
@@ -110,6 +113,7 @@ static int gsim_line(gsim *s, const char *line)
         int ok = 0;
         for (i = 0; i < sizeof gs / sizeof gs[0]; i++)
             ok |= g == gs[i] && !(s->klipper && g == 21);
+        ok |= s->arcs && (g == 2 || g == 3);
         for (i = 0; i < sizeof ms / sizeof ms[0]; i++)
             ok |= m == ms[i];
         if (!ok || strlen(tok) > 4)
@@ -150,6 +154,32 @@ static int gsim_line(gsim *s, const char *line)
             BAD("line %d: feed not positive", s->line_no);
         s->f = val['F' - 'A'] / 60.0;
     }
+    if (g == 2 || g == 3) {
+        /* a helical arc: the centre must be as far from the start as from the end */
+        double cx = s->pos.x + (have['I' - 'A'] ? val['I' - 'A'] : 0), cy = s->pos.y + (have['J' - 'A'] ? val['J' - 'A'] : 0);
+        amp_vec3 to = s->pos;
+        seg x;
+        if (have['X' - 'A'])
+            to.x = val['X' - 'A'];
+        if (have['Y' - 'A'])
+            to.y = val['Y' - 'A'];
+        if (have['Z' - 'A'])
+            to.z = val['Z' - 'A'];
+        if (!have['E' - 'A'] || fabs(hypot(s->pos.x - cx, s->pos.y - cy) - hypot(to.x - cx, to.y - cy)) > 2e-3)
+            BAD("line %d: arc without E or with an inconsistent centre", s->line_no);
+        x.a = s->pos;
+        x.b = to;
+        x.arc = g;
+        x.cx = cx;
+        x.cy = cy;
+        x.e = s->rel_e ? val['E' - 'A'] : val['E' - 'A'] - s->e;
+        s->e = s->rel_e ? s->e + x.e : val['E' - 'A'];
+        x.feed = s->f;
+        x.before = 0;
+        push_seg(&s->segs, &s->nsegs, &s->cap, x);
+        s->pos = to;
+        return 1;
+    }
     if (g == 0 || g == 1) {
         amp_vec3 to = s->pos;
         double de = 0.0;
@@ -171,6 +201,7 @@ static int gsim_line(gsim *s, const char *line)
         }
         if (g == 1 && have['E' - 'A'] && (have['X' - 'A'] || have['Y' - 'A'] || have['Z' - 'A'])) {
             seg x;
+            memset(&x, 0, sizeof x);
             if (!s->heated)
                 BAD("line %d: extrusion before the hot end is heated", s->line_no);
             x.a = s->pos;
@@ -192,6 +223,7 @@ static int gsim_line(gsim *s, const char *line)
             s->g0_lines++;
             if (have['X' - 'A'] || have['Y' - 'A']) {
                 seg x;
+                memset(&x, 0, sizeof x);
                 x.a = s->pos;
                 x.b = to;
                 x.e = 0;
@@ -1399,6 +1431,78 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
 }
 END_TEST
 
+
+/* Distance from p to written move k: a chord, or a helical arc (radial and z error, p's angle inside the sweep). */
+static double dist_to_move(const seg *m, amp_vec3 p)
+{
+    double t, R, a0, a1, ap, sweep, f, twopi = 2 * PI;
+    if (!m->arc)
+        return sqrt(amp_v3_seg_dist2(p, m->a, m->b, &t));
+    R = hypot(m->a.x - m->cx, m->a.y - m->cy);
+    a0 = atan2(m->a.y - m->cy, m->a.x - m->cx);
+    a1 = atan2(m->b.y - m->cy, m->b.x - m->cx);
+    ap = atan2(p.y - m->cy, p.x - m->cx);
+    /* counter-clockwise (G3) sweep from a0 to a1; G2 the other way */
+    sweep = m->arc == 3 ? fmod(a1 - a0 + 2 * twopi, twopi) : fmod(a0 - a1 + 2 * twopi, twopi);
+    f = m->arc == 3 ? fmod(ap - a0 + 2 * twopi, twopi) : fmod(a0 - ap + 2 * twopi, twopi);
+    if (f > sweep + 1e-9)
+        return HUGE_VAL;
+    f = sweep > 0 ? f / sweep : 0;
+    return hypot(hypot(p.x - m->cx, p.y - m->cy) - R, p.z - (m->a.z + f * (m->b.z - m->a.z)));
+}
+
+START_TEST(arcs_follow_the_input_within_tolerance)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st, lines_only;
+    gsim s;
+    char *text;
+    size_t k, i, n = 4000, arcs = 0;
+    double worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    amp_pathset_init(&ps, NULL);
+    /* one and a half turns of a helix of radius 12 (pitch 2 mm), sampled every 0.03 mm, then a straight line */
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k <= n; k++) {
+        double a = 3 * PI * k / n;
+        amp_pathset_push(&ps, amp_v3(12 * cos(a), 12 * sin(a), 0.3 + a / PI), 0.3 + 0.02 * sin(a), NULL);
+    }
+    for (k = 1; k <= 50; k++)
+        amp_pathset_push(&ps, amp_v3(-12 - 0.1 * k, 0, 3.3), 0.3, NULL);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER);
+    free(gen(&ps, &o, &lines_only));
+    o.arcs = 1;
+    text = gen(&ps, &o, &st);
+    gsim_init(&s);
+    s.klipper = 1;
+    s.arcs = 1;
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    for (k = 0; k < s.nsegs; k++)
+        arcs += s.segs[k].arc != 0;
+    ck_assert_uint_eq(arcs, st.arcs);
+    ck_assert_uint_ge(arcs, 3); /* each arc sweeps less than a turn */
+    ck_assert_uint_lt(st.segments * 5, lines_only.segments);
+    /* every input vertex within the chord tolerance of a written move (placed back into model coordinates) */
+    for (i = 0; i < ps.paths[0].n; i++) {
+        amp_vec3 p = amp_v3_add(ps.verts[i].p, amp_v3_sub(s.segs[0].a, ps.verts[0].p));
+        double best = HUGE_VAL;
+        for (k = 0; k < s.nsegs; k++)
+            best = fmin(best, dist_to_move(&s.segs[k], p));
+        worst = fmax(worst, best);
+    }
+    ck_assert_msg(worst <= o.chord_tol + 2e-3, "input vertex %g mm from the written moves", worst);
+    ck_assert_double_eq_tol(gsim_filament(&s) * fil / amp_pathset_volume(&ps, -1), 1, 1e-3);
+    gsim_free(&s);
+    /* a reader without arc support refuses the file: the G2/G3 are really there */
+    gsim_init(&s);
+    s.klipper = 1;
+    ck_assert(!gsim_run(&s, text));
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *gcode_suite(void)
 {
     Suite *s = suite_create("gcode");
@@ -1426,6 +1530,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, travels_go_straight_over_nothing_and_over_material_only_where_it_is);
     tcase_add_test(tc, klipper_reader_rejects_marlin_only_commands);
     tcase_add_test(tc, continuous_slices_of_the_builtin_meshes_print_on_the_bed);
+    tcase_add_test(tc, arcs_follow_the_input_within_tolerance);
     tcase_set_timeout(tc, 300);
     suite_add_tcase(s, tc);
     return s;

@@ -37,6 +37,8 @@ const char cmd_gcode_usage[] =
     "  --chord-tol T           simplification chord tolerance, mm (0.01; 0 = off)\n"
     "  --radius-tol T          deposition radius tolerance of the simplification, mm (0.01)\n"
     "  --min-segment L         shortest extruding segment unless a whole path, mm (0.02; 0 = off)\n"
+    "  --arcs                  fit helical arcs within the tolerances and write them as G2/G3 (Marlin with\n"
+    "                          ARC_SUPPORT, Klipper with [gcode_arcs])\n"
     "  --corridor W            half-width around a travel line checked for material, mm (2.0)\n"
     "  --end-lift H            lift at the end of the job, mm (10)\n"
     "  --junction-deviation J  junction deviation of the time estimate, mm (0.05)\n"
@@ -130,6 +132,7 @@ static void print_json(const char *in, const char *out, const amp_printer *pr, c
     cli_json_int(&j, "input_segments", (long long)st->input_segments);
     cli_json_int(&j, "segments", (long long)st->segments);
     cli_json_int(&j, "lines_saved", (long long)st->input_segments - (long long)st->segments);
+    cli_json_int(&j, "arcs", (long long)st->arcs);
     cli_json_int(&j, "travels", (long long)st->travels);
     cli_json_int(&j, "travel_moves", (long long)st->travel_moves);
     cli_json_int(&j, "retractions", (long long)st->retractions);
@@ -257,20 +260,44 @@ static int part_volume(const char *mesh, double *vol)
     return CLI_OK;
 }
 
+/* Load the paths, check that the job fits (before any file is touched), write it, report. */
+static int run_job(const char *in, const char *out, int json, const amp_printer *pr, const amp_gcode_opts *o,
+                   double part)
+{
+    static amp_gcode_iter it;
+    amp_pathset ps;
+    amp_gcode_stats st;
+    amp_error err;
+    double t0;
+    int rc;
+    amp_pathset_init(&ps, NULL);
+    amp_error_clear(&err);
+    rc = cli_load_paths("gcode", in, &ps);
+    t0 = cli_now();
+    if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, o, &err) != AMP_OK)
+        rc = cli_fail_err("gcode", &err);
+    st = it.est;
+    if (rc == CLI_OK && out)
+        rc = write_gcode(out, &ps, o, &st);
+    if (rc == CLI_OK && json)
+        print_json(in, out, pr, &it, &st, &ps, part, cli_now() - t0);
+    else if (rc == CLI_OK)
+        print_human(in, out, pr, &it, &st);
+    amp_pathset_free(&ps);
+    return rc;
+}
+
 int cmd_gcode(int argc, char **argv)
 {
     static amp_printer pr;
-    static amp_gcode_iter it;
     amp_gcode_opts o;
-    amp_pathset ps;
-    amp_gcode_stats st;
     amp_error err;
     cli_vals v;
     const char *pos[1], *flavor = NULL, *out = NULL, *start = NULL, *end = NULL, *printer = "generic", *place = NULL;
     const char *mesh = NULL;
     char *start_text = NULL, *end_text = NULL;
-    int json = 0, rel = 0, abs_e = 0, npos = 0, rc;
-    double t0, part = 0.0;
+    int json = 0, rel = 0, abs_e = 0, arcs = 0, npos = 0, rc;
+    double part = 0.0;
     cli_opt opts[] = {{"printer", CLI_STR, &printer, 0},        {"place", CLI_STR, &place, 0},
                       {"flavor", CLI_STR, &flavor, 0},          {"mesh", CLI_STR, &mesh, 0},
                       {"filament", CLI_DOUBLE, &v.filament, 0}, {"flow", CLI_DOUBLE, &v.flow, 0},
@@ -288,6 +315,7 @@ int cmd_gcode(int argc, char **argv)
                       {"chord-tol", CLI_DOUBLE, &v.chord, 0},   {"radius-tol", CLI_DOUBLE, &v.rtol, 0},
                       {"min-segment", CLI_DOUBLE, &v.minseg, 0}, {"corridor", CLI_DOUBLE, &v.corridor, 0},
                       {"end-lift", CLI_DOUBLE, &v.end_lift, 0}, {"relative-e", CLI_FLAG, &rel, 0},
+                      {"arcs", CLI_FLAG, &arcs, 0},
                       {"absolute-e", CLI_FLAG, &abs_e, 0},      {"start", CLI_STR, &start, 0},
                       {"end", CLI_STR, &end, 0},                {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},             {NULL, CLI_FLAG, NULL, 0}};
@@ -309,6 +337,7 @@ int cmd_gcode(int argc, char **argv)
     apply_overrides(opts, &v, &o);
     if (place && (rc = parse_place(place, &o)) != CLI_OK)
         return rc;
+    o.arcs = arcs;
     if (rel)
         o.relative_e = 1;
     if (abs_e)
@@ -325,20 +354,7 @@ int cmd_gcode(int argc, char **argv)
         o.start_gcode = start_text;
     if (end_text)
         o.end_gcode = end_text;
-    amp_pathset_init(&ps, NULL);
-    rc = cli_load_paths("gcode", pos[0], &ps);
-    t0 = cli_now();
-    /* init first: a job that does not fit the bed is refused before any file is touched */
-    if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, &o, &err) != AMP_OK)
-        rc = cli_fail_err("gcode", &err);
-    st = it.est;
-    if (rc == CLI_OK && out)
-        rc = write_gcode(out, &ps, &o, &st);
-    if (rc == CLI_OK && json)
-        print_json(pos[0], out, &pr, &it, &st, &ps, part, cli_now() - t0);
-    else if (rc == CLI_OK)
-        print_human(pos[0], out, &pr, &it, &st);
-    amp_pathset_free(&ps);
+    rc = run_job(pos[0], out, json, &pr, &o, part);
     amp_free(NULL, start_text);
     amp_free(NULL, end_text);
     return rc;

@@ -55,7 +55,12 @@
  * sum of the replaced segments' E, so the volume is exact. With min_segment
  * > 0 no extruding segment is shorter than min_segment unless it is a whole
  * path (short pieces are merged with the next, or the last with the one
- * before). chord_tol = min_segment = 0 writes every input segment.
+ * before). chord_tol = min_segment = 0 writes every input segment. With
+ * arcs = 1 a run of vertices on one circle in XY (z and radius linear in the
+ * angle, each polyline piece within chord_tol of the arc, circle radius
+ * 0.5..1000 mm, sweep below 2 pi) that reaches beyond the straight segment is
+ * written as one `G2`/`G3 X Y Z I J E` (Marlin ARC_SUPPORT, Klipper
+ * [gcode_arcs]); its E is again the exact sum of the replaced segments'.
  *
  * First layer: for planar jobs the paths at the lowest planar layer z; for
  * tube jobs the paths whose lowest bead point lies below first_layer_height
@@ -174,6 +179,7 @@ typedef struct amp_gcode_opts {
     double chord_tol;           /**< mm, simplification chord tolerance (0.01; 0 = off) */
     double radius_tol;          /**< mm, deposition radius tolerance of the simplification (0.01) */
     double min_segment;         /**< mm, shortest extruding segment unless a whole path (0.02; 0 = off) */
+    int arcs;                   /**< 1: fit helical arcs, written as G2/G3 (0; needs firmware arc support) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */
@@ -194,6 +200,7 @@ typedef struct amp_gcode_stats {
     double travel_time;           /**< part spent in travels, retractions and lifts */
     double max_travel_z;          /**< highest z a travel rose to (placed) */
     size_t input_segments;        /**< segments of non-zero length in the input paths */
+    size_t arcs;                  /**< G2/G3 moves (counted in segments too) */
     size_t travel_moves;          /**< G0 lines */
     double bead_volume;           /**< sum of A L over the printed paths (SPEC §5), mm^3 */
     double first_layer_z;         /**< placed z of the first extrusion */
