@@ -123,7 +123,11 @@ extern "C" {
 /** Smallest buffer accepted by amp_gcode_iter_next() (line + NUL). */
 #define AMP_GCODE_LINE_CAP (AMP_GCODE_LINE_MAX + 1)
 
-/** Cells per side of the material-height grid used to lift travels (compile-time; 32 = 4 KiB). */
+/**
+ * Cells per side of the material-height grid used to lift travels (compile-time; 128 = 64 KiB,
+ * the iterator is then about 80 KiB; -DAMP_GCODE_GRID=32 gives 4 KiB for small targets, with
+ * travels up to a few percent longer because the tops are tracked more coarsely).
+ */
 #ifndef AMP_GCODE_GRID
 #define AMP_GCODE_GRID 128
 #endif
