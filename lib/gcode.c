@@ -2,27 +2,32 @@
  * G-code writer (SPEC §5): an allocation-free line iterator over a path set.
  *
  * The iterator is a small state machine (header, start sequence, set-up,
- * paths with their travels, teardown, end sequence). Init runs it once
- * without formatting (pass 1) to obtain the figures the header prints; the
- * caller's calls to amp_gcode_iter_next() then run it again (pass 2) and
- * format each line with an integer fixed-point formatter (no printf on the
- * hot path, no locale, no exponents).
+ * paths with their travels, teardown, end sequence). Init checks the job,
+ * places it on the bed and runs the machine once without formatting (pass 1)
+ * to obtain the figures the header prints; the caller's calls to
+ * amp_gcode_iter_next() then run it again (pass 2) and format each line with
+ * an integer fixed-point formatter (no printf on the hot path, no locale, no
+ * exponents). The print-time estimate lives in gcode_estimate.c.
  */
 #include <math.h>
 #include <stdarg.h>
 #include <string.h>
 
-#include "ampath/gcode.h"
 #include "ampath/version.h"
+#include "gcode_internal.h"
 
 #define GC_MAGIC 0x67636f64u
 #define GC_PI 3.14159265358979323846
 #define GC_MIN_SEG 1e-9      /* segments shorter than this (mm) are not printed */
 #define GC_COORD_MAX 99999.0 /* keeps every number short enough for AMP_GCODE_LINE_MAX */
+#define GC_FIT_TOL 5e-4      /* half the 0.001 mm resolution of the written coordinates */
+#define GC_HEADER_LINES 9
 
 enum { PH_HEADER, PH_START, PH_SETUP, PH_PATHS, PH_TEARDOWN, PH_END, PH_DONE };
 /* sub-steps of PH_PATHS */
-enum { PS_COMMENT, PS_RETRACT, PS_LIFT, PS_XY, PS_DESCEND, PS_UNRETRACT, PS_SEGS };
+enum { PS_COMMENT, PS_HOTEND, PS_BED, PS_FAN, PS_PLAN, PS_RETRACT, PS_LIFT, PS_HULL, PS_DESCEND, PS_UNRETRACT, PS_SEGS };
+/* sub-steps of PH_START around a caller's sequence (PrusaSlicer's automatic temperatures) */
+enum { ST_BED_WAIT, ST_HOT_SET, ST_TEXT, ST_HOT_WAIT, ST_DONE };
 enum { MOVE_NONE = 0, MOVE_PRINT = 1, MOVE_TRAVEL = 2, MOVE_E = 3 };
 
 void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
@@ -49,6 +54,22 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->max_feed_xy = 200.0;
     o->max_feed_z = 10.0;
     o->max_feed_e = 60.0;
+    /* the generic printer of SPEC §5: 220 x 220 x 250 mm */
+    o->profile = "generic";
+    o->place = AMP_PLACE_CENTER;
+    o->bed_max_x = 220.0;
+    o->bed_max_y = 220.0;
+    o->max_height = 250.0;
+    o->first_layer_height = 0.2;
+    o->first_layer_feed = 20.0;
+    o->first_layer_hotend_temp = 215.0;
+    o->first_layer_bed_temp = 60.0;
+    o->fan_off_layers = 1;
+    o->fan_speed = 1.0;
+    o->retract_min_travel = 2.0;
+    o->chord_tol = 0.01;
+    o->radius_tol = 0.01;
+    o->min_segment = 0.02;
 }
 
 /* ---------------------------------------------------------------- line builder */
@@ -164,128 +185,18 @@ static double grid_walk(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, do
     return best;
 }
 
-/* ---------------------------------------------------------------- time estimate */
-
-double amp_gcode_trapezoid_time(double len, double v0, double v1, double vmax, double accel)
+/* Highest material top in the cells of the box of half-width @p w around (px, py); -HUGE_VAL if none. */
+static double grid_top_box(const amp_gcode_iter *it, double px, double py, double w)
 {
-    double da, dd, vp;
-    if (len <= 0.0)
-        return 0.0;
-    if (vmax <= 0.0 || accel <= 0.0)
-        return vmax > 0.0 ? len / vmax : 0.0;
-    if (v0 > vmax)
-        v0 = vmax;
-    if (v1 > vmax)
-        v1 = vmax;
-    da = (vmax * vmax - v0 * v0) / (2.0 * accel);
-    dd = (vmax * vmax - v1 * v1) / (2.0 * accel);
-    if (da + dd <= len)
-        return (vmax - v0) / accel + (vmax - v1) / accel + (len - da - dd) / vmax;
-    /* triangle: the peak where the acceleration and deceleration ramps meet */
-    vp = sqrt(0.5 * (2.0 * accel * len + v0 * v0 + v1 * v1));
-    if (vp < v0)
-        vp = v0;
-    if (vp < v1)
-        vp = v1;
-    return (vp - v0) / accel + (vp - v1) / accel;
-}
-
-static amp_gcode_block *plan_at(amp_gcode_iter *it, size_t k)
-{
-    return &it->plan[(it->plan_head + k) % AMP_GCODE_LOOKAHEAD];
-}
-
-/*
- * Execute the oldest planned block: a backward pass over the window (which
- * must end at rest, as a firmware planner with a finite buffer must) gives the
- * highest speed it may leave with; a forward step from its entry speed gives
- * the reachable one.
- */
-static void plan_commit(amp_gcode_iter *it)
-{
-    double a = it->o.accel, vexit = 0.0, t;
-    amp_gcode_block *b0 = plan_at(it, 0);
-    size_t k;
-    for (k = it->plan_n; k-- > 1;) {
-        amp_gcode_block *b = plan_at(it, k);
-        double ventry = sqrt(vexit * vexit + 2.0 * a * b->len);
-        vexit = ventry < b->vjunc ? ventry : b->vjunc;
-    }
-    {
-        double reach = sqrt(it->plan_v * it->plan_v + 2.0 * a * b0->len);
-        if (vexit > reach)
-            vexit = reach;
-        if (vexit > b0->vnom)
-            vexit = b0->vnom;
-    }
-    t = amp_gcode_trapezoid_time(b0->len, it->plan_v, vexit, b0->vnom, a);
-    it->stats.time += t;
-    it->stats.print_time += t;
-    it->plan_v = vexit;
-    it->plan_head = (it->plan_head + 1) % AMP_GCODE_LOOKAHEAD;
-    it->plan_n--;
-}
-
-static void plan_flush(amp_gcode_iter *it)
-{
-    while (it->plan_n > 0)
-        plan_commit(it);
-    it->plan_v = 0.0;
-}
-
-/* Junction speed limit between unit directions u1 (incoming) and u2 (Grbl/Marlin junction deviation). */
-static double junction_speed(const amp_gcode_opts *o, const amp_gcode_block *p, const amp_gcode_block *b)
-{
-    double c = -(p->ux * b->ux + p->uy * b->uy + p->uz * b->uz), s;
-    if (c > 0.999999)
-        return 0.0; /* reversal */
-    if (c < -0.999999)
-        return HUGE_VAL; /* straight on */
-    s = sqrt(0.5 * (1.0 - c));
-    return sqrt(o->accel * o->junction_deviation * s / (1.0 - s));
-}
-
-static void plan_print(amp_gcode_iter *it, amp_vec3 d, double len, double feed, double de)
-{
-    amp_gcode_block b;
-    double v = feed, hxy = sqrt(d.x * d.x + d.y * d.y);
-    b.len = len;
-    b.ux = d.x / len;
-    b.uy = d.y / len;
-    b.uz = d.z / len;
-    /* the firmware clamps each axis to its maximum feed */
-    if (hxy > 0.0 && v * hxy / len > it->o.max_feed_xy)
-        v = it->o.max_feed_xy * len / hxy;
-    if (fabs(d.z) > 0.0 && v * fabs(d.z) / len > it->o.max_feed_z)
-        v = it->o.max_feed_z * len / fabs(d.z);
-    if (de > 0.0 && v * de / len > it->o.max_feed_e)
-        v = it->o.max_feed_e * len / de;
-    b.vnom = v;
-    if (it->plan_n == 0) {
-        b.vjunc = it->plan_v; /* from rest after a flush, or continuing speed */
-    } else {
-        const amp_gcode_block *p = plan_at(it, it->plan_n - 1);
-        double vj = junction_speed(&it->o, p, &b);
-        if (vj > p->vnom)
-            vj = p->vnom;
-        if (vj > b.vnom)
-            vj = b.vnom;
-        b.vjunc = vj;
-    }
-    if (it->plan_n == AMP_GCODE_LOOKAHEAD)
-        plan_commit(it);
-    *plan_at(it, it->plan_n) = b;
-    it->plan_n++;
-}
-
-/* A move outside the print planner: from rest to rest. */
-static void plan_single(amp_gcode_iter *it, double len, double v)
-{
-    double t;
-    plan_flush(it);
-    t = amp_gcode_trapezoid_time(len, 0.0, 0.0, v, it->o.accel);
-    it->stats.time += t;
-    it->stats.travel_time += t;
+    double cell = it->grid_cell, best = -HUGE_VAL;
+    int i0 = grid_index(px - w, it->grid_x0, cell), i1 = grid_index(px + w, it->grid_x0, cell);
+    int j0 = grid_index(py - w, it->grid_y0, cell), j1 = grid_index(py + w, it->grid_y0, cell);
+    int i, j;
+    for (j = j0; j <= j1; j++)
+        for (i = i0; i <= i1; i++)
+            if ((double)it->grid[j * AMP_GCODE_GRID + i] > best)
+                best = (double)it->grid[j * AMP_GCODE_GRID + i];
+    return best;
 }
 
 /* ---------------------------------------------------------------- option and input checks */
@@ -315,35 +226,46 @@ static amp_status check_text(const char *text, const char *what, amp_error *err)
         if (!(cond))                                                                                               \
             return amp_fail(err, AMP_ERR_ARG, 0, "gcode option %s must be %s", name, rule);                        \
     } while (0)
+#define IN(v, lo, hi) (isfinite(v) && (v) >= (lo) && (v) <= (hi))
 
 static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
 {
     NEED(o->flavor == AMP_FLAVOR_MARLIN || o->flavor == AMP_FLAVOR_KLIPPER, "flavor", "marlin or klipper");
-    NEED(isfinite(o->filament_diameter) && o->filament_diameter > 0.0 && o->filament_diameter <= 10.0,
-         "filament diameter", "in (0, 10] mm");
-    NEED(isfinite(o->flow) && o->flow > 0.0 && o->flow <= 10.0, "flow", "in (0, 10]");
-    NEED(isfinite(o->max_volumetric_flow) && o->max_volumetric_flow > 0.0 && o->max_volumetric_flow <= 1e4,
-         "max volumetric flow", "in (0, 10000] mm^3/s");
-    NEED(isfinite(o->print_feed) && o->print_feed > 0.0 && o->print_feed <= 1e4, "print feed", "in (0, 10000] mm/s");
-    NEED(isfinite(o->travel_feed) && o->travel_feed > 0.0 && o->travel_feed <= 1e4, "travel feed",
-         "in (0, 10000] mm/s");
-    NEED(isfinite(o->retract_length) && o->retract_length >= 0.0 && o->retract_length <= 100.0, "retract length",
-         "in [0, 100] mm");
-    NEED(isfinite(o->retract_speed) && o->retract_speed > 0.0 && o->retract_speed <= 1e4, "retract speed",
-         "in (0, 10000] mm/s");
-    NEED(isfinite(o->z_hop) && o->z_hop >= 0.0 && o->z_hop <= 1000.0, "z-hop", "in [0, 1000] mm");
-    NEED(isfinite(o->travel_corridor) && o->travel_corridor >= 0.0 && o->travel_corridor <= 1000.0,
-         "travel corridor", "in [0, 1000] mm");
-    NEED(isfinite(o->end_lift) && o->end_lift >= 0.0 && o->end_lift <= 1000.0, "end lift", "in [0, 1000] mm");
-    NEED(isfinite(o->hotend_temp) && o->hotend_temp >= 0.0 && o->hotend_temp <= 500.0, "hotend temperature",
-         "in [0, 500] C");
-    NEED(isfinite(o->bed_temp) && o->bed_temp >= 0.0 && o->bed_temp <= 200.0, "bed temperature", "in [0, 200] C");
-    NEED(isfinite(o->accel) && o->accel > 0.0 && o->accel <= 1e6, "acceleration", "in (0, 1e6] mm/s^2");
-    NEED(isfinite(o->junction_deviation) && o->junction_deviation >= 0.0 && o->junction_deviation <= 10.0,
-         "junction deviation", "in [0, 10] mm");
+    NEED(IN(o->filament_diameter, 1e-9, 10.0), "filament diameter", "in (0, 10] mm");
+    NEED(IN(o->flow, 1e-9, 10.0), "flow", "in (0, 10]");
+    NEED(IN(o->max_volumetric_flow, 1e-9, 1e4), "max volumetric flow", "in (0, 10000] mm^3/s");
+    NEED(IN(o->print_feed, 1e-9, 1e4), "print feed", "in (0, 10000] mm/s");
+    NEED(IN(o->travel_feed, 1e-9, 1e4), "travel feed", "in (0, 10000] mm/s");
+    NEED(IN(o->retract_length, 0.0, 100.0), "retract length", "in [0, 100] mm");
+    NEED(IN(o->retract_speed, 1e-9, 1e4), "retract speed", "in (0, 10000] mm/s");
+    NEED(IN(o->z_hop, 0.0, 1000.0), "z-hop", "in [0, 1000] mm");
+    NEED(IN(o->travel_corridor, 0.0, 1000.0), "travel corridor", "in [0, 1000] mm");
+    NEED(IN(o->end_lift, 0.0, 1000.0), "end lift", "in [0, 1000] mm");
+    NEED(IN(o->hotend_temp, 0.0, 500.0), "hotend temperature", "in [0, 500] C");
+    NEED(IN(o->bed_temp, 0.0, 200.0), "bed temperature", "in [0, 200] C");
+    NEED(IN(o->first_layer_hotend_temp, 0.0, 500.0), "first-layer hotend temperature", "in [0, 500] C");
+    NEED(IN(o->first_layer_bed_temp, 0.0, 200.0), "first-layer bed temperature", "in [0, 200] C");
+    NEED(IN(o->accel, 1e-9, 1e6), "acceleration", "in (0, 1e6] mm/s^2");
+    NEED(IN(o->junction_deviation, 0.0, 10.0), "junction deviation", "in [0, 10] mm");
     NEED(isfinite(o->max_feed_xy) && o->max_feed_xy > 0.0, "max feed xy", "positive");
     NEED(isfinite(o->max_feed_z) && o->max_feed_z > 0.0, "max feed z", "positive");
     NEED(isfinite(o->max_feed_e) && o->max_feed_e > 0.0, "max feed e", "positive");
+    NEED(o->place >= AMP_PLACE_CENTER && o->place <= AMP_PLACE_AT, "place", "center, origin or a bed point");
+    NEED(IN(o->place_x, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->place_y, -GC_COORD_MAX, GC_COORD_MAX), "place point",
+         "finite, within +-99999 mm");
+    NEED(IN(o->bed_min_x, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->bed_max_x, o->bed_min_x + 1e-3, GC_COORD_MAX),
+         "bed x range", "min < max within +-99999 mm");
+    NEED(IN(o->bed_min_y, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->bed_max_y, o->bed_min_y + 1e-3, GC_COORD_MAX),
+         "bed y range", "min < max within +-99999 mm");
+    NEED(IN(o->max_height, 1e-3, GC_COORD_MAX), "max height", "in (0, 99999] mm");
+    NEED(IN(o->first_layer_height, 1e-3, 10.0), "first-layer height", "in (0, 10] mm");
+    NEED(IN(o->first_layer_feed, 1e-9, 1e4), "first-layer feed", "in (0, 10000] mm/s");
+    NEED(o->fan_off_layers >= 0 && o->fan_off_layers <= 100000, "fan off layers", "in [0, 100000]");
+    NEED(IN(o->fan_speed, 0.0, 1.0), "fan speed", "in [0, 1]");
+    NEED(IN(o->retract_min_travel, 0.0, 1000.0), "retract min travel", "in [0, 1000] mm");
+    NEED(IN(o->chord_tol, 0.0, 10.0), "chord tolerance", "in [0, 10] mm");
+    NEED(IN(o->radius_tol, 0.0, 10.0), "radius tolerance", "in [0, 10] mm");
+    NEED(IN(o->min_segment, 0.0, 10.0), "min segment", "in [0, 10] mm");
     if (o->start_gcode && check_text(o->start_gcode, "start", err) != AMP_OK)
         return AMP_ERR_LIMIT;
     if (o->end_gcode && check_text(o->end_gcode, "end", err) != AMP_OK)
@@ -362,6 +284,149 @@ static size_t next_segment(const amp_pathset *ps, size_t i, size_t k)
     return n > 0 ? n - 1 : 0;
 }
 
+/* Depth of a bead below its vertex: h for a planar bead, r for a tube (SPEC §5). */
+static double bead_depth(const amp_path *p, double r) { return p->h > 0.0 ? p->h : r; }
+
+/* Does vertex @p i lie within the tolerances of the chord v[k] -> v[j] (position and radius)? */
+static int chord_keeps(const amp_gcode_opts *o, const amp_pvert *v, size_t k, size_t j, size_t i)
+{
+    amp_vec3 d = amp_v3_sub(v[j].p, v[k].p), q = amp_v3_sub(v[i].p, v[k].p);
+    double l2 = amp_v3_dot(d, d), t = l2 > 0.0 ? amp_v3_dot(q, d) / l2 : 0.0;
+    amp_vec3 foot;
+    t = t < 0.0 ? 0.0 : t > 1.0 ? 1.0 : t;
+    foot = amp_v3_add(v[k].p, amp_v3_scale(d, t));
+    if (amp_v3_dist(foot, v[i].p) > o->chord_tol)
+        return 0;
+    /* the deposition radius must follow the chord too (MDR, paper §5.2); E stays exact either way */
+    return fabs(v[k].r + t * (v[j].r - v[k].r) - v[i].r) <= o->radius_tol;
+}
+
+/*
+ * End vertex of the written segment that starts at vertex @p k of path @p i
+ * (clean segments, SPEC §5): the farthest vertex whose chord keeps every
+ * vertex in between within the tolerances, extended while the chord is
+ * shorter than min_segment; a short remainder joins the last segment.
+ */
+static size_t next_vertex(const amp_gcode_iter *it, size_t i, size_t k)
+{
+    const amp_pathset *ps = it->ps;
+    const amp_gcode_opts *o = &it->o;
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, j = next_segment(ps, i, k) + 1, m, lim;
+    double rest = 0.0;
+    if (j >= n)
+        return n - 1;
+    if (o->chord_tol <= 0.0 && o->min_segment <= 0.0)
+        return j;
+    lim = k + AMP_GCODE_MERGE_MAX < n - 1 ? k + AMP_GCODE_MERGE_MAX : n - 1;
+    for (m = j + 1; m <= lim; m++) {
+        int keep = amp_v3_dist(v[k].p, v[j].p) < o->min_segment; /* a chord still too short must grow */
+        size_t t;
+        if (!keep && o->chord_tol > 0.0)
+            for (keep = 1, t = k + 1; t < m && keep; t++)
+                keep = chord_keeps(o, v, k, m, t);
+        if (!keep)
+            break;
+        if (amp_v3_dist(v[k].p, v[m].p) > GC_MIN_SEG) /* never a chord of zero length (closed loops) */
+            j = m;
+    }
+    /* a remainder shorter than min_segment joins this segment */
+    for (m = j; m + 1 < n && rest < o->min_segment; m++)
+        rest += amp_v3_dist(v[m].p, v[m + 1].p);
+    if (rest < o->min_segment && amp_v3_dist(v[k].p, v[n - 1].p) > GC_MIN_SEG)
+        j = n - 1;
+    return j;
+}
+
+/* ---------------------------------------------------------------- scan and placement */
+
+typedef struct job_scan {
+    amp_box3 bb;  /* vertices */
+    double rmax, zlow, z_first;
+    size_t printable, input_segments;
+} job_scan;
+
+static amp_status scan_paths(const amp_pathset *ps, job_scan *js, amp_error *err)
+{
+    size_t i, k;
+    js->bb = amp_box3_empty();
+    js->rmax = 0.0;
+    js->zlow = js->z_first = HUGE_VAL;
+    js->printable = js->input_segments = 0;
+    if (ps->npaths > 0 && (!ps->paths || !ps->verts))
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: inconsistent path set");
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_path *p = &ps->paths[i];
+        const amp_pvert *v;
+        if (p->first > ps->nverts || p->n > ps->nverts - p->first)
+            return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu lies outside the vertex array", (unsigned long)i);
+        if (!isfinite(p->h) || p->h < 0.0 || p->h > 100.0)
+            return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu has a bead height outside [0, 100] mm",
+                            (unsigned long)i);
+        if (next_segment(ps, i, 0) + 1 >= p->n)
+            continue; /* skipped: nothing to print, and it must not move the placement */
+        js->printable++;
+        v = amp_pathset_path_verts(ps, i);
+        for (k = 0; k < p->n; k++) {
+            if (!amp_v3_finite(v[k].p) || !isfinite(v[k].r) || v[k].r < 0.0)
+                return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu vertex %lu is not finite or has a negative radius",
+                                (unsigned long)i, (unsigned long)k);
+            if (fabs(v[k].p.x) > GC_COORD_MAX || fabs(v[k].p.y) > GC_COORD_MAX || fabs(v[k].p.z) > GC_COORD_MAX ||
+                v[k].r > 1000.0)
+                return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: path %lu vertex %lu lies beyond +-%g mm",
+                                (unsigned long)i, (unsigned long)k, GC_COORD_MAX);
+            js->bb = amp_box3_add(js->bb, v[k].p);
+            js->rmax = fmax(js->rmax, v[k].r);
+            js->zlow = fmin(js->zlow, v[k].p.z - bead_depth(p, v[k].r));
+            if (p->h > 0.0)
+                js->z_first = fmin(js->z_first, v[k].p.z);
+            if (k + 1 < p->n && amp_v3_dist(v[k].p, v[k + 1].p) > GC_MIN_SEG)
+                js->input_segments++;
+        }
+    }
+    if (js->printable == 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: empty path set: no path has a segment of non-zero length");
+    return AMP_OK;
+}
+
+/* One axis of the fit check: the placed range [lo, hi] must lie in [b0, b1]. */
+static amp_status fit_axis(const amp_gcode_opts *o, char axis, double lo, double hi, double b0, double b1,
+                           amp_error *err)
+{
+    double over = fmax(0.0, b0 - lo) + fmax(0.0, hi - b1);
+    if (over <= GC_FIT_TOL)
+        return AMP_OK;
+    return amp_fail(err, AMP_ERR_RANGE, 0,
+                    "gcode: the job does not fit printer '%s': %c spans %.3f..%.3f mm after placement, the bed "
+                    "%.3f..%.3f mm (%.3f mm over)",
+                    o->profile ? o->profile : "?", axis, lo, hi, b0, b1, over);
+}
+
+/* The placement offset (SPEC §5) and the check that the placed job fits the bed volume. */
+static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *err)
+{
+    const amp_gcode_opts *o = &it->o;
+    amp_vec3 off = amp_v3(0, 0, 0);
+    amp_status st;
+    if (o->place != AMP_PLACE_ORIGIN) {
+        double cx = o->place == AMP_PLACE_AT ? o->place_x : 0.5 * (o->bed_min_x + o->bed_max_x);
+        double cy = o->place == AMP_PLACE_AT ? o->place_y : 0.5 * (o->bed_min_y + o->bed_max_y);
+        off = amp_v3(cx - 0.5 * (js->bb.min.x + js->bb.max.x), cy - 0.5 * (js->bb.min.y + js->bb.max.y), -js->zlow);
+    }
+    it->off = off;
+    st = fit_axis(o, 'X', js->bb.min.x + off.x, js->bb.max.x + off.x, o->bed_min_x, o->bed_max_x, err);
+    if (st == AMP_OK)
+        st = fit_axis(o, 'Y', js->bb.min.y + off.y, js->bb.max.y + off.y, o->bed_min_y, o->bed_max_y, err);
+    if (st == AMP_OK)
+        st = fit_axis(o, 'Z', js->bb.min.z + off.z, js->bb.max.z + off.z, 0.0, o->max_height, err);
+    if (st != AMP_OK)
+        return st;
+    it->zmax = o->max_height - off.z;
+    it->zlow = js->zlow;
+    it->z_first = js->z_first;
+    return AMP_OK;
+}
+
 static void reset_run(amp_gcode_iter *it, int pass)
 {
     size_t i;
@@ -369,7 +434,7 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->phase = PH_HEADER;
     it->sub = 0;
     it->path = 0;
-    it->seg = 0;
+    it->seg = it->nxt = 0;
     it->text = NULL;
     it->have_pos = 0;
     it->retracted = 0;
@@ -378,8 +443,11 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->e_exact = 0.0;
     it->e_units = 0;
     it->f_units = -1;
-    it->travel_z = 0.0;
-    it->travel_to = amp_v3(0, 0, 0);
+    it->travel_to = it->travel_from = amp_v3(0, 0, 0);
+    it->layer = 0;
+    it->layer_z = it->z_first;
+    it->first_done = it->fan_on = it->travel_retract = it->path_first = 0;
+    it->hull_n = it->hull_i = 0;
     for (i = 0; i < AMP_GCODE_GRID * AMP_GCODE_GRID; i++)
         it->grid[i] = -HUGE_VALF;
     it->plan_head = it->plan_n = 0;
@@ -387,6 +455,8 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->plan_print = 0;
     memset(&it->stats, 0, sizeof it->stats);
     it->stats.max_travel_z = -HUGE_VAL;
+    it->stats.first_layer_z = HUGE_VAL;
+    it->stats.bbox = amp_box3_empty();
     memset(&it->last, 0, sizeof it->last);
 }
 
@@ -394,9 +464,8 @@ static int step(amp_gcode_iter *it, lb *l);
 
 amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, amp_error *err)
 {
-    amp_box3 bb = amp_box3_empty();
-    double rmax = 0.0, margin, ext;
-    size_t i, nseg = 0;
+    job_scan js;
+    double margin, ext;
     amp_status st;
     if (!it)
         return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL iterator");
@@ -408,42 +477,21 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     else
         amp_gcode_opts_default(&it->o, AMP_FLAVOR_MARLIN);
     st = check_opts(&it->o, err);
+    if (st == AMP_OK)
+        st = scan_paths(ps, &js, err);
+    if (st == AMP_OK)
+        st = place_job(it, &js, err);
     if (st != AMP_OK)
         return st;
-    if (ps->npaths > 0 && (!ps->paths || !ps->verts))
-        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: inconsistent path set");
-    for (i = 0; i < ps->npaths; i++) {
-        const amp_pvert *v;
-        size_t k;
-        if (ps->paths[i].first > ps->nverts || ps->paths[i].n > ps->nverts - ps->paths[i].first)
-            return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu lies outside the vertex array", (unsigned long)i);
-        v = amp_pathset_path_verts(ps, i);
-        for (k = 0; k < ps->paths[i].n; k++) {
-            if (!amp_v3_finite(v[k].p) || !isfinite(v[k].r) || v[k].r < 0.0)
-                return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu vertex %lu is not finite or has a negative radius",
-                                (unsigned long)i, (unsigned long)k);
-            if (fabs(v[k].p.x) > GC_COORD_MAX || fabs(v[k].p.y) > GC_COORD_MAX || fabs(v[k].p.z) > GC_COORD_MAX ||
-                v[k].r > 1000.0)
-                return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: path %lu vertex %lu lies beyond +-%g mm",
-                                (unsigned long)i, (unsigned long)k, GC_COORD_MAX);
-            bb = amp_box3_add(bb, v[k].p);
-            if (v[k].r > rmax)
-                rmax = v[k].r;
-        }
-        if (next_segment(ps, i, 0) + 1 < ps->paths[i].n)
-            nseg++;
-    }
-    if (nseg == 0)
-        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: empty path set: no path has a segment of non-zero length");
-    if (bb.max.z + rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
+    if (js.bb.max.z + it->off.z + js.rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
         return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: the job rises beyond %g mm", GC_COORD_MAX);
     it->ps = ps;
     it->fil_area = GC_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
-    /* the grid covers every vertex with its radius and a travel corridor around it */
-    margin = rmax + it->o.travel_corridor + 1.0;
-    ext = fmax(bb.max.x - bb.min.x, bb.max.y - bb.min.y) + 2.0 * margin;
-    it->grid_x0 = bb.min.x - margin;
-    it->grid_y0 = bb.min.y - margin;
+    /* the grid (model coordinates) covers every vertex with its radius and a travel corridor around it */
+    margin = js.rmax + it->o.travel_corridor + 1.0;
+    ext = fmax(js.bb.max.x - js.bb.min.x, js.bb.max.y - js.bb.min.y) + 2.0 * margin;
+    it->grid_x0 = js.bb.min.x - margin;
+    it->grid_y0 = js.bb.min.y - margin;
     it->grid_cell = ext / AMP_GCODE_GRID;
     /* pass 1: the whole job without formatting, for the figures of the header */
     reset_run(it, 1);
@@ -454,8 +502,10 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
             if (r == 1)
                 it->stats.lines++;
     }
+    it->stats.input_segments = js.input_segments;
     it->est = it->stats;
     reset_run(it, 2);
+    it->stats.input_segments = js.input_segments;
     it->magic = GC_MAGIC;
     return AMP_OK;
 }
@@ -467,7 +517,7 @@ static void set_last(amp_gcode_iter *it, int kind, amp_vec3 to, double e, double
     it->last.kind = kind;
     it->last.path = it->path;
     it->last.seg = it->seg;
-    it->last.to = to;
+    it->last.to = amp_v3_add(to, it->off);
     it->last.e = e;
     it->last.feed = feed;
     it->last.r = r;
@@ -491,6 +541,13 @@ static void put_e(amp_gcode_iter *it, lb *l)
     it->e_units = u;
 }
 
+/* A model coordinate as written: placed on the bed (SPEC §5). */
+static void put_coord(amp_gcode_iter *it, lb *l, char axis, double v)
+{
+    double off = axis == 'X' ? it->off.x : axis == 'Y' ? it->off.y : it->off.z;
+    lb_num(l, axis, v + off, 3);
+}
+
 /* Retract (sign -1) or unretract (+1) by exactly the printed retraction length. */
 static void move_e(amp_gcode_iter *it, lb *l, int sign)
 {
@@ -503,51 +560,88 @@ static void move_e(amp_gcode_iter *it, lb *l, int sign)
     it->retracted = sign < 0;
     if (sign < 0)
         it->stats.retractions++;
-    plan_single(it, it->o.retract_length, v);
+    amp_gc_plan_single(it, it->o.retract_length, v);
     set_last(it, MOVE_E, it->pos, (double)(sign * ru) * 1e-5, feed, 0.0, 0.0);
 }
 
-static void move_travel(amp_gcode_iter *it, lb *l, amp_vec3 to, int xy, int z, double v)
+/* A G0 to @p to (model coordinates) with the axes that change; z is capped at the bed's height. */
+static void move_travel(amp_gcode_iter *it, lb *l, amp_vec3 to, int xy, double v)
 {
     /* have_pos: 0 = unknown (after homing), 1 = only z known, 2 = known */
-    double len = it->have_pos == 2 ? amp_v3_dist(it->pos, to) : 0.0, feed;
+    double len, feed;
+    int z;
+    to.z = fmin(to.z, it->zmax);
+    z = it->have_pos == 0 || to.z != it->pos.z;
+    len = it->have_pos == 2 ? amp_v3_dist(it->pos, to) : 0.0;
     lb_str(l, "G0");
     if (xy) {
-        lb_num(l, 'X', to.x, 3);
-        lb_num(l, 'Y', to.y, 3);
+        put_coord(it, l, 'X', to.x);
+        put_coord(it, l, 'Y', to.y);
     }
     if (z)
-        lb_num(l, 'Z', to.z, 3);
+        put_coord(it, l, 'Z', to.z);
+    if (!xy) /* a lift or descent: at the z axis' speed */
+        v = fmin(v, it->o.max_feed_z);
     feed = put_feed(it, l, llround(v * 600.0));
     it->stats.travel_length += len;
-    plan_single(it, len, fmin(feed, xy ? it->o.max_feed_xy : it->o.max_feed_z));
-    if (z && to.z > it->stats.max_travel_z)
-        it->stats.max_travel_z = to.z;
+    it->stats.travel_moves++;
+    /* the planner clamps the z component to max_feed_z as firmware does */
+    if (it->have_pos == 2)
+        amp_gc_plan_move(it, amp_v3_sub(to, it->pos), len, feed, 0.0, 1);
+    if (z && to.z + it->off.z > it->stats.max_travel_z)
+        it->stats.max_travel_z = to.z + it->off.z;
     it->pos = to;
     it->have_pos = it->have_pos == 2 || xy ? 2 : 1;
     set_last(it, MOVE_TRAVEL, to, 0.0, feed, 0.0, len);
 }
 
-/* One extrusion segment k -> k+1 of the current path (SPEC §5). */
-static void move_print(amp_gcode_iter *it, lb *l, size_t k)
+/* Raise the material grid by the bead of segment v[a] -> v[b] of path @p p. */
+static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pvert *va, const amp_pvert *vb)
 {
+    double r = fmax(va->r, vb->r);
+    /* a planar bead's top is its vertex z (layer top); a tube rises r above its centre line */
+    double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
+    if (r > 0.0)
+        grid_walk(it, va->p, vb->p, r, top, 0);
+}
+
+/*
+ * The written segment from vertex k to vertex j of the current path (SPEC §5,
+ * clean segments): a straight G1, or with @p arc a G2/G3 along it.
+ */
+static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_gc_arc *arc)
+{
+    const amp_path *p = &it->ps->paths[it->path];
     const amp_pvert *v = amp_pathset_path_verts(it->ps, it->path);
-    amp_vec3 a = v[k].p, b = v[k + 1].p, d = amp_v3_sub(b, a);
-    double len = amp_v3_len(d), r = 0.5 * (v[k].r + v[k + 1].r), area = GC_PI * r * r;
-    /* E = flow * (pi r^2 L) / (pi (d/2)^2) */
-    double de = it->o.flow * area * len / it->fil_area, feed, top;
-    long long fu = llround(it->o.print_feed * 600.0);
-    if (area * it->o.print_feed > it->o.max_volumetric_flow) {
+    amp_vec3 a = v[k].p, b = v[j].p, d = amp_v3_sub(b, a);
+    double len = arc ? arc->len : amp_v3_len(d), vol = 0.0, de, feed, area;
+    double base = it->path_first ? it->o.first_layer_feed : it->o.print_feed;
+    long long fu = llround(base * 600.0);
+    size_t m;
+    /* E = flow * sum A L / (pi (d/2)^2) over the input segments replaced: the volume stays exact */
+    for (m = k; m < j; m++) {
+        double lm = amp_v3_dist(v[m].p, v[m + 1].p);
+        vol += amp_bead_area(0.5 * (v[m].r + v[m + 1].r), p->h) * lm;
+        raise_material(it, p, &v[m], &v[m + 1]);
+    }
+    de = it->o.flow * vol / it->fil_area;
+    area = len > 0.0 ? vol / len : 0.0;
+    if (area * base > it->o.max_volumetric_flow) {
         /* volumetric cap: lower the feed, rounded down so that the printed F respects the cap */
         fu = (long long)floor(it->o.max_volumetric_flow / area * 600.0);
         if (fu < 1)
             fu = 1;
         it->stats.lowered_feed_segments++;
     }
-    lb_str(l, "G1");
-    lb_num(l, 'X', b.x, 3);
-    lb_num(l, 'Y', b.y, 3);
-    lb_num(l, 'Z', b.z, 3);
+    lb_str(l, arc ? (arc->cw ? "G2" : "G3") : "G1");
+    put_coord(it, l, 'X', b.x);
+    put_coord(it, l, 'Y', b.y);
+    put_coord(it, l, 'Z', b.z);
+    if (arc) { /* the centre relative to the start, as G2/G3 take it */
+        lb_num(l, 'I', arc->cx - a.x, 3);
+        lb_num(l, 'J', arc->cy - a.y, 3);
+        it->stats.arcs++;
+    }
     it->e_exact += de;
     put_e(it, l);
     feed = put_feed(it, l, fu);
@@ -555,15 +649,83 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k)
     it->stats.print_length += len;
     it->stats.filament_length += de;
     it->stats.filament_volume += de * it->fil_area;
-    plan_print(it, d, len, feed, de);
-    /* material top: the tube of radius r around the segment */
-    top = fmax(a.z, b.z) + fmax(v[k].r, v[k + 1].r);
-    grid_walk(it, a, b, fmax(v[k].r, v[k + 1].r), top, 0);
+    it->stats.bead_volume += vol;
+    if (de > 0.0 && !it->printed_any)
+        it->stats.first_layer_z = fmin(a.z, b.z) + it->off.z;
+    it->stats.bbox = amp_box3_add(amp_box3_add(it->stats.bbox, amp_v3_add(a, it->off)), amp_v3_add(b, it->off));
+    /* an arc enters the planner as one block of its length along its chord */
+    amp_gc_plan_move(it, arc && amp_v3_len(d) > 0.0 ? amp_v3_scale(d, len / amp_v3_len(d)) : d, len, feed, de, 0);
     it->pos = b;
-    it->printed_any = 1;
-    set_last(it, MOVE_PRINT, b, de, feed, r, len);
+    if (de > 0.0)
+        it->printed_any = 1;
+    set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / GC_PI) : 0.0, len);
 }
 
+/*
+ * The travel polyline from it->pos to it->travel_to (SPEC §5: gouge-free,
+ * as low as is safe): the upper convex hull, in (fraction of the line, z),
+ * of the start and end lifted by z_hop and of the material tops + z_hop
+ * sampled along the line within the corridor. Each sample's box covers half
+ * a step either side, so its height holds over that interval; the hull is
+ * the lowest polyline of straight moves above all of them.
+ */
+static void travel_hull(amp_gcode_iter *it)
+{
+    amp_vec3 a = it->pos, b = it->travel_to;
+    double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), hop = it->o.z_hop;
+    double zs = a.z + hop, ze = b.z + hop, w, dt;
+    long steps = (long)ceil(len / (0.5 * it->grid_cell)), s, maxs = (AMP_GCODE_HULL - 4) / 2 - 1;
+    size_t n = 0;
+    if (steps < 1)
+        steps = 1;
+    if (steps > maxs)
+        steps = maxs;
+    w = it->o.travel_corridor + 0.5 * len / (double)steps;
+    dt = 0.5 / (double)steps;
+    it->travel_from = a;
+    for (s = 0; s <= steps + 1; s++) {
+        double t, z, tt[2];
+        int q;
+        if (s == steps + 1) { /* the end, then nothing more */
+            t = 1.0;
+            z = ze;
+        } else {
+            t = (double)s / (double)steps;
+            z = grid_top_box(it, a.x + t * dx, a.y + t * dy, w) + hop;
+            if (s == 0)
+                zs = fmax(zs, z);
+            if (s == steps)
+                ze = fmax(ze, z);
+            if (n == 0) {
+                it->hull_t[0] = 0.0;
+                it->hull_z[0] = fmin(zs, it->zmax);
+                n = 1;
+            }
+            if (!(z > -HUGE_VAL))
+                continue;
+        }
+        tt[0] = fmax(0.0, t - dt);
+        tt[1] = fmin(1.0, t + dt);
+        for (q = s == steps + 1 ? 1 : 0; q < 2; q++) {
+            double pt = tt[q], pz = fmin(q == 1 && s == steps + 1 ? ze : z, it->zmax);
+            /* monotone chain: drop corners that lie on or below the chord of their neighbours */
+            while (n >= 2 && (it->hull_t[n - 1] - it->hull_t[n - 2]) * (pz - it->hull_z[n - 2]) -
+                                     (it->hull_z[n - 1] - it->hull_z[n - 2]) * (pt - it->hull_t[n - 2]) >=
+                                 -1e-6) /* float tops of the grid: 1 nm bumps are not corners */
+                n--;
+            if (n >= 1 && pt <= it->hull_t[n - 1]) { /* same fraction: keep the higher point */
+                if (pz > it->hull_z[n - 1])
+                    it->hull_z[n - 1] = pz;
+                continue;
+            }
+            it->hull_t[n] = pt;
+            it->hull_z[n] = pz;
+            n++;
+        }
+    }
+    it->hull_n = n;
+    it->hull_i = 1;
+}
 /* ---------------------------------------------------------------- sequences */
 
 static const char *flavor_name(int f) { return f == AMP_FLAVOR_KLIPPER ? "klipper" : "marlin"; }
@@ -617,40 +779,63 @@ static void lb_fmt(lb *l, const char *fmt, ...)
 static int header_line(amp_gcode_iter *it, lb *l, size_t k)
 {
     const amp_gcode_stats *e = &it->est;
+    const amp_gcode_opts *o = &it->o;
     unsigned long t = e->time > 0.0 ? (unsigned long)(e->time + 0.5) : 0;
     switch (k) {
     case 0: lb_str(l, "; generated by ampath " AMP_VERSION_STRING ": MDR-modulated extrusion (SPEC 5)"); return 1;
     case 1:
-        lb_fmt(l, "; flavor %s, %s E, filament %f3 mm, flow %f4", flavor_name(it->o.flavor),
-               it->o.relative_e ? "relative" : "absolute", it->o.filament_diameter, it->o.flow);
+        lb_fmt(l, "; printer %s: bed %f1..%f1 x %f1..%f1, height %f1 mm", o->profile ? o->profile : "-", o->bed_min_x,
+               o->bed_max_x, o->bed_min_y, o->bed_max_y, o->max_height);
         return 1;
     case 2:
-        lb_fmt(l, "; estimated print time %u s (%u:%z:%z), moves only", t, t / 3600, t / 60 % 60, t % 60);
+        lb_fmt(l, "; flavor %s, %s E, filament %f3 mm, flow %f4", flavor_name(o->flavor),
+               o->relative_e ? "relative" : "absolute", o->filament_diameter, o->flow);
         return 1;
-    case 3: lb_fmt(l, "; filament used %f1 mm (%f1 mm3)", e->filament_length, e->filament_volume); return 1;
+    case 3:
+        lb_fmt(l, "; placed %s, offset %f3 %f3 %f3 mm", o->place == AMP_PLACE_ORIGIN ? "as given" : "on the bed",
+               it->off.x, it->off.y, it->off.z);
+        return 1;
     case 4:
-        lb_fmt(l, "; paths %u printed, %u skipped, %u segments, %f1 mm printed", (unsigned long)e->paths,
-               (unsigned long)e->paths_skipped, (unsigned long)e->segments, e->print_length);
+        lb_fmt(l, "; bounding box %f2..%f2 x %f2..%f2 x %f2..%f2", e->bbox.min.x, e->bbox.max.x, e->bbox.min.y,
+               e->bbox.max.y, e->bbox.min.z, e->bbox.max.z);
         return 1;
     case 5:
-        lb_fmt(l, "; travels %u (%f1 mm), retractions %u, lowered feeds %u", (unsigned long)e->travels,
-               e->travel_length, (unsigned long)e->retractions, (unsigned long)e->lowered_feed_segments);
+        lb_fmt(l, "; estimated print time %u s (%u:%z:%z), moves only", t, t / 3600, t / 60 % 60, t % 60);
         return 1;
-    case 6: lb_fmt(l, "; lines %u", (unsigned long)e->lines); return 1;
+    case 6: lb_fmt(l, "; filament used %f1 mm (%f1 mm3)", e->filament_length, e->filament_volume); return 1;
+    case 7:
+        lb_fmt(l, "; paths %u (%u skipped), %u segments of %u, %f1 mm printed", (unsigned long)e->paths,
+               (unsigned long)e->paths_skipped, (unsigned long)e->segments, (unsigned long)e->input_segments,
+               e->print_length);
+        return 1;
+    case 8:
+        lb_fmt(l, "; travels %u (%f1 mm), retractions %u, lines %u", (unsigned long)e->travels, e->travel_length,
+               (unsigned long)e->retractions, (unsigned long)e->lines);
+        return 1;
     default: return 0;
     }
+}
+
+/* "CMD S<t> ; note" for a temperature. */
+static int temp_line(lb *l, const char *cmd, double t, const char *note)
+{
+    lb_str(l, cmd);
+    lb_num(l, 'S', t, 1);
+    lb_str(l, note);
+    return 1;
 }
 
 /* Built-in start sequence line @p k (lines skipped for an unheated bed or hot end); -1 past the end. */
 static int builtin_start(amp_gcode_iter *it, lb *l, size_t k)
 {
     const amp_gcode_opts *o = &it->o;
+    double bed = o->first_layer_bed_temp, hot = o->first_layer_hotend_temp;
     switch (k) {
-    case 0: if (o->bed_temp <= 0.0) return 0; lb_str(l, "M140"); lb_num(l, 'S', o->bed_temp, 1); lb_str(l, " ; bed"); return 1;
-    case 1: if (o->hotend_temp <= 0.0) return 0; lb_str(l, "M104"); lb_num(l, 'S', o->hotend_temp, 1); lb_str(l, " ; hot end"); return 1;
+    case 0: return bed > 0.0 ? temp_line(l, "M140", bed, " ; bed") : 0;
+    case 1: return hot > 0.0 ? temp_line(l, "M104", hot, " ; hot end") : 0;
     case 2: lb_str(l, "G28 ; home all axes"); return 1;
-    case 3: if (o->bed_temp <= 0.0) return 0; lb_str(l, "M190"); lb_num(l, 'S', o->bed_temp, 1); lb_str(l, " ; wait for the bed"); return 1;
-    case 4: if (o->hotend_temp <= 0.0) return 0; lb_str(l, "M109"); lb_num(l, 'S', o->hotend_temp, 1); lb_str(l, " ; wait for the hot end"); return 1;
+    case 3: return bed > 0.0 ? temp_line(l, "M190", bed, " ; wait for the bed") : 0;
+    case 4: return hot > 0.0 ? temp_line(l, "M109", hot, " ; wait for the hot end") : 0;
     default: return -1;
     }
 }
@@ -691,32 +876,286 @@ static int text_line(amp_gcode_iter *it, lb *l)
     return 0;
 }
 
+/* Does the caller's sequence command any of the codes in @p codes (e.g. "M109", "M104")? */
+static int text_has(const char *text, const char *c1, const char *c2)
+{
+    const char *s;
+    for (s = text; *s; s++) {
+        if ((s == text || s[-1] == '\n' || s[-1] == ' ') &&
+            (strncmp(s, c1, strlen(c1)) == 0 || strncmp(s, c2, strlen(c2)) == 0)) {
+            char c = s[strlen(c1)];
+            if (c == ' ' || c == '\0' || c == '\n' || c == '\r' || c == ';')
+                return 1;
+        }
+        if (*s == ';') /* the rest of the line is a comment */
+            while (s[1] && s[1] != '\n')
+                s++;
+    }
+    return 0;
+}
+
+/*
+ * A caller's start sequence, wrapped like PrusaSlicer does it: without a bed
+ * temperature command it is preceded by M190 (first-layer bed), without a
+ * hot-end one by M104 and followed by M109 (first-layer hot end).
+ */
+static int start_line(amp_gcode_iter *it, lb *l)
+{
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
+    case ST_BED_WAIT:
+        it->sub = ST_HOT_SET;
+        if (o->first_layer_bed_temp > 0.0 && !text_has(o->start_gcode, "M190", "M140"))
+            return temp_line(l, "M190", o->first_layer_bed_temp, " ; wait for the bed");
+        return 0;
+    case ST_HOT_SET:
+        it->sub = ST_TEXT;
+        if (o->first_layer_hotend_temp > 0.0 && !text_has(o->start_gcode, "M109", "M104"))
+            return temp_line(l, "M104", o->first_layer_hotend_temp, " ; hot end");
+        return 0;
+    case ST_TEXT:
+        if (text_line(it, l))
+            return 1;
+        it->sub = ST_HOT_WAIT;
+        return 0;
+    case ST_HOT_WAIT:
+        it->sub = ST_DONE;
+        if (o->first_layer_hotend_temp > 0.0 && !text_has(o->start_gcode, "M109", "M104"))
+            return temp_line(l, "M109", o->first_layer_hotend_temp, " ; wait for the hot end");
+        return 0;
+    default: return -1;
+    }
+}
+
+/* Set-up line @p k: 1 written, 0 skipped for this flavor or job, -1 past the end. */
 static int setup_line(amp_gcode_iter *it, lb *l, size_t k)
 {
+    int klipper = it->o.flavor == AMP_FLAVOR_KLIPPER;
     switch (k) {
-    case 0: lb_str(l, "G21 ; millimetres"); return 1;
+    case 0: if (klipper) return 0; lb_str(l, "G21 ; millimetres"); return 1; /* Klipper knows no G20/G21 */
     case 1: lb_str(l, "G90 ; absolute XYZ"); return 1;
     case 2: lb_str(l, it->o.relative_e ? "M83 ; relative E" : "M82 ; absolute E"); return 1;
     case 3: lb_str(l, "G92 E0"); return 1;
     case 4:
-        lb_str(l, it->o.flavor == AMP_FLAVOR_KLIPPER ? "SET_VELOCITY_LIMIT ACCEL=" : "M204 S");
+        lb_str(l, klipper ? "SET_VELOCITY_LIMIT ACCEL=" : "M204 S");
         lb_fixed(l, 0, units_of(it->o.accel, 10.0), 1);
         lb_str(l, " ; acceleration");
         return 1;
+    case 5: if (it->o.fan_speed <= 0.0) return 0; lb_str(l, "M107 ; part-cooling fan off for the first layers"); return 1;
     default: return -1;
     }
 }
 
 /* ---------------------------------------------------------------- the state machine */
 
+/*
+ * Classify the path that starts (SPEC §5 first layer): first-layer or not,
+ * and its layer for the fan. Planar jobs know their layers from the bead z;
+ * tubes count layers of first_layer_height from the bed.
+ */
+static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v)
+{
+    double zmin = HUGE_VAL, bottom = HUGE_VAL;
+    size_t k;
+    for (k = 0; k < p->n; k++) {
+        zmin = fmin(zmin, v[k].p.z);
+        bottom = fmin(bottom, v[k].p.z - bead_depth(p, v[k].r));
+    }
+    bottom += it->off.z;
+    if (p->h > 0.0) {
+        it->path_first = zmin <= it->z_first + 1e-6;
+        if (zmin > it->layer_z + 1e-6) {
+            it->layer++;
+            it->layer_z = zmin;
+        }
+    } else {
+        long lay = (long)floor(bottom / it->o.first_layer_height + 1e-9);
+        it->path_first = bottom < it->o.first_layer_height - 1e-6;
+        if (lay > it->layer)
+            it->layer = lay > 100000 ? 100000 : (int)lay;
+    }
+}
+
+/* Decide the travel to the current path; 0 when the path starts where the head is (no travel). */
+static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
+{
+    double dxy;
+    it->travel_to = v[0].p;
+    if (it->have_pos == 2 && amp_v3_dist(it->pos, it->travel_to) <= GC_MIN_SEG)
+        return 0;
+    it->stats.travels++;
+    dxy = it->have_pos == 2 ? hypot(it->travel_to.x - it->pos.x, it->travel_to.y - it->pos.y) : HUGE_VAL;
+    /* short hops need no retraction (PrusaSlicer's retract_before_travel) */
+    it->travel_retract = it->printed_any && it->o.retract_length > 0.0 && !it->retracted &&
+                         dxy >= it->o.retract_min_travel;
+    if (it->printed_any && it->have_pos == 2) {
+        travel_hull(it);
+    } else { /* the first approach: lift above the start, move, descend */
+        double zt = fmin(fmax(it->travel_to.z, it->have_pos ? it->pos.z : it->travel_to.z) + it->o.z_hop, it->zmax);
+        it->travel_from = it->have_pos == 2 ? it->pos : it->travel_to;
+        it->hull_t[0] = 0.0;
+        it->hull_z[0] = zt;
+        it->hull_t[1] = 1.0;
+        it->hull_z[1] = zt;
+        it->hull_n = 2;
+        it->hull_i = 1;
+    }
+    return 1;
+}
+
+/* One line (or none) of a path: the per-path sub-steps in order. */
+static int step_path(amp_gcode_iter *it, lb *l)
+{
+    const amp_pathset *ps = it->ps;
+    const amp_path *p = &ps->paths[it->path];
+    const amp_pvert *v = amp_pathset_path_verts(ps, it->path);
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
+    case PS_COMMENT: {
+        int skip;
+        it->seg = next_segment(ps, it->path, 0);
+        skip = it->seg + 1 >= p->n;
+        lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
+               p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
+               skip ? " (skipped: no segment of non-zero length)" : "");
+        if (skip) {
+            it->stats.paths_skipped++;
+            it->path++;
+            return 1;
+        }
+        it->seg = 0;
+        it->stats.paths++;
+        begin_path(it, p, v);
+        it->sub = PS_HOTEND;
+        return 1;
+    }
+    case PS_HOTEND: /* above the first layer: the other layers' temperatures, once */
+        it->sub = PS_BED;
+        if (!it->path_first && !it->first_done && o->hotend_temp > 0.0 && o->hotend_temp != o->first_layer_hotend_temp)
+            return temp_line(l, "M104", o->hotend_temp, " ; hot end after the first layer");
+        return 0;
+    case PS_BED:
+        it->sub = PS_FAN;
+        if (!it->path_first && !it->first_done) {
+            it->first_done = 1;
+            if (o->bed_temp > 0.0 && o->bed_temp != o->first_layer_bed_temp)
+                return temp_line(l, "M140", o->bed_temp, " ; bed after the first layer");
+        }
+        return 0;
+    case PS_FAN:
+        it->sub = PS_PLAN;
+        if (!it->fan_on && o->fan_speed > 0.0 && it->layer >= o->fan_off_layers) {
+            it->fan_on = 1;
+            lb_str(l, "M106");
+            lb_fixed(l, 'S', llround(o->fan_speed * 255.0), 0);
+            lb_str(l, " ; part-cooling fan");
+            return 1;
+        }
+        return 0;
+    case PS_PLAN:
+        it->sub = plan_travel(it, v) ? PS_RETRACT : PS_SEGS;
+        return 0;
+    case PS_RETRACT:
+        it->sub = PS_LIFT;
+        if (it->travel_retract) {
+            move_e(it, l, -1);
+            return 1;
+        }
+        return 0;
+    case PS_LIFT:
+        it->sub = PS_HULL;
+        if (!it->have_pos || fmin(it->hull_z[0], it->zmax) > it->pos.z) {
+            amp_vec3 to = it->have_pos ? it->pos : it->travel_to;
+            to.z = it->hull_z[0];
+            move_travel(it, l, to, 0, o->travel_feed);
+            return 1;
+        }
+        return 0;
+    case PS_HULL:
+        if (it->hull_i < it->hull_n) {
+            double t = it->hull_t[it->hull_i];
+            amp_vec3 to = amp_v3_lerp(it->travel_from, it->travel_to, t);
+            if (it->hull_i + 1 == it->hull_n)
+                to = it->travel_to; /* exactly the path's start in XY */
+            to.z = it->hull_z[it->hull_i++];
+            move_travel(it, l, to, 1, o->travel_feed);
+            return 1;
+        }
+        it->sub = PS_DESCEND;
+        return 0;
+    case PS_DESCEND:
+        it->sub = PS_UNRETRACT;
+        if (it->pos.z != it->travel_to.z) {
+            move_travel(it, l, it->travel_to, 0, o->travel_feed);
+            return 1;
+        }
+        return 0;
+    case PS_UNRETRACT:
+        it->sub = PS_SEGS;
+        amp_gc_plan_flush(it); /* the head stops where it starts to print (an unretract usually sits there) */
+        if (it->retracted) {
+            move_e(it, l, +1);
+            return 1;
+        }
+        return 0;
+    default: /* PS_SEGS: it->seg is the vertex the head is at */
+        if (it->seg + 1 < p->n && next_segment(ps, it->path, it->seg) + 1 < p->n) {
+            amp_gc_arc arc;
+            int use_arc;
+            it->nxt = next_vertex(it, it->path, it->seg);
+            use_arc = o->arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, o, &arc);
+            if (use_arc)
+                it->nxt = arc.end;
+            move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
+            it->seg = it->nxt;
+            return 1;
+        }
+        it->path++;
+        it->sub = PS_COMMENT;
+        return 0;
+    }
+}
+
+/* Retraction, lift (capped at the bed's height) and the fan off before the end sequence. */
+static int step_teardown(amp_gcode_iter *it, lb *l)
+{
+    switch (it->sub++) {
+    case 0:
+        if (it->o.retract_length > 0.0 && !it->retracted) {
+            move_e(it, l, -1);
+            return 1;
+        }
+        return 0;
+    case 1:
+        if (it->o.end_lift > 0.0 && it->pos.z < it->zmax) {
+            amp_vec3 to = it->pos;
+            to.z += it->o.end_lift;
+            move_travel(it, l, to, 0, it->o.travel_feed);
+            return 1;
+        }
+        return 0;
+    case 2:
+        if (it->fan_on) {
+            lb_str(l, "M107 ; part-cooling fan off");
+            return 1;
+        }
+        return 0;
+    default:
+        amp_gc_plan_flush(it);
+        it->phase = PH_END;
+        it->sub = 0;
+        it->text = it->o.end_gcode;
+        return 0;
+    }
+}
+
 /* Advance by one unit: 1 = a line was produced, 0 = state changed without a line, -1 = done. */
 static int step(amp_gcode_iter *it, lb *l)
 {
-    const amp_pathset *ps = it->ps;
     int r;
     switch (it->phase) {
     case PH_HEADER:
-        if (it->pass == 1 ? it->sub < 7 : header_line(it, l, it->sub)) {
+        if (it->pass == 1 ? it->sub < GC_HEADER_LINES : header_line(it, l, it->sub)) {
             it->sub++;
             return 1;
         }
@@ -725,141 +1164,38 @@ static int step(amp_gcode_iter *it, lb *l)
         it->text = it->o.start_gcode;
         return 0;
     case PH_START:
-        r = it->o.start_gcode ? text_line(it, l) : builtin_start(it, l, it->sub++);
+        r = it->o.start_gcode ? start_line(it, l) : builtin_start(it, l, it->sub++);
         if (r > 0)
             return 1;
-        if (r == 0 && !it->o.start_gcode)
-            return 0; /* a skipped built-in line */
+        if (r == 0)
+            return 0; /* a skipped line */
         it->phase = PH_SETUP;
         it->sub = 0;
         return 0;
     case PH_SETUP:
-        if (setup_line(it, l, it->sub) > 0) {
-            it->sub++;
-            return 1;
-        }
+        r = setup_line(it, l, it->sub++);
+        if (r >= 0)
+            return r;
         it->phase = PH_PATHS;
         it->sub = PS_COMMENT;
         it->path = 0;
         return 0;
-    case PH_PATHS: {
-        const amp_path *p;
-        const amp_pvert *v;
-        if (it->path >= ps->npaths) {
+    case PH_PATHS:
+        if (it->path >= it->ps->npaths) {
             it->phase = PH_TEARDOWN;
             it->sub = 0;
             return 0;
         }
-        p = &ps->paths[it->path];
-        v = amp_pathset_path_verts(ps, it->path);
-        switch (it->sub) {
-        case PS_COMMENT:
-            it->seg = next_segment(ps, it->path, 0);
-            if (l->b) {
-                lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
-                         p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
-                         it->seg + 1 < p->n ? "" : " (skipped: no segment of non-zero length)");
-            }
-            if (it->seg + 1 >= p->n) {
-                it->stats.paths_skipped++;
-                it->path++;
-                return 1;
-            }
-            it->stats.paths++;
-            it->travel_to = v[0].p;
-            if (it->have_pos == 2 && amp_v3_dist(it->pos, it->travel_to) <= GC_MIN_SEG) {
-                it->sub = PS_SEGS; /* the path starts where the last one ended: no travel */
-                return 1;
-            }
-            /* no gouging: rise above the printed material near the travel line */
-            it->travel_z = fmax(it->travel_to.z, it->have_pos ? it->pos.z : it->travel_to.z);
-            if (it->printed_any)
-                it->travel_z = fmax(it->travel_z, grid_walk(it, it->pos, it->travel_to, it->o.travel_corridor, 0.0, 1));
-            it->travel_z += it->o.z_hop;
-            it->stats.travels++;
-            it->sub = PS_RETRACT;
-            return 1;
-        case PS_RETRACT:
-            it->sub = PS_LIFT;
-            if (it->printed_any && it->o.retract_length > 0.0 && !it->retracted) {
-                move_e(it, l, -1);
-                return 1;
-            }
-            return 0;
-        case PS_LIFT:
-            it->sub = PS_XY;
-            if (!it->have_pos || it->travel_z > it->pos.z) {
-                amp_vec3 to = it->have_pos ? it->pos : it->travel_to;
-                to.z = it->travel_z;
-                move_travel(it, l, to, 0, 1, fmin(it->o.travel_feed, it->o.max_feed_z));
-                return 1;
-            }
-            return 0;
-        case PS_XY:
-            it->sub = PS_DESCEND;
-            if (it->have_pos < 2 || it->pos.x != it->travel_to.x || it->pos.y != it->travel_to.y) {
-                move_travel(it, l, amp_v3(it->travel_to.x, it->travel_to.y, it->pos.z), 1, 0, it->o.travel_feed);
-                return 1;
-            }
-            return 0;
-        case PS_DESCEND:
-            it->sub = PS_UNRETRACT;
-            if (it->pos.z != it->travel_to.z) {
-                move_travel(it, l, it->travel_to, 0, 1, fmin(it->o.travel_feed, it->o.max_feed_z));
-                return 1;
-            }
-            return 0;
-        case PS_UNRETRACT:
-            it->sub = PS_SEGS;
-            if (it->retracted) {
-                move_e(it, l, +1);
-                return 1;
-            }
-            return 0;
-        default: /* PS_SEGS: it->seg is the next segment of non-zero length */
-            if (it->seg + 1 < p->n) {
-                move_print(it, l, it->seg);
-                it->seg = next_segment(ps, it->path, it->seg + 1);
-                return 1;
-            }
-            it->path++;
-            it->sub = PS_COMMENT;
-            return 0;
-        }
-    }
-    case PH_TEARDOWN:
-        if (it->sub == 0) {
-            it->sub = 1;
-            if (it->o.retract_length > 0.0 && !it->retracted) {
-                move_e(it, l, -1);
-                return 1;
-            }
-            return 0;
-        }
-        if (it->sub == 1) {
-            it->sub = 2;
-            if (it->o.end_lift > 0.0) {
-                amp_vec3 to = it->pos;
-                to.z += it->o.end_lift;
-                move_travel(it, l, to, 0, 1, fmin(it->o.travel_feed, it->o.max_feed_z));
-                return 1;
-            }
-            return 0;
-        }
-        plan_flush(it);
-        it->phase = PH_END;
-        it->sub = 0;
-        it->text = it->o.end_gcode;
-        return 0;
+        return step_path(it, l);
+    case PH_TEARDOWN: return step_teardown(it, l);
     case PH_END:
         r = it->o.end_gcode ? text_line(it, l) : builtin_end(l, it->sub++);
         if (r > 0)
             return 1;
-        plan_flush(it);
+        amp_gc_plan_flush(it);
         it->phase = PH_DONE;
         return 0;
-    default:
-        return -1;
+    default: return -1;
     }
 }
 

@@ -4,7 +4,8 @@
 #   -> support (§5.3) -> independent checks -> G-code (SPEC §5) -> pictures
 #   -> stream through ampath-bridge to the virtual printer, and compare what it executed.
 # Everything lands in demo/. Options through the environment:
-#   DEMO_EPS (default 1 mm), DEMO_DIR (default u: curves along the helix, as in paper Fig. 11).
+#   DEMO_EPS (default 1 mm), DEMO_DIR (default u: curves along the helix, as in paper Fig. 11),
+#   DEMO_PRINTER (default generic; any `ampath printer list` name or a slicer .ini).
 set -e
 A=./tools/ampath
 B=./bridge/ampath-bridge
@@ -41,18 +42,19 @@ $A check $D/helix.amp --trivariate $D/helix.spl --json > $D/check.json || {
 GAP=$(sed -n 's/.*"coverage":{[^}]*"coverage_gap_mm":\([0-9.e+-]*\).*/\1/p' $D/check.json)
 step check "coverage gap $(echo "$GAP" | cut -c1-6) mm <= eps $EPS mm, no gouging, no crossing (independent checkers)"
 
-$A gcode $D/helix.amp --json -o $D/helix.gcode > $D/gcode.json
+$A gcode $D/helix.amp --printer "${DEMO_PRINTER:-generic}" --json -o $D/helix.gcode > $D/gcode.json
 $A preview $D/helix.amp -o $D/helix.png
 $A preview $D/helix.amp -o $D/helix.svg
-step gcode "$D/helix.gcode: $(num $D/gcode.json lines) lines; pictures $D/helix.png, $D/helix.svg"
+step gcode "$D/helix.gcode for printer $(sed -n 's/.*"printer":"\([^"]*\)".*/\1/p' $D/gcode.json): $(num $D/gcode.json lines) lines ($(num $D/gcode.json lines_saved) segments saved by the 0.01 mm simplification), centred on the bed; pictures $D/helix.png, $D/helix.svg"
 
 T=$(num $D/gcode.json time_s | cut -d. -f1)
 echo
 echo "paths:           $(num $D/order.json paths_out) object + $(num $D/support.json support_paths) support"
 echo "subdivisions:    $(num $D/order.json subdivisions_improved) (plain greedy $(num $D/order.json subdivisions_greedy))"
 echo "coverage error:  $(echo "$GAP" | cut -c1-6) mm (eps $EPS mm)"
-echo "print length:    $(num $D/gcode.json print_length_mm | cut -d. -f1) mm extruding, $(num $D/gcode.json travel_length_mm | cut -d. -f1) mm travel"
-echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, filament $(num $D/gcode.json filament_mm | cut -d. -f1) mm"
+TT=$(num $D/gcode.json travel_time_s | cut -d. -f1)
+echo "print length:    $(num $D/gcode.json print_length_mm | cut -d. -f1) mm extruding, $(num $D/gcode.json travel_length_mm | cut -d. -f1) mm travel ($(num $D/gcode.json travel_per_print_length | cut -c1-4) x)"
+echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, of which travel $((TT / 60)) min ($((100 * TT / (T > 0 ? T : 1))) %); filament $(num $D/gcode.json filament_mm | cut -d. -f1) mm"
 echo
 
 # Stream the job to the virtual printer (SPEC §8) through a pseudo-terminal, then compare.

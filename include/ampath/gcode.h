@@ -10,32 +10,74 @@
  * pushes every line, newline-terminated, into an amp_sink_fn.
  *
  * What is emitted, in order:
- *   1. a header of `;` comments: flavor, the estimates (time, filament, lines)
+ *   1. a header of `;` comments: profile, flavor, placement offset and the
+ *      placed bounding box, the estimates (time, filament, lines);
  *   2. the start sequence: the caller's text, or the built-in one (bed and
- *      hot-end temperatures, G28 homing, waiting for temperatures);
- *   3. set-up that the rest depends on (always): G21, G90 (absolute XYZ),
- *      M82 or M83 (absolute or relative E), G92 E0, the acceleration
- *      (Marlin `M204 S`, Klipper `SET_VELOCITY_LIMIT ACCEL=`);
+ *      hot-end first-layer temperatures, G28 homing, waiting for both). A
+ *      caller's text without M190/M140 gets `M190 S<first-layer bed>` before
+ *      it, one without M109/M104 gets `M104` before and `M109` after it (with
+ *      the first-layer temperatures), as PrusaSlicer does;
+ *   3. set-up that the rest depends on (always): G21 (Marlin only; Klipper
+ *      has millimetres only), G90 (absolute XYZ), M82 or M83, G92 E0, the
+ *      acceleration (Marlin `M204 S`, Klipper `SET_VELOCITY_LIMIT ACCEL=`),
+ *      M107 when the job uses the fan;
  *   4. per path a comment `; path I ROLE N vertices` (I counts from 0 in
- *      file order), a travel from the previous path, then one
- *      `G1 X Y Z E [F]` per segment of non-zero length;
- *   5. retraction and a vertical lift of end_lift, then the end sequence
- *      (caller's text or built-in: heaters off, fan off, motors off).
+ *      file order); at the first path above the first layer the other-layer
+ *      temperatures (M104/M140 without waiting, only when they differ), at
+ *      the first path of layer fan_off_layers `M106 S<0..255>`; a travel from
+ *      the previous path, then one `G1 X Y Z E [F]` per simplified segment;
+ *   5. retraction and a lift of end_lift (at most to the bed's maximum
+ *      height), M107 if the fan was on, then the end sequence (caller's text
+ *      or built-in: heaters off, fan off, motors off).
+ *
+ * Placement (SPEC §5): AMP_PLACE_CENTER (default) puts the centre of the
+ * job's XY bounding box at the centre of the bed, AMP_PLACE_AT at
+ * (place_x, place_y); both shift z so that the job rests on the bed: the
+ * lowest bead bottom (vertex z - h for planar beads, z - r for tubes) is at
+ * z = 0, which puts the first planar layer at its bead height and the lowest
+ * tube at its radius. AMP_PLACE_ORIGIN writes the job's own coordinates.
+ * Every written X, Y lies in [bed_min, bed_max] and every Z in
+ * [0, max_height]; init refuses a job that does not fit (AMP_ERR_RANGE, the
+ * message names the axis and the overflow in mm).
  *
  * Extrusion (SPEC §5): a segment of length L whose end radii are r0, r1
- * extrudes E = flow * (pi r^2 L) / (pi (d/2)^2) mm of filament, r = (r0+r1)/2,
- * d = filament diameter. Its feed is print_feed unless pi r^2 v would exceed
- * max_volumetric_flow; then it is lowered to max_volumetric_flow / (pi r^2)
- * (rounded down to the 0.1 mm/min printed in F).
+ * extrudes E = flow * A L / (pi (d/2)^2) mm of filament, r = (r0+r1)/2,
+ * d = filament diameter, A = amp_bead_area(r, h): pi r^2 for a tube, the
+ * rounded rectangle (2r - h) h + pi (h/2)^2 for a planar bead of height h.
+ * Its feed is print_feed (first_layer_feed on the first layer) unless A v
+ * would exceed max_volumetric_flow; then it is lowered to
+ * max_volumetric_flow / A (rounded down to the 0.1 mm/min printed in F).
  *
- * Travel (no gouging): between two paths the head retracts, rises to
- * z_travel = max(top of printed material within travel_corridor of the
- * travel line, start z, end z) + z_hop, moves in XY with G0, descends, and
+ * Clean segments: with chord_tol > 0 each path is simplified greedily: a
+ * written segment from vertex k to vertex j replaces the input vertices
+ * between them when each lies within chord_tol of the chord and its radius
+ * within radius_tol of the radius interpolated along the chord; its E is the
+ * sum of the replaced segments' E, so the volume is exact. With min_segment
+ * > 0 no extruding segment is shorter than min_segment unless it is a whole
+ * path (short pieces are merged with the next, or the last with the one
+ * before). chord_tol = min_segment = 0 writes every input segment. With
+ * arcs = 1 a run of vertices on one circle in XY (z and radius linear in the
+ * angle, each polyline piece within chord_tol of the arc, circle radius
+ * 0.5..1000 mm, sweep below 2 pi) that reaches beyond the straight segment is
+ * written as one `G2`/`G3 X Y Z I J E` (Marlin ARC_SUPPORT, Klipper
+ * [gcode_arcs]); its E is again the exact sum of the replaced segments'.
+ *
+ * First layer: for planar jobs the paths at the lowest planar layer z; for
+ * tube jobs the paths whose lowest bead point lies below first_layer_height
+ * above the bed. Layers (for the fan): planar paths count a new layer at each
+ * rise of the bead z in print order; tubes are in layer
+ * floor(bottom / first_layer_height).
+ *
+ * Travel (no gouging): between two paths the head retracts (unless the XY
+ * distance is below retract_min_travel), rises by z_hop, then follows the
+ * lowest polyline from (start, z+z_hop) to (end, z+z_hop) that stays z_hop
+ * above all printed material within travel_corridor of the travel line (the
+ * upper convex hull of the material heights sampled along the line: a single
+ * straight move when nothing printed is in the way), descends and
  * unretracts. The material top is tracked conservatively in a fixed grid of
  * AMP_GCODE_GRID^2 cells over the XY bounding box of the job: every printed
- * segment raises the cells within its radius to its highest z + r, and a
- * travel reads every cell within the corridor of its line, so the lift can be
- * higher than needed but never lower.
+ * segment raises the cells within its radius to its highest z (+ r for
+ * tubes), so a travel can be higher than needed but never lower.
  *
  * Print-time estimate: every move is a block of a look-ahead planner of
  * AMP_GCODE_LOOKAHEAD blocks, like the firmware's block buffer: trapezoidal
@@ -81,12 +123,25 @@ extern "C" {
 /** Smallest buffer accepted by amp_gcode_iter_next() (line + NUL). */
 #define AMP_GCODE_LINE_CAP (AMP_GCODE_LINE_MAX + 1)
 
-/** Cells per side of the material-height grid used to lift travels (compile-time; 32 = 4 KiB). */
+/**
+ * Cells per side of the material-height grid used to lift travels (compile-time; 128 = 64 KiB,
+ * the iterator is then about 80 KiB; -DAMP_GCODE_GRID=32 gives 4 KiB for small targets, with
+ * travels up to a few percent longer because the tops are tracked more coarsely).
+ */
 #ifndef AMP_GCODE_GRID
-#define AMP_GCODE_GRID 32
+#define AMP_GCODE_GRID 128
 #endif
 /** Blocks in the look-ahead planner of the time estimate (Marlin's BLOCK_BUFFER_SIZE is 16). */
 #define AMP_GCODE_LOOKAHEAD 16
+/** Most corners of one travel polyline (the upper hull of the sampled material heights). */
+#define AMP_GCODE_HULL 512
+/** Longest run of input vertices merged into one written segment by the simplification. */
+#define AMP_GCODE_MERGE_MAX 64
+
+/** Placement modes (amp_gcode_opts.place). */
+#define AMP_PLACE_CENTER 0 /**< centre of the job's XY box at the bed centre, resting on the bed */
+#define AMP_PLACE_ORIGIN 1 /**< the job's own coordinates */
+#define AMP_PLACE_AT 2     /**< centre of the job's XY box at (place_x, place_y), resting on the bed */
 
 /** Printer and G-code options. Fill with amp_gcode_opts_default(), then change fields. */
 typedef struct amp_gcode_opts {
@@ -111,6 +166,24 @@ typedef struct amp_gcode_opts {
     double max_feed_xy;         /**< mm/s limit of the XY speed in the estimate (200) */
     double max_feed_z;          /**< mm/s limit of the Z speed, also the feed of travel lifts (10) */
     double max_feed_e;          /**< mm/s limit of the filament speed in the estimate (60) */
+    /* printer and placement (SPEC §5); amp_printer_gcode_opts() fills these from a profile */
+    const char *profile;        /**< printer name for the header ("generic"); not copied */
+    int place;                  /**< AMP_PLACE_CENTER (default), AMP_PLACE_ORIGIN or AMP_PLACE_AT */
+    double place_x, place_y;    /**< AMP_PLACE_AT: bed point of the centre of the job's XY box (mm) */
+    double bed_min_x, bed_min_y;/**< printable rectangle, mm (0, 0) */
+    double bed_max_x, bed_max_y;/**< (220, 220) */
+    double max_height;          /**< highest Z written, mm (250) */
+    double first_layer_height;  /**< mm (0.2): tube paths whose bead bottom lies below it are first layer */
+    double first_layer_feed;    /**< mm/s on the first layer (20) */
+    double first_layer_hotend_temp; /**< deg C of the start sequence (215; 0 = do not heat) */
+    double first_layer_bed_temp;    /**< deg C of the start sequence (60; 0 = do not heat) */
+    int fan_off_layers;         /**< part-cooling fan off for this many layers (1) */
+    double fan_speed;           /**< fan after them, 0..1 of full speed (1; 0 = no fan commands) */
+    double retract_min_travel;  /**< mm: shorter XY travels do not retract (2; PrusaSlicer retract_before_travel) */
+    double chord_tol;           /**< mm, simplification chord tolerance (0.01; 0 = off) */
+    double radius_tol;          /**< mm, deposition radius tolerance of the simplification (0.01) */
+    double min_segment;         /**< mm, shortest extruding segment unless a whole path (0.02; 0 = off) */
+    int arcs;                   /**< 1: fit helical arcs, written as G2/G3 (0; needs firmware arc support) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */
@@ -129,7 +202,13 @@ typedef struct amp_gcode_stats {
     double time;                  /**< estimated print time (moves only; no heating, no homing) */
     double print_time;            /**< part of time spent in extrusion moves */
     double travel_time;           /**< part spent in travels, retractions and lifts */
-    double max_travel_z;          /**< highest z a travel rose to */
+    double max_travel_z;          /**< highest z a travel rose to (placed) */
+    size_t input_segments;        /**< segments of non-zero length in the input paths */
+    size_t arcs;                  /**< G2/G3 moves (counted in segments too) */
+    size_t travel_moves;          /**< G0 lines */
+    double bead_volume;           /**< sum of A L over the printed paths (SPEC §5), mm^3 */
+    double first_layer_z;         /**< placed z of the first extrusion */
+    amp_box3 bbox;                /**< placed bounding box of the printed vertices */
 } amp_gcode_stats;
 
 /** The motion of the last line (for callers that follow the head; kind 0 = the line was not a move). */
@@ -147,6 +226,7 @@ typedef struct amp_gcode_move {
 /** One planner block of the estimate (internal; part of the iterator's plain data). */
 typedef struct amp_gcode_block {
     double len, vnom, vjunc, ux, uy, uz;
+    int travel; /* a G0: its time counts as travel time */
 } amp_gcode_block;
 
 /**
@@ -169,8 +249,18 @@ typedef struct amp_gcode_iter {
     double e_exact;     /* absolute E, exact */
     long long e_units;  /* absolute E as last printed, in 1e-5 mm */
     long long f_units;  /* modal feed as last printed, in 0.1 mm/min (-1 = none) */
-    double travel_z;
     amp_vec3 travel_to;
+    amp_vec3 off;       /* placement offset added to every written coordinate */
+    double zmax;        /* highest model z a travel may reach (max_height - off.z) */
+    double zlow;        /* lowest bead bottom of the job (model z) */
+    double z_first;     /* planar: z of the lowest planar layer (model); HUGE_VAL if none */
+    double layer_z;     /* planar: z of the current layer */
+    int layer;          /* layer index of the current path */
+    int first_done, fan_on, travel_retract, path_first;
+    amp_vec3 travel_from;
+    size_t nxt;         /* end vertex of the next written segment */
+    size_t hull_n, hull_i;
+    double hull_t[AMP_GCODE_HULL], hull_z[AMP_GCODE_HULL]; /* travel polyline: (fraction, z) corners */
     double fil_area;    /* pi (d/2)^2 */
     double grid_x0, grid_y0, grid_cell;
     float grid[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* top of printed material per cell (-inf = none) */

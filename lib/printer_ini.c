@@ -1,0 +1,333 @@
+/*
+ * Reader of the printer/filament/print `.ini` files that PrusaSlicer,
+ * SuperSlicer and OrcaSlicer export (SPEC §5): `key = value` lines, the
+ * slicers' own key names (OrcaSlicer's as aliases), the first value of a
+ * multi-extruder list, C-style escapes in the G-code strings. Unknown keys
+ * are collected, not fatal: a full slicer export has hundreds of keys that
+ * only matter to a slicer.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ampath/printer.h"
+
+enum {
+    K_BED_SHAPE, K_MAX_HEIGHT, K_NOZZLE, K_FILAMENT, K_LAYER, K_FIRST_LAYER, K_TEMP, K_TEMP1, K_BED, K_BED1,
+    K_RETRACT, K_RETRACT_SPEED, K_LIFT, K_BEFORE_TRAVEL, K_TRAVEL, K_PERIMETER, K_FIRST_SPEED, K_FAN_MIN, K_FAN_MAX,
+    K_FAN_ALWAYS, K_FAN_OFF, K_COOLING, K_FLAVOR, K_START, K_END, K_ACCEL, K_FEED_X, K_FEED_Y, K_FEED_Z, K_FEED_E,
+    K_VOLUMETRIC, K_MULTIPLIER, K_MODEL
+};
+
+static const struct {
+    const char *key;
+    int k;
+} ini_keys[] = {
+    {"bed_shape", K_BED_SHAPE}, {"printable_area", K_BED_SHAPE},
+    {"max_print_height", K_MAX_HEIGHT}, {"printable_height", K_MAX_HEIGHT},
+    {"nozzle_diameter", K_NOZZLE}, {"filament_diameter", K_FILAMENT},
+    {"layer_height", K_LAYER}, {"first_layer_height", K_FIRST_LAYER}, {"initial_layer_print_height", K_FIRST_LAYER},
+    {"temperature", K_TEMP}, {"nozzle_temperature", K_TEMP},
+    {"first_layer_temperature", K_TEMP1}, {"nozzle_temperature_initial_layer", K_TEMP1},
+    {"bed_temperature", K_BED}, {"hot_plate_temp", K_BED},
+    {"first_layer_bed_temperature", K_BED1}, {"hot_plate_temp_initial_layer", K_BED1},
+    {"retract_length", K_RETRACT}, {"retraction_length", K_RETRACT},
+    {"retract_speed", K_RETRACT_SPEED}, {"retraction_speed", K_RETRACT_SPEED},
+    {"retract_lift", K_LIFT}, {"z_hop", K_LIFT},
+    {"retract_before_travel", K_BEFORE_TRAVEL}, {"retraction_minimum_travel", K_BEFORE_TRAVEL},
+    {"travel_speed", K_TRAVEL},
+    {"perimeter_speed", K_PERIMETER}, {"outer_wall_speed", K_PERIMETER},
+    {"first_layer_speed", K_FIRST_SPEED}, {"initial_layer_speed", K_FIRST_SPEED},
+    {"min_fan_speed", K_FAN_MIN}, {"fan_min_speed", K_FAN_MIN},
+    {"max_fan_speed", K_FAN_MAX}, {"fan_max_speed", K_FAN_MAX},
+    {"fan_always_on", K_FAN_ALWAYS},
+    {"disable_fan_first_layers", K_FAN_OFF}, {"close_fan_the_first_x_layers", K_FAN_OFF},
+    {"cooling", K_COOLING},
+    {"gcode_flavor", K_FLAVOR},
+    {"start_gcode", K_START}, {"machine_start_gcode", K_START},
+    {"end_gcode", K_END}, {"machine_end_gcode", K_END},
+    {"machine_max_acceleration_extruding", K_ACCEL}, {"default_acceleration", K_ACCEL},
+    {"machine_max_feedrate_x", K_FEED_X}, {"machine_max_feedrate_y", K_FEED_Y},
+    {"machine_max_feedrate_z", K_FEED_Z}, {"machine_max_feedrate_e", K_FEED_E},
+    {"max_volumetric_speed", K_VOLUMETRIC}, {"filament_max_volumetric_speed", K_VOLUMETRIC},
+    {"extrusion_multiplier", K_MULTIPLIER}, {"filament_flow_ratio", K_MULTIPLIER},
+    {"printer_model", K_MODEL},
+};
+
+/* Settings that combine several keys, resolved after the whole file is read. */
+typedef struct ini_ctx {
+    double fan_min, fan_max, first_speed, perimeter;
+    int fan_always, fan_always_seen, orca_fan, first_speed_pct, have_fan;
+} ini_ctx;
+
+static int key_id(const char *k, size_t n)
+{
+    size_t i;
+    for (i = 0; i < sizeof ini_keys / sizeof ini_keys[0]; i++)
+        if (strlen(ini_keys[i].key) == n && strncmp(ini_keys[i].key, k, n) == 0)
+            return ini_keys[i].k;
+    return -1;
+}
+
+/* The first number of a (comma- or semicolon-separated) value; *pct set when it ends with '%'. */
+static int first_number(const char *v, size_t n, double *out, int *pct)
+{
+    char buf[64], *end;
+    size_t k = 0;
+    while (k < n && v[k] != ',' && v[k] != ';' && k + 1 < sizeof buf) {
+        buf[k] = v[k];
+        k++;
+    }
+    while (k > 0 && (buf[k - 1] == ' ' || buf[k - 1] == '"'))
+        k--;
+    buf[k] = '\0';
+    *pct = k > 0 && buf[k - 1] == '%';
+    if (*pct)
+        buf[--k] = '\0';
+    end = buf;
+    while (*end == ' ' || *end == '"')
+        end++;
+    *out = strtod(end, &end);
+    return k > 0 && *end == '\0' && isfinite(*out);
+}
+
+/* A decimal number up to @p stop (strtod alone would read "0x0" as hexadecimal); advances *s. */
+static int dec_number(const char **s, char stop, double *out)
+{
+    char buf[48], *end;
+    size_t k = 0;
+    while (**s == ' ' || **s == '"')
+        (*s)++;
+    while (**s && **s != stop && **s != ',' && **s != 'x' && **s != 'X' && k + 1 < sizeof buf)
+        buf[k++] = *(*s)++;
+    while (k > 0 && (buf[k - 1] == ' ' || buf[k - 1] == '"'))
+        k--;
+    buf[k] = '\0';
+    *out = strtod(buf, &end);
+    return k > 0 && *end == '\0' && isfinite(*out);
+}
+
+/* bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline. */
+static int bed_shape(amp_printer *p, const char *v, size_t n)
+{
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+    char buf[1024];
+    const char *s;
+    int pts = 0;
+    if (n >= sizeof buf)
+        return 0;
+    memcpy(buf, v, n);
+    buf[n] = '\0';
+    for (s = buf; *s;) {
+        double x, y;
+        while (*s == ' ' || *s == ',' || *s == '"')
+            s++;
+        if (!*s)
+            break;
+        if (!dec_number(&s, 'x', &x) || (*s != 'x' && *s != 'X'))
+            return 0;
+        s++;
+        if (!dec_number(&s, ',', &y))
+            return 0;
+        x0 = x < x0 ? x : x0;
+        x1 = x > x1 ? x : x1;
+        y0 = y < y0 ? y : y0;
+        y1 = y > y1 ? y : y1;
+        pts++;
+    }
+    if (pts < 3)
+        return 0;
+    p->bed_min_x = x0;
+    p->bed_min_y = y0;
+    p->bed_max_x = x1;
+    p->bed_max_y = y1;
+    return 1;
+}
+
+/* A G-code string with the slicers' C-style escapes; surrounding double quotes are removed. */
+static amp_status gcode_string(char *dst, size_t cap, const char *v, size_t n, long line, amp_error *err)
+{
+    size_t i, o = 0;
+    if (n >= 2 && v[0] == '"' && v[n - 1] == '"') {
+        v++;
+        n -= 2;
+    }
+    for (i = 0; i < n; i++) {
+        char c = v[i];
+        if (c == '\\' && i + 1 < n) {
+            char e = v[++i];
+            c = e == 'n' ? '\n' : e == 'r' ? '\r' : e == 't' ? '\t' : e;
+        }
+        if (o + 1 >= cap)
+            return amp_fail(err, AMP_ERR_PARSE, line, "G-code longer than %lu bytes", (unsigned long)cap - 1);
+        dst[o++] = c;
+    }
+    dst[o] = '\0';
+    return AMP_OK;
+}
+
+static amp_status flavor_of(amp_printer *p, const char *v, size_t n, long line, amp_error *err)
+{
+    if ((n >= 6 && strncmp(v, "marlin", 6) == 0) || (n == 5 && strncmp(v, "prusa", 5) == 0))
+        p->flavor = AMP_FLAVOR_MARLIN; /* marlin, marlin2, marlinlegacy */
+    else if (n == 7 && strncmp(v, "klipper", 7) == 0)
+        p->flavor = AMP_FLAVOR_KLIPPER;
+    else
+        return amp_fail(err, AMP_ERR_PARSE, line, "gcode_flavor %.*s is not supported (marlin, marlin2, marlinlegacy, "
+                        "klipper)", (int)(n > 40 ? 40 : n), v);
+    return AMP_OK;
+}
+
+static void note_unknown(amp_printer *p, const char *k, size_t n)
+{
+    size_t have = strlen(p->unknown);
+    p->n_unknown++;
+    if (have + n + 2 < sizeof p->unknown) {
+        if (have)
+            p->unknown[have++] = ',';
+        memcpy(p->unknown + have, k, n);
+        p->unknown[have + n] = '\0';
+    }
+}
+
+/* One known numeric key. */
+static void set_number(amp_printer *p, ini_ctx *c, int id, double x, int pct)
+{
+    switch (id) {
+    case K_MAX_HEIGHT: p->max_height = x; break;
+    case K_NOZZLE: p->nozzle_diameter = x; break;
+    case K_FILAMENT: p->filament_diameter = x; break;
+    case K_LAYER: p->layer_height = x; break;
+    case K_FIRST_LAYER: p->first_layer_height = pct ? x / 100.0 * p->layer_height : x; break;
+    case K_TEMP: p->temp = x; break;
+    case K_TEMP1: p->first_layer_temp = x; break;
+    case K_BED: p->bed_temp = x; break;
+    case K_BED1: p->first_layer_bed_temp = x; break;
+    case K_RETRACT: p->retract_length = x; break;
+    case K_RETRACT_SPEED: p->retract_speed = x; break;
+    case K_LIFT: p->retract_lift = x; break;
+    case K_BEFORE_TRAVEL: p->retract_before_travel = x; break;
+    case K_TRAVEL: p->travel_speed = x; break;
+    case K_PERIMETER: c->perimeter = x; break;
+    case K_FIRST_SPEED: c->first_speed = x; c->first_speed_pct = pct; break;
+    case K_FAN_MIN: c->fan_min = x; c->have_fan = 1; break;
+    case K_FAN_MAX: c->fan_max = x; c->have_fan = 1; break;
+    case K_FAN_ALWAYS: c->fan_always = x != 0.0; c->fan_always_seen = 1; break;
+    case K_FAN_OFF: p->fan_off_layers = x < 0 ? 0 : x > 100000 ? 100000 : (int)x; break;
+    case K_ACCEL: if (x > 0) p->accel = x; break;
+    case K_FEED_X: if (x > 0) p->max_feed_xy = x; break;
+    case K_FEED_Y: if (x > 0 && x < p->max_feed_xy) p->max_feed_xy = x; break;
+    case K_FEED_Z: if (x > 0) p->max_feed_z = x; break;
+    case K_FEED_E: if (x > 0) p->max_feed_e = x; break;
+    case K_VOLUMETRIC: if (x > 0) p->max_volumetric_flow = x; break; /* 0 = unlimited: keep the hot end's default */
+    case K_MULTIPLIER: p->extrusion_multiplier = x; break;
+    default: break; /* K_COOLING: no layer-time cooling in ampath */
+    }
+}
+
+/* One `key = value` line. */
+static amp_status ini_line(amp_printer *p, ini_ctx *c, const char *s, size_t n, long line, amp_error *err)
+{
+    const char *eq = memchr(s, '=', n), *v;
+    size_t kn, vn;
+    int id, pct;
+    double x;
+    if (!eq)
+        return amp_fail(err, AMP_ERR_PARSE, line, "expected 'key = value'");
+    kn = (size_t)(eq - s);
+    while (kn > 0 && (s[kn - 1] == ' ' || s[kn - 1] == '\t'))
+        kn--;
+    v = eq + 1;
+    vn = n - (size_t)(v - s);
+    while (vn > 0 && (*v == ' ' || *v == '\t'))
+        v++, vn--;
+    p->n_keys++;
+    id = key_id(s, kn);
+    if (id < 0) {
+        note_unknown(p, s, kn);
+        return AMP_OK;
+    }
+    if (kn >= 3 && (strncmp(s, "fan_", 4) == 0 || strncmp(s, "close_fan", 9) == 0))
+        c->orca_fan = 1;
+    switch (id) {
+    case K_BED_SHAPE:
+        return bed_shape(p, v, vn) ? AMP_OK : amp_fail(err, AMP_ERR_PARSE, line, "bed_shape: expected XxY,XxY,...");
+    case K_FLAVOR: return flavor_of(p, v, vn, line, err);
+    case K_START: return gcode_string(p->start_gcode, sizeof p->start_gcode, v, vn, line, err);
+    case K_END: return gcode_string(p->end_gcode, sizeof p->end_gcode, v, vn, line, err);
+    case K_MODEL:
+        if (vn >= sizeof p->model)
+            vn = sizeof p->model - 1;
+        memcpy(p->model, v, vn);
+        p->model[vn] = '\0';
+        return AMP_OK;
+    default:
+        if (vn == 0 || (vn == 3 && strncmp(v, "nil", 3) == 0))
+            return AMP_OK; /* an unset value keeps the default */
+        if (!first_number(v, vn, &x, &pct))
+            return amp_fail(err, AMP_ERR_PARSE, line, "%.*s: '%.*s' is not a number", (int)(kn > 60 ? 60 : kn), s,
+                            (int)(vn > 40 ? 40 : vn), v);
+        set_number(p, c, id, x, pct);
+        return AMP_OK;
+    }
+}
+
+/*
+ * Fan: PrusaSlicer runs min_fan_speed all the time with fan_always_on and
+ * speeds up only for short layers (which ampath does not model); without
+ * fan_always_on the fan stays off. OrcaSlicer has no such switch and runs
+ * fan_min_speed.
+ */
+static void ini_finish(amp_printer *p, const ini_ctx *c)
+{
+    if (c->perimeter > 0)
+        p->print_speed = c->perimeter;
+    if (c->first_speed > 0)
+        p->first_layer_speed = c->first_speed_pct ? c->first_speed / 100.0 * p->print_speed : c->first_speed;
+    if (c->have_fan || c->fan_always_seen)
+        p->fan_percent = (c->fan_always_seen ? c->fan_always : c->orca_fan) ? c->fan_min : 0.0;
+    if (p->fan_percent > 100.0)
+        p->fan_percent = 100.0;
+}
+
+amp_status amp_printer_parse_ini(amp_printer *p, const char *text, size_t len, const char *name, amp_error *err)
+{
+    ini_ctx c;
+    size_t pos = 0;
+    long line = 0;
+    amp_status st;
+    if (!p || (!text && len))
+        return amp_fail(err, AMP_ERR_ARG, 0, "printer: NULL profile or text");
+    st = amp_printer_builtin(p, "generic", err);
+    if (st != AMP_OK)
+        return st;
+    memset(&c, 0, sizeof c);
+    c.fan_min = p->fan_percent;
+    p->model[0] = '\0';
+    if (name) {
+        size_t n = strlen(name) < sizeof p->name - 1 ? strlen(name) : sizeof p->name - 1;
+        memcpy(p->name, name, n);
+        p->name[n] = '\0';
+    } else {
+        strcpy(p->name, "ini");
+    }
+    while (pos < len) {
+        const char *s = text + pos, *e = memchr(s, '\n', len - pos);
+        size_t n = e ? (size_t)(e - s) : len - pos;
+        pos += n + (e ? 1 : 0);
+        line++;
+        while (n > 0 && (s[n - 1] == '\r' || s[n - 1] == ' ' || s[n - 1] == '\t'))
+            n--;
+        while (n > 0 && (*s == ' ' || *s == '\t'))
+            s++, n--;
+        if (n == 0 || *s == '#' || *s == ';' || *s == '[')
+            continue;
+        if (memchr(s, '\0', n))
+            return amp_fail(err, AMP_ERR_PARSE, line, "NUL byte");
+        st = ini_line(p, &c, s, n, line, err);
+        if (st != AMP_OK)
+            return st;
+    }
+    ini_finish(p, &c);
+    return amp_printer_check(p, err);
+}
