@@ -92,6 +92,13 @@ int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, siz
     return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
 }
 
+/* q is inside the head printing p, beyond the tolerance (SPEC §2) */
+static int point_clear(double zo, double k, amp_vec3 p, amp_vec3 q)
+{
+    double dz = q.z - p.z - zo - AMP_CONE_TOL, dx = q.x - p.x, dy = q.y - p.y;
+    return dz > 0.0 && dz * dz > k * k * (dx * dx + dy * dy);
+}
+
 int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b)
 {
     const amp_fragment *fa = &fs->frag[a], *fb = &fs->frag[b];
@@ -101,6 +108,11 @@ int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a,
     /* box bound of the clearance: highest point of b over lowest of a, nearest in xy */
     if (fb->box.max.z - fa->box.min.z - zo - k * amp_box_xy_gap(fa->box, fb->box) <= AMP_CONE_TOL)
         return 0;
+    /* quick accept: the clearance of two segments is at least that of any two of their points, and the
+     * fragment ends usually show a blocker far below at once */
+    if (point_clear(zo, k, fa->p0, fb->p0) || point_clear(zo, k, fa->p0, fb->p1) ||
+        point_clear(zo, k, fa->p1, fb->p0) || point_clear(zo, k, fa->p1, fb->p1))
+        return 1;
     na = amp_fragment_npoints(fa);
     nb = amp_fragment_npoints(fb);
     for (i = 0; i + 1 < na; i++) {

@@ -168,6 +168,7 @@ typedef struct orderer {
     unsigned char *done;  /* 0 unprinted, 1 printed, 2 printed tentatively (look-ahead) */
     unsigned char *ready; /* nothing unprinted below: member of the set B of Alg. 2, line 4 */
     uint32_t *whead, *wnext, *rs, *re;
+    uint32_t *waits; /* the blocker an unprinted, unready fragment waits on */
     double *rz;
     runent *heap;
     size_t nheap, cap_heap;
@@ -451,12 +452,13 @@ static amp_status make_ready(orderer *o, uint32_t f)
 /* Below(f) ∩ F (Alg. 2, line 4) by a hierarchy query; f waits on the blocker it finds. */
 static amp_status recheck(orderer *o, uint32_t f)
 {
-    uint32_t g = amp_fbvh_find_below(&o->bvh, o->fs, o->h, f, o->done, NULL);
+    uint32_t g = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, f, o->done, o->waits[f]);
     o->st.queries++;
     if (g == NONE)
         return make_ready(o, f);
     o->wnext[f] = o->whead[g];
     o->whead[g] = f;
+    o->waits[f] = g;
     return AMP_OK;
 }
 
@@ -543,9 +545,15 @@ static uint32_t simulate(orderer *o, uint32_t s, uint32_t e, int dir)
         o->done[f] = 2;
     x = step_along(dir > 0 ? e : s, dir, lo, hi);
     while (x != NONE && cnt < LOOKAHEAD_CAP && !o->done[x]) {
-        o->st.queries++;
-        if (amp_fbvh_find_below(&o->bvh, o->fs, o->h, x, o->done, NULL) != NONE)
+        /* a fragment still waiting on a blocker that is not in the simulated run stays blocked, and a ready one
+         * stays printable: only a fragment waiting on the run itself needs a query */
+        if (!o->ready[x] && o->done[o->waits[x]] != 2)
             break;
+        if (!o->ready[x]) {
+            o->st.queries++;
+            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, x, o->done, o->waits[x]) != NONE)
+                break;
+        }
         o->done[x] = 2;
         cnt++;
         x = step_along(x, dir, lo, hi);
@@ -905,6 +913,7 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->rs);
     amp_free(o->a, o->re);
     amp_free(o->a, o->rz);
+    amp_free(o->a, o->waits);
     amp_free(o->a, o->heap);
     amp_free(o->a, o->pc);
     rgrid_free(o->a, &o->grid);
@@ -952,8 +961,9 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.rs = amp_calloc(o.a, n + 1, sizeof *o.rs);
     o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
     o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
+    o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
     blocker = amp_calloc(o.a, n + 1, sizeof *blocker);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !blocker) {
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !blocker) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
         goto done;
     }
@@ -964,7 +974,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     /* Alg. 2, line 4 for the initial set: independent queries, run in parallel */
 #pragma omp parallel for schedule(dynamic, 256)
     for (f = 0; f < (long)n; f++)
-        blocker[f] = amp_fbvh_find_below(&o.bvh, &fs, o.h, (uint32_t)f, o.done, NULL);
+        blocker[f] = amp_fbvh_find_any_below(&o.bvh, &fs, o.h, (uint32_t)f, o.done, NONE);
     o.st.queries += n;
     for (i = 0; i < n && st == AMP_OK; i++) {
         if (blocker[i] == NONE)
@@ -972,6 +982,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
         else {
             o.wnext[i] = o.whead[blocker[i]];
             o.whead[blocker[i]] = (uint32_t)i;
+            o.waits[i] = blocker[i];
         }
     }
     amp_free(o.a, blocker);

@@ -14,7 +14,7 @@ const char cmd_order_usage[] =
     "  --compare       compute both orderings and report both (the plain greedy one is the baseline of the\n"
     "                  improvements; it is computed only on request)\n"
     "  --nearest M     1 (default): among equally good runs start the one nearest to the head; 0: off\n"
-    "  --lookahead K   candidate runs simulated per step when improving (default 4, 1..16)\n"
+    "  --lookahead K   candidate runs simulated per step when improving (default 16, 1..16)\n"
     "  --max-edges N   also list the below graph up to N edges, for the report (default 0: skip; slow, ordering never needs it)\n"
     "  --json          print one JSON object: fragments, below-graph edges, subdivisions greedy vs improved, times\n"
     "  -o FILE         write the ordered paths (.amp); cut points get interpolated radii\n"
@@ -26,7 +26,7 @@ int cmd_order(int argc, char **argv)
 {
     const char *pos[1], *output = NULL;
     double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, t0, t_greedy = 0.0, t_improved = 0.0, t_graph = 0.0;
-    long max_edges = 0, lookahead = 4, nearest = 1;
+    long max_edges = 0, lookahead = 16, nearest = 1;
     int json = 0, greedy = 0, compare = 0, npos = 0, rc, graph_done = 0, do_g, do_i;
     amp_pathset ps, out_g, out_i;
     amp_order_opts o;
