@@ -110,7 +110,7 @@ static amp_status ugrid_build(ugrid *g, const amp_allocator *a, const amp_vec3 *
         g->nx = (size_t)(sz.x / cell) + 1;
         g->ny = (size_t)(sz.y / cell) + 1;
         g->nz = (size_t)(sz.z / cell) + 1;
-        if ((double)g->nx * (double)g->ny * (double)g->nz <= 4.0 * (double)n + 64.0)
+        if ((double)g->nx * (double)g->ny * (double)g->nz <= 8.0 * (double)n + 64.0)
             break;
         cell *= 1.5; /* keep the grid linear in the input: coarser cells, more candidates each */
     }
@@ -198,9 +198,9 @@ typedef struct mdr_ctx {
     const amp_mdr_opts *o;
     ugrid g;
     amp_vec3 *ctr;
+    amp_vec3 *gpts; /* ctr in the grid's item order */
     double *rho;   /* half the box diagonal: every point of the fragment is this close to its centre */
     double *arc;   /* arc length at each fragment's end along its path */
-    double *cut;   /* neighbour distance kept for each tube (max(2U, U + r_min)) */
     double rho_max, reach;
     amp_error *err;
 } mdr_ctx;
@@ -224,157 +224,226 @@ static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j)
  * of a box). Calls back with the centre distance; stops when the callback returns non-zero. */
 typedef int (*nb_visit)(mdr_ctx *c, uint32_t i, uint32_t j, double cdist, void *user);
 
-static void for_near(mdr_ctx *c, uint32_t i, double R, nb_visit cb, void *user)
+static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, nb_visit cb, void *user)
 {
     const ugrid *g = &c->g;
     amp_vec3 p = c->ctr[i];
-    size_t x0, y0, z0, x1, y1, z1, x, y, z;
+    size_t x0, y0, z0, x1, y1, z1, y, z;
+    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
     cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
     cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
     for (z = z0; z <= z1; z++)
-        for (y = y0; y <= y1; y++)
-            for (x = x0; x <= x1; x++) {
-                size_t cc = (z * g->ny + y) * g->nx + x, q;
-                for (q = g->start[cc]; q < g->start[cc + 1]; q++) {
-                    uint32_t j = g->item[q];
-                    double cd = amp_v3_dist(p, c->ctr[j]);
-                    if (cd <= R && cb(c, i, j, cd, user))
-                        return;
-                }
+        for (y = y0; y <= y1; y++) {
+            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
+            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
+            for (q = g->start[row + x0]; q < qe; q++) {
+                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= R2 && d2 > s2 && cb(c, i, g->item[q], sqrt(d2), user))
+                    return;
             }
-}
-
-/* Pass 1: the upper bound U of each tube's stopping radius, from its nearest neighbours. */
-typedef struct ub_state {
-    double u;   /* current bound on the stopping radius */
-} ub_state;
-
-static int ub_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
-{
-    ub_state *s = user;
-    double lb = cd - c->rho[i] - c->rho[j], d;
-    if (lb >= c->reach || pair_upper(c, fmax(lb, 0.0)) >= s->u || !pair_allowed(c, i, j))
-        return 0;
-    d = frag_dist(c->fs, i, j);
-    if (d < c->reach && pair_upper(c, d) < s->u)
-        s->u = pair_upper(c, d);
-    return 0;
-}
-
-static double tube_bound(mdr_ctx *c, uint32_t i)
-{
-    ub_state s;
-    double R;
-    /* nearest first: a small ball usually holds the nearest neighbour, and then the bound is final */
-    s.u = c->o->r_max;
-    for (R = 0.25 * c->reach; ; R *= 2.0) {
-        double cut, need;
-        R = fmin(R, c->reach + c->rho[i] + c->rho_max);
-        for_near(c, i, R, ub_visit, &s);
-        cut = fmax(2.0 * s.u, s.u + c->o->r_min);
-        need = fmin(cut, c->reach) + c->rho[i] + c->rho_max;
-        if (R >= need || R >= c->reach + c->rho[i] + c->rho_max)
-            return s.u;
-    }
-}
-
-/* Pass 2: the kept pairs, each stored once (by the lower index when both tubes keep it). */
-typedef struct pair_list {
-    uint32_t (*ij)[2];
-    double *d;
-    size_t n, cap;
-    amp_status st;
-} pair_list;
-
-static int keep_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
-{
-    pair_list *pl = user;
-    double lb = cd - c->rho[i] - c->rho[j], d;
-    if (lb > c->cut[i] || !pair_allowed(c, i, j))
-        return 0;
-    d = frag_dist(c->fs, i, j);
-    if (d >= c->reach || d > c->cut[i] || (j < i && d <= c->cut[j]))
-        return 0;
-    if (pl->n == pl->cap) {
-        void *p = pl->ij, *q = pl->d;
-        size_t cap = pl->cap;
-        if (amp_grow(c->a, &p, &cap, pl->n + 1, sizeof *pl->ij) != AMP_OK) {
-            pl->st = AMP_ERR_NOMEM;
-            return 1;
         }
-        pl->ij = p;
-        cap = pl->cap;
-        if (amp_grow(c->a, &q, &cap, pl->n + 1, sizeof *pl->d) != AMP_OK) {
-            pl->st = AMP_ERR_NOMEM;
-            return 1;
-        }
-        pl->d = q;
-        pl->cap = cap;
-    }
-    pl->ij[pl->n][0] = i < j ? i : j;
-    pl->ij[pl->n][1] = i < j ? j : i;
-    pl->d[pl->n++] = d;
-    return 0;
 }
 
-/* Symmetric neighbour lists in compressed rows: other[row[i] .. row[i+1]-1] with distances dist[]. */
-typedef struct nbrs {
-    size_t *row;
+/* One tube's neighbour search: the bound U so far, the distance kept (max(2U, U + r_min)), the ball already
+ * searched, and where the kept neighbours go (a caller's buffer; overflow is flagged, not grown, so that the
+ * search may run on any thread without allocating). */
+typedef struct scan_state {
+    double u, cut, done_r;
     uint32_t *other;
     double *dist;
-    size_t npairs;
+    size_t n, cap;
+    int overflow;
+} scan_state;
+
+static double cut_of(const mdr_ctx *c, double u) { return fmin(c->reach, fmax(2.0 * u, u + c->o->r_min)); }
+
+/* Squared distance between two boxes: a lower bound of the fragments' distance. */
+static double box_dist2(const amp_box3 *a, const amp_box3 *b)
+{
+    double gx = a->min.x - b->max.x, gy = a->min.y - b->max.y, gz = a->min.z - b->max.z;
+    double hx = b->min.x - a->max.x, hy = b->min.y - a->max.y, hz = b->min.z - a->max.z;
+    gx = gx > hx ? gx : hx;
+    gy = gy > hy ? gy : hy;
+    gz = gz > hz ? gz : hz;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    gz = gz > 0.0 ? gz : 0.0;
+    return gx * gx + gy * gy + gz * gz;
+}
+
+static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
+{
+    scan_state *s = user;
+    double d;
+    if (cd - c->rho[i] - c->rho[j] > s->cut || box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) >
+                                                                         s->cut * s->cut || !pair_allowed(c, i, j))
+        return 0;
+    d = frag_dist(c->fs, i, j);
+    if (d >= c->reach)
+        return 0;
+    if (pair_upper(c, d) < s->u) {
+        s->u = pair_upper(c, d);
+        s->cut = cut_of(c, s->u);
+    }
+    if (d <= s->cut) {
+        if (s->n == s->cap) {
+            s->overflow = 1;
+            return 1;
+        }
+        s->other[s->n] = j;
+        s->dist[s->n++] = d;
+    }
+    return 0;
+}
+
+/* The neighbours tube i keeps (d <= max(2U, U + r_min)), searched in growing balls: every fragment within
+ * d of i has its centre within d + rho_i + rho_max, so the search ends once the ball reaches that for the
+ * current distance kept. Returns 0 on buffer overflow. */
+static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
+{
+    double R = 0.5 * c->o->nominal + c->rho[i] + c->rho_max, need;
+    size_t k, m = 0;
+    s->u = c->o->r_max;
+    s->cut = c->reach;
+    s->done_r = -1.0;
+    s->n = 0;
+    s->overflow = 0;
+    for (;;) {
+        for_near(c, i, R, s->done_r, scan_visit, s);
+        if (s->overflow)
+            return 0;
+        need = s->cut + c->rho[i] + c->rho_max;
+        if (R >= need)
+            break;
+        s->done_r = R;
+        R = need;
+    }
+    for (k = 0; k < s->n; k++)
+        if (s->dist[k] <= s->cut) {
+            s->other[m] = s->other[k];
+            s->dist[m++] = s->dist[k];
+        }
+    s->n = m;
+    return 1;
+}
+
+/* Neighbour lists in compressed rows: tube i keeps other[row[i] .. row[i+1]-1] (the pairs that can stop it,
+ * with their distances); rother[rrow[i] ..] are the tubes that keep i (those i's stop may concern). */
+typedef struct nbrs {
+    size_t *row, *rrow;
+    uint32_t *other, *rother;
+    double *dist, *rdist;
+    size_t n, cap;
 } nbrs;
 
+static amp_status nbrs_append(mdr_ctx *c, nbrs *nb, const uint32_t *other, const double *dist, size_t n)
+{
+    if (nb->n + n > nb->cap) {
+        void *p = nb->other, *q = nb->dist;
+        size_t cap = nb->cap;
+        if (amp_grow(c->a, &p, &cap, nb->n + n, sizeof *nb->other) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        nb->other = p;
+        cap = nb->cap;
+        if (amp_grow(c->a, &q, &cap, nb->n + n, sizeof *nb->dist) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        nb->dist = q;
+        nb->cap = cap;
+    }
+    memcpy(nb->other + nb->n, other, n * sizeof *other);
+    memcpy(nb->dist + nb->n, dist, n * sizeof *dist);
+    nb->n += n;
+    return AMP_OK;
+}
+
+#define SCAN_CHUNK 2048
+#define SCAN_PER_TUBE 64
+
+/* The reverse lists (who keeps whom), by counting. */
+static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
+{
+    size_t i, q, nf = c->fs->n, *fill;
+    nb->rrow = amp_calloc(c->a, nf + 1, sizeof *nb->rrow);
+    nb->rother = amp_calloc(c->a, nb->n + 1, sizeof *nb->rother);
+    nb->rdist = amp_calloc(c->a, nb->n + 1, sizeof *nb->rdist);
+    fill = amp_calloc(c->a, nf + 1, sizeof *fill);
+    if (!nb->rrow || !nb->rother || !nb->rdist || !fill) {
+        amp_free(c->a, fill);
+        return AMP_ERR_NOMEM;
+    }
+    for (q = 0; q < nb->n; q++)
+        nb->rrow[nb->other[q] + 1]++;
+    for (i = 0; i < nf; i++)
+        nb->rrow[i + 1] += nb->rrow[i];
+    memcpy(fill, nb->rrow, (nf + 1) * sizeof *fill);
+    for (i = 0; i < nf; i++)
+        for (q = nb->row[i]; q < nb->row[i + 1]; q++) {
+            size_t at = fill[nb->other[q]]++;
+            nb->rother[at] = (uint32_t)i;
+            nb->rdist[at] = nb->dist[q];
+        }
+    amp_free(c->a, fill);
+    return AMP_OK;
+}
+
+/*
+ * Every tube's kept neighbours. Tubes are searched in chunks, in parallel (OpenMP): each search writes into
+ * a fixed slice of a buffer allocated beforehand, and the chunk is appended in tube order afterwards, so the
+ * lists are the same whatever the thread count. A tube whose slice overflows is searched again alone.
+ */
 static amp_status find_neighbours(mdr_ctx *c, nbrs *nb)
 {
-    const amp_fragments *fs = c->fs;
-    pair_list pl;
-    size_t i, *fill;
-    memset(&pl, 0, sizeof pl);
-    for (i = 0; i < fs->n; i++) {
-        double u;
-        if (c->o->progress && (i & 4095) == 0) /* finding neighbours: the first half of the work */
-            c->o->progress(c->o->progress_user, 0.25 * (double)i / (double)fs->n);
-        u = tube_bound(c, (uint32_t)i);
-        c->cut[i] = fmin(c->reach, fmax(2.0 * u, u + c->o->r_min));
-    }
-    for (i = 0; i < fs->n && pl.st == AMP_OK; i++) {
-        if (c->o->progress && (i & 4095) == 0)
-            c->o->progress(c->o->progress_user, 0.25 + 0.25 * (double)i / (double)fs->n);
-        for_near(c, (uint32_t)i, c->cut[i] + c->rho[i] + c->rho_max, keep_visit, &pl);
-    }
-    if (pl.st == AMP_OK) {
-        nb->row = amp_calloc(c->a, fs->n + 1, sizeof *nb->row);
-        nb->other = amp_calloc(c->a, 2 * pl.n + 1, sizeof *nb->other);
-        nb->dist = amp_calloc(c->a, 2 * pl.n + 1, sizeof *nb->dist);
-    }
-    fill = pl.st == AMP_OK ? amp_calloc(c->a, fs->n + 1, sizeof *fill) : NULL;
-    if (!fill || !nb->row || !nb->other || !nb->dist) {
-        amp_free(c->a, pl.ij);
-        amp_free(c->a, pl.d);
-        amp_free(c->a, fill);
-        return amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
-    }
-    nb->npairs = pl.n;
-    for (i = 0; i < pl.n; i++) {
-        nb->row[pl.ij[i][0] + 1]++;
-        nb->row[pl.ij[i][1] + 1]++;
-    }
-    for (i = 0; i < fs->n; i++)
-        nb->row[i + 1] += nb->row[i];
-    memcpy(fill, nb->row, (fs->n + 1) * sizeof *fill);
-    for (i = 0; i < pl.n; i++) {
-        int k;
-        for (k = 0; k < 2; k++) {
-            size_t at = fill[pl.ij[i][k]]++;
-            nb->other[at] = pl.ij[i][1 - k];
-            nb->dist[at] = pl.d[i];
+    size_t nf = c->fs->n, base, slot = SCAN_CHUNK * SCAN_PER_TUBE;
+    uint32_t *bo = amp_calloc(c->a, slot, sizeof *bo);
+    double *bd = amp_calloc(c->a, slot, sizeof *bd);
+    size_t *cnt = amp_calloc(c->a, SCAN_CHUNK, sizeof *cnt);
+    amp_status st = AMP_OK;
+    nb->row = amp_calloc(c->a, nf + 1, sizeof *nb->row);
+    if (!bo || !bd || !cnt || !nb->row)
+        st = AMP_ERR_NOMEM;
+    for (base = 0; base < nf && st == AMP_OK; base += SCAN_CHUNK) {
+        long k, m = (long)(nf - base < SCAN_CHUNK ? nf - base : SCAN_CHUNK);
+        if (c->o->progress)
+            c->o->progress(c->o->progress_user, 0.5 * (double)base / (double)nf);
+#pragma omp parallel for schedule(dynamic, 16)
+        for (k = 0; k < m; k++) {
+            scan_state s;
+            s.other = bo + (size_t)k * SCAN_PER_TUBE;
+            s.dist = bd + (size_t)k * SCAN_PER_TUBE;
+            s.cap = SCAN_PER_TUBE;
+            cnt[k] = scan_tube(c, (uint32_t)(base + (size_t)k), &s) ? s.n : (size_t)-1;
+        }
+        for (k = 0; k < m && st == AMP_OK; k++) {
+            size_t i = base + (size_t)k;
+            if (cnt[k] == (size_t)-1) {
+                /* a crowded tube: search again with room for every candidate */
+                scan_state s;
+                size_t cap = SCAN_PER_TUBE;
+                memset(&s, 0, sizeof s);
+                do {
+                    amp_free(c->a, s.other);
+                    amp_free(c->a, s.dist);
+                    cap *= 4;
+                    s.other = amp_calloc(c->a, cap, sizeof *s.other);
+                    s.dist = amp_calloc(c->a, cap, sizeof *s.dist);
+                    s.cap = cap;
+                } while (s.other && s.dist && !scan_tube(c, (uint32_t)i, &s));
+                st = s.other && s.dist ? nbrs_append(c, nb, s.other, s.dist, s.n) : AMP_ERR_NOMEM;
+                amp_free(c->a, s.other);
+                amp_free(c->a, s.dist);
+            } else {
+                st = nbrs_append(c, nb, bo + (size_t)k * SCAN_PER_TUBE, bd + (size_t)k * SCAN_PER_TUBE, cnt[k]);
+            }
+            nb->row[i + 1] = nb->n;
         }
     }
-    amp_free(c->a, fill);
-    amp_free(c->a, pl.ij);
-    amp_free(c->a, pl.d);
-    return AMP_OK;
+    amp_free(c->a, bo);
+    amp_free(c->a, bd);
+    amp_free(c->a, cnt);
+    if (st == AMP_OK)
+        st = nbrs_reverse(c, nb);
+    return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
 }
 
 /* The tube's stopping radius now: the earliest event over its pairs (d/2 with a growing neighbour, d - r'
@@ -429,9 +498,9 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
         if (key < o->r_min * (1 - 1e-9))
             s->at_min++;
         r[e.f] = fmin(fmax(key, o->r_min), o->r_max);
-        for (q = nb->row[e.f]; q < nb->row[e.f + 1] && st == AMP_OK; q++) {
-            uint32_t nbo = nb->other[q];
-            double ev = fmax(0.0, nb->dist[q] - r[e.f]);
+        for (q = nb->rrow[e.f]; q < nb->rrow[e.f + 1] && st == AMP_OK; q++) {
+            uint32_t nbo = nb->rother[q];
+            double ev = fmax(0.0, nb->rdist[q] - r[e.f]);
             if (!frozen[nbo] && ev < sched[nbo]) {
                 sched[nbo] = ev;
                 st = hpush(c->a, &heap, &nh, &caph, ev, nbo);
@@ -509,11 +578,10 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
     c.ctr = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.ctr);
     c.rho = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.rho);
     c.arc = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.arc);
-    c.cut = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.cut);
     r = amp_calloc(a, fs.n ? fs.n : 1, sizeof *r);
     sched = amp_calloc(a, fs.n ? fs.n : 1, sizeof *sched);
     frozen = amp_calloc(a, fs.n ? fs.n : 1, 1);
-    if (!c.ctr || !c.rho || !c.arc || !c.cut || !r || !sched || !frozen) {
+    if (!c.ctr || !c.rho || !c.arc || !r || !sched || !frozen) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu tubes", (unsigned long)fs.n);
         goto done;
     }
@@ -526,9 +594,16 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
     /* cells about a fragment long: the searches reach only a few cells beyond the nearest neighbour */
     if ((stt = ugrid_build(&c.g, a, c.ctr, fs.n, fmax(o->fragment, 2.0 * c.rho_max), err)) != AMP_OK)
         goto done;
+    c.gpts = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.gpts);
+    if (!c.gpts) {
+        stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu tubes", (unsigned long)fs.n);
+        goto done;
+    }
+    for (i = 0; i < fs.n; i++)
+        c.gpts[i] = c.ctr[c.g.item[i]];
     if ((stt = find_neighbours(&c, &nb)) != AMP_OK)
         goto done;
-    s.pairs = nb.npairs;
+    s.pairs = nb.n;
     if ((stt = grow(&c, &nb, r, frozen, sched, &s)) != AMP_OK)
         goto done;
     stt = mdr_emit(&fs, in, r, out, &s, err);
@@ -537,12 +612,15 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
 done:
     ugrid_free(&c.g, a);
     amp_free(a, c.ctr);
+    amp_free(a, c.gpts);
     amp_free(a, c.rho);
     amp_free(a, c.arc);
-    amp_free(a, c.cut);
     amp_free(a, nb.row);
     amp_free(a, nb.other);
     amp_free(a, nb.dist);
+    amp_free(a, nb.rrow);
+    amp_free(a, nb.rother);
+    amp_free(a, nb.rdist);
     amp_free(a, r);
     amp_free(a, sched);
     amp_free(a, frozen);
