@@ -99,6 +99,23 @@ static int point_clear(double zo, double k, amp_vec3 p, amp_vec3 q)
     return dz > 0.0 && dz * dz > k * k * (dx * dx + dy * dy);
 }
 
+/* Box bound of the clearance between segment [a0, a1] and a box: may the cone over the segment reach it? */
+static int seg_may_see(double zo, double k, amp_vec3 a0, amp_vec3 a1, const amp_box3 *b)
+{
+    double lo = a0.z < a1.z ? a0.z : a1.z, room = b->max.z - lo - zo - AMP_CONE_TOL, gx, gy, ex, ey;
+    if (room <= 0.0)
+        return 0;
+    gx = (a0.x < a1.x ? a0.x : a1.x) - b->max.x;
+    ex = b->min.x - (a0.x > a1.x ? a0.x : a1.x);
+    gy = (a0.y < a1.y ? a0.y : a1.y) - b->max.y;
+    ey = b->min.y - (a0.y > a1.y ? a0.y : a1.y);
+    gx = gx > ex ? gx : ex;
+    gy = gy > ey ? gy : ey;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    return room * room > k * k * (gx * gx + gy * gy);
+}
+
 int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b)
 {
     const amp_fragment *fa = &fs->frag[a], *fb = &fs->frag[b];
@@ -117,6 +134,9 @@ int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a,
     nb = amp_fragment_npoints(fb);
     for (i = 0; i + 1 < na; i++) {
         amp_vec3 a0 = amp_fragment_point(fs, fa, i), a1 = amp_fragment_point(fs, fa, i + 1);
+        /* the box bound again for this segment of a against all of b */
+        if (!seg_may_see(zo, k, a0, a1, &fb->box))
+            continue;
         for (j = 0; j + 1 < nb; j++) {
             amp_vec3 b0 = amp_fragment_point(fs, fb, j), b1 = amp_fragment_point(fs, fb, j + 1);
             if (amp_cone_clearance_k(zo, k, a0, a1, b0, b1) > AMP_CONE_TOL)
