@@ -169,6 +169,7 @@ typedef struct orderer {
     unsigned char *ready; /* nothing unprinted below: member of the set B of Alg. 2, line 4 */
     uint32_t *whead, *wnext, *rs, *re;
     uint32_t *waits; /* the blocker an unprinted, unready fragment waits on */
+    uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
     double *rz;
     runent *heap;
     size_t nheap, cap_heap;
@@ -449,19 +450,6 @@ static amp_status make_ready(orderer *o, uint32_t f)
     return heap_push(o, s, e);
 }
 
-/* Below(f) ∩ F (Alg. 2, line 4) by a hierarchy query; f waits on the blocker it finds. */
-static amp_status recheck(orderer *o, uint32_t f)
-{
-    uint32_t g = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, f, o->done, o->waits[f]);
-    o->st.queries++;
-    if (g == NONE)
-        return make_ready(o, f);
-    o->wnext[f] = o->whead[g];
-    o->whead[g] = f;
-    o->waits[f] = g;
-    return AMP_OK;
-}
-
 static void mark_done(orderer *o, uint32_t f)
 {
     o->done[f] = 1;
@@ -469,20 +457,40 @@ static void mark_done(orderer *o, uint32_t f)
     amp_fbvh_deactivate(&o->bvh, o->fs, o->done, f);
 }
 
-/* f was printed: the fragments waiting on it look for another blocker or become printable. */
-static amp_status release(orderer *o, uint32_t f)
+/* Fragments [s, e] were printed: the fragments waiting on them look for another blocker or become printable.
+ * The queries only read the printed marks and the hierarchy; they are answered first and applied afterwards
+ * in the order of the waiting lists. (Run in parallel they gained nothing: most batches are a few fragments,
+ * and a thread waiting between batches slows the ordering on a shared machine.) */
+static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
 {
-    uint32_t w = o->whead[f];
-    o->whead[f] = NONE;
-    while (w != NONE) {
-        uint32_t next = o->wnext[w];
-        amp_status st = o->done[w] ? AMP_OK : recheck(o, w);
-        if (st != AMP_OK)
-            return st;
-        w = next;
+    size_t nb = 0, k;
+    long q;
+    uint32_t f;
+    amp_status st = AMP_OK;
+    for (f = s; f <= e; f++) {
+        uint32_t w = o->whead[f];
+        o->whead[f] = NONE;
+        for (; w != NONE; w = o->wnext[w])
+            if (!o->done[w])
+                o->batch[nb++] = w;
     }
-    return AMP_OK;
+    for (q = 0; q < (long)nb; q++)
+        o->found[q] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, o->batch[q], o->done, o->waits[o->batch[q]]);
+    o->st.queries += nb;
+    for (k = 0; k < nb && st == AMP_OK; k++) {
+        uint32_t w = o->batch[k], g = o->found[k];
+        if (g == NONE)
+            st = make_ready(o, w);
+        else {
+            o->wnext[w] = o->whead[g];
+            o->whead[g] = w;
+            o->waits[w] = g;
+        }
+    }
+    return st;
 }
+
+static amp_status release(orderer *o, uint32_t f) { return release_range(o, f, f); }
 
 /* x (printable, at one end of its run) is printed alone: the rest of its run stays a run. */
 static amp_status split_off(orderer *o, uint32_t x)
@@ -529,12 +537,9 @@ static amp_status add_piece(orderer *o, uint32_t lo, uint32_t hi, int dir)
 static amp_status print_run(orderer *o, uint32_t s, uint32_t e)
 {
     uint32_t f;
-    amp_status st = AMP_OK;
     for (f = s; f <= e; f++)
         mark_done(o, f);
-    for (f = s; f <= e && st == AMP_OK; f++)
-        st = release(o, f);
-    return st;
+    return release_range(o, s, e);
 }
 
 /* Look-ahead: how many fragments past the run would become printable one after another in direction dir. */
@@ -914,6 +919,8 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->re);
     amp_free(o->a, o->rz);
     amp_free(o->a, o->waits);
+    amp_free(o->a, o->batch);
+    amp_free(o->a, o->found);
     amp_free(o->a, o->heap);
     amp_free(o->a, o->pc);
     rgrid_free(o->a, &o->grid);
@@ -962,8 +969,10 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
     o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
     o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
+    o.batch = amp_calloc(o.a, n + 1, sizeof *o.batch);
+    o.found = amp_calloc(o.a, n + 1, sizeof *o.found);
     blocker = amp_calloc(o.a, n + 1, sizeof *blocker);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !blocker) {
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.batch || !o.found || !blocker) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
         goto done;
     }
