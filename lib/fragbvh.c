@@ -194,13 +194,13 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 }
 
 /* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins. */
-static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, double k,
-                                  uint32_t f, const unsigned char *done, uint32_t root, uint32_t skip)
+static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                  const unsigned char *done, uint32_t root, uint32_t skip)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - h->z_offs - AMP_CONE_TOL;
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
     stack[top++] = root;
     while (top) {
         uint32_t id = stack[--top];
@@ -223,7 +223,7 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, co
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if (g != f && !done[g] && amp_fragment_below_k(fs, h->z_offs, k, g, f))
+                if (g != f && !done[g] && amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
@@ -241,17 +241,16 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, co
     return AMP_FBVH_NONE;
 }
 
-uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                  const unsigned char *done, uint32_t near)
 {
-    double k = 1.0 / tan(h->theta);
     uint32_t id, prev = AMP_FBVH_NONE;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
     for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
-        uint32_t g = subtree_any_below(b, fs, h, k, f, done, id, prev);
+        uint32_t g = subtree_any_below(b, fs, zo, k, f, done, id, prev);
         if (g != AMP_FBVH_NONE)
             return g;
     }

@@ -163,6 +163,7 @@ typedef struct orderer {
     const amp_allocator *a;
     const amp_fragments *fs;
     const amp_head *h;
+    double k; /* cot(theta) */
     const amp_order_opts *o;
     amp_fbvh bvh;
     unsigned char *done;  /* 0 unprinted, 1 printed, 2 printed tentatively (look-ahead) */
@@ -475,7 +476,8 @@ static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
                 o->batch[nb++] = w;
     }
     for (q = 0; q < (long)nb; q++)
-        o->found[q] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, o->batch[q], o->done, o->waits[o->batch[q]]);
+        o->found[q] =
+            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, o->batch[q], o->done, o->waits[o->batch[q]]);
     o->st.queries += nb;
     for (k = 0; k < nb && st == AMP_OK; k++) {
         uint32_t w = o->batch[k], g = o->found[k];
@@ -556,7 +558,7 @@ static uint32_t simulate(orderer *o, uint32_t s, uint32_t e, int dir)
             break;
         if (!o->ready[x]) {
             o->st.queries++;
-            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h, x, o->done, o->waits[x]) != NONE)
+            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, x, o->done, o->waits[x]) != NONE)
                 break;
         }
         o->done[x] = 2;
@@ -951,6 +953,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.a = out->alloc;
     o.fs = &fs;
     o.h = &opts->head;
+    o.k = 1.0 / tan(opts->head.theta);
     o.o = opts;
     o.err = err;
     n = fs.n;
@@ -983,7 +986,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     /* Alg. 2, line 4 for the initial set: independent queries, run in parallel */
 #pragma omp parallel for schedule(dynamic, 256)
     for (f = 0; f < (long)n; f++)
-        blocker[f] = amp_fbvh_find_any_below(&o.bvh, &fs, o.h, (uint32_t)f, o.done, NONE);
+        blocker[f] = amp_fbvh_find_any_below(&o.bvh, &fs, o.h->z_offs, o.k, (uint32_t)f, o.done, NONE);
     o.st.queries += n;
     for (i = 0; i < n && st == AMP_OK; i++) {
         if (blocker[i] == NONE)
