@@ -339,6 +339,8 @@ typedef struct nbrs {
 
 static amp_status nbrs_append(mdr_ctx *c, nbrs *nb, const uint32_t *other, const double *dist, size_t n)
 {
+    if (n == 0)
+        return AMP_OK;
     if (nb->n + n > nb->cap) {
         void *p = nb->other, *q = nb->dist;
         size_t cap = nb->cap;

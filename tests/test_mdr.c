@@ -255,6 +255,33 @@ START_TEST(bounded_neighbours_give_the_radii_of_all_pairs)
 }
 END_TEST
 
+/* Every allocation of the MDR (neighbour search buffers, lists, growth queue) may fail: an error, no leak. */
+START_TEST(mdr_survives_out_of_memory)
+{
+    amp_pathset ps;
+    long budget;
+    int ok = 0;
+    amp_pathset_init(&ps, NULL);
+    fan(&ps, 6, 0.5);
+    for (budget = 0; budget < 120; budget++) {
+        amp_test_failalloc fa;
+        amp_pathset out;
+        amp_mdr_opts o;
+        amp_error err;
+        amp_status st;
+        amp_test_failalloc_init(&fa, budget);
+        amp_pathset_init(&out, &fa.a);
+        amp_mdr_opts_default(&o, 0.5);
+        st = amp_mdr(&ps, &o, &out, NULL, &err);
+        ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
+        ok |= st == AMP_OK;
+        amp_pathset_free(&out);
+    }
+    ck_assert(ok);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(bad_mdr_bounds_are_rejected)
 {
     amp_pathset ps, out;
@@ -285,6 +312,7 @@ static Suite *mdr_suite(void)
     tcase_add_test(tc, parallel_lines_get_half_their_spacing_and_tubes_fill_the_volume);
     tcase_add_test(tc, bad_mdr_bounds_are_rejected);
     tcase_add_test(tc, bounded_neighbours_give_the_radii_of_all_pairs);
+    tcase_add_test(tc, mdr_survives_out_of_memory);
     suite_add_tcase(s, tc);
     return s;
 }

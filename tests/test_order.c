@@ -506,7 +506,7 @@ START_TEST(ordering_survives_out_of_memory)
     amp_pathset_init(&ps, NULL);
     add_curve(&ps, fig8_green, NULL, 30);
     add_curve(&ps, fig8_red, NULL, 10);
-    for (budget = 0; budget < 40; budget++) {
+    for (budget = 0; budget < 80; budget++) {
         amp_test_failalloc fa;
         amp_pathset out;
         amp_error err;
