@@ -910,6 +910,29 @@ static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out
     return AMP_OK;
 }
 
+/* Alg. 2, line 4 for the initial set: independent queries, run in parallel, applied in fragment order. */
+static amp_status initial_set(orderer *o)
+{
+    size_t i, n = o->fs->n;
+    long f;
+    amp_status st = AMP_OK;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (f = 0; f < (long)n; f++)
+        o->found[f] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, (uint32_t)f, o->done, NONE);
+    o->st.queries += n;
+    for (i = 0; i < n && st == AMP_OK; i++) {
+        uint32_t g = o->found[i];
+        if (g == NONE)
+            st = make_ready(o, (uint32_t)i);
+        else {
+            o->wnext[i] = o->whead[g];
+            o->whead[g] = (uint32_t)i;
+            o->waits[i] = g;
+        }
+    }
+    return st;
+}
+
 static void orderer_free(orderer *o)
 {
     amp_fbvh_free(&o->bvh);
@@ -936,8 +959,6 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     orderer o;
     amp_status st;
     size_t i, n;
-    long f;
-    uint32_t *blocker = NULL;
     if (!in || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_order: NULL pathset");
     if (!opts) {
@@ -974,31 +995,16 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
     o.batch = amp_calloc(o.a, n + 1, sizeof *o.batch);
     o.found = amp_calloc(o.a, n + 1, sizeof *o.found);
-    blocker = amp_calloc(o.a, n + 1, sizeof *blocker);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.batch || !o.found || !blocker) {
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.batch || !o.found) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
         goto done;
     }
     for (i = 0; i < n; i++)
         o.whead[i] = o.wnext[i] = NONE;
-    if (opts->improve && opts->nearest && n > 0 && (st = rgrid_init(&o)) != AMP_OK)
-        goto done;
-    /* Alg. 2, line 4 for the initial set: independent queries, run in parallel */
-#pragma omp parallel for schedule(dynamic, 256)
-    for (f = 0; f < (long)n; f++)
-        blocker[f] = amp_fbvh_find_any_below(&o.bvh, &fs, o.h->z_offs, o.k, (uint32_t)f, o.done, NONE);
-    o.st.queries += n;
-    for (i = 0; i < n && st == AMP_OK; i++) {
-        if (blocker[i] == NONE)
-            st = make_ready(&o, (uint32_t)i);
-        else {
-            o.wnext[i] = o.whead[blocker[i]];
-            o.whead[blocker[i]] = (uint32_t)i;
-            o.waits[i] = blocker[i];
-        }
-    }
-    amp_free(o.a, blocker);
-    blocker = NULL;
+    if (opts->improve && opts->nearest && n > 0)
+        st = rgrid_init(&o);
+    if (st == AMP_OK)
+        st = initial_set(&o);
     /* Alg. 2, lines 3-8 */
     {
         size_t next_report = 0;
@@ -1026,7 +1032,6 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     if (stats)
         *stats = o.st;
 done:
-    amp_free(o.a, blocker);
     orderer_free(&o);
     amp_fragments_free(&fs);
     return st;
