@@ -359,8 +359,8 @@ static amp_status nbrs_append(mdr_ctx *c, nbrs *nb, const uint32_t *other, const
     return AMP_OK;
 }
 
-#define SCAN_CHUNK 2048
-#define SCAN_PER_TUBE 64
+#define SCAN_CHUNK 16384
+#define SCAN_PER_TUBE 32
 
 /* The reverse lists (who keeps whom), by counting. */
 static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
@@ -390,9 +390,10 @@ static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
 }
 
 /*
- * Every tube's kept neighbours. Tubes are searched in chunks, in parallel (OpenMP): each search writes into
- * a fixed slice of a buffer allocated beforehand, and the chunk is appended in tube order afterwards, so the
- * lists are the same whatever the thread count. A tube whose slice overflows is searched again alone.
+ * Every tube's kept neighbours. Tubes are searched in chunks of SCAN_CHUNK (few parallel regions), in parallel
+ * (OpenMP): each search writes into a fixed slice of a buffer allocated beforehand, and the chunk is appended
+ * in tube order afterwards, so the lists are the same whatever the thread count. A tube whose slice
+ * overflows is searched again alone.
  */
 static amp_status find_neighbours(mdr_ctx *c, nbrs *nb)
 {
