@@ -6,6 +6,10 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "runtool.h"
 #include "testutil.h"
 
@@ -273,6 +277,97 @@ START_TEST(cli_cover_and_check_report_and_fail_properly)
 }
 END_TEST
 
+#ifdef _OPENMP
+/* Appends G-code text to a growing buffer. */
+typedef struct text_buf {
+    char *p;
+    size_t n, cap;
+} text_buf;
+
+static amp_status text_sink(void *user, const char *data, size_t len)
+{
+    text_buf *b = user;
+    if (b->n + len > b->cap) {
+        b->cap = 2 * (b->n + len);
+        b->p = realloc(b->p, b->cap);
+        ck_assert_ptr_nonnull(b->p);
+    }
+    memcpy(b->p + b->n, data, len);
+    b->n += len;
+    return AMP_OK;
+}
+
+/* The helix job of `make demo` (coarser), every stage with @p threads OpenMP threads; its G-code in @p g and the
+ * ordered paths with their radii in @p ordered. */
+static void helix_job(int threads, text_buf *g, amp_pathset *ordered)
+{
+    amp_spline v;
+    amp_cover_opts co;
+    amp_order_opts oo;
+    amp_mdr_opts mo;
+    amp_support_opts so;
+    amp_gcode_opts go;
+    amp_pathset a, b, c;
+    amp_mesh m;
+    amp_bvh *bvh = NULL;
+    amp_error err;
+    omp_set_num_threads(threads);
+    amp_spline_init(&v);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_pathset_init(&c, NULL);
+    amp_mesh_init(&m, NULL);
+    amp_cover_opts_default(&co);
+    co.eps = 2.0;
+    co.dir = 0;
+    amp_order_opts_default(&oo);
+    amp_mdr_opts_default(&mo, 0.5);
+    amp_support_opts_default(&so);
+    amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_cover_trivariate(&v, &co, &a, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_order(&a, &oo, &b, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_mdr(&b, &mo, ordered, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 0, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&bvh, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_support(ordered, bvh, &so, &c, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_gcode_write(&c, &go, text_sink, g, NULL, &err), AMP_OK);
+    amp_bvh_free(bvh);
+    amp_mesh_free(&m);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_pathset_free(&c);
+    amp_spline_free(&v);
+}
+
+/* Issue 18: the library's parallel parts (coverage, ordering's first queries, MDR neighbour search, support
+ * rays) must not change any output: the whole job on 1 and on 2 threads, byte for byte. */
+START_TEST(helix_job_is_byte_identical_on_one_and_two_threads)
+{
+    text_buf g1 = {NULL, 0, 0}, g2 = {NULL, 0, 0};
+    amp_pathset p1, p2;
+    size_t i;
+    int saved = omp_get_max_threads();
+    amp_pathset_init(&p1, NULL);
+    amp_pathset_init(&p2, NULL);
+    helix_job(1, &g1, &p1);
+    helix_job(2, &g2, &p2);
+    omp_set_num_threads(saved);
+    ck_assert_uint_eq(p1.npaths, p2.npaths);
+    ck_assert_uint_eq(p1.nverts, p2.nverts);
+    for (i = 0; i < p1.nverts; i++)
+        ck_assert_msg(memcmp(&p1.verts[i], &p2.verts[i], sizeof p1.verts[i]) == 0, "vertex %lu differs", (unsigned long)i);
+    ck_assert_uint_gt(g1.n, 100000);
+    ck_assert_uint_eq(g1.n, g2.n);
+    ck_assert(memcmp(g1.p, g2.p, g1.n) == 0);
+    amp_pathset_free(&p1);
+    amp_pathset_free(&p2);
+    free(g1.p);
+    free(g2.p);
+}
+END_TEST
+#endif
+
 static Suite *cover_suite(void)
 {
     Suite *s = suite_create("cover");
@@ -285,6 +380,9 @@ static Suite *cover_suite(void)
     tcase_add_test(tc, volume_and_gap_measurement_agree_with_closed_forms);
     tcase_add_test(tc, bad_input_is_rejected);
     tcase_add_test(tc, cli_cover_and_check_report_and_fail_properly);
+#ifdef _OPENMP
+    tcase_add_test(tc, helix_job_is_byte_identical_on_one_and_two_threads);
+#endif
     suite_add_tcase(s, tc);
     return s;
 }
