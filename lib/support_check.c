@@ -10,6 +10,7 @@ void amp_hold_opts_default(amp_hold_opts *o)
     o->overhang = 0.25 * 3.14159265358979323846;
     o->max_gap = 1.0;
     o->bridge = 5.0;
+    o->cantilever = 1.0;
     o->step = 0.25;
 }
 
@@ -192,17 +193,22 @@ static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hol
     size_t i = 0;
     while (i < c->n) {
         size_t path = c->sm[i].path, j = i, e;
+        int before, after;
         if (ps->paths[path].role != AMP_ROLE_OBJECT || ok[i]) {
             i++;
             continue;
         }
         for (e = i; e < c->n && c->sm[e].path == path && !ok[e]; e++)
             ;
-        /* unheld run [i, e) of one path */
-        if (i > 0 && c->sm[i - 1].path == path && e < c->n && c->sm[e].path == path &&
-            c->sm[e].s - c->sm[i - 1].s <= o->bridge + 1e-9) {
+        /* unheld run [i, e) of one path: a bridge between held samples, or a short tip off a held sample */
+        before = i > 0 && c->sm[i - 1].path == path;
+        after = e < c->n && c->sm[e].path == path;
+        if (before && after && c->sm[e].s - c->sm[i - 1].s <= o->bridge + 1e-9) {
             rep->bridges++;
             rep->bridged_mm += c->sm[e].s - c->sm[i - 1].s;
+        } else if (before != after && (before ? c->sm[e - 1].s - c->sm[i - 1].s : c->sm[e].s - c->sm[i].s) <=
+                                          o->cantilever + 1e-9) {
+            rep->tips++;
         } else {
             amp_status st = note_failure(rep, path, c->sm[e - 1].s - c->sm[j].s + o->step, c->sm[j].p, err);
             if (st != AMP_OK)
@@ -224,9 +230,10 @@ amp_status amp_hold_check(const amp_pathset *ps, const amp_hold_opts *o, amp_hol
     memset(rep, 0, sizeof *rep);
     rep->alloc = ps->alloc;
     if (!(o->overhang >= 0.0 && o->overhang < 0.5 * 3.14159265358979323846) || !(o->max_gap >= 0.0) ||
-        !(o->bridge >= 0.0) || !(o->step > 0.0) || !isfinite(o->max_gap + o->bridge + o->step))
+        !(o->bridge >= 0.0) || !(o->cantilever >= 0.0) || !(o->step > 0.0) ||
+        !isfinite(o->max_gap + o->bridge + o->cantilever + o->step))
         return amp_fail(err, AMP_ERR_RANGE, 0,
-                        "support check: overhang must be in [0, 90) degrees, gap and bridge >= 0, step > 0");
+                        "support check: overhang must be in [0, 90) degrees, gap, bridge and tip >= 0, step > 0");
     memset(&c, 0, sizeof c);
     c.a = ps->alloc;
     if ((st = sample_paths(&c, ps, o->step, err)) != AMP_OK)

@@ -26,6 +26,7 @@ static void report_json(cli_json *j, const amp_hold_opts *o, const amp_hold_repo
     cli_json_int(j, "unheld_samples", (long long)r->unheld);
     cli_json_int(j, "bridges", (long long)r->bridges);
     cli_json_num(j, "bridged_mm", r->bridged_mm);
+    cli_json_int(j, "tips", (long long)r->tips);
     cli_json_int(j, "failures", (long long)r->failures);
     cli_json_num(j, "unheld_mm", r->failed_mm);
     cli_json_int(j, "unheld_paths", (long long)r->npaths_failed);

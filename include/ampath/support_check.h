@@ -19,8 +19,10 @@
  * A bead's vertical half-extent is h/2 for a planar path with bead height h,
  * else its radius r. A maximal run of unheld samples along one path is a
  * *bridge* when held samples bound it on both sides and the span between them
- * is at most `bridge` mm; any other unheld run is a failure (a bead printed in
- * the air, or a cantilever).
+ * is at most `bridge` mm; a run at one end of a path, off a held sample, is a
+ * *tip* when it reaches at most `cantilever` mm beyond it (a bead end hanging
+ * over an edge by about its width); any other unheld run is a failure (a bead
+ * printed in the air, or a long cantilever).
  * max_gap defaults to 1 mm, the same as amp_support_opts.min_gap: air lower
  * than that is what `ampath support` leaves unsupported on purpose.
  * Thread-safe (reads only its input; OpenMP over samples when enabled).
@@ -43,6 +45,7 @@ typedef struct amp_hold_opts {
     double overhang; /**< largest overhang from the vertical, radians, in [0, pi/2) (default pi/4) */
     double max_gap;  /**< air tolerated under a bead, mm, >= 0 (default 1) */
     double bridge;   /**< longest bridge between held points, mm, >= 0 (default 5) */
+    double cantilever; /**< longest unheld tip at a path end, mm, >= 0 (default 1) */
     double step;     /**< sample spacing along the paths, mm, > 0 (default 0.25) */
 } amp_hold_opts;
 
@@ -55,6 +58,7 @@ typedef struct amp_hold_report {
     size_t unheld;        /**< of them, with nothing under them */
     size_t bridges;       /**< unheld runs accepted as bridges */
     double bridged_mm;    /**< their total span, mm */
+    size_t tips;          /**< unheld runs accepted as tips at a path end */
     size_t failures;      /**< unheld runs that are not bridges */
     double failed_mm;     /**< their total length, mm */
     size_t npaths_failed; /**< object paths with at least one failure */
