@@ -343,6 +343,54 @@ START_TEST(rational_correction_of_lemma_a2_is_needed_and_sufficient)
 }
 END_TEST
 
+
+/* The number after "key": in a JSON text (the first occurrence after @p from). */
+static double json_after(const char *js, const char *from, const char *key)
+{
+    char pat[128];
+    const char *p = from ? strstr(js, from) : js;
+    ck_assert_msg(p != NULL, "%s missing in %s", from, js);
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(p, pat);
+    ck_assert_msg(p != NULL, "%s missing in %s", key, js);
+    return strtod(p + strlen(pat), NULL);
+}
+
+/* One over-coverage (cover.h amp_over_coverage): mdr and check report the same figure on the same result. */
+START_TEST(mdr_and_check_report_one_over_coverage)
+{
+    char args[1024], a[8192], b[8192];
+    const char *cov = amp_test_tmp("oc-cover.amp"), *m = amp_test_tmp("oc-mdr.amp");
+    amp_pathset ps;
+    amp_spline v;
+    amp_error err;
+    double om, oc, want;
+    snprintf(args, sizeof args, "cover torus-quarter --eps 3 -o %s", cov);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "mdr %s --nominal 1 --trivariate torus-quarter --json -o %s", cov, m);
+    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    snprintf(args, sizeof args, "check %s --trivariate torus-quarter --no-gouge --samples 2000 --json", m);
+    amp_test_run_tool(args, b, sizeof b); /* the gap may exceed eps after MDR: only the figure matters here */
+    om = json_after(a, NULL, "over_coverage");
+    oc = json_after(b, "\"coverage\"", "over_coverage");
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, m, &err), AMP_OK);
+    ck_assert_int_eq(amp_trivariate_model("torus-quarter", NULL, &v, NULL), AMP_OK);
+    want = amp_pathset_volume(&ps, AMP_ROLE_OBJECT) / amp_trivariate_volume(&v);
+    ck_assert_msg(fabs(om - want) <= 1e-6 * want && fabs(oc - want) <= 1e-6 * want, "mdr %g, check %g, want %g", om,
+                  oc, want);
+    /* without a model mdr does not guess one: null, and the union-of-tubes overlap instead */
+    snprintf(args, sizeof args, "mdr %s --nominal 1 --json", cov);
+    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_ptr_nonnull(strstr(a, "\"over_coverage\":null"));
+    ck_assert_msg(json_after(a, NULL, "overlap") > 0.5, "%s", a);
+    amp_spline_free(&v);
+    amp_pathset_free(&ps);
+    remove(cov);
+    remove(m);
+}
+END_TEST
+
 START_TEST(bad_input_is_rejected)
 {
     amp_spline v;
@@ -425,6 +473,7 @@ static Suite *cover_suite(void)
     tcase_add_test(tc, trimmed_mid_surfaces_cover_a_wedge_with_far_fewer_curves);
     tcase_add_test(tc, elber_cohen_mid_curves_cover_only_where_neighbours_drift_apart);
     tcase_add_test(tc, rational_correction_of_lemma_a2_is_needed_and_sufficient);
+    tcase_add_test(tc, mdr_and_check_report_one_over_coverage);
     suite_add_tcase(s, tc);
     return s;
 }
