@@ -27,7 +27,12 @@ const char cmd_field_usage[] =
     "figures: curves, paths kept, lengths before/after clipping (mm), mesh and deposited volume (mm^3),\n"
     "coverage gap (largest distance from a sampled inside point to the nearest path, mm) over the whole\n"
     "solid and over points at least S from the surface, with the lattice's covering radius as the bound.\n"
-    "exit status: 0 ok, 2 bad usage or input\n";
+    "The covering radius is met in space, for any parametrization: a trivariate field is covered by\n"
+    "Algorithm 1 with eps = the covering radius (paper 4.2 step 1, route algorithm1); other fields on the\n"
+    "grid pattern by an adaptive lattice that inserts curves where neighbours drift apart and next to the\n"
+    "surface (route adaptive; bound_mm is the sampled bound it meets); hex is the plain lattice (uniform).\n"
+    "exit status: 0 ok, 1 the field cannot meet the spacing or the measured gap exceeds the covering radius\n"
+    "(paths still written), 2 bad usage or input\n";
 
 int cmd_field(int argc, char **argv)
 {
@@ -149,8 +154,13 @@ int cmd_field(int argc, char **argv)
             }
             if (gap_in >= 0)
                 cli_json_num(&j, "coverage_gap_interior_mm", gap_in);
-            cli_json_num(&j, "covering_radius_mm", o.pattern == AMP_PATTERN_GRID ? spacing * 0.7071067811865476
-                                                                                 : spacing * 0.5773502691896258);
+            cli_json_num(&j, "covering_radius_mm", st.target);
+            cli_json_str(&j, "route", st.route == AMP_FIELD_ROUTE_ALGORITHM1 ? "algorithm1"
+                                      : st.route == AMP_FIELD_ROUTE_ADAPTIVE ? "adaptive" : "uniform");
+            cli_json_num(&j, "bound_mm", st.bound);
+            if (st.bound_met >= 0)
+                cli_json_bool(&j, "bound_met", st.bound_met);
+            cli_json_int(&j, "inserted_curves", (long long)st.inserted);
             cli_json_num(&j, "cover_s", t_cover);
             cli_json_num(&j, "gap_s", t_gap);
             cli_json_end(&j);
@@ -163,7 +173,21 @@ int cmd_field(int argc, char **argv)
             if (gap_all >= 0)
                 printf("coverage gap %.3f mm (mean %.3f), %s%.3f mm at least S inside; %ld samples\n", gap_all,
                        mean, gap_in >= 0 ? "" : "n/a ", gap_in >= 0 ? gap_in : 0.0, samples);
+            if (st.bound_met >= 0)
+                printf("%s covering: bound %.3f mm against the covering radius %.3f mm (%lu curves inserted)%s\n",
+                       st.route == AMP_FIELD_ROUTE_ALGORITHM1 ? "Algorithm 1" : "adaptive", st.bound, st.target,
+                       (unsigned long)st.inserted, st.bound_met ? "" : ": the field cannot meet the spacing");
         }
+    }
+    if (rc == CLI_OK && st.bound_met == 0) {
+        fprintf(stderr, "ampath field: the field cannot meet spacing %g mm: covering bound %.3f mm > %.3f mm\n",
+                spacing, st.bound, st.target);
+        rc = CLI_FAILED;
+    } else if (rc == CLI_OK && gap_all > st.target * (1 + 1e-6)) {
+        /* e.g. a mesh reaching outside the field's volume, or the plain honeycomb next to the surface */
+        fprintf(stderr, "ampath field: measured coverage gap %.3f mm exceeds the covering radius %.3f mm\n", gap_all,
+                st.target);
+        rc = CLI_FAILED;
     }
     amp_bvh_free(b);
     amp_pathset_free(&ps);
