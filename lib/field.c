@@ -200,6 +200,7 @@ void amp_field_opts_default(amp_field_opts *o)
     o->step = 0;
     o->min_len = -1;
     o->radius = 0;
+    o->shells = 0;
 }
 
 /* ------------------------------------------------------------- covering */
@@ -555,6 +556,77 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, size_t na
     return st;
 }
 
+/* ------------------------------------------------- surface layer (shells) */
+
+/*
+ * Shell curves (paper 1 §4.2, like a slicer's perimeters but along the field):
+ * the lattice curves at corners (i/na, j/nb) that run within the band
+ * [-S/2, S/2) of signed distance to the surface, shifted j S deeper for shell
+ * j, are projected onto the surface offset inward by d_j = S/2 + j S (the
+ * closest surface point moved d_j along the inward direction). A lattice
+ * point lies in one band per normal line, so neighbouring shell curves are
+ * about S apart along the surface and follow the field's direction projected
+ * onto it. Runs of consecutive samples in the band whose projection is inside
+ * the solid become paths (at least min_len long).
+ */
+static amp_status cover_shells(const amp_field *f, const amp_bvh *b, size_t na, size_t nb, size_t nc, double S,
+                               double r, int shells, double min_len, amp_pathset *out, amp_field_stats *s,
+                               amp_error *err)
+{
+    amp_pvert *run = amp_calloc(out->alloc, nc + 1, sizeof *run);
+    size_t i, j, k, p0 = out->npaths;
+    int sh;
+    amp_status st = AMP_OK;
+    if (!run)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for shell curves");
+    for (sh = 0; sh < shells && st == AMP_OK; sh++) {
+        double d = 0.5 * S + sh * S, lo = -0.5 * S - sh * S, hi = 0.5 * S - sh * S;
+        for (j = 0; j <= nb && st == AMP_OK; j++)
+            for (i = 0; i <= na && st == AMP_OK; i++) {
+                size_t n = 0;
+                for (k = 0; k <= nc + 1 && st == AMP_OK; k++) {
+                    amp_vec3 p, q, x;
+                    double uvw[3], dist, sd, len = 0;
+                    int ok = 0;
+                    if (k <= nc) {
+                        to_uvw(f, (double)i / (double)na, (double)j / (double)nb, (double)k / (double)nc, uvw);
+                        if ((st = f->eval(f, uvw, &p, err)) != AMP_OK)
+                            break;
+                        dist = amp_bvh_closest(b, p, &q, NULL);
+                        sd = amp_bvh_inside(b, p) ? -dist : dist;
+                        if (dist > 1e-9 && sd >= lo && sd < hi) {
+                            /* inward direction: towards p from q when p is inside, away from p otherwise */
+                            amp_vec3 in = amp_v3_scale(amp_v3_sub(p, q), (sd < 0 ? 1.0 : -1.0) / dist);
+                            x = amp_v3_madd(q, in, d);
+                            ok = amp_bvh_inside(b, x) && amp_bvh_closest(b, x, NULL, NULL) >= 0.9 * d;
+                        }
+                    }
+                    if (ok && (n == 0 || amp_v3_dist(run[n - 1].p, x) > 1e-6)) {
+                        run[n].p = x;
+                        run[n++].r = r;
+                        continue;
+                    }
+                    if (ok)
+                        continue;
+                    {
+                        size_t m;
+                        for (m = 1; m < n; m++)
+                            len += amp_v3_dist(run[m - 1].p, run[m].p);
+                    }
+                    if (n > 1 && len >= min_len)
+                        st = amp_pathset_add(out, AMP_ROLE_OBJECT, run, n, err);
+                    n = 0;
+                }
+            }
+    }
+    for (i = p0; i < out->npaths; i++) {
+        s->shell_paths++;
+        s->shell_length += amp_path_length(out, i);
+    }
+    amp_free(out->alloc, run);
+    return st;
+}
+
 /* The plain lattice (honeycomb): curves at the cell centres of an na x nb pattern, no adaptivity. */
 static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
                                 size_t nc, double r, double min_len, amp_pathset *out, amp_field_stats *stats,
@@ -623,12 +695,8 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
     memset(&s, 0, sizeof s);
     s.radius = r;
     s.target = target;
-    if (f->eval == eval_spline) {
-        st = cover_spline_field((const amp_spline *)f->user, f->dir, b, target, r, min_len, out, &s, err);
-        if (stats)
-            *stats = s;
-        return st;
-    }
+    if (o->shells < 0 || o->shells > 100)
+        return amp_fail(err, AMP_ERR_ARG, 0, "shells must be in 0..100");
     if ((st = max_iso_length(f, 0, 32, &la, err)) != AMP_OK || (st = max_iso_length(f, 1, 32, &lb, err)) != AMP_OK ||
         (st = max_iso_length(f, 2, 256, &lc, err)) != AMP_OK)
         return st;
@@ -644,10 +712,16 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
     if ((double)(na + 1) * (double)(nb + 1) * (double)(nc + 1) > 1e7)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "covering needs %.3g curve samples (limit 1e7): raise the spacing",
                         (double)(na + 1) * (double)(nb + 1) * (double)(nc + 1));
-    s.grid_a = na;
-    s.grid_b = nb;
-    st = o->pattern == AMP_PATTERN_GRID ? cover_adaptive(f, b, na, nb, nc, target, r, min_len, out, &s, err)
-                                        : cover_uniform(f, b, o, na, nb, nc, r, min_len, out, &s, err);
+    if (f->eval == eval_spline) {
+        st = cover_spline_field((const amp_spline *)f->user, f->dir, b, target, r, min_len, out, &s, err);
+    } else {
+        s.grid_a = na;
+        s.grid_b = nb;
+        st = o->pattern == AMP_PATTERN_GRID ? cover_adaptive(f, b, na, nb, nc, target, r, min_len, out, &s, err)
+                                            : cover_uniform(f, b, o, na, nb, nc, r, min_len, out, &s, err);
+    }
+    if (st == AMP_OK && o->shells > 0)
+        st = cover_shells(f, b, na, nb, nc, S, r, o->shells, min_len, out, &s, err);
     if (stats)
         *stats = s;
     return st;

@@ -537,6 +537,52 @@ START_TEST(adaptive_seeding_inserts_curves_where_neighbours_drift_apart)
 }
 END_TEST
 
+
+/*
+ * The surface layer: one shell of curves S/2 inside the helix's surface, along
+ * the helix. At 4.5 mm from the axis the shell's circumference is 28.3 mm:
+ * about 28 curves, S apart, each about the helix's length (a turn of radius
+ * 20 mm and pitch 40 mm: 131.9 mm), so roughly 3,700 mm; every shell vertex
+ * lies S/2 inside the mesh, and the whole solid stays within the bound.
+ */
+START_TEST(surface_layer_follows_the_surface_half_a_spacing_inside)
+{
+    amp_mesh m;
+    amp_bvh *b;
+    amp_field f;
+    amp_field_opts o;
+    amp_field_stats st;
+    amp_pathset ps;
+    amp_error err;
+    size_t i, first, bad = 0;
+    double g;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_builtin(&f, "helix-square", amp_mesh_bbox(&m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.shells = 1;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_uint_gt(st.shell_paths, 20);
+    ck_assert_msg(st.shell_length > 3000.0 && st.shell_length < 5000.0, "shell %g mm", st.shell_length);
+    first = ps.npaths - st.shell_paths;
+    for (i = ps.paths[first].first; i < ps.nverts; i++) {
+        amp_vec3 p = ps.verts[i].p;
+        double d = amp_bvh_closest(b, p, NULL, NULL);
+        bad += !amp_bvh_inside(b, p) || d < 0.45 || d > 0.55;
+    }
+    ck_assert_msg(bad == 0, "%lu shell vertices not 0.5 mm inside", (unsigned long)bad);
+    ck_assert_int_eq(amp_coverage_gap(&ps, b, 4000, 5, 0.0, &g, NULL, &err), AMP_OK);
+    ck_assert_msg(g <= sqrt(2.0) / 2 + 0.01, "gap %g", g);
+    o.shells = -1;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_ERR_ARG);
+    amp_pathset_free(&ps);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *field_suite(void)
 {
     Suite *s = suite_create("field");
@@ -553,6 +599,7 @@ static Suite *field_suite(void)
     AMP_ADD_TEST(tc, trivariate_field_is_covered_by_algorithm_1_within_its_bound);
     AMP_ADD_TEST(tc, cubic_box_field_meets_the_covering_radius_by_algorithm_1);
     AMP_ADD_TEST(tc, adaptive_seeding_inserts_curves_where_neighbours_drift_apart);
+    AMP_ADD_TEST(tc, surface_layer_follows_the_surface_half_a_spacing_inside);
     AMP_ADD_TEST(tc, field_route_and_trivariate_route_both_cover_the_helix);
     suite_add_tcase(s, tc);
     return s;

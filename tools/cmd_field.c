@@ -21,6 +21,8 @@ const char cmd_field_usage[] =
     "  --step D          sampling step along each curve, mm (default min(0.5, S/2))\n"
     "  --min-len L       drop clipped pieces shorter than L mm (default S/2)\n"
     "  --radius R        deposition radius written to the paths, mm (default: the covering radius)\n"
+    "  --shells N        surface layer: N shells of curves following the surface, S/2, 3S/2, ... inside it,\n"
+    "                    along the field's direction (default 0)\n"
     "  --samples N       points sampled in the mesh to measure the coverage gap (default 10000; 0 = skip)\n"
     "  -o, --output FILE write the paths (.amp); nothing is written without it\n"
     "  --json            print one JSON object with the figures\n"
@@ -39,7 +41,7 @@ int cmd_field(int argc, char **argv)
     const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w", *along = NULL;
     double side = 6.0, spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
     double gap_all = -1, gap_in = -1, mean = -1;
-    long samples = 10000;
+    long samples = 10000, shells = 0;
     int json = 0, npos = 0, rc;
     amp_mesh m;
     amp_bvh *b = NULL;
@@ -57,7 +59,7 @@ int cmd_field(int argc, char **argv)
                       {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
                       {"along", CLI_STR, &along, 0},     {"side", CLI_DOUBLE, &side, 0},
-                      {NULL, CLI_FLAG, NULL, 0}};
+                      {"shells", CLI_LONG, &shells, 0},  {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
@@ -65,6 +67,8 @@ int cmd_field(int argc, char **argv)
         return cli_fail("field", CLI_USAGE, "--field NAME is required (helix-square, box, sweep, or a trivariate)");
     if (strcmp(pattern, "grid") != 0 && strcmp(pattern, "hex") != 0)
         return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", pattern);
+    if (shells < 0 || shells > 100)
+        return cli_fail("field", CLI_USAGE, "--shells must be in 0..100");
     if (samples < 0)
         return cli_fail("field", CLI_USAGE, "--samples must be >= 0");
     if (strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
@@ -113,6 +117,7 @@ int cmd_field(int argc, char **argv)
     o.step = step;
     o.min_len = min_len;
     o.radius = radius;
+    o.shells = (int)shells;
     t0 = cli_now();
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
     t_cover = cli_now() - t0;
@@ -161,6 +166,9 @@ int cmd_field(int argc, char **argv)
             if (st.bound_met >= 0)
                 cli_json_bool(&j, "bound_met", st.bound_met);
             cli_json_int(&j, "inserted_curves", (long long)st.inserted);
+            cli_json_int(&j, "shells", shells);
+            cli_json_int(&j, "shell_paths", (long long)st.shell_paths);
+            cli_json_num(&j, "shell_length_mm", st.shell_length);
             cli_json_num(&j, "cover_s", t_cover);
             cli_json_num(&j, "gap_s", t_gap);
             cli_json_end(&j);

@@ -113,6 +113,7 @@ typedef struct amp_field_opts {
     double step;         /**< sampling step along a curve, mm (default min(0.5, S/2)) */
     double min_len;      /**< clipped pieces shorter than this are dropped, mm (default S/2) */
     double radius;       /**< deposition radius written to the paths; 0 = the pattern's covering radius */
+    int shells;          /**< surface layer: shell curves at S/2, 3S/2, ... inside the surface (default 0) */
 } amp_field_opts;
 
 void amp_field_opts_default(amp_field_opts *o);
@@ -137,6 +138,8 @@ typedef struct amp_field_stats {
     int bound_met;         /**< 1: bound <= target; 0: the field cannot meet the spacing; -1: not checked */
     size_t inserted;       /**< adaptive route: curves added beyond the base lattice */
     amp_field_route route; /**< which covering was used */
+    size_t shell_paths;    /**< surface layer: shell paths written (after the covering curves) */
+    double shell_length;   /**< their length, mm */
 } amp_field_stats;
 
 /**
@@ -160,6 +163,12 @@ typedef struct amp_field_stats {
  *   bound_met = 0 when a finest cell still exceeds the target (the field
  *   cannot meet the spacing there);
  * - the honeycomb is the plain lattice at the cell centres (no bound checked).
+ * With o->shells = N > 0 a surface layer follows: N shells of curves on the
+ * surface offset inward by S/2, 3S/2, ...: the lattice curves (corners of the
+ * base cells) that run within S/2 of the surface (shifted j S inward for
+ * shell j) projected onto the offset surface, so that the skin is printed as
+ * smooth curves along the field's direction (slicers' perimeters); they are
+ * appended after the covering curves and add to its material.
  * Errors: AMP_ERR_ARG (bad options), the evaluator's errors, AMP_ERR_LIMIT
  * (more than 10^7 curve samples), AMP_ERR_NOMEM. @p stats may be NULL.
  * Thread-safe on @p f and @p b.
