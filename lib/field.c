@@ -201,6 +201,9 @@ void amp_field_opts_default(amp_field_opts *o)
     o->min_len = -1;
     o->radius = 0;
     o->shells = 0;
+    o->within = NULL;
+    o->without = NULL;
+    o->nwithout = 0;
 }
 
 /* ------------------------------------------------------------- covering */
@@ -250,6 +253,94 @@ static amp_status max_iso_length(const amp_field *f, int which, int nseg, double
     return AMP_OK;
 }
 
+/* ------------------------------------------------ regions (several fields) */
+
+/* Is p in the part of the solid this field covers: inside the mesh, inside `within` (if any), in no `without`? */
+static int member(const amp_bvh *b, const amp_field_opts *o, amp_vec3 p)
+{
+    size_t i;
+    if (!amp_bvh_inside(b, p) || (o->within && !amp_bvh_inside(o->within, p)))
+        return 0;
+    for (i = 0; i < o->nwithout; i++)
+        if (amp_bvh_inside(o->without[i], p))
+            return 0;
+    return 1;
+}
+
+static int has_regions(const amp_field_opts *o) { return o->within != NULL || o->nwithout > 0; }
+
+/* Emit the member runs of one clipped piece: sampled every 0.25 mm, each boundary found by bisection. */
+static amp_status keep_member_runs(const amp_bvh *b, const amp_field_opts *o, const amp_pvert *v, size_t n,
+                                   double min_len, amp_pathset *out, amp_error *err)
+{
+    amp_pvert *run = NULL;
+    size_t cap = 0, m = 0, k;
+    double len = 0.0;
+    amp_status st = AMP_OK;
+    int prev = n ? member(b, o, v[0].p) : 0;
+    if (prev && amp_grow(out->alloc, (void **)&run, &cap, 1, sizeof *run) == AMP_OK)
+        run[m++] = v[0];
+    for (k = 0; st == AMP_OK && k + 1 < n; k++) {
+        double sl = amp_v3_dist(v[k].p, v[k + 1].p), t0 = 0.0;
+        size_t ns = (size_t)ceil(sl / 0.25), j;
+        for (j = 1; st == AMP_OK && j <= (ns ? ns : 1); j++) {
+            double t1 = ns ? (double)j / (double)ns : 1.0, a = t0, c = t1;
+            amp_pvert x;
+            int cur = member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, t1)), it;
+            if (cur != prev) /* bisect the crossing between t0 and t1 */
+                for (it = 0; it < 20; it++) {
+                    double mid = 0.5 * (a + c);
+                    if (member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, mid)) == prev)
+                        a = mid;
+                    else
+                        c = mid;
+                }
+            x.p = amp_v3_lerp(v[k].p, v[k + 1].p, cur != prev ? (prev ? a : c) : t1);
+            x.r = v[k].r + (cur != prev ? (prev ? a : c) : t1) * (v[k + 1].r - v[k].r);
+            if (prev || cur) {
+                if (amp_grow(out->alloc, (void **)&run, &cap, m + 1, sizeof *run) != AMP_OK) {
+                    st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for field curves");
+                    break;
+                }
+                if (j == (ns ? ns : 1) || cur != prev) { /* interior samples of a straight segment need no vertex */
+                    if (m)
+                        len += amp_v3_dist(run[m - 1].p, x.p);
+                    run[m++] = x;
+                }
+            }
+            if (prev && !cur) {
+                if (m > 1 && len >= min_len)
+                    st = amp_pathset_add(out, AMP_ROLE_OBJECT, run, m, err);
+                m = 0;
+                len = 0.0;
+            }
+            prev = cur;
+            t0 = t1;
+        }
+    }
+    if (st == AMP_OK && prev && m > 1 && len >= min_len)
+        st = amp_pathset_add(out, AMP_ROLE_OBJECT, run, m, err);
+    amp_free(out->alloc, run);
+    return st;
+}
+
+/* Clip a curve to the solid and, with regions, to this field's part of it. */
+static amp_status clip_part(const amp_bvh *b, const amp_field_opts *o, const amp_pvert *v, size_t n, double min_len,
+                            amp_pathset *out, amp_error *err)
+{
+    amp_pathset tmp;
+    amp_status st;
+    size_t i;
+    if (!has_regions(o))
+        return amp_bvh_clip_polyline(b, v, n, min_len, AMP_ROLE_OBJECT, out, err);
+    amp_pathset_init(&tmp, out->alloc);
+    st = amp_bvh_clip_polyline(b, v, n, 0.0, AMP_ROLE_OBJECT, &tmp, err);
+    for (i = 0; st == AMP_OK && i < tmp.npaths; i++)
+        st = keep_member_runs(b, o, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, min_len, out, err);
+    amp_pathset_free(&tmp);
+    return st;
+}
+
 /* ------------------------------------------- trivariate fields: Algorithm 1 */
 
 /* A copy of @p s with parameter directions 0 and 1 exchanged (so that curves along u become curves along v). */
@@ -290,7 +381,8 @@ static amp_status swap_uv(const amp_spline *s, amp_spline *t, amp_error *err)
  * e1 = (d == 2 ? 1 : 2): curves along w use d = 0, along v d = 2, and along u
  * the field with u and v exchanged, d = 2.
  */
-static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh *b, double eps, double r,
+static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh *b, const amp_field_opts *o,
+                                     double eps, double r,
                                      double min_len, amp_pathset *out, amp_field_stats *s, amp_error *err)
 {
     amp_spline sw;
@@ -310,8 +402,7 @@ static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh
     if (st == AMP_OK)
         st = amp_cover_trivariate(dir == 0 ? &sw : v, &co, &tmp, &cs, err);
     for (i = 0; st == AMP_OK && i < tmp.npaths; i++)
-        st = amp_bvh_clip_polyline(b, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, min_len, AMP_ROLE_OBJECT, out,
-                                   err);
+        st = clip_part(b, o, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, min_len, out, err);
     s->curves = cs.curves;
     s->length_before = cs.length;
     s->bound = eps;
@@ -334,6 +425,7 @@ static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh
 typedef struct qctx {
     const amp_field *f;
     const amp_bvh *b;
+    const amp_field_opts *o;
     const amp_allocator *a;
     amp_error *err;
     size_t na, nb, ncs;    /* base cells across a and b; c samples of the bound */
@@ -409,7 +501,7 @@ static amp_status q_curve(qctx *q, uint64_t ia, uint64_t ib, size_t *out)
         q_uvw(q, ia, ib, (double)k / (double)q->ncs, uvw);
         if ((st = q->f->eval(q->f, uvw, p, q->err)) != AMP_OK)
             return st;
-        q->in[q->ncur * (q->ncs + 1) + k] = (unsigned char)amp_bvh_inside(q->b, *p);
+        q->in[q->ncur * (q->ncs + 1) + k] = (unsigned char)member(q->b, q->o, *p);
     }
     *out = q->ncur++;
     return AMP_OK;
@@ -449,7 +541,7 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double
             if (len <= 2.0 * q->target * (1 + 1e-9) || len / 2 <= *bound)
                 continue;
             mid = amp_v3_lerp(p0, p1, 0.5);
-            if (amp_bvh_inside(q->b, mid) || amp_bvh_closest(q->b, mid, NULL, NULL) <= len / 2)
+            if (member(q->b, q->o, mid) || amp_bvh_closest(q->b, mid, NULL, NULL) <= len / 2)
                 *bound = len / 2;
         }
     for (k = 0; k <= q->ncs; k++)
@@ -461,7 +553,7 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double
                        ((double)ib + (double)sz * j / 4.0) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
                 if ((st = q->f->eval(q->f, uvw, &x3, q->err)) != AMP_OK)
                     return st;
-                if (!amp_bvh_inside(q->b, x3))
+                if (!member(q->b, q->o, x3))
                     continue;
                 for (t = 0; t < nc; t++)
                     if (q->in[cand[t] * n + k])
@@ -499,7 +591,8 @@ static int key_cmp(const void *x, const void *y)
 }
 
 /* The adaptive lattice: base cells of at most S, refined where the cell bound exceeds the target. */
-static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, size_t na, size_t nb, size_t nc, double target,
+static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
+                                 size_t nc, double target,
                                  double r, double min_len, amp_pathset *out, amp_field_stats *s, amp_error *err)
 {
     qctx q;
@@ -510,6 +603,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, size_t na
     memset(&q, 0, sizeof q);
     q.f = f;
     q.b = b;
+    q.o = o;
     q.a = out->alloc;
     q.err = err;
     q.na = na;
@@ -536,7 +630,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, size_t na
                 s->length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
         }
         if (st == AMP_OK)
-            st = amp_bvh_clip_polyline(b, curve, nc + 1, min_len, AMP_ROLE_OBJECT, out, err);
+            st = clip_part(b, o, curve, nc + 1, min_len, out, err);
         s->curves++;
     }
     s->bound = q.worst;
@@ -569,7 +663,8 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, size_t na
  * onto it. Runs of consecutive samples in the band whose projection is inside
  * the solid become paths (at least min_len long).
  */
-static amp_status cover_shells(const amp_field *f, const amp_bvh *b, size_t na, size_t nb, size_t nc, double S,
+static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
+                               size_t nc, double S,
                                double r, int shells, double min_len, amp_pathset *out, amp_field_stats *s,
                                amp_error *err)
 {
@@ -598,7 +693,7 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, size_t na, 
                             /* inward direction: towards p from q when p is inside, away from p otherwise */
                             amp_vec3 in = amp_v3_scale(amp_v3_sub(p, q), (sd < 0 ? 1.0 : -1.0) / dist);
                             x = amp_v3_madd(q, in, d);
-                            ok = amp_bvh_inside(b, x) && amp_bvh_closest(b, x, NULL, NULL) >= 0.9 * d;
+                            ok = member(b, o, x) && amp_bvh_closest(b, x, NULL, NULL) >= 0.9 * d;
                         }
                     }
                     if (ok && (n == 0 || amp_v3_dist(run[n - 1].p, x) > 1e-6)) {
@@ -655,7 +750,7 @@ static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_
                     s.length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
             }
             if (st == AMP_OK)
-                st = amp_bvh_clip_polyline(b, curve, nc + 1, min_len, AMP_ROLE_OBJECT, out, err);
+                st = clip_part(b, o, curve, nc + 1, min_len, out, err);
             s.curves++;
         }
     }
@@ -713,15 +808,15 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
         return amp_fail(err, AMP_ERR_LIMIT, 0, "covering needs %.3g curve samples (limit 1e7): raise the spacing",
                         (double)(na + 1) * (double)(nb + 1) * (double)(nc + 1));
     if (f->eval == eval_spline) {
-        st = cover_spline_field((const amp_spline *)f->user, f->dir, b, target, r, min_len, out, &s, err);
+        st = cover_spline_field((const amp_spline *)f->user, f->dir, b, o, target, r, min_len, out, &s, err);
     } else {
         s.grid_a = na;
         s.grid_b = nb;
-        st = o->pattern == AMP_PATTERN_GRID ? cover_adaptive(f, b, na, nb, nc, target, r, min_len, out, &s, err)
+        st = o->pattern == AMP_PATTERN_GRID ? cover_adaptive(f, b, o, na, nb, nc, target, r, min_len, out, &s, err)
                                             : cover_uniform(f, b, o, na, nb, nc, r, min_len, out, &s, err);
     }
     if (st == AMP_OK && o->shells > 0)
-        st = cover_shells(f, b, na, nb, nc, S, r, o->shells, min_len, out, &s, err);
+        st = cover_shells(f, b, o, na, nb, nc, S, r, o->shells, min_len, out, &s, err);
     if (stats)
         *stats = s;
     return st;

@@ -583,6 +583,111 @@ START_TEST(surface_layer_follows_the_surface_half_a_spacing_inside)
 }
 END_TEST
 
+
+/* Largest distance from @p n points inside the solid of @p b and the box [lo, hi] to the nearest path segment. */
+static double zone_gap(const amp_pathset *ps, const amp_bvh *b, amp_vec3 lo, amp_vec3 hi, int n)
+{
+    unsigned long x = 99;
+    double worst = 0.0;
+    int got = 0, tries = 0;
+    while (got < n && tries++ < 200 * n) {
+        amp_vec3 p;
+        double best = HUGE_VAL;
+        size_t i, k;
+        x = x * 6364136223846793005UL + 1442695040888963407UL;
+        p.x = lo.x + (hi.x - lo.x) * (double)((x >> 11) & 0xfffff) / 1048575.0;
+        x = x * 6364136223846793005UL + 1442695040888963407UL;
+        p.y = lo.y + (hi.y - lo.y) * (double)((x >> 11) & 0xfffff) / 1048575.0;
+        x = x * 6364136223846793005UL + 1442695040888963407UL;
+        p.z = lo.z + (hi.z - lo.z) * (double)((x >> 11) & 0xfffff) / 1048575.0;
+        if (!amp_bvh_inside(b, p))
+            continue;
+        got++;
+        for (i = 0; i < ps->npaths; i++) {
+            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+            for (k = 0; k + 1 < ps->paths[i].n; k++)
+                best = fmin(best, amp_v3_seg_dist2(p, v[k].p, v[k + 1].p, NULL));
+        }
+        worst = fmax(worst, sqrt(best));
+    }
+    ck_assert_int_eq(got, n);
+    return worst;
+}
+
+/*
+ * Several fields in one model (paper §4.2, Fig. 6): the crocodile's front leg
+ * gets a sweep field along it, restricted to a region box around the leg
+ * below the belly; the body gets the box field everywhere else. Each field's
+ * adaptive lattice treats the region's boundary like the surface, so the
+ * curves of both sides reach the seam: the gap over the whole solid and in a
+ * slab around the seam stays within S sqrt(2)/2, and neither field enters the
+ * other's part (no double covering).
+ */
+START_TEST(two_fields_meet_at_a_seam_without_gap_or_double_cover)
+{
+    static const amp_vec3 spine[4] = {{14, 2, 13}, {16, 6, 9}, {19, 15, 6}, {17, 17, -1}};
+    const amp_vec3 rlo = amp_v3(10, 4, -2), rhi = amp_v3(25, 22, 7);
+    amp_mesh m, rm;
+    amp_bvh *b, *rb;
+    amp_field body, leg;
+    amp_sweep *sw = malloc(sizeof *sw);
+    amp_field_opts o;
+    amp_field_stats sl, sb;
+    amp_pathset ps;
+    amp_error err;
+    const amp_bvh *wo[1];
+    double g, target = 2.0 * sqrt(2.0); /* twice the covering radius at S = 2 */
+    size_t i, nleg, bad = 0;
+    ck_assert_ptr_nonnull(sw);
+    amp_mesh_init(&m, NULL);
+    amp_mesh_init(&rm, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_mesh_model("crocodile-like", 0.125, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_fix_box(&rm, rlo, rhi, 0), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&rb, &rm, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_sweep(&leg, sw, spine, 4, 7.0, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_builtin(&body, "box", amp_mesh_bbox(&m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = 2.0;
+    o.within = rb;
+    ck_assert_int_eq(amp_field_cover(&leg, b, &o, &ps, &sl, &err), AMP_OK);
+    nleg = ps.nverts;
+    o.within = NULL;
+    wo[0] = rb;
+    o.without = wo;
+    o.nwithout = 1;
+    ck_assert_int_eq(amp_field_cover(&body, b, &o, &ps, &sb, &err), AMP_OK);
+    ck_assert_int_eq(sl.bound_met, 1);
+    ck_assert_int_eq(sb.bound_met, 1);
+    ck_assert_uint_gt(sl.pieces, 10);
+    /* each field stays on its side of the seam (cut points lie on it, up to the bisection's 1e-6) */
+    for (i = 0; i < ps.nverts; i++) {
+        amp_vec3 p = ps.verts[i].p;
+        int in = p.x > rlo.x + 1e-4 && p.x < rhi.x - 1e-4 && p.y > rlo.y + 1e-4 && p.y < rhi.y - 1e-4 &&
+                 p.z > rlo.z + 1e-4 && p.z < rhi.z - 1e-4;
+        int out = p.x < rlo.x - 1e-4 || p.x > rhi.x + 1e-4 || p.y < rlo.y - 1e-4 || p.y > rhi.y + 1e-4 ||
+                  p.z < rlo.z - 1e-4 || p.z > rhi.z + 1e-4;
+        bad += i < nleg ? out : in;
+    }
+    ck_assert_msg(bad == 0, "%lu vertices on the other field's side", (unsigned long)bad);
+    ck_assert_int_eq(amp_coverage_gap(&ps, b, 3000, 11, 0.0, &g, NULL, &err), AMP_OK);
+    ck_assert_msg(g <= target / 2 + 0.01, "whole-solid gap %g > %g", g, target / 2);
+    fprintf(stderr, "crocodile S=2: leg %lu paths %.0f mm, body %lu paths %.0f mm, whole-solid gap %.3f", (unsigned long)sl.pieces,
+            sl.length_after, (unsigned long)sb.pieces, sb.length_after, g);
+    /* the seam: the region's top face z = 7 across the leg, and its side faces through the body */
+    g = zone_gap(&ps, b, amp_v3(10, 4, 5.5), amp_v3(25, 22, 8.5), 400);
+    fprintf(stderr, ", seam gap %.3f (bound %.3f)\n", g, target / 2);
+    ck_assert_msg(g <= target / 2 + 0.01, "seam gap %g > %g", g, target / 2);
+    amp_pathset_free(&ps);
+    amp_bvh_free(b);
+    amp_bvh_free(rb);
+    amp_mesh_free(&m);
+    amp_mesh_free(&rm);
+    free(sw);
+}
+END_TEST
+
 static Suite *field_suite(void)
 {
     Suite *s = suite_create("field");
@@ -600,6 +705,7 @@ static Suite *field_suite(void)
     AMP_ADD_TEST(tc, cubic_box_field_meets_the_covering_radius_by_algorithm_1);
     AMP_ADD_TEST(tc, adaptive_seeding_inserts_curves_where_neighbours_drift_apart);
     AMP_ADD_TEST(tc, surface_layer_follows_the_surface_half_a_spacing_inside);
+    AMP_ADD_TEST(tc, two_fields_meet_at_a_seam_without_gap_or_double_cover);
     AMP_ADD_TEST(tc, field_route_and_trivariate_route_both_cover_the_helix);
     suite_add_tcase(s, tc);
     return s;

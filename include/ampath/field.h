@@ -114,6 +114,13 @@ typedef struct amp_field_opts {
     double min_len;      /**< clipped pieces shorter than this are dropped, mm (default S/2) */
     double radius;       /**< deposition radius written to the paths; 0 = the pattern's covering radius */
     int shells;          /**< surface layer: shell curves at S/2, 3S/2, ... inside the surface (default 0) */
+    /** Several fields in one model: this field covers only the part of the solid inside @p within (a closed
+     *  region mesh's BVH; NULL: everywhere) and outside every region of @p without (the parts other fields
+     *  cover). The adaptive lattice treats the region's boundary like the surface, so the bound holds up to
+     *  the seam on each side. Borrowed; default NULL / 0. */
+    const amp_bvh *within;
+    const amp_bvh *const *without;
+    size_t nwithout;
 } amp_field_opts;
 
 void amp_field_opts_default(amp_field_opts *o);
