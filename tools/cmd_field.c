@@ -21,6 +21,9 @@ const char cmd_field_usage[] =
     "  --step D          sampling step along each curve, mm (default min(0.5, S/2))\n"
     "  --min-len L       drop clipped pieces shorter than L mm (default S/2)\n"
     "  --radius R        deposition radius written to the paths, mm (default: the covering radius)\n"
+    "  --within R.stl    cover only the part of the mesh inside the closed region mesh R (several fields in\n"
+    "                    one model: one run per field); --without R.stl: only the part outside R; no gap is\n"
+    "                    measured then: merge the parts' paths and run 'ampath check --mesh MESH.stl'\n"
     "  --shells N        surface layer: N shells of curves following the surface, S/2, 3S/2, ... inside it,\n"
     "                    along the field's direction (default 0)\n"
     "  --samples N       points sampled in the mesh to measure the coverage gap (default 10000; 0 = skip)\n"
@@ -39,6 +42,9 @@ const char cmd_field_usage[] =
 int cmd_field(int argc, char **argv)
 {
     const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w", *along = NULL;
+    const char *within = NULL, *without = NULL;
+    amp_mesh rm[2];
+    amp_bvh *rb[2] = {NULL, NULL};
     double side = 6.0, spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
     double gap_all = -1, gap_in = -1, mean = -1;
     long samples = 10000, shells = 0;
@@ -59,7 +65,8 @@ int cmd_field(int argc, char **argv)
                       {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
                       {"along", CLI_STR, &along, 0},     {"side", CLI_DOUBLE, &side, 0},
-                      {"shells", CLI_LONG, &shells, 0},  {NULL, CLI_FLAG, NULL, 0}};
+                      {"shells", CLI_LONG, &shells, 0},  {"within", CLI_STR, &within, 0},
+                      {"without", CLI_STR, &without, 0}, {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
@@ -100,14 +107,22 @@ int cmd_field(int argc, char **argv)
     } else if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
         return CLI_USAGE;
     amp_mesh_init(&m, NULL);
+    amp_mesh_init(&rm[0], NULL);
+    amp_mesh_init(&rm[1], NULL);
     amp_pathset_init(&ps, NULL);
-    if (amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
+    if ((within && (amp_mesh_read_stl_file(&rm[0], within, &err) != AMP_OK || amp_bvh_build(&rb[0], &rm[0], &err) != AMP_OK)) ||
+        (without && (amp_mesh_read_stl_file(&rm[1], without, &err) != AMP_OK || amp_bvh_build(&rb[1], &rm[1], &err) != AMP_OK)) ||
+        amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
         (sweep ? AMP_OK
                : builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
                          : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
         free(sw);
         amp_bvh_free(b);
         amp_mesh_free(&m);
+        amp_bvh_free(rb[0]);
+        amp_bvh_free(rb[1]);
+        amp_mesh_free(&rm[0]);
+        amp_mesh_free(&rm[1]);
         amp_spline_free(&spl);
         return cli_fail_err("field", &err);
     }
@@ -118,9 +133,14 @@ int cmd_field(int argc, char **argv)
     o.min_len = min_len;
     o.radius = radius;
     o.shells = (int)shells;
+    o.within = rb[0];
+    o.without = (const amp_bvh *const *)&rb[1];
+    o.nwithout = rb[1] != NULL;
     t0 = cli_now();
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
     t_cover = cli_now() - t0;
+    if (within || without)
+        samples = 0; /* the gap of one part is not the model's: check the merged paths with 'ampath check --mesh' */
     if (rc == CLI_OK && samples > 0 && ps.npaths > 0) {
         t0 = cli_now();
         if (amp_coverage_gap(&ps, b, (size_t)samples, 1, 0.0, &gap_all, &mean, &err) != AMP_OK ||
@@ -198,6 +218,10 @@ int cmd_field(int argc, char **argv)
         rc = CLI_FAILED;
     }
     amp_bvh_free(b);
+    amp_bvh_free(rb[0]);
+    amp_bvh_free(rb[1]);
+    amp_mesh_free(&rm[0]);
+    amp_mesh_free(&rm[1]);
     amp_pathset_free(&ps);
     amp_mesh_free(&m);
     amp_spline_free(&spl);
