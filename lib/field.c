@@ -204,6 +204,8 @@ void amp_field_opts_default(amp_field_opts *o)
     o->within = NULL;
     o->without = NULL;
     o->nwithout = 0;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 /* ------------------------------------------------------------- covering */
@@ -397,6 +399,8 @@ static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh
     co.eps = eps;
     co.radius = r;
     co.dir = dir == 2 ? 0 : 2;
+    co.progress = o->progress;
+    co.progress_user = o->progress_user;
     if (dir == 0)
         st = swap_uv(v, &sw, err);
     if (st == AMP_OK)
@@ -610,9 +614,12 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
     q.nb = nb;
     q.ncs = nc < 64 ? nc : 64 + (nc - 64) / 4;
     q.target = target;
-    for (j = 0; j < nb && st == AMP_OK; j++)
+    for (j = 0; j < nb && st == AMP_OK; j++) {
         for (i = 0; i < na && st == AMP_OK; i++)
             st = q_refine(&q, (uint64_t)i << QDEPTH, (uint64_t)j << QDEPTH, (uint64_t)1 << QDEPTH);
+        if (o->progress)
+            o->progress(o->progress_user, 0.8 * (double)(j + 1) / (double)nb);
+    }
     if (st == AMP_OK && (!(keys = amp_calloc(q.a, q.ncur + 1, sizeof *keys)) ||
                          !(curve = amp_calloc(q.a, nc + 1, sizeof *curve))))
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for field curves");

@@ -12,6 +12,8 @@ void amp_support_opts_default(amp_support_opts *o)
     o->layer_height = 0.4;
     o->radius = 0.2;
     o->min_gap = 1.0;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 /* One stretch of a vertical ray that needs support: air from z0 (plate or solid) up to the underside z1. */
@@ -448,6 +450,8 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
         for (i = nobj + rfirst[l]; st == AMP_OK && i < nobj + rfirst[l + 1]; i++)
             st = cut_row(c, fs, i, nf, first, late, d, nx, ny, pcs, npc, &pcap, s, err);
         pfirst[2 * (size_t)l + 1] = *npc;
+        if (o->progress && l % 8 == 0)
+            o->progress(o->progress_user, 0.6 + 0.35 * (double)(nl - (size_t)l) / (double)nl);
     }
     /* bottom layer first: a piece is emitted before the pieces above it in the same slot */
     for (i = 0; st == AMP_OK && i < *npc / 2; i++) {
@@ -579,6 +583,8 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
+    if (o->progress)
+        o->progress(o->progress_user, 0.1);
     /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
      * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
     if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
@@ -608,6 +614,8 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         }
     }
     /* object before support above it, support before object and support above it (Def. 5.1) */
+    if (o->progress)
+        o->progress(o->progress_user, 0.6);
     if ((stt = place_pieces(&c, o, &fs, nobj, first, late, &pcs, &npc, &s, err)) != AMP_OK)
         goto done;
     if ((stt = emit_all(in, nobj, &fs, late, pcs, npc, out, &s, err)) != AMP_OK)

@@ -102,6 +102,8 @@ static void print_report(const report *r, int json)
     }
 }
 
+static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
 /* The sweep field of --along SPINE.amp (its first path) and --side W; *sw is malloc'ed and must outlive f. */
 static int load_sweep(const char *along, double side, amp_field *f, amp_sweep **sw)
 {
@@ -187,6 +189,7 @@ int cmd_field(int argc, char **argv)
     amp_sweep *sw = NULL;
     amp_field_opts o;
     amp_field_stats st;
+    cli_progress bar;
     amp_pathset ps;
     amp_error err;
     cli_opt opts[] = {{"field", CLI_STR, &field, 0},     {"spacing", CLI_DOUBLE, &spacing, 0},
@@ -244,7 +247,11 @@ int cmd_field(int argc, char **argv)
     o.without = (const amp_bvh *const *)&rb[1];
     o.nwithout = rb[1] != NULL;
     t0 = cli_now();
+    cli_progress_begin(&bar, "field");
+    o.progress = progress;
+    o.progress_user = &bar;
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
+    cli_progress_end(&bar);
     t_cover = cli_now() - t0;
     if (within || without)
         samples = 0; /* the gap of one part is not the model's: check the merged paths with 'ampath check --mesh' */

@@ -121,6 +121,9 @@ typedef struct amp_field_opts {
     const amp_bvh *within;
     const amp_bvh *const *without;
     size_t nwithout;
+    /** Optional progress report (fraction 0..1, from the calling thread, a few hundred times at most). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } amp_field_opts;
 
 void amp_field_opts_default(amp_field_opts *o);

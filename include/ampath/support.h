@@ -42,6 +42,9 @@ typedef struct amp_support_opts {
     double layer_height; /**< vertical distance of support layers, mm (default 0.4) */
     double radius;       /**< deposition radius of support paths, mm (default 0.2) */
     double min_gap;      /**< ignore air gaps lower than this, mm (default 1) */
+    /** Optional progress report (fraction 0..1, from the calling thread, a few hundred times at most). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } amp_support_opts;
 
 void amp_support_opts_default(amp_support_opts *o);
