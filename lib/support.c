@@ -523,7 +523,7 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
             if (k == cnt[g])
                 continue;
             if (g > cut) {
-                st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, g, NULL, 0, &run, &run_cap, err);
+                st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, g, NULL, 1, &run, &run_cap, err);
                 s->splits++;
                 cut = g;
             }
@@ -536,7 +536,7 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
             if (st == AMP_OK && in->paths[i].h > 0.0)
                 st = amp_pathset_set_height(out, in->paths[i].h, err);
         } else if (st == AMP_OK) {
-            st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, f1, NULL, 0, &run, &run_cap, err);
+            st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, f1, NULL, 1, &run, &run_cap, err);
         }
     }
     for (i = out->npaths; st == AMP_OK && k < cnt[nf]; k++)
