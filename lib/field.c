@@ -424,6 +424,8 @@ static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh
 
 /* Finest subdivision of a base cell of the adaptive lattice: 2^QDEPTH per side. */
 #define QDEPTH 5
+/* Sample points of a cell's bound: a (QS + 1)^2 grid over it, edges and centre included (QS even), corners not. */
+#define QS 4
 
 /* The curves of the adaptive lattice, hashed by their integer position (ia, ib) in units of 1/(n 2^QDEPTH). */
 typedef struct qctx {
@@ -512,7 +514,7 @@ static amp_status q_curve(qctx *q, uint64_t ia, uint64_t ib, size_t *out)
 }
 
 /*
- * Bound of a cell: over 3 x 3 points of the cell at every c-sample that lie
+ * Bound of a cell: over the QS x QS grid points of the cell at every c-sample that lie
  * inside the mesh, the largest distance to the nearest candidate curve at the
  * same c (an upper bound on the distance to that curve), counting only
  * candidate points inside the mesh (the rest is clipped away). Candidates:
@@ -520,7 +522,7 @@ static amp_status q_curve(qctx *q, uint64_t ia, uint64_t ib, size_t *out)
  * cell (all of them are printed), so that a sliver of the solid next to the
  * surface is not refined for want of a corner inside it.
  */
-static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double *bound)
+static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb, double *bound)
 {
     size_t cand[20], nc = 0, k, n = q->ncs + 1, t;
     uint64_t bi = ia >> QDEPTH, bj = ib >> QDEPTH, x, y;
@@ -528,15 +530,15 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double
     amp_status st;
     *bound = 0.0;
     for (t = 0; t < 4; t++)
-        if ((st = q_curve(q, ia + (t & 1 ? sz : 0), ib + (t & 2 ? sz : 0), &cand[nc++])) != AMP_OK)
+        if ((st = q_curve(q, ia + (t & 1 ? sa : 0), ib + (t & 2 ? sb : 0), &cand[nc++])) != AMP_OK)
             return st;
-    if (sz < ((uint64_t)1 << QDEPTH))
+    if (sa < ((uint64_t)1 << QDEPTH) || sb < ((uint64_t)1 << QDEPTH))
         for (y = bj ? bj - 1 : 0; y <= bj + 2 && y <= q->nb; y++)
             for (x = bi ? bi - 1 : 0; x <= bi + 2 && x <= q->na; x++)
                 if ((st = q_curve(q, x << QDEPTH, y << QDEPTH, &cand[nc++])) != AMP_OK)
                     return st;
     /* an edge longer than 2 target that may touch the solid: its middle is about half its length from both
-     * curves, even where the 3 x 3 samples miss the solid (a field stretched within one cell) */
+     * curves, even where the grid points miss the solid (a field stretched within one cell) */
     for (k = 0; k <= q->ncs; k++)
         for (t = 0; t < 4; t++) {
             static const int e0[4] = {0, 2, 0, 1}, e1[4] = {1, 3, 2, 3};
@@ -549,12 +551,14 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double
                 *bound = len / 2;
         }
     for (k = 0; k <= q->ncs; k++)
-        for (j = 1; j <= 3; j++)
-            for (i = 1; i <= 3; i++) {
+        for (j = 0; j <= QS; j++)
+            for (i = 0; i <= QS; i++) {
                 double uvw[3], d = HUGE_VAL;
                 amp_vec3 x3;
-                to_uvw(q->f, ((double)ia + (double)sz * i / 4.0) / (double)(q->na << QDEPTH),
-                       ((double)ib + (double)sz * j / 4.0) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
+                if ((i == 0 || i == QS) && (j == 0 || j == QS))
+                    continue; /* a corner: on its curve */
+                to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
+                       ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
                 if ((st = q->f->eval(q->f, uvw, &x3, q->err)) != AMP_OK)
                     return st;
                 if (!member(q->b, q->o, x3))
@@ -567,18 +571,43 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz, double
     return AMP_OK;
 }
 
-/* Split a cell into four while its bound exceeds the target (adaptive seeding: curves where neighbours drift apart). */
-static amp_status q_refine(qctx *q, uint64_t ia, uint64_t ib, uint64_t sz)
+/* Longest distance in space between the corner curves along a (which = 0) or b (1) over the c-samples. */
+static double q_edge(const qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb, int which)
+{
+    size_t c00, c10, c01, c11, k, n = q->ncs + 1;
+    double m = 0.0;
+    /* the four corners exist: q_bound made them */
+    if (q_curve((qctx *)q, ia, ib, &c00) != AMP_OK || q_curve((qctx *)q, ia + sa, ib, &c10) != AMP_OK ||
+        q_curve((qctx *)q, ia, ib + sb, &c01) != AMP_OK || q_curve((qctx *)q, ia + sa, ib + sb, &c11) != AMP_OK)
+        return 0.0;
+    for (k = 0; k < n; k++)
+        m = fmax(m, which == 0 ? fmax(amp_v3_dist(q->pts[c00 * n + k], q->pts[c10 * n + k]),
+                                      amp_v3_dist(q->pts[c01 * n + k], q->pts[c11 * n + k]))
+                               : fmax(amp_v3_dist(q->pts[c00 * n + k], q->pts[c01 * n + k]),
+                                      amp_v3_dist(q->pts[c10 * n + k], q->pts[c11 * n + k])));
+    return m;
+}
+
+/*
+ * Split a cell in two, across its longer side in space, while its bound
+ * exceeds the target (adaptive seeding: curves where neighbours drift apart);
+ * a split adds the two curves in the middle of that side's edges.
+ */
+static amp_status q_refine(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb)
 {
     double bound;
-    amp_status st = q_bound(q, ia, ib, sz, &bound);
+    amp_status st = q_bound(q, ia, ib, sa, sb, &bound);
     if (st != AMP_OK)
         return st;
-    if (sz > 1 && bound > q->target * (1 + 1e-9)) { /* the half diagonal of a full cell is exactly the target */
-        uint64_t h = sz / 2;
-        if ((st = q_refine(q, ia, ib, h)) == AMP_OK && (st = q_refine(q, ia + h, ib, h)) == AMP_OK &&
-            (st = q_refine(q, ia, ib + h, h)) == AMP_OK)
-            st = q_refine(q, ia + h, ib + h, h);
+    /* the half diagonal of a full cell is exactly the target */
+    if ((sa > 1 || sb > 1) && bound > q->target * (1 + 1e-9)) {
+        int along_a = sb == 1 || (sa > 1 && q_edge(q, ia, ib, sa, sb, 0) >= q_edge(q, ia, ib, sa, sb, 1));
+        if (along_a) {
+            if ((st = q_refine(q, ia, ib, sa / 2, sb)) == AMP_OK)
+                st = q_refine(q, ia + sa / 2, ib, sa / 2, sb);
+        } else if ((st = q_refine(q, ia, ib, sa, sb / 2)) == AMP_OK) {
+            st = q_refine(q, ia, ib + sb / 2, sa, sb / 2);
+        }
         return st;
     }
     q->worst = fmax(q->worst, bound);
@@ -616,7 +645,8 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
     q.target = target;
     for (j = 0; j < nb && st == AMP_OK; j++) {
         for (i = 0; i < na && st == AMP_OK; i++)
-            st = q_refine(&q, (uint64_t)i << QDEPTH, (uint64_t)j << QDEPTH, (uint64_t)1 << QDEPTH);
+            st = q_refine(&q, (uint64_t)i << QDEPTH, (uint64_t)j << QDEPTH, (uint64_t)1 << QDEPTH,
+                          (uint64_t)1 << QDEPTH);
         if (o->progress)
             o->progress(o->progress_user, 0.8 * (double)(j + 1) / (double)nb);
     }

@@ -163,11 +163,11 @@ typedef struct amp_field_stats {
  *   recursion hit its depth limit);
  * - any other field with the grid pattern is covered by an adaptive lattice:
  *   base cells of at most S in space (the largest iso-curve length over a 5 x 5
- *   set of positions, divided by S), each split in four while some point of
- *   it inside the mesh (3 x 3 points per cell at every sample along the
- *   curves) is farther than target from the nearest of its four corner curves
- *   at the same position along them, counting only corner points inside the
- *   mesh (the rest is clipped away): curves are inserted where neighbours
+ *   set of positions, divided by S), each split in two across its longer side
+ *   while some point of it inside the mesh (a 5 x 5 grid over the cell at every
+ *   sample along the curves) is farther than target from the nearest nearby
+ *   curve at the same position along them, counting only curve points inside
+ *   the mesh (the rest is clipped away): curves are inserted where neighbours
  *   drift apart and next to the surface, down to 1/32 of a base cell.
  *   stats.bound is the largest such cell figure, a sampled upper bound;
  *   bound_met = 0 when a finest cell still exceeds the target (the field
