@@ -492,6 +492,63 @@ static void node_bounds(const amp_fbvh *b, const amp_fragments *fs, const amp_pa
     }
 }
 
+/* Reverse the vertices of paths [p0, out->npaths): a support row prints the same either way. */
+static void reverse_paths(amp_pathset *out, size_t p0)
+{
+    size_t i;
+    for (i = p0; i < out->npaths; i++) {
+        amp_pvert *v = amp_pathset_path_verts(out, i);
+        size_t a = 0, b = out->paths[i].n;
+        while (b > a + 1) {
+            amp_pvert t = v[a];
+            v[a++] = v[--b];
+            v[b] = t;
+        }
+    }
+}
+
+/*
+ * The pieces ord[k0, k1) of one slot, layer by layer (lowest first, as made);
+ * within a layer (one height: no piece is below another) the nearest piece
+ * next, from either end, so that the nozzle travels little between them.
+ */
+static amp_status emit_slot(amp_pathset *out, const amp_fragments *fs, const uint32_t *late, const piece *pcs,
+                            const size_t *ord, size_t k0, size_t k1, unsigned char *used, amp_pvert **run, size_t *cap,
+                            amp_error *err)
+{
+    amp_status st = AMP_OK;
+    size_t g0 = k0;
+    while (st == AMP_OK && g0 < k1) {
+        double z = fs->frag[pcs[ord[g0]].f0].p0.z;
+        size_t g1 = g0, left, k;
+        while (g1 < k1 && fabs(fs->frag[pcs[ord[g1]].f0].p0.z - z) < 1e-9)
+            used[g1++ - k0] = 0;
+        for (left = g1 - g0; st == AMP_OK && left > 0; left--) {
+            amp_vec3 cur = out->nverts ? out->verts[out->nverts - 1].p : fs->frag[pcs[ord[g0]].f0].p0;
+            size_t best = g0, p0 = out->npaths;
+            double bd = HUGE_VAL;
+            int rev = 0;
+            for (k = g0; k < g1; k++) {
+                const piece *pc = &pcs[ord[k]];
+                double ds = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f0].p0);
+                double de = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f1 - 1].p1);
+                if (ds < bd || de < bd) {
+                    best = k;
+                    rev = de < ds;
+                    bd = fmin(ds, de);
+                }
+            }
+            used[best - k0] = 1;
+            st = emit_frags(out, fs, AMP_ROLE_SUPPORT, 0.0, pcs[ord[best]].f0, pcs[ord[best]].f1, late, 1, run, cap,
+                            err);
+            if (st == AMP_OK && rev)
+                reverse_paths(out, p0);
+        }
+        g0 = g1;
+    }
+    return st;
+}
+
 /*
  * Emit in print order: object path k, with the pieces placed before each of its
  * fragments; a piece placed inside path k splits it there. Pieces placed after
@@ -504,9 +561,10 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
     const amp_allocator *a = out->alloc;
     size_t nf = fs->first[nobj], i, g, k = 0, run_cap = 0;
     size_t *cnt = amp_calloc(a, nf + 2, sizeof *cnt), *ord = amp_calloc(a, npc + 1, sizeof *ord);
+    unsigned char *used = amp_calloc(a, npc + 1, 1);
     amp_pvert *run = NULL;
     amp_status st = AMP_OK;
-    if (!cnt || !ord) {
+    if (!cnt || !ord || !used) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
         goto done;
     }
@@ -527,9 +585,8 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
                 s->splits++;
                 cut = g;
             }
-            for (; st == AMP_OK && k < cnt[g]; k++)
-                st = emit_frags(out, fs, AMP_ROLE_SUPPORT, 0.0, pcs[ord[k]].f0, pcs[ord[k]].f1, late, 1, &run,
-                                &run_cap, err);
+            st = emit_slot(out, fs, late, pcs, ord, k, cnt[g], used, &run, &run_cap, err);
+            k = cnt[g];
         }
         if (st == AMP_OK && cut == f0) {
             st = amp_pathset_add(out, in->paths[i].role, amp_pathset_path_verts(in, i), in->paths[i].n, err);
@@ -539,12 +596,14 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
             st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, f1, NULL, 1, &run, &run_cap, err);
         }
     }
-    for (i = out->npaths; st == AMP_OK && k < cnt[nf]; k++)
-        st = emit_frags(out, fs, AMP_ROLE_SUPPORT, 0.0, pcs[ord[k]].f0, pcs[ord[k]].f1, late, 1, &run, &run_cap, err);
+    i = out->npaths;
+    if (st == AMP_OK)
+        st = emit_slot(out, fs, late, pcs, ord, k, cnt[nf], used, &run, &run_cap, err);
     s->unplaced = out->npaths - i;
 done:
     amp_free(a, cnt);
     amp_free(a, ord);
+    amp_free(a, used);
     amp_free(a, run);
     return st;
 }
