@@ -443,7 +443,8 @@ typedef struct qctx {
     uint64_t *ck;          /* curve k's key */
     size_t ncur, capcur;
     double worst;          /* largest cell bound among the leaves */
-    size_t deep;           /* leaves stopped by QDEPTH above the target */
+    size_t deep;           /* leaves stopped by QDEPTH (or maxcur) above the target */
+    size_t maxcur;         /* most curves kept in memory */
 } qctx;
 
 static void q_uvw(const qctx *q, uint64_t ia, uint64_t ib, double c, double uvw[3])
@@ -572,13 +573,13 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
 }
 
 /* Longest distance in space between the corner curves along a (which = 0) or b (1) over the c-samples. */
-static double q_edge(const qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb, int which)
+static double q_edge(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb, int which)
 {
     size_t c00, c10, c01, c11, k, n = q->ncs + 1;
     double m = 0.0;
     /* the four corners exist: q_bound made them */
-    if (q_curve((qctx *)q, ia, ib, &c00) != AMP_OK || q_curve((qctx *)q, ia + sa, ib, &c10) != AMP_OK ||
-        q_curve((qctx *)q, ia, ib + sb, &c01) != AMP_OK || q_curve((qctx *)q, ia + sa, ib + sb, &c11) != AMP_OK)
+    if (q_curve(q, ia, ib, &c00) != AMP_OK || q_curve(q, ia + sa, ib, &c10) != AMP_OK ||
+        q_curve(q, ia, ib + sb, &c01) != AMP_OK || q_curve(q, ia + sa, ib + sb, &c11) != AMP_OK)
         return 0.0;
     for (k = 0; k < n; k++)
         m = fmax(m, which == 0 ? fmax(amp_v3_dist(q->pts[c00 * n + k], q->pts[c10 * n + k]),
@@ -599,8 +600,8 @@ static amp_status q_refine(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint6
     amp_status st = q_bound(q, ia, ib, sa, sb, &bound);
     if (st != AMP_OK)
         return st;
-    /* the half diagonal of a full cell is exactly the target */
-    if ((sa > 1 || sb > 1) && bound > q->target * (1 + 1e-9)) {
+    /* the half diagonal of a full cell is exactly the target; maxcur bounds the memory of a wild field */
+    if ((sa > 1 || sb > 1) && bound > q->target * (1 + 1e-9) && q->ncur + 2 <= q->maxcur) {
         int along_a = sb == 1 || (sa > 1 && q_edge(q, ia, ib, sa, sb, 0) >= q_edge(q, ia, ib, sa, sb, 1));
         if (along_a) {
             if ((st = q_refine(q, ia, ib, sa / 2, sb)) == AMP_OK)
@@ -643,6 +644,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
     q.nb = nb;
     q.ncs = nc < 64 ? nc : 64 + (nc - 64) / 4;
     q.target = target;
+    q.maxcur = (na + 1) * (nb + 1) + 4000000 / (q.ncs + 1); /* inserted curves: about 100 MB of samples at most */
     for (j = 0; j < nb && st == AMP_OK; j++) {
         for (i = 0; i < na && st == AMP_OK; i++)
             st = q_refine(&q, (uint64_t)i << QDEPTH, (uint64_t)j << QDEPTH, (uint64_t)1 << QDEPTH,
