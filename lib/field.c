@@ -384,8 +384,8 @@ static amp_status swap_uv(const amp_spline *s, amp_spline *t, amp_error *err)
  * the field with u and v exchanged, d = 2.
  */
 static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh *b, const amp_field_opts *o,
-                                     double eps, double r,
-                                     double min_len, amp_pathset *out, amp_field_stats *s, amp_error *err)
+                                     double eps, double r, double min_len, amp_pathset *out, amp_field_stats *s,
+                                     amp_error *err)
 {
     amp_spline sw;
     amp_cover_opts co;
@@ -626,8 +626,8 @@ static int key_cmp(const void *x, const void *y)
 
 /* The adaptive lattice: base cells of at most S, refined where the cell bound exceeds the target. */
 static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
-                                 size_t nc, double target,
-                                 double r, double min_len, amp_pathset *out, amp_field_stats *s, amp_error *err)
+                                 size_t nc, double target, double r, double min_len, amp_pathset *out,
+                                 amp_field_stats *s, amp_error *err)
 {
     qctx q;
     size_t i, j, k, p0 = out->npaths;
@@ -703,9 +703,8 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
  * the solid become paths (at least min_len long).
  */
 static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
-                               size_t nc, double S,
-                               double r, int shells, double min_len, amp_pathset *out, amp_field_stats *s,
-                               amp_error *err)
+                               size_t nc, double S, double r, int shells, double min_len, amp_pathset *out,
+                               amp_field_stats *s, amp_error *err)
 {
     amp_pvert *run = amp_calloc(out->alloc, nc + 1, sizeof *run);
     size_t i, j, k, p0 = out->npaths;
