@@ -31,7 +31,7 @@ step cover "$(num $D/cover.json surfaces) iso-surfaces, $(num $D/cover.json curv
 $A order $D/helix-cover.amp --json -o $D/helix-ordered.amp > $D/order.json
 step order "$(num $D/order.json fragments) fragments -> $(num $D/order.json paths_out) gouge-free paths: $(num $D/order.json subdivisions_improved) subdivisions"
 
-$A mdr $D/helix-ordered.amp --nominal 0.5 --json -o $D/helix-mdr.amp > $D/mdr.json
+$A mdr $D/helix-ordered.amp --nominal 0.5 --trivariate $D/helix.spl --json -o $D/helix-mdr.amp > $D/mdr.json
 step mdr "deposition radius $(num $D/mdr.json radius_lo | cut -c1-5)..$(num $D/mdr.json radius_hi | cut -c1-5) mm, over-coverage $(num $D/mdr.json over_coverage | cut -c1-5)"
 
 $A support $D/helix-mdr.amp --mesh $D/helix.stl --json -o $D/helix.amp > $D/support.json
