@@ -633,6 +633,28 @@ static int cmp_piece(const void *a, const void *b)
     return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
 }
 
+/* Unused piece whose start is nearest to node @p nb within @p tol (npc + 1:
+ * the ring's start node @p start is nearer: close the ring; npc: none). */
+static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t nb, size_t start, double tol)
+{
+    amp_vec2 q = c->node[nb];
+    double best = hypot(c->node[start].x - q.x, c->node[start].y - q.y);
+    size_t i, at = best <= tol ? npc + 1 : npc;
+    if (!(best <= tol))
+        best = tol;
+    for (i = 0; i < npc; i++) {
+        double d;
+        if (pc[i].used)
+            continue;
+        d = hypot(c->node[pc[i].na].x - q.x, c->node[pc[i].na].y - q.y);
+        if (d < best) {
+            best = d;
+            at = i;
+        }
+    }
+    return at;
+}
+
 static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
 {
     inset_ctx c;
@@ -752,11 +774,21 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
             for (at = first[nb]; at < npc && pc[at].na == nb && pc[at].used; at++)
                 ;
             if (at >= npc || pc[at].na != nb) {
-                len = 0; /* open chain: a misclassified sliver; dropped */
-                break;
+                /* dead end: a sliver piece of a swallowtail (crossings
+                 * of nearly parallel raw segments) was misclassified.
+                 * Bridge the gap to the nearest piece start, or close the
+                 * ring, when it is within r/4 (the boundary moves by at
+                 * most the gap); otherwise the chain is dropped. */
+                at = bridge_gap(&c, pc, npc, nb, start, 0.25 * r);
+                if (at == npc + 1)
+                    break;
+                if (at >= npc) {
+                    len = 0;
+                    break;
+                }
             }
         }
-        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-12 * r * r &&
+        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
             (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
             goto done;
     }
