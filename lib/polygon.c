@@ -633,6 +633,47 @@ static int cmp_piece(const void *a, const void *b)
     return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
 }
 
+/* Remove needles from a stitched ring in place: a vertex equal to its
+ * predecessor, and the tip B of a back-and-forth A-B-A (a swallowtail piece
+ * run both ways) or of a tiny loop A-B-C-A within @p small of A, cyclically.
+ * Returns the new count. */
+static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
+{
+    size_t m = 0, i, pass;
+    for (i = 0; i < n; i++) {
+        size_t k;
+        if (m >= 1 && hypot(p[i].x - p[m - 1].x, p[i].y - p[m - 1].y) <= tol)
+            continue;
+        /* p[i] repeats p[m - k] for a small k: p[m - k + 1 .. m - 1] is a
+         * needle (k = 2) or a tiny loop within @p small of it; cut it out */
+        for (k = 2; k <= 8 && k <= m; k++)
+            if (hypot(p[i].x - p[m - k].x, p[i].y - p[m - k].y) <= tol) {
+                size_t q;
+                for (q = m - k + 1; q < m; q++)
+                    if (hypot(p[q].x - p[i].x, p[q].y - p[i].y) > small)
+                        break;
+                if (q == m)
+                    break;
+            }
+        if (k <= 8 && k <= m) {
+            m -= k - 1;
+            continue;
+        }
+        p[m++] = p[i];
+    }
+    /* the seam: the same patterns across the end of the array */
+    for (pass = 0; pass < 4 && m >= 3; pass++) {
+        if (hypot(p[0].x - p[m - 1].x, p[0].y - p[m - 1].y) <= tol)
+            m--;
+        else if (hypot(p[1].x - p[m - 1].x, p[1].y - p[m - 1].y) <= tol) {
+            memmove(p, p + 1, (m - 1) * sizeof *p); /* p[0] was a tip */
+            m -= 2;
+        } else if (hypot(p[0].x - p[m - 2].x, p[0].y - p[m - 2].y) <= tol)
+            m -= 2; /* p[m - 1] was a tip, p[m - 2] repeats p[0] */
+    }
+    return m;
+}
+
 /* Unused piece whose start is nearest to node @p nb within @p tol (npc + 1:
  * the ring's start node @p start is nearer: close the ring; npc: none). */
 static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t nb, size_t start, double tol)
@@ -788,6 +829,8 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
                 }
             }
         }
+        if (len >= 3)
+            len = despike(loop, len, 1e-9 * r, 0.05 * r);
         if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
             (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
             goto done;

@@ -23,6 +23,7 @@ static int cmp_vkey(const void *a, const void *b)
 
 typedef struct ekey2 {
     size_t a, b;
+    amp_vec2 at;
 } ekey2;
 
 static int cmp_ekey2(const void *p, const void *q)
@@ -82,6 +83,7 @@ static int in_arc(double a, double b, double c)
 
 typedef struct pass {
     size_t v;
+    amp_vec2 at;
     double in, out;
 } pass;
 
@@ -109,6 +111,8 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
     ekey2 *ek = NULL;
     pass *ps = NULL;
     amp_status st = AMP_OK;
+    amp_vec2 where = amp_v2(0, 0); /* first violation, for the message */
+    int found = 0;
     memset(&r, 0, sizeof r);
     if (n == 0)
         goto report;
@@ -150,6 +154,7 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
             /* only material counts as printed twice */
             ek[ne].a = id[i] < id[i + 1] ? id[i] : id[i + 1];
             ek[ne].b = id[i] < id[i + 1] ? id[i + 1] : id[i];
+            ek[ne].at = pts[i];
             ne++;
         }
         ns++;
@@ -158,8 +163,11 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
     if (ne > 1)
         qsort(ek, ne, sizeof *ek, cmp_ekey2);
     for (i = 1; i < ne; i++)
-        if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b)
+        if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b) {
             r.repeated_edges++;
+            if (!found++)
+                where = ek[i].at;
+        }
     /* segment pairs, swept over x */
     if (ns > 1)
         qsort(sg, ns, sizeof *sg, cmp_seg2);
@@ -168,7 +176,11 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
             if (sg[i].ia == sg[j].ia || sg[i].ia == sg[j].ib || sg[i].ib == sg[j].ia || sg[i].ib == sg[j].ib)
                 continue;
-            r.crossings += (size_t)seg_conflict(&sg[i], &sg[j]);
+            if (seg_conflict(&sg[i], &sg[j])) {
+                r.crossings++;
+                if (!found++)
+                    where = sg[i].a;
+            }
         }
     }
     /* passes through a vertex visited more than once must not interleave */
@@ -186,6 +198,7 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         if (a == 0 || b + 1 >= n || b != i)
             continue;
         ps[np].v = id[i];
+        ps[np].at = pts[i];
         ps[np].in = atan2(pts[a - 1].y - pts[i].y, pts[a - 1].x - pts[i].x);
         ps[np].out = atan2(pts[b + 1].y - pts[i].y, pts[b + 1].x - pts[i].x);
         np++;
@@ -196,13 +209,19 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         for (j = i + 1; j < np && ps[j].v == ps[i].v; j++) {
             int c1 = in_arc(ps[i].in, ps[i].out, ps[j].in), c2 = in_arc(ps[i].in, ps[i].out, ps[j].out);
             if (ps[j].in != ps[i].in && ps[j].in != ps[i].out && ps[j].out != ps[i].in && ps[j].out != ps[i].out &&
-                c1 != c2)
+                c1 != c2) {
                 r.crossings++;
+                if (!found++)
+                    where = ps[i].at;
+            }
         }
     if (region)
         for (i = 0; i < n; i++) {
-            if (amp_polyset_contains(region, pts[i], tol) == 0)
+            if (amp_polyset_contains(region, pts[i], tol) == 0) {
                 r.outside++;
+                if (!found++)
+                    where = pts[i];
+            }
             if (i + 1 < n &&
                 amp_polyset_contains(region, amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y)),
                                      tol) == 0)
@@ -210,8 +229,10 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         }
 report:
     if (r.crossings || r.repeated_edges || r.outside)
-        st = amp_fail(err, AMP_ERR_CHECK, 0, "stroke: %lu crossings, %lu edges printed twice, %lu points outside",
-                      (unsigned long)r.crossings, (unsigned long)r.repeated_edges, (unsigned long)r.outside);
+        st = amp_fail(err, AMP_ERR_CHECK, 0,
+                      "stroke: %lu crossings, %lu edges printed twice, %lu points outside (first near %.6g, %.6g)",
+                      (unsigned long)r.crossings, (unsigned long)r.repeated_edges, (unsigned long)r.outside, where.x,
+                      where.y);
 out:
     amp_free(al, vk);
     amp_free(al, id);
