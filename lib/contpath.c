@@ -19,7 +19,8 @@ void amp_contpath_opts_default(amp_contpath_opts *o, double r)
     o->offset = r;
     o->perimeters = 1;
     o->support_stretches = 0;
-    o->pseudo_edges = 1;
+    o->pseudo_edges = 0;
+    o->join = 1;
 }
 
 /* Length of the printed segments of path i (a segment with radius 0 at both
@@ -188,13 +189,15 @@ static int cmp_gap(const void *a, const void *b)
 
 /* Region processing with a prepared K̂ edge list. */
 amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
-                             const amp_contpath_opts *o, amp_pathset *out, amp_contpath_stats *st, amp_error *err)
+                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_contpath_stats *st,
+                             amp_error *err)
 {
     amp_cp_graph g;
     size_t *uf = NULL, *grs = NULL, *grm = NULL, *tmp = NULL, i, j, k, ngr, ntours = 0, nodd = 0, first_path, ngap = 0;
     unsigned char *choice = NULL;
     gap *gp = NULL;
     amp_cp_patchset P;
+    int fig6;
     double D = o->pseudo_edges ? 2 * o->radius * (1 - 1e-9) : 0.0, pseudo = 0;
     amp_status rc;
     memset(&g, 0, sizeof g);
@@ -299,10 +302,15 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
      * Kruskal, until the region is one component. */
     if (ngap > 1)
         qsort(gp, ngap, sizeof *gp, cmp_gap);
+    /* With perimeters spliced into the island's stroke (o->join), the
+     * perimeter loop runs beside every component: they are spliced to it
+     * there (contpath_join.c) instead, which needs no travel inside the
+     * stroke. Fig. 6 stays for strokes without perimeters or joining. */
+    fig6 = !hub;
     for (i = 0; i < ngap; i++) {
         size_t m = grm[gp[i].k];
         const amp_cp_fend *fa = &g.fe[grs[gp[i].k] + gp[i].q], *fb = &g.fe[grs[gp[i].k] + (gp[i].q + 1) % m];
-        if (amp_cp_uf_find(uf, fa->node) != amp_cp_uf_find(uf, fb->node)) {
+        if (fig6 && amp_cp_uf_find(uf, fa->node) != amp_cp_uf_find(uf, fb->node)) {
             if ((rc = amp_cp_patch_add(&g, &P, R, fa, fb, 1, err)) != AMP_OK)
                 goto done;
             amp_cp_uf_union(uf, fa->node, fb->node);
@@ -345,7 +353,7 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
         if (out->paths[i].role == AMP_ROLE_OBJECT)
             st->infill_length += amp_cp_printed_len(out, i);
     st->pseudo_length += pseudo;
-    st->islands++;
+    st->regions++;
     st->strokes += ntours;
     st->multi_stroke += ntours > 1;
     st->odd_vertices += nodd;
@@ -370,7 +378,7 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
     amp_status rc;
     if (amp_cp_khat_edges(khat, out->alloc, &ke, &nke) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
-    rc = amp_cp_region_run(khat, ke, nke, region, z, o, out, st, err);
+    rc = amp_cp_region_run(khat, ke, nke, region, z, o, 0, out, st, err);
     amp_free(out->alloc, ke);
     return rc;
 }

@@ -63,9 +63,14 @@ int amp_cp_uf_union(size_t *p, size_t a, size_t b);
 amp_status amp_cp_khat_edges(const amp_cx2 *k, const amp_allocator *al, uint64_t **out, size_t *n);
 /** Printed length of path i (pseudo segments, radius 0 at both ends, excluded). */
 double amp_cp_printed_len(const amp_pathset *ps, size_t i);
-/** Steps 5 + §4 for one region with a prepared K̂ edge list. */
+/**
+ * Steps 5 + §4 for one region with a prepared K̂ edge list. @p hub: a
+ * perimeter loop will be spliced with the region's strokes (contpath_join.c),
+ * so components are left apart for it instead of Fig. 6's doubled paths.
+ */
 amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
-                             const amp_contpath_opts *o, amp_pathset *out, amp_contpath_stats *st, amp_error *err);
+                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_contpath_stats *st,
+                             amp_error *err);
 
 /* ---- step 5, clipping (contpath_clip.c) ---- */
 amp_status amp_cp_clip(const amp_cx2 *k, const uint64_t *ke, size_t nke, const amp_polyset *R, amp_cp_graph *g,
@@ -89,5 +94,15 @@ amp_status amp_cp_add_chain(amp_cp_graph *g, size_t a, size_t b, int all_pseudo,
 /* ---- §4, the tour (contpath_tour.c) ---- */
 amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, amp_pathset *out, size_t *ntours, size_t *nodd,
                        amp_error *err);
+
+/* ---- one start per island (contpath_join.c) ---- */
+/**
+ * Join the closed object loops among paths [first, npaths) of @p in (one
+ * island's perimeters and region strokes, radius @p r) into as few closed
+ * strokes as crossing-free splices allow, appended to @p out with bead
+ * height @p h (0: none); other paths are copied. *nout: object paths written.
+ */
+amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, double h, amp_pathset *out,
+                             size_t *nout, amp_error *err);
 
 #endif

@@ -1,4 +1,6 @@
-/* All layers: perimeters, regions, print order (continuous-toolpath-euler.txt §2.2). */
+/* All layers: islands in print order, perimeters (thin islands included),
+ * regions, one stroke per island, bead heights, stroke starts
+ * (continuous-toolpath-euler.txt §2.2; issues 14 and 16). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -6,52 +8,196 @@
 
 #include "contpath_internal.h"
 
+/* Work state of amp_contpath_layers(). */
+typedef struct lctx {
+    const amp_slices *sl;
+    const amp_contpath_opts *o;
+    amp_cx2 khat;
+    uint64_t *ke;
+    size_t nke;
+    amp_polyset isl, ins, reg;
+    amp_pathset tmp; /* one island's paths before joining */
+    amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
+    int have_at;
+    unsigned char *done; /* islands of the layer already printed */
+    size_t cap_done;
+} lctx;
+
+/* Closed path @p k of @p ps (last vertex = first) is rotated to start at
+ * its vertex nearest to @p q among those whose two segments are printed, so
+ * that the stroke begins where the nozzle is (issue 14: travel). */
+static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *err)
+{
+    amp_pvert *v = amp_pathset_path_verts(ps, k), *w;
+    size_t n = ps->paths[k].n, i, best = 0;
+    double bd = HUGE_VAL;
+    if (n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y || v[0].r != v[n - 1].r)
+        return AMP_OK;
+    for (i = 0; i + 1 < n; i++) {
+        size_t prev = i ? i - 1 : n - 2;
+        double d = hypot(v[i].p.x - q.x, v[i].p.y - q.y);
+        if (d < bd && v[i].r > 0 && v[prev].r > 0 && v[i + 1].r > 0) {
+            bd = d;
+            best = i;
+        }
+    }
+    if (best == 0)
+        return AMP_OK;
+    w = amp_alloc(ps->alloc, n * sizeof *w);
+    if (!w)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering the strokes");
+    memcpy(w, v + best, (n - 1 - best) * sizeof *w);
+    memcpy(w + (n - 1 - best), v, (best + 1) * sizeof *w);
+    memcpy(v, w, n * sizeof *w);
+    amp_free(ps->alloc, w);
+    return AMP_OK;
+}
+
+/* Closed paths of every ring of @p P at height z, radius r, into c->tmp. */
+static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpath_stats *s0, amp_error *err)
+{
+    size_t r, q;
+    amp_status rc = AMP_OK;
+    for (r = 0; r < P->nrings && rc == AMP_OK; r++) {
+        const amp_vec2 *p = amp_polyset_ring(P, r);
+        size_t n = P->rings[r].n;
+        rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
+        for (q = 0; q <= n && rc == AMP_OK; q++)
+            rc = amp_pathset_push(&c->tmp, amp_v3(p[q % n].x, p[q % n].y, z), c->o->radius, err);
+        s0->perimeter_loops++;
+    }
+    return rc;
+}
+
+/* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
+ * for an island narrower than 2r, at the deepest smaller inset that exists:
+ * every island with area is printed) and the strokes of its regions. */
+static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *s0, amp_error *err)
+{
+    const amp_contpath_opts *o = c->o;
+    double d;
+    size_t q;
+    amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
+    if (rc == AMP_OK && c->ins.nrings == 0) {
+        /* thin island: the bead (2r wide) is wider than the part here; its
+         * centre line is the inset by the largest d < r that still exists */
+        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && c->ins.nrings == 0; d *= 0.5)
+            rc = amp_polyset_inset(&c->isl, d, 0, &c->ins, err);
+        if (rc == AMP_OK && c->ins.nrings) {
+            s0->thin_islands++;
+            return ring_paths(c, &c->ins, L->z_print, s0, err);
+        }
+        if (rc == AMP_OK)
+            s0->dropped_islands++;
+        return rc;
+    }
+    if (rc == AMP_OK && o->perimeters)
+        rc = ring_paths(c, &c->ins, L->z_print, s0, err);
+    /* R̃: inside the perimeter bead (2r) and one bead radius more */
+    if (rc == AMP_OK)
+        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
+    for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
+        if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
+            break;
+        rc = amp_cp_region_run(&c->khat, c->ke, c->nke, &c->reg, L->z_print, o, o->join && o->perimeters, &c->tmp,
+                               s0, err);
+    }
+    return rc;
+}
+
+/* The unprinted island of layer L nearest to the nozzle (by its outer ring). */
+static size_t next_island(const lctx *c, const amp_layer *L)
+{
+    size_t k, r, i, best = NONE;
+    double bd = HUGE_VAL;
+    for (r = 0; r < L->polys.nrings; r++) {
+        const amp_vec2 *p = amp_polyset_ring(&L->polys, r);
+        k = (size_t)L->polys.rings[r].island;
+        if (L->polys.rings[r].hole || c->done[k])
+            continue;
+        if (!c->have_at)
+            return k;
+        for (i = 0; i < L->polys.rings[r].n; i++) {
+            double d = hypot(p[i].x - c->at.x, p[i].y - c->at.y);
+            if (d < bd) {
+                bd = d;
+                best = k;
+            }
+        }
+    }
+    return best;
+}
+
+/* One layer: its islands nearest first, each joined and started near the nozzle. */
+static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
+{
+    const amp_layer *L = &c->sl->layers[li];
+    double h = li == 0 ? L->z_print : L->z_print - c->sl->layers[li - 1].z_print;
+    size_t n, k, before = out->npaths, i, nobj;
+    amp_status rc = AMP_OK;
+    void *q = c->done;
+    if (amp_grow(out->alloc, &q, &c->cap_done, L->polys.nislands + 1, 1) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering the islands");
+    c->done = q;
+    memset(c->done, 0, L->polys.nislands + 1);
+    for (n = 0; n < L->polys.nislands && rc == AMP_OK; n++) {
+        size_t first = out->npaths;
+        k = next_island(c, L);
+        if (k == NONE)
+            break;
+        c->done[k] = 1;
+        amp_pathset_clear(&c->tmp);
+        if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
+            (rc = island_paths(c, L, s0, err)) != AMP_OK)
+            break;
+        if (c->o->join)
+            rc = amp_cp_join_loops(&c->tmp, 0, c->o->radius, h, out, &nobj, err);
+        else {
+            rc = amp_pathset_append(out, &c->tmp, err);
+            for (i = first, nobj = 0; i < out->npaths; i++) {
+                out->paths[i].h = h;
+                nobj += out->paths[i].role == AMP_ROLE_OBJECT;
+            }
+        }
+        s0->islands += out->npaths > first;
+        s0->island_strokes += nobj;
+        for (i = first; i < out->npaths && rc == AMP_OK; i++) {
+            if (c->have_at)
+                rc = rotate_to(out, i, c->at, err);
+            if (out->paths[i].n) {
+                amp_pvert e = amp_pathset_path_verts(out, i)[out->paths[i].n - 1];
+                c->at = amp_v2(e.p.x, e.p.y);
+                c->have_at = 1;
+            }
+        }
+    }
+    s0->empty_layers += rc == AMP_OK && out->npaths == before && amp_polyset_area(&L->polys) > 0;
+    return rc;
+}
+
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
-    amp_cx2 khat;
-    amp_polyset isl, ins, reg;
-    uint64_t *ke = NULL;
-    size_t nke = 0, li, k, r, q, p0 = out->npaths;
+    lctx c;
+    size_t li, q, p0 = out->npaths;
     amp_contpath_stats s0;
     amp_status rc;
     memset(&s0, 0, sizeof s0);
-    amp_cx2_init(&khat, al);
-    amp_polyset_init(&isl, al);
-    amp_polyset_init(&ins, al);
-    amp_polyset_init(&reg, al);
-    rc = amp_contpath_complex(sl, o, &khat, err);
-    if (rc == AMP_OK && amp_cp_khat_edges(&khat, al, &ke, &nke) != AMP_OK)
+    memset(&c, 0, sizeof c);
+    c.sl = sl;
+    c.o = o;
+    amp_cx2_init(&c.khat, al);
+    amp_polyset_init(&c.isl, al);
+    amp_polyset_init(&c.ins, al);
+    amp_polyset_init(&c.reg, al);
+    amp_pathset_init(&c.tmp, al);
+    rc = amp_contpath_complex(sl, o, &c.khat, err);
+    if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
-        const amp_layer *L = &sl->layers[li];
         s0.layers++;
-        for (k = 0; k < L->polys.nislands && rc == AMP_OK; k++) {
-            if ((rc = amp_polyset_island(&L->polys, k, &isl, err)) != AMP_OK)
-                break;
-            if (o->perimeters) {
-                /* the perimeter bead's centre line: inset by r */
-                if ((rc = amp_polyset_inset(&isl, o->radius, 0, &ins, err)) != AMP_OK)
-                    break;
-                for (r = 0; r < ins.nrings && rc == AMP_OK; r++) {
-                    const amp_vec2 *p = amp_polyset_ring(&ins, r);
-                    size_t n = ins.rings[r].n;
-                    rc = amp_pathset_begin(out, AMP_ROLE_OBJECT, err);
-                    for (q = 0; q <= n && rc == AMP_OK; q++)
-                        rc = amp_pathset_push(out, amp_v3(p[q % n].x, p[q % n].y, L->z_print), o->radius, err);
-                    s0.perimeter_loops++;
-                }
-            }
-            /* R̃: inside the perimeter bead (2r) and one bead radius more */
-            if (rc == AMP_OK)
-                rc = amp_polyset_inset(&isl, 3 * o->radius, 0, &ins, err);
-            for (q = 0; q < ins.nislands && rc == AMP_OK; q++) {
-                if ((rc = amp_polyset_island(&ins, q, &reg, err)) != AMP_OK)
-                    break;
-                rc = amp_cp_region_run(&khat, ke, nke, &reg, L->z_print, o, out, &s0, err);
-            }
-        }
+        rc = layer_paths(&c, li, out, &s0, err);
     }
     /* figures over the paths written by this call */
     for (q = p0; q < out->npaths && rc == AMP_OK; q++) {
@@ -64,11 +210,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
             s0.travel_length += amp_v3_dist(a.p, b.p);
         }
     }
-    amp_free(al, ke);
-    amp_cx2_free(&khat);
-    amp_polyset_free(&isl);
-    amp_polyset_free(&ins);
-    amp_polyset_free(&reg);
+    amp_free(al, c.ke);
+    amp_free(al, c.done);
+    amp_cx2_free(&c.khat);
+    amp_polyset_free(&c.isl);
+    amp_polyset_free(&c.ins);
+    amp_polyset_free(&c.reg);
+    amp_pathset_free(&c.tmp);
     if (st)
         *st = s0;
     return rc;

@@ -382,10 +382,11 @@ START_TEST(all_layers_of_a_sphere_and_torus_pair)
     ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
     ck_assert_uint_eq(st.layers, sl.nlayers);
     ck_assert_uint_gt(st.islands, sl.nlayers); /* two bodies on most layers */
-    ck_assert_uint_eq(st.strokes, st.islands);
-    ck_assert_uint_eq(st.multi_stroke, 0);
+    ck_assert_uint_ge(st.strokes, st.regions);
     ck_assert_uint_eq(st.odd_vertices, 0);
-    ck_assert_uint_eq(ps.npaths, st.strokes + st.perimeter_loops);
+    /* perimeters and region strokes joined: one closed path per island */
+    ck_assert_uint_eq(ps.npaths, st.islands);
+    ck_assert_uint_eq(st.island_strokes, st.islands);
     ck_assert_uint_eq(st.travel_moves, ps.npaths - 1);
     ck_assert(st.printed_length > st.infill_length && st.infill_length > 0);
     /* pseudo edges are in the paths but print nothing */
@@ -426,8 +427,9 @@ START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
         amp_contpath_opts_default(&o, 0.5);
         ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_gt(st.islands, sl.nlayers / 2);
-        ck_assert_uint_eq(st.strokes, st.islands);
-        ck_assert_uint_eq(st.multi_stroke, 0);
+        /* a region's components are spliced to the perimeter, not joined inside it (Fig. 6) */
+        ck_assert_uint_ge(st.strokes, st.regions);
+        ck_assert_uint_eq(st.island_strokes, st.islands);
         ck_assert_uint_eq(st.odd_vertices, 0);
         /* pseudo edges (thin cells, return runs of joins) are a small part of the infill */
         ck_assert_msg(st.pseudo_length <= 0.1 * st.infill_length, "%s: pseudo %g of %g mm", names[n],
@@ -505,9 +507,11 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --radius 0.4 --continuous -o %s --json", stl, amp);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
-    /* 12 layers x 3 regions (the neck splits R̃), one stroke each */
-    ck_assert_msg(strstr(out, "\"layers\":12,\"islands\":36,\"strokes\":36,\"multi_stroke_islands\":0") != NULL, "%s",
-                  out);
+    /* 12 layers x 2 islands x one stroke; 3 regions per layer (the neck splits R̃) */
+    ck_assert_msg(strstr(out, "\"layers\":12,\"empty_layers\":0,\"islands\":24,") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"island_strokes\":24,\"extrusion_starts\":24,\"regions\":36,\"strokes\":36,"
+                              "\"multi_stroke_islands\":0") != NULL,
+                  "%s", out);
     ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"joins\":") != NULL && strstr(out, "\"pseudo_length_mm\":") != NULL, "%s", out);

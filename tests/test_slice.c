@@ -238,7 +238,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert_uint_gt(n, 4);
         ck_assert(v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y); /* closed */
         ck_assert_near(v[0].p.z, (i / 2 + 0.5) * 0.5, 1e-6);               /* cut height above the plate */
-        ck_assert_near(v[0].r, 0.5, 1e-9);
+        ck_assert_near(v[0].r, 0.225, 1e-9); /* default: a 0.45 mm bead */
         for (k = 0; k + 1 < n; k++)
             a += v[k].p.x * v[k + 1].p.y - v[k + 1].p.x * v[k].p.y;
         ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);

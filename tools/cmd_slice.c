@@ -17,28 +17,35 @@ const char cmd_slice_usage[] =
     "  --polygons         write each layer's polygons (the default product): one closed path per\n"
     "                     ring (last vertex repeats the first) at the cutting height, outer\n"
     "                     boundaries counter-clockwise, holes clockwise, islands in order\n"
-    "  --continuous       continuous tool paths (paper 2): per island a perimeter loop at r, then one\n"
-    "                     closed stroke over the Euler lattice clipped to the inset by 3r, printed at\n"
-    "                     z = (i + 1) H with radius r on every vertex\n"
+    "  --continuous       continuous tool paths (paper 2): per island one closed stroke holding its\n"
+    "                     perimeter loops at r and the Euler lattice clipped to the inset by 3r,\n"
+    "                     printed at z = (i + 1) H with radius r, each path a bead of the layer's\n"
+    "                     height; the stroke starts where the previous one ended\n"
     "  --cell S           lattice cell size of --continuous in mm (default 10 r)\n"
     "  --grid KIND        lattice of --continuous: square (default), tri or hex\n"
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
     "  --no-perimeter     --continuous without the perimeter loops\n"
     "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
-    "  --no-pseudo        print every patch of thin boundary cells (default: stretches closer than\n"
-    "                     2r to a lattice piece of their cell are pseudo edges, radius 0: travel\n"
-    "                     inside the stroke, paper Figs. 7, 8)\n"
+    "  --pseudo           patch stretches closer than 2r to a lattice piece of their thin boundary\n"
+    "                     cell become pseudo edges, radius 0: travel inside the stroke (paper\n"
+    "                     Figs. 7, 8; each is one more extrusion start). Default: printed\n"
+    "  --no-pseudo        the default (kept for old scripts)\n"
+    "  --no-join          keep each island's perimeter loops and region strokes apart (default:\n"
+    "                     spliced into one closed stroke, one extrusion start per island)\n"
     "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
-    "  --radius R         deposition radius written on every vertex, and the inset drawn in\n"
-    "                     the SVG, in mm (default 0.5)\n"
+    "  --radius R         deposition radius (half the bead width) written on every vertex, and the\n"
+    "                     inset drawn in the SVG, in mm (default 0.225: a 0.45 mm bead)\n"
+    "  --nozzle D         nozzle diameter in mm: the bead is 1.125 D wide (r = 0.5625 D) unless\n"
+    "                     --radius is given\n"
     "  --json             print the figures as one JSON object (layers, polygons, islands, holes,\n"
     "                     area per layer, open chains of an open mesh, time; with --continuous:\n"
     "                     strokes, joins, travel moves, printed/travel/support/pseudo lengths,\n"
     "                     crossings)\n"
     "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
-    "(open_chains) with a warning on stderr.\n";
+    "(open_chains) with a warning on stderr. --continuous checks every path it writes (crossings,\n"
+    "edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
 static int ends_with(const char *s, const char *suf)
 {
@@ -123,14 +130,84 @@ static amp_grid_kind grid_kind(const char *g, int *ok)
     return AMP_GRID_SQUARE;
 }
 
-/* --continuous: build, self-check (crossings, repeated edges) and report. */
+/* Layer whose printing height is z (the paths of --continuous). */
+static const amp_polyset *layer_region(const amp_slices *sl, double z)
+{
+    size_t i;
+    for (i = 0; i < sl->nlayers; i++)
+        if (fabs(sl->layers[i].z_print - z) < 1e-9)
+            return &sl->layers[i].polys;
+    return NULL;
+}
+
+/* Extrusion starts counted like a G-code reader would: a printed segment
+ * (radius > 0 at an end) after a travel (a new path, or a pseudo edge). */
+static size_t count_starts(const amp_pathset *ps)
+{
+    size_t i, k, starts = 0;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        int printing = 0;
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            int pr = (v[k].r > 0 || v[k + 1].r > 0) && amp_v3_dist(v[k].p, v[k + 1].p) > 0;
+            int tr = !(v[k].r > 0 || v[k + 1].r > 0) && amp_v3_dist(v[k].p, v[k + 1].p) > 0;
+            if (pr && !printing)
+                starts++;
+            if (pr)
+                printing = 1;
+            else if (tr)
+                printing = 0;
+        }
+    }
+    return starts;
+}
+
+static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size_t crossings, size_t repeats,
+                       size_t outside, size_t failed, double radius, double t0)
+{
+    cli_json j;
+    cli_json_begin(&j, stdout);
+    cli_json_int(&j, "layers", (long long)st->layers);
+    cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
+    cli_json_int(&j, "islands", (long long)st->islands);
+    cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
+    cli_json_int(&j, "dropped_islands", (long long)st->dropped_islands);
+    cli_json_int(&j, "island_strokes", (long long)st->island_strokes);
+    cli_json_int(&j, "extrusion_starts", (long long)count_starts(ps));
+    cli_json_int(&j, "regions", (long long)st->regions);
+    cli_json_int(&j, "strokes", (long long)st->strokes);
+    cli_json_int(&j, "multi_stroke_islands", (long long)st->multi_stroke);
+    cli_json_int(&j, "perimeter_loops", (long long)st->perimeter_loops);
+    cli_json_int(&j, "support_paths", (long long)st->support_paths);
+    cli_json_int(&j, "paths", (long long)ps->npaths);
+    cli_json_int(&j, "travel_moves", (long long)st->travel_moves);
+    cli_json_num(&j, "printed_length_mm", st->printed_length);
+    cli_json_num(&j, "infill_length_mm", st->infill_length);
+    cli_json_num(&j, "travel_length_mm", st->travel_length);
+    cli_json_num(&j, "support_length_mm", st->support_length);
+    cli_json_num(&j, "unprinted_ring_length_mm", st->unprinted_length);
+    cli_json_int(&j, "joins", (long long)st->joins);
+    cli_json_num(&j, "pseudo_length_mm", st->pseudo_length);
+    cli_json_int(&j, "free_ends", (long long)st->free_ends);
+    cli_json_int(&j, "odd_vertices", (long long)st->odd_vertices);
+    cli_json_int(&j, "crossings", (long long)crossings);
+    cli_json_int(&j, "repeated_edges", (long long)repeats);
+    cli_json_int(&j, "outside", (long long)outside);
+    cli_json_int(&j, "failed_paths", (long long)failed);
+    cli_json_num(&j, "radius", radius);
+    cli_json_num(&j, "time_s", cli_now() - t0);
+    cli_json_end(&j);
+}
+
+/* --continuous: build, check every path independently (crossings, repeated
+ * edges, points outside its layer) and report; a failed check is exit 1. */
 static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
                           int json, double t0)
 {
     amp_pathset ps;
     amp_contpath_stats st;
     amp_error err;
-    size_t i, crossings = 0, repeats = 0;
+    size_t i, crossings = 0, repeats = 0, outside = 0, failed = 0;
     int rc = CLI_OK;
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
@@ -140,59 +217,53 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     }
     for (i = 0; i < ps.npaths; i++) {
         amp_stroke_report rep;
-        if (amp_pathset_stroke_check(&ps, i, NULL, 0, &rep, &err) == AMP_ERR_NOMEM) {
+        amp_status cs;
+        const amp_polyset *reg = ps.paths[i].n ? layer_region(sl, amp_pathset_path_verts(&ps, i)[0].p.z) : NULL;
+        cs = amp_pathset_stroke_check(&ps, i, reg, 1e-6, &rep, &err);
+        if (cs == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
             return cli_fail_err("slice", &err);
         }
+        if (cs != AMP_OK && failed++ == 0)
+            fprintf(stderr, "ampath slice: path %lu fails its check: %s\n", (unsigned long)i, err.msg);
         crossings += rep.crossings;
         repeats += rep.repeated_edges;
+        outside += rep.outside;
     }
     if (out) {
         char comment[200];
         snprintf(comment, sizeof comment,
-                 "ampath slice --continuous: %lu layers, %lu strokes, %lu perimeter loops, radius %g mm",
-                 (unsigned long)st.layers, (unsigned long)st.strokes, (unsigned long)st.perimeter_loops, o->radius);
+                 "ampath slice --continuous: %lu layers, %lu islands, %lu strokes, radius %g mm",
+                 (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.island_strokes, o->radius);
         rc = cli_save_paths("slice", out, &ps, comment);
     }
-    if (rc == CLI_OK && json) {
-        cli_json j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "layers", (long long)st.layers);
-        cli_json_int(&j, "islands", (long long)st.islands);
-        cli_json_int(&j, "strokes", (long long)st.strokes);
-        cli_json_int(&j, "multi_stroke_islands", (long long)st.multi_stroke);
-        cli_json_int(&j, "perimeter_loops", (long long)st.perimeter_loops);
-        cli_json_int(&j, "support_paths", (long long)st.support_paths);
-        cli_json_int(&j, "paths", (long long)ps.npaths);
-        cli_json_int(&j, "travel_moves", (long long)st.travel_moves);
-        cli_json_num(&j, "printed_length_mm", st.printed_length);
-        cli_json_num(&j, "infill_length_mm", st.infill_length);
-        cli_json_num(&j, "travel_length_mm", st.travel_length);
-        cli_json_num(&j, "support_length_mm", st.support_length);
-        cli_json_num(&j, "unprinted_ring_length_mm", st.unprinted_length);
-        cli_json_int(&j, "joins", (long long)st.joins);
-        cli_json_num(&j, "pseudo_length_mm", st.pseudo_length);
-        cli_json_int(&j, "free_ends", (long long)st.free_ends);
-        cli_json_int(&j, "odd_vertices", (long long)st.odd_vertices);
-        cli_json_int(&j, "crossings", (long long)crossings);
-        cli_json_int(&j, "repeated_edges", (long long)repeats);
-        cli_json_num(&j, "radius", o->radius);
-        cli_json_num(&j, "time_s", cli_now() - t0);
-        cli_json_end(&j);
-    } else if (rc == CLI_OK)
-        printf("%s: %lu layers, %lu islands, %lu strokes, %lu travel moves, printed %.1f mm, travel %.1f mm%s%s\n",
-               file, (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.strokes,
-               (unsigned long)st.travel_moves, st.printed_length, st.travel_length, out ? " -> " : "",
-               out ? out : "");
+    if (rc == CLI_OK && json)
+        json_stats(&st, &ps, crossings, repeats, outside, failed, o->radius, t0);
+    else if (rc == CLI_OK)
+        printf("%s: %lu layers, %lu islands, %lu strokes, %lu extrusion starts, %lu travel moves, printed %.1f mm, "
+               "travel %.1f mm%s%s\n",
+               file, (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.island_strokes,
+               (unsigned long)count_starts(&ps), (unsigned long)st.travel_moves, st.printed_length, st.travel_length,
+               out ? " -> " : "", out ? out : "");
+    if (rc == CLI_OK && failed) {
+        fprintf(stderr,
+                "ampath slice: %lu paths fail the stroke check (%lu crossings, %lu edges printed twice, %lu points "
+                "outside their layer): a bug, please report it\n",
+                (unsigned long)failed, (unsigned long)crossings, (unsigned long)repeats, (unsigned long)outside);
+        rc = CLI_FAILED;
+    }
+    if (rc == CLI_OK && st.empty_layers)
+        fprintf(stderr, "ampath slice: warning: %lu layers with section area got no path\n",
+                (unsigned long)st.empty_layers);
     amp_pathset_free(&ps);
     return rc;
 }
 
 int cmd_slice(int argc, char **argv)
 {
-    double layer = 0, first = 0, radius = 0.5, z = 0, t0 = cli_now();
+    double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, npos = 0, rc, ok;
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0;
     const char *pos[1], *out = NULL, *grid = "square";
     amp_contpath_opts co;
@@ -206,13 +277,19 @@ int cmd_slice(int argc, char **argv)
                       {"continuous", CLI_FLAG, &continuous, 0}, {"cell", CLI_DOUBLE, &cell, 0},
                       {"grid", CLI_STR, &grid, 0},          {"offset", CLI_DOUBLE, &offset, 0},
                       {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
-                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},
+                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
+                      {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
     if (!opts[0].seen)
         return cli_fail("slice", CLI_USAGE, "--layer H is required");
+    if (opts[15].seen && !opts[6].seen) {
+        if (!(nozzle > 0) || !isfinite(nozzle))
+            return cli_fail("slice", CLI_USAGE, "--nozzle must be positive");
+        radius = 0.5 * 1.125 * nozzle; /* a bead 1.125 x the nozzle wide, as slicers extrude */
+    }
     if (!(radius > 0) || !isfinite(radius))
         return cli_fail("slice", CLI_USAGE, "--radius must be positive");
     if (continuous && polygons)
@@ -229,7 +306,8 @@ int cmd_slice(int argc, char **argv)
         co.offset = offset;
     co.perimeters = !noperim;
     co.support_stretches = stretches;
-    co.pseudo_edges = !nopseudo;
+    co.pseudo_edges = pseudo && !nopseudo;
+    co.join = !nojoin;
     if (continuous && out && ends_with(out, ".svg"))
         return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
     amp_mesh_init(&m, NULL);

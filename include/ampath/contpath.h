@@ -52,14 +52,27 @@ typedef struct amp_contpath_opts {
     int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
     int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
                                 cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
+    int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
+                                stroke (one extrusion start per island); 0: separate closed paths */
 } amp_contpath_opts;
 
-/** Fill @p o with the defaults for radius @p r (square grid, perimeters on, pseudo edges on). */
+/**
+ * Fill @p o with the defaults for radius @p r: square grid, cell 10 r,
+ * offset r, perimeters on, joined strokes (one start per island), thin-cell
+ * patches printed (pseudo_edges 0: a travel inside a stroke would be one
+ * more extrusion start in the G-code; the overlap it avoids is at most a
+ * bead's width over a short stretch).
+ */
 void amp_contpath_opts_default(amp_contpath_opts *o, double r);
 
 typedef struct amp_contpath_stats {
     size_t layers;
-    size_t islands;          /**< infill regions R̃_j that received a stroke */
+    size_t empty_layers;     /**< layers with section area that received no path (0 expected) */
+    size_t islands;          /**< islands of the sections (outer ring with its holes) that received paths */
+    size_t thin_islands;     /**< islands narrower than 2r printed by a perimeter of a smaller inset */
+    size_t dropped_islands;  /**< islands narrower than r/32: nothing printed */
+    size_t island_strokes;   /**< object strokes written for the islands (= islands when joined) */
+    size_t regions;          /**< infill regions R̃_j that received a stroke */
     size_t strokes;          /**< infill strokes (one per region when all goes well) */
     size_t multi_stroke;     /**< regions that needed more than one stroke */
     size_t perimeter_loops;  /**< perimeter paths */
@@ -96,8 +109,14 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
                                amp_error *err);
 
 /**
- * All layers: perimeters and one stroke per infill region, in print order,
- * at each layer's printing height z_print. @p out is appended to.
+ * All layers: per island (in nearest-first order) the perimeter loop(s) at
+ * r and one stroke per infill region, spliced into one closed stroke when
+ * o->join (see contpath_join.c), at each layer's printing height z_print,
+ * every path a planar bead of the layer's thickness (amp_path.h). A closed
+ * stroke starts at its vertex nearest to where the previous one ended. An
+ * island narrower than 2r (no inset by r) gets the perimeter of the inset
+ * by r/2, r/4, ... r/32 instead (counted in thin_islands). @p out is
+ * appended to.
  */
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);
