@@ -197,6 +197,7 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     unsigned char *choice = NULL;
     gap *gp = NULL;
     amp_cp_patchset P;
+    amp_cp_tour_info ti;
     int fig6;
     double D = o->pseudo_edges ? 2 * o->radius * (1 - 1e-9) : 0.0, pseudo = 0;
     amp_status rc;
@@ -336,9 +337,15 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
         }
     }
     first_path = out->npaths;
-    rc = amp_cp_tour(&g, z, o->radius, out, &ntours, &nodd, err);
+    rc = amp_cp_tour(&g, z, o->radius, (int)o->tour, out, &ti, err);
     if (rc != AMP_OK)
         goto done;
+    ntours = ti.ntours;
+    nodd = ti.nodd;
+    st->cycles += ti.cycles;
+    st->tour_fallbacks += (size_t)ti.fallback;
+    if (ti.levels > st->tree_levels)
+        st->tree_levels = ti.levels;
     if (ntours == 0 && R->nrings) {
         /* no lattice edge reaches this region: its outer ring is the stroke */
         const amp_vec2 *p = amp_polyset_ring(R, 0);

@@ -92,7 +92,19 @@ amp_status amp_cp_patch_points(amp_cp_graph *g, const amp_cp_patchset *P, size_t
 amp_status amp_cp_add_chain(amp_cp_graph *g, size_t a, size_t b, int all_pseudo, double *pseudo_len);
 
 /* ---- §4, the tour (contpath_tour.c) ---- */
-amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, amp_pathset *out, size_t *ntours, size_t *nodd,
+typedef struct amp_cp_tour_info {
+    size_t ntours;   /* closed (or open) strokes written */
+    size_t nodd;     /* odd vertices met (0 expected) */
+    size_t cycles;   /* boundary cycles of the cycle tree */
+    size_t levels;   /* depth of the cycle tree */
+    int fallback;    /* 1: faces not 2-coloured, the angular-neighbour merging was used */
+} amp_cp_tour_info;
+/**
+ * §4: one closed crossover-free tour per component of @p g, appended to
+ * @p out (radius @p rad, 0 on pseudo edges) at height @p z; @p method
+ * AMP_TOUR_CYCLE_TREE or AMP_TOUR_MERGE.
+ */
+amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pathset *out, amp_cp_tour_info *info,
                        amp_error *err);
 
 /* ---- one start per island (contpath_join.c) ---- */

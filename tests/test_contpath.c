@@ -510,7 +510,7 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     /* 12 layers x 2 islands x one stroke; 3 regions per layer (the neck splits R̃) */
     ck_assert_msg(strstr(out, "\"layers\":12,\"empty_layers\":0,\"islands\":24,") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"island_strokes\":24,\"extrusion_starts\":24,\"regions\":36,\"strokes\":36,"
-                              "\"multi_stroke_islands\":0") != NULL,
+                              "\"multi_stroke_regions\":0") != NULL,
                   "%s", out);
     ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);

@@ -30,6 +30,8 @@ const char cmd_slice_usage[] =
     "                     cell become pseudo edges, radius 0: travel inside the stroke (paper\n"
     "                     Figs. 7, 8; each is one more extrusion start). Default: printed\n"
     "  --no-pseudo        the default (kept for old scripts)\n"
+    "  --tour KIND        cycle-tree (default: the paper's cycle tree and Hierholzer traversal, §4)\n"
+    "                     or merge (angular-neighbour transitions merged wherever curves touch)\n"
     "  --no-join          keep each island's perimeter loops and region strokes apart (default:\n"
     "                     spliced into one closed stroke, one extrusion start per island)\n"
     "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
@@ -176,7 +178,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "extrusion_starts", (long long)count_starts(ps));
     cli_json_int(&j, "regions", (long long)st->regions);
     cli_json_int(&j, "strokes", (long long)st->strokes);
-    cli_json_int(&j, "multi_stroke_islands", (long long)st->multi_stroke);
+    cli_json_int(&j, "multi_stroke_regions", (long long)st->multi_stroke);
     cli_json_int(&j, "perimeter_loops", (long long)st->perimeter_loops);
     cli_json_int(&j, "support_paths", (long long)st->support_paths);
     cli_json_int(&j, "paths", (long long)ps->npaths);
@@ -186,6 +188,9 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_num(&j, "travel_length_mm", st->travel_length);
     cli_json_num(&j, "support_length_mm", st->support_length);
     cli_json_num(&j, "unprinted_ring_length_mm", st->unprinted_length);
+    cli_json_int(&j, "cycles", (long long)st->cycles);
+    cli_json_int(&j, "tree_levels", (long long)st->tree_levels);
+    cli_json_int(&j, "tour_fallbacks", (long long)st->tour_fallbacks);
     cli_json_int(&j, "joins", (long long)st->joins);
     cli_json_num(&j, "pseudo_length_mm", st->pseudo_length);
     cli_json_int(&j, "free_ends", (long long)st->free_ends);
@@ -265,7 +270,7 @@ int cmd_slice(int argc, char **argv)
     long index = -1;
     int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0;
-    const char *pos[1], *out = NULL, *grid = "square";
+    const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
     amp_contpath_opts co;
     amp_mesh m;
     amp_slices sl;
@@ -279,6 +284,7 @@ int cmd_slice(int argc, char **argv)
                       {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
                       {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
                       {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
+                      {"tour", CLI_STR, &tour, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -308,6 +314,12 @@ int cmd_slice(int argc, char **argv)
     co.support_stretches = stretches;
     co.pseudo_edges = pseudo && !nopseudo;
     co.join = !nojoin;
+    if (strcmp(tour, "cycle-tree") == 0)
+        co.tour = AMP_TOUR_CYCLE_TREE;
+    else if (strcmp(tour, "merge") == 0)
+        co.tour = AMP_TOUR_MERGE;
+    else
+        return cli_fail("slice", CLI_USAGE, "--tour must be cycle-tree or merge, not '%s'", tour);
     if (continuous && out && ends_with(out, ".svg"))
         return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
     amp_mesh_init(&m, NULL);

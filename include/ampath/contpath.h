@@ -43,6 +43,12 @@
 extern "C" {
 #endif
 
+/** How §4's tour is built from the patched complex of a region. */
+typedef enum amp_tour_method {
+    AMP_TOUR_CYCLE_TREE = 0, /**< the paper: boundary cycles by level (Hierholzer), cycle tree, q = 2 / q > 2 splices */
+    AMP_TOUR_MERGE = 1       /**< ends paired with their angular neighbour, curves merged wherever they touch */
+} amp_tour_method;
+
 typedef struct amp_contpath_opts {
     double radius;         /**< extruder (deposition) radius r > 0, mm */
     double cell;           /**< lattice cell size of K (<= 0: 10 r) */
@@ -52,6 +58,7 @@ typedef struct amp_contpath_opts {
     int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
     int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
                                 cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
+    amp_tour_method tour;  /**< §4 construction (default AMP_TOUR_CYCLE_TREE) */
     int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
                                 stroke (one extrusion start per island); 0: separate closed paths */
 } amp_contpath_opts;
@@ -80,6 +87,9 @@ typedef struct amp_contpath_stats {
     size_t travel_moves;     /**< moves between consecutive paths */
     size_t free_ends;        /**< free-edge end points patched (Σ m) */
     size_t odd_vertices;     /**< odd vertices left after patching (0 expected) */
+    size_t cycles;           /**< boundary cycles of the cycle trees (§4.1), over all regions */
+    size_t tree_levels;      /**< deepest cycle tree (levels) */
+    size_t tour_fallbacks;   /**< regions whose faces were not 2-coloured: AMP_TOUR_MERGE used instead */
     size_t joins;            /**< components joined by a patch printed once and run back as a pseudo edge (Fig. 6) */
     double printed_length;   /**< mm, all object paths, pseudo edges excluded */
     double infill_length;    /**< mm, strokes only, pseudo edges excluded */
