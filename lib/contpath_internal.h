@@ -111,10 +111,12 @@ amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pa
 /**
  * Join the closed object loops among paths [first, npaths) of @p in (one
  * island's perimeters and region strokes, radius @p r) into as few closed
- * strokes as crossing-free splices allow, appended to @p out with bead
- * height @p h (0: none); other paths are copied. *nout: object paths written.
+ * strokes as crossing-free splices inside the rings @p walls (the island's
+ * section) allow, appended to @p out with bead
+ * height @p h (0: none); other paths are copied. *nout: object paths
+ * written; loops smaller than r/4 across are left out and counted in *nspeck.
  */
-amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, double h, amp_pathset *out,
-                             size_t *nout, amp_error *err);
+amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_polyset *walls, double r, double h,
+                             amp_pathset *out, size_t *nout, size_t *nspeck, amp_error *err);
 
 #endif

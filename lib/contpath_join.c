@@ -19,6 +19,7 @@ typedef struct jloop {
     amp_pvert *v;
     size_t n;
     int alive;
+    int wall; /* a ring of the island's section: connectors must not cross it */
 } jloop;
 
 typedef struct jseg {
@@ -130,7 +131,8 @@ static int nearest(const joiner *J, const size_t *uf, size_t skip, amp_vec2 q, s
                 size_t i = g->item[k].i, j = (i + 1) % L->n;
                 amp_vec2 a = P2v(L->v[i].p), b = P2v(L->v[j].p);
                 double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-                if (amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r > 0) || !(L->v[j].r > 0))
+                if (L->wall || amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r > 0) ||
+                    !(L->v[j].r > 0))
                     continue;
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
                 t = fmin(fmax(t, 0.0), 1.0);
@@ -317,7 +319,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     p1 = P2v(P1.p);
     p2 = P2v(P2.p);
     if (!nearest(J, uf, rx, p1, &c.ly, &c.j1, &c.u1, &d1) || !nearest(J, uf, rx, p2, &l2, &c.j2, &c.u2, &d2) ||
-        l2 != c.ly || d1 < 0.5 * J->r || d2 < 0.5 * J->r)
+        l2 != c.ly || d1 < 0.1 * J->r || d2 < 0.1 * J->r)
         return 0;
     /* a nearest point at a corner of Y (its vertex cone) moves into the
      * segment: a connector ending on a vertex would touch the segment
@@ -336,8 +338,27 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
     q1 = P2v(Q1.p);
     q2 = P2v(Q2.p);
-    /* q1 == q2 (a corner of Y) or connectors meeting: no quadrilateral */
-    if (hypot(q1.x - q2.x, q1.y - q2.y) < 1e-3 * ell || proper_cross(p1, q1, p2, q2))
+    /* q1 == q2 (both in one corner's cone of a small Y): spread them over
+     * segment j1, in the order that keeps the connectors apart */
+    if (hypot(q1.x - q2.x, q1.y - q2.y) < 1e-3 * ell) {
+        c.j2 = c.j1;
+        c.u1 = 0.3;
+        c.u2 = 0.7;
+        Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
+        Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
+        if (proper_cross(p1, P2v(Q1.p), p2, P2v(Q2.p))) {
+            c.u1 = 0.7;
+            c.u2 = 0.3;
+            Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
+            Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
+        }
+        q1 = P2v(Q1.p);
+        q2 = P2v(Q2.p);
+        c.ybackward = c.u2 >= c.u1;
+        fw = c.ybackward ? 0 : J->lp[c.ly].n;
+        bw = c.ybackward ? J->lp[c.ly].n : 0;
+    }
+    if (proper_cross(p1, q1, p2, q2))
         return 0;
     if (connector_blocked(J, p1, q1, lx, sx, c.ly, c.j1) || connector_blocked(J, p2, q2, lx, c.sx2, c.ly, c.j2))
         return 0;
@@ -349,8 +370,22 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     return 1;
 }
 
-amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, double h, amp_pathset *out,
-                             size_t *nout, amp_error *err)
+/* Does the loop fit in a box of diagonal @p d? */
+static int speck(const amp_pvert *v, size_t n, double d)
+{
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+    size_t i;
+    for (i = 0; i < n; i++) {
+        x0 = fmin(x0, v[i].p.x);
+        y0 = fmin(y0, v[i].p.y);
+        x1 = fmax(x1, v[i].p.x);
+        y1 = fmax(y1, v[i].p.y);
+    }
+    return hypot(x1 - x0, y1 - y0) < d;
+}
+
+amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_polyset *walls, double r, double h,
+                             amp_pathset *out, size_t *nout, size_t *nspeck, amp_error *err)
 {
     joiner J;
     size_t *uf = NULL, i, k, sets, nclosed = 0;
@@ -361,8 +396,8 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
     J.r = r;
     J.dmax = 4.5 * r;
     *nout = 0;
-    J.lp = amp_calloc(J.al, in->npaths - first + 1, sizeof *J.lp);
-    uf = amp_alloc(J.al, (in->npaths - first + 1) * sizeof *uf);
+    J.lp = amp_calloc(J.al, in->npaths - first + walls->nrings + 1, sizeof *J.lp);
+    uf = amp_alloc(J.al, (in->npaths - first + walls->nrings + 1) * sizeof *uf);
     if (!J.lp || !uf) {
         st = AMP_ERR_NOMEM;
         goto done;
@@ -373,6 +408,10 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
         size_t n = in->paths[i].n;
         if (in->paths[i].role != AMP_ROLE_OBJECT || n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y)
             continue;
+        if (speck(v, n, 0.25 * r)) {
+            (*nspeck)++; /* a loop smaller than a quarter bead: inside the beads around it */
+            continue;
+        }
         J.lp[J.nl].v = amp_alloc(J.al, n * sizeof *J.lp[J.nl].v);
         if (!J.lp[J.nl].v) {
             st = AMP_ERR_NOMEM;
@@ -388,7 +427,25 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
         nclosed++;
     }
     sets = J.nl;
-    if (J.nl > 1 && (st = grid_build(&J)) != AMP_OK)
+    /* the section's rings, as walls in the grid */
+    for (i = 0; i < walls->nrings && sets > 1; i++) {
+        const amp_vec2 *p = amp_polyset_ring(walls, i);
+        jloop *L = &J.lp[J.nl];
+        L->n = walls->rings[i].n;
+        L->v = amp_alloc(J.al, (L->n + 1) * sizeof *L->v);
+        if (!L->v) {
+            st = AMP_ERR_NOMEM;
+            goto done;
+        }
+        for (k = 0; k < L->n; k++) {
+            L->v[k].p = amp_v3(p[k].x, p[k].y, 0);
+            L->v[k].r = 0;
+        }
+        L->alive = L->wall = 1;
+        uf[J.nl] = J.nl;
+        J.nl++;
+    }
+    if (sets > 1 && (st = grid_build(&J)) != AMP_OK)
         goto done;
     /* connectors 2r apart (their beads just touch), closer where a loop
      * offers no straight stretch that long (small infill components) */
@@ -398,7 +455,7 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
         while (sets > 1 && progress && st == AMP_OK) {
             progress = 0;
             for (k = 0; k < J.nl && !progress && st == AMP_OK; k++)
-                for (i = 0; J.lp[k].alive && i < J.lp[k].n && !progress && st == AMP_OK; i++)
+                for (i = 0; J.lp[k].alive && !J.lp[k].wall && i < J.lp[k].n && !progress && st == AMP_OK; i++)
                     progress = try_segment(&J, uf, k, i, ell, &st);
             sets -= (size_t)progress;
         }
@@ -406,7 +463,7 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
     if (st != AMP_OK)
         goto done;
     for (k = 0; k < J.nl && st == AMP_OK; k++) {
-        if (!J.lp[k].alive)
+        if (!J.lp[k].alive || J.lp[k].wall)
             continue;
         st = amp_pathset_begin(out, AMP_ROLE_OBJECT, err);
         for (i = 0; i <= J.lp[k].n && st == AMP_OK; i++)
@@ -420,7 +477,7 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, double r, doub
         const amp_pvert *v = amp_pathset_path_verts(in, i);
         size_t n = in->paths[i].n;
         if (in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y)
-            continue;
+            continue; /* joined above, or a speck */
         if ((st = amp_pathset_add(out, in->paths[i].role, v, n, err)) == AMP_OK && h > 0)
             st = amp_pathset_set_height(out, h, err);
         *nout += in->paths[i].role == AMP_ROLE_OBJECT;

@@ -53,6 +53,54 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
     return AMP_OK;
 }
 
+/* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
+ * than @p tol to the last kept one (same radius): micro-segments from
+ * splices and swallowtail remnants, below a motor step, would be written as
+ * moves without extrusion. A radius change (a pseudo edge's doubled vertex)
+ * stays; the last vertex of a path stays (closure); a needle A-B-A left by
+ * the merging loses its tip. Paths left without
+ * length are removed. */
+static void compact_tail(amp_pathset *ps, size_t first, double tol)
+{
+    size_t i, w = first < ps->npaths ? ps->paths[first].first : ps->nverts, np = first;
+    for (i = first; i < ps->npaths; i++) {
+        amp_pvert *v = ps->verts + ps->paths[i].first;
+        size_t n = ps->paths[i].n, k, m = 0, start = w;
+        double len = 0;
+        for (k = 0; k < n; k++) {
+            amp_pvert x = v[k];
+            if (m > 0) {
+                amp_pvert *last = &ps->verts[w - 1];
+                double d = amp_v3_dist(x.p, last->p);
+                if (d < tol && x.r == last->r) {
+                    if (k + 1 == n && m > 1)
+                        *last = x; /* keep the closing vertex itself */
+                    continue;
+                }
+                if (m > 1 && k + 1 < n && amp_v3_dist(x.p, ps->verts[w - 2].p) < tol && x.r == ps->verts[w - 2].r &&
+                    last->r == x.r) {
+                    w--; /* A -> B -> A: the tip B of a needle goes */
+                    m--;
+                    continue;
+                }
+                len += d;
+            }
+            ps->verts[w++] = x;
+            m++;
+        }
+        if (m < 2 || !(len > 0)) {
+            w = start; /* nothing left to print */
+            continue;
+        }
+        ps->paths[np] = ps->paths[i];
+        ps->paths[np].first = start;
+        ps->paths[np].n = m;
+        np++;
+    }
+    ps->npaths = np;
+    ps->nverts = w;
+}
+
 /* Closed paths of every ring of @p P at height z, radius r, into c->tmp. */
 static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpath_stats *s0, amp_error *err)
 {
@@ -99,6 +147,10 @@ static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
         if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
             break;
+        /* a speck of R̃ (under a hundredth of a bead's cross-section) is
+         * filled by the beads around it */
+        if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
+            continue;
         rc = amp_cp_region_run(&c->khat, c->ke, c->nke, &c->reg, L->z_print, o, o->join && o->perimeters, &c->tmp,
                                s0, err);
     }
@@ -151,7 +203,7 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
             (rc = island_paths(c, L, s0, err)) != AMP_OK)
             break;
         if (c->o->join)
-            rc = amp_cp_join_loops(&c->tmp, 0, c->o->radius, h, out, &nobj, err);
+            rc = amp_cp_join_loops(&c->tmp, 0, &c->isl, c->o->radius, h, out, &nobj, &s0->specks, err);
         else {
             rc = amp_pathset_append(out, &c->tmp, err);
             for (i = first, nobj = 0; i < out->npaths; i++) {
@@ -159,6 +211,7 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
                 nobj += out->paths[i].role == AMP_ROLE_OBJECT;
             }
         }
+        compact_tail(out, first, 1e-3);
         s0->islands += out->npaths > first;
         s0->island_strokes += nobj;
         for (i = first; i < out->npaths && rc == AMP_OK; i++) {

@@ -222,10 +222,14 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
                 if (!found++)
                     where = pts[i];
             }
-            if (i + 1 < n &&
-                amp_polyset_contains(region, amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y)),
-                                     tol) == 0)
-                r.outside++;
+            if (i + 1 < n) {
+                amp_vec2 mid = amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y));
+                if (amp_polyset_contains(region, mid, tol) == 0) {
+                    r.outside++;
+                    if (!found++)
+                        where = mid;
+                }
+            }
         }
 report:
     if (r.crossings || r.repeated_edges || r.outside)

@@ -175,6 +175,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
     cli_json_int(&j, "dropped_islands", (long long)st->dropped_islands);
     cli_json_int(&j, "island_strokes", (long long)st->island_strokes);
+    cli_json_int(&j, "specks", (long long)st->specks);
     cli_json_int(&j, "extrusion_starts", (long long)count_starts(ps));
     cli_json_int(&j, "regions", (long long)st->regions);
     cli_json_int(&j, "strokes", (long long)st->strokes);

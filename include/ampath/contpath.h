@@ -79,6 +79,7 @@ typedef struct amp_contpath_stats {
     size_t thin_islands;     /**< islands narrower than 2r printed by a perimeter of a smaller inset */
     size_t dropped_islands;  /**< islands narrower than r/32: nothing printed */
     size_t island_strokes;   /**< object strokes written for the islands (= islands when joined) */
+    size_t specks;           /**< closed loops under r/4 across left out when joining (inside other beads) */
     size_t regions;          /**< infill regions R̃_j that received a stroke */
     size_t strokes;          /**< infill strokes (one per region when all goes well) */
     size_t multi_stroke;     /**< regions that needed more than one stroke */
