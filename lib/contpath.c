@@ -21,6 +21,7 @@ void amp_contpath_opts_default(amp_contpath_opts *o, double r)
     o->support_stretches = 0;
     o->pseudo_edges = 0;
     o->join = 1;
+    o->support_corners = 1;
 }
 
 /* Length of the printed segments of path i (a segment with radius 0 at both
@@ -187,10 +188,20 @@ static int cmp_gap(const void *a, const void *b)
     return x->len < y->len ? -1 : (x->len > y->len ? 1 : 0);
 }
 
+/* Length of a closed ring. */
+static double ring_perimeter(const amp_vec2 *p, size_t n)
+{
+    size_t i;
+    double l = 0;
+    for (i = 0; i < n; i++)
+        l += hypot(p[(i + 1) % n].x - p[i].x, p[(i + 1) % n].y - p[i].y);
+    return l;
+}
+
 /* Region processing with a prepared K̂ edge list. */
 amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
-                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_contpath_stats *st,
-                             amp_error *err)
+                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_pathset *bare,
+                             amp_contpath_stats *st, amp_error *err)
 {
     amp_cp_graph g;
     size_t *uf = NULL, *grs = NULL, *grm = NULL, *tmp = NULL, i, j, k, ngr, ntours = 0, nodd = 0, first_path, ngap = 0;
@@ -322,8 +333,31 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
                 goto done;
             st->support_paths++;
             st->support_length += gp[i].len;
-        } else
+        } else {
             st->unprinted_length += gp[i].len;
+            /* step 6: the bare stretch, for the support corners */
+            if (bare && (rc = amp_cp_ring_support(&g, R, fa, fb, bare, z, 0.0, err)) != AMP_OK)
+                goto done;
+        }
+    }
+    /* a ring no lattice edge reaches (a hole in the middle of a cell) is
+     * bare as a whole when the region has lattice strokes elsewhere */
+    for (k = 0; k < R->nrings && g.ne > 0; k++) {
+        size_t q, nf = 0;
+        const amp_vec2 *p = amp_polyset_ring(R, k);
+        for (q = 0; q < g.nfe; q++)
+            nf += g.fe[q].ring == k;
+        if (nf)
+            continue;
+        st->unprinted_length += ring_perimeter(p, R->rings[k].n);
+        if (bare) {
+            if ((rc = amp_pathset_begin(bare, AMP_ROLE_SUPPORT, err)) != AMP_OK)
+                goto done;
+            for (q = 0; q <= R->rings[k].n && rc == AMP_OK; q++)
+                rc = amp_pathset_push(bare, amp_v3(p[q % R->rings[k].n].x, p[q % R->rings[k].n].y, z), 0.0, err);
+            if (rc != AMP_OK)
+                goto done;
+        }
     }
     /* Figs. 7, 8: every patch against the printed edges near it, then into
      * the graph (a join twice: printed, and back as a pseudo edge) */
@@ -385,7 +419,7 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
     amp_status rc;
     if (amp_cp_khat_edges(khat, out->alloc, &ke, &nke) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
-    rc = amp_cp_region_run(khat, ke, nke, region, z, o, 0, out, st, err);
+    rc = amp_cp_region_run(khat, ke, nke, region, z, o, 0, out, NULL, st, err);
     amp_free(out->alloc, ke);
     return rc;
 }

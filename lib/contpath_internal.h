@@ -67,10 +67,12 @@ double amp_cp_printed_len(const amp_pathset *ps, size_t i);
  * Steps 5 + §4 for one region with a prepared K̂ edge list. @p hub: a
  * perimeter loop will be spliced with the region's strokes (contpath_join.c),
  * so components are left apart for it instead of Fig. 6's doubled paths.
+ * @p bare (optional) receives the ring stretches left unprinted (step 6),
+ * one open polyline each (a whole bare ring closed), radius 0.
  */
 amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
-                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_contpath_stats *st,
-                             amp_error *err);
+                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_pathset *bare,
+                             amp_contpath_stats *st, amp_error *err);
 
 /* ---- step 5, clipping (contpath_clip.c) ---- */
 amp_status amp_cp_clip(const amp_cx2 *k, const uint64_t *ke, size_t nke, const amp_polyset *R, amp_cp_graph *g,
@@ -106,6 +108,15 @@ typedef struct amp_cp_tour_info {
  */
 amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pathset *out, amp_cp_tour_info *info,
                        amp_error *err);
+
+/* ---- step 6, support corners (contpath_support.c) ---- */
+/**
+ * Corners (Fig. 5) on the bare ring stretches @p bare of one island, built
+ * into its perimeter loops, paths [0, nperim) of @p ps (closed, radius r).
+ * Counts support_corners and corners_left_out in @p st. AMP_ERR_NOMEM.
+ */
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+                                  amp_contpath_stats *st, amp_error *err);
 
 /* ---- one start per island (contpath_join.c) ---- */
 /**

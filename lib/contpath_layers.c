@@ -16,7 +16,8 @@ typedef struct lctx {
     uint64_t *ke;
     size_t nke;
     amp_polyset isl, ins, reg;
-    amp_pathset tmp; /* one island's paths before joining */
+    amp_pathset tmp;  /* one island's paths before joining */
+    amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
     amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
     int have_at;
     unsigned char *done; /* islands of the layer already printed */
@@ -124,7 +125,7 @@ static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *
 {
     const amp_contpath_opts *o = c->o;
     double d;
-    size_t q;
+    size_t q, nperim = 0;
     amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
     if (rc == AMP_OK && c->ins.nrings == 0) {
         /* thin island: the bead (2r wide) is wider than the part here; its
@@ -139,8 +140,11 @@ static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *
             s0->dropped_islands++;
         return rc;
     }
-    if (rc == AMP_OK && o->perimeters)
+    if (rc == AMP_OK && o->perimeters) {
         rc = ring_paths(c, &c->ins, L->z_print, s0, err);
+        nperim = c->tmp.npaths;
+    }
+    amp_pathset_clear(&c->bare);
     /* R̃: inside the perimeter bead (2r) and one bead radius more */
     if (rc == AMP_OK)
         rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
@@ -152,8 +156,11 @@ static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *
         if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
             continue;
         rc = amp_cp_region_run(&c->khat, c->ke, c->nke, &c->reg, L->z_print, o, o->join && o->perimeters, &c->tmp,
-                               s0, err);
+                               o->support_corners && !o->support_stretches ? &c->bare : NULL, s0, err);
     }
+    /* step 6: corners from the bare stretches to the perimeter */
+    if (rc == AMP_OK && nperim)
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, s0, err);
     return rc;
 }
 
@@ -245,6 +252,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_init(&c.ins, al);
     amp_polyset_init(&c.reg, al);
     amp_pathset_init(&c.tmp, al);
+    amp_pathset_init(&c.bare, al);
     rc = amp_contpath_complex(sl, o, &c.khat, err);
     if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
@@ -270,6 +278,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_free(&c.ins);
     amp_polyset_free(&c.reg);
     amp_pathset_free(&c.tmp);
+    amp_pathset_free(&c.bare);
     if (st)
         *st = s0;
     return rc;

@@ -26,6 +26,9 @@ const char cmd_slice_usage[] =
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
     "  --no-perimeter     --continuous without the perimeter loops\n"
     "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
+    "                     instead of the corners\n"
+    "  --no-corners       no support corners (step 6, Fig. 5; default: corners from the unprinted\n"
+    "                     stretches of the infill ring to the perimeter, part of the stroke)\n"
     "  --pseudo           patch stretches closer than 2r to a lattice piece of their thin boundary\n"
     "                     cell become pseudo edges, radius 0: travel inside the stroke (paper\n"
     "                     Figs. 7, 8; each is one more extrusion start). Default: printed\n"
@@ -189,6 +192,8 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_num(&j, "travel_length_mm", st->travel_length);
     cli_json_num(&j, "support_length_mm", st->support_length);
     cli_json_num(&j, "unprinted_ring_length_mm", st->unprinted_length);
+    cli_json_int(&j, "support_corners", (long long)st->support_corners);
+    cli_json_int(&j, "corners_left_out", (long long)st->corners_left_out);
     cli_json_int(&j, "cycles", (long long)st->cycles);
     cli_json_int(&j, "tree_levels", (long long)st->tree_levels);
     cli_json_int(&j, "tour_fallbacks", (long long)st->tour_fallbacks);
@@ -269,7 +274,7 @@ int cmd_slice(int argc, char **argv)
 {
     double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, npos = 0, rc, ok;
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0;
     const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
     amp_contpath_opts co;
@@ -285,7 +290,7 @@ int cmd_slice(int argc, char **argv)
                       {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
                       {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
                       {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
-                      {"tour", CLI_STR, &tour, 0},
+                      {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -315,6 +320,7 @@ int cmd_slice(int argc, char **argv)
     co.support_stretches = stretches;
     co.pseudo_edges = pseudo && !nopseudo;
     co.join = !nojoin;
+    co.support_corners = !nocorners;
     if (strcmp(tour, "cycle-tree") == 0)
         co.tour = AMP_TOUR_CYCLE_TREE;
     else if (strcmp(tour, "merge") == 0)

@@ -56,6 +56,7 @@ typedef struct amp_contpath_opts {
     double offset;         /**< mitered offset δ of K̂ (<= 0: r) */
     int perimeters;        /**< 1: print the perimeter loop(s) of each island */
     int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
+    int support_corners;   /**< 1 (default): step 6, corners from the unprinted ring stretches to the perimeter */
     int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
                                 cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
     amp_tour_method tour;  /**< §4 construction (default AMP_TOUR_CYCLE_TREE) */
@@ -97,7 +98,9 @@ typedef struct amp_contpath_stats {
     double pseudo_length;    /**< mm, pseudo edges inside the strokes (travel without extrusion) */
     double travel_length;    /**< mm, straight moves between paths (3-D) */
     double support_length;   /**< mm, Remark 2.1 stretches printed */
-    double unprinted_length; /**< mm, ring stretches of R̃ left unprinted */
+    double unprinted_length; /**< mm, ring stretches of R̃ left unprinted by the lattice and its patches */
+    size_t support_corners;  /**< step 6 corners built into the perimeter loops */
+    size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour or find no perimeter */
 } amp_contpath_stats;
 
 /**
