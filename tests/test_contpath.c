@@ -807,6 +807,84 @@ START_TEST(a_sliver_first_layer_is_printed_on_the_bed)
 }
 END_TEST
 
+/* Fraction of the points of the infill rings (the inset by 3r of every
+ * island, computed here from the sections) within @p reach of a printed
+ * segment at the layer's height: every 4th layer, points 0.05 mm apart. */
+static double ring_cover(const amp_slices *sl, const amp_pathset *ps, double r, double reach)
+{
+    amp_polyset isl, ins;
+    size_t li, k, q, i, j, total = 0, covered = 0;
+    amp_polyset_init(&isl, NULL);
+    amp_polyset_init(&ins, NULL);
+    for (li = 0; li < sl->nlayers; li += 4) {
+        const amp_layer *L = &sl->layers[li];
+        for (k = 0; k < L->polys.nislands; k++) {
+            ck_assert_int_eq(amp_polyset_island(&L->polys, k, &isl, NULL), AMP_OK);
+            ck_assert_int_eq(amp_polyset_inset(&isl, 3 * r, 0, &ins, NULL), AMP_OK);
+            for (q = 0; q < ins.nrings; q++) {
+                const amp_vec2 *p = amp_polyset_ring(&ins, q);
+                size_t n = ins.rings[q].n;
+                for (j = 0; j < n; j++) {
+                    amp_vec2 a = p[j], b = p[(j + 1) % n];
+                    double len = hypot(b.x - a.x, b.y - a.y), t;
+                    for (t = 0; t < len; t += 0.05) {
+                        amp_vec3 x = amp_v3(a.x + (b.x - a.x) * t / len, a.y + (b.y - a.y) * t / len, 0);
+                        double best = HUGE_VAL;
+                        for (i = 0; i < ps->npaths && best > reach; i++) {
+                            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+                            size_t e;
+                            if (fabs(v[0].p.z - L->z_print) > 1e-9)
+                                continue;
+                            for (e = 0; e + 1 < ps->paths[i].n && best > reach; e++)
+                                if (v[e].r > 0 && v[e + 1].r > 0)
+                                    best = fmin(best, sqrt(amp_v3_seg_dist2(x, amp_v3(v[e].p.x, v[e].p.y, 0),
+                                                                            amp_v3(v[e + 1].p.x, v[e + 1].p.y, 0),
+                                                                            NULL)));
+                        }
+                        total++;
+                        covered += best <= reach;
+                    }
+                }
+            }
+        }
+    }
+    amp_polyset_free(&isl);
+    amp_polyset_free(&ins);
+    return total ? (double)covered / (double)total : 0;
+}
+
+START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
+{
+    /* step 6: with the corners every point of the rings of R̃ lies within r
+     * of material (the ring's own patches, lattice ends, or a corner); the
+     * same slicing without corners leaves stretches bare */
+    amp_slices sl, sl2;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_contpath_opts o;
+    double ca, cb;
+    amp_slices_init(&sl, NULL);
+    amp_slices_init(&sl2, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
+    o.support_corners = 0;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl2, &b, &sb, &o);
+    ck_assert_uint_gt(sa.support_corners, 100);
+    ck_assert_uint_eq(sb.support_corners, 0);
+    ck_assert_double_gt(sa.unprinted_length, 0);
+    ca = ring_cover(&sl, &a, 0.225, 0.225 * 1.01);
+    cb = ring_cover(&sl2, &b, 0.225, 0.225 * 1.01);
+    ck_assert_msg(ca >= 0.99 && cb < 0.95, "ring within r of material: %g with corners, %g without", ca, cb);
+    ck_assert_uint_le(sa.corners_left_out, sa.support_corners / 20);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+    amp_slices_free(&sl2);
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -826,6 +904,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is);
     AMP_ADD_TEST(tc, cycle_tree_and_merging_trace_the_same_edges_once_without_crossing);
     AMP_ADD_TEST(tc, a_sliver_first_layer_is_printed_on_the_bed);
+    AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
     suite_add_tcase(s, tc);
     return s;
 }
