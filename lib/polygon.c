@@ -112,7 +112,9 @@ int amp_ring_contains(const amp_vec2 *p, size_t n, amp_vec2 q, double tol)
     int in = 0;
     for (i = 0, j = n - 1; i < n; j = i++) {
         amp_vec2 a = p[j], b = p[i];
-        if (seg_dist2(q, a, b) <= tol * tol)
+        /* the distance only matters near the segment's box (tol = 0: on it) */
+        if (q.y >= fmin(a.y, b.y) - tol && q.y <= fmax(a.y, b.y) + tol && q.x >= fmin(a.x, b.x) - tol &&
+            q.x <= fmax(a.x, b.x) + tol && seg_dist2(q, a, b) <= tol * tol)
             return -1;
         /* half-open rule on y: each crossing counted once even at vertices */
         if ((a.y > q.y) != (b.y > q.y)) {
@@ -599,6 +601,35 @@ static int egrid_closer(const egrid *g, amp_vec2 q, double lim)
     return 0;
 }
 
+/* Point in the region of the grid's edges (even-odd, half-open rule as
+ * amp_ring_contains with tol 0): a ray to +x through the row of cells of q,
+ * each crossing counted in the cell that holds it. Linear in the row, not
+ * in the whole boundary. */
+static int egrid_inside(const egrid *g, amp_vec2 q)
+{
+    long ix0, ix1, iy0, iy1, x;
+    size_t k, cnt = 0;
+    egrid_range(g, q.x, q.x, q.y, q.y, &ix0, &ix1, &iy0, &iy1);
+    if (q.y < g->y0 || q.y > g->y0 + g->cell * (double)g->ny)
+        return 0;
+    for (x = ix0; x < g->nx; x++) {
+        size_t cidx = (size_t)(iy0 * g->nx + x);
+        for (k = g->start[cidx]; k < g->start[cidx + 1]; k++) {
+            amp_vec2 a = g->ea[g->item[k]], b = g->eb[g->item[k]];
+            double xi;
+            long cx, d0, d1, d2;
+            if ((a.y > q.y) == (b.y > q.y))
+                continue;
+            xi = a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y);
+            if (!(q.x < xi))
+                continue;
+            egrid_range(g, xi, xi, q.y, q.y, &cx, &d0, &d1, &d2);
+            cnt += cx == x;
+        }
+    }
+    return (int)(cnt & 1u);
+}
+
 /* Copy ring p into out without the vertices closer than tol to the segment
  * joining their kept predecessor and their successor. Returns the count. */
 static size_t simplify_ring(const amp_vec2 *p, size_t n, double tol, amp_vec2 *out)
@@ -762,7 +793,7 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
                 a = c.node[cur];
                 b = c.node[nxt];
                 m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
-                if (!egrid_closer(&g, m, lim) && amp_polyset_contains(in, m, 0.0) == 1) {
+                if (!egrid_closer(&g, m, lim) && egrid_inside(&g, m)) {
                     void *v = pc;
                     if (amp_grow(c.al, &v, &cap_pc, npc + 1, sizeof *pc) != AMP_OK) {
                         st = AMP_ERR_NOMEM;
