@@ -22,6 +22,9 @@ void amp_contpath_opts_default(amp_contpath_opts *o, double r)
     o->pseudo_edges = 0;
     o->join = 1;
     o->support_corners = 1;
+    o->skin_bottom = 0.8;
+    o->skin_top = 0.8;
+    o->skin_cell = 0;
 }
 
 /* Length of the printed segments of path i (a segment with radius 0 at both

@@ -109,6 +109,16 @@ typedef struct amp_cp_tour_info {
 amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pathset *out, amp_cp_tour_info *info,
                        amp_error *err);
 
+/* ---- solid skins (contpath_skin.c) ---- */
+/**
+ * 1 when a sample of region @p R of layer @p li (ring vertices, a grid of
+ * spacing @p step inside) is not covered by every section within @p below
+ * mm under and @p above mm over the layer (the part's ends count as
+ * uncovered): the region is printed solid.
+ */
+int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R, double below, double above,
+                          double step);
+
 /* ---- step 6, support corners (contpath_support.c) ---- */
 /**
  * Corners (Fig. 5) on the bare ring stretches @p bare of one island, built

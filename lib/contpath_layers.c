@@ -12,9 +12,10 @@
 typedef struct lctx {
     const amp_slices *sl;
     const amp_contpath_opts *o;
-    amp_cx2 khat;
-    uint64_t *ke;
-    size_t nke;
+    amp_cx2 khat, kskin; /* sparse infill and solid skin lattices */
+    uint64_t *ke, *kse;
+    size_t nke, nkse;
+    int skins;
     amp_polyset isl, ins, reg;
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
@@ -121,8 +122,9 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
 /* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
  * for an island narrower than 2r, at the deepest smaller inset that exists:
  * every island with area is printed) and the strokes of its regions. */
-static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *s0, amp_error *err)
+static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_error *err)
 {
+    const amp_layer *L = &c->sl->layers[li];
     const amp_contpath_opts *o = c->o;
     double d;
     size_t q, nperim = 0;
@@ -149,13 +151,17 @@ static amp_status island_paths(lctx *c, const amp_layer *L, amp_contpath_stats *
     if (rc == AMP_OK)
         rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
+        int skin;
         if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
             break;
         /* a speck of R̃ (under a hundredth of a bead's cross-section) is
          * filled by the beads around it */
         if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
             continue;
-        rc = amp_cp_region_run(&c->khat, c->ke, c->nke, &c->reg, L->z_print, o, o->join && o->perimeters, &c->tmp,
+        skin = c->skins && amp_cp_region_is_skin(c->sl, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
+        s0->skin_regions += (size_t)skin;
+        rc = amp_cp_region_run(skin ? &c->kskin : &c->khat, skin ? c->kse : c->ke, skin ? c->nkse : c->nke, &c->reg,
+                               L->z_print, o, o->join && o->perimeters, &c->tmp,
                                o->support_corners && !o->support_stretches ? &c->bare : NULL, s0, err);
     }
     /* step 6: corners from the bare stretches to the perimeter */
@@ -207,7 +213,7 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
         c->done[k] = 1;
         amp_pathset_clear(&c->tmp);
         if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
-            (rc = island_paths(c, L, s0, err)) != AMP_OK)
+            (rc = island_paths(c, li, s0, err)) != AMP_OK)
             break;
         if (c->o->join)
             rc = amp_cp_join_loops(&c->tmp, 0, &c->isl, c->o->radius, h, out, &nobj, &s0->specks, err);
@@ -248,6 +254,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     c.sl = sl;
     c.o = o;
     amp_cx2_init(&c.khat, al);
+    amp_cx2_init(&c.kskin, al);
     amp_polyset_init(&c.isl, al);
     amp_polyset_init(&c.ins, al);
     amp_polyset_init(&c.reg, al);
@@ -256,6 +263,17 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     rc = amp_contpath_complex(sl, o, &c.khat, err);
     if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
+    c.skins = o->skin_bottom > 0 || o->skin_top > 0;
+    if (rc == AMP_OK && c.skins) {
+        /* the solid lattice: square cells of 4r with offset r, beads touching */
+        amp_contpath_opts so = *o;
+        so.cell = o->skin_cell > 0 ? o->skin_cell : 4 * o->radius;
+        so.grid = AMP_GRID_SQUARE;
+        so.offset = o->radius;
+        rc = amp_contpath_complex(sl, &so, &c.kskin, err);
+        if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin, al, &c.kse, &c.nkse) != AMP_OK)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
+    }
     for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
         s0.layers++;
         rc = layer_paths(&c, li, out, &s0, err);
@@ -272,6 +290,8 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         }
     }
     amp_free(al, c.ke);
+    amp_free(al, c.kse);
+    amp_cx2_free(&c.kskin);
     amp_free(al, c.done);
     amp_cx2_free(&c.khat);
     amp_polyset_free(&c.isl);

@@ -511,7 +511,7 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     /* 12 layers x 2 islands x one stroke; 3 regions per layer (the neck splits R̃) */
     ck_assert_msg(strstr(out, "\"layers\":12,\"empty_layers\":0,\"islands\":24,") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"island_strokes\":24,\"specks\":0,\"extrusion_starts\":24,\"regions\":36,"
-                              "\"strokes\":36,\"multi_stroke_regions\":0") != NULL,
+                              "\"skin_regions\":12,\"strokes\":36,\"multi_stroke_regions\":0") != NULL,
                   "%s", out);
     ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);
@@ -885,6 +885,109 @@ START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
 }
 END_TEST
 
+static int cmp_dbl(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : (x > y ? 1 : 0);
+}
+
+/* Independent bead coverage of one layer: the section rasterised by
+ * scanlines (pixel @p px), every printed segment at height z stamped as a
+ * capsule of radius r; the fraction of the section's pixels under a bead. */
+static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, double z, double r, double px)
+{
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, *xs;
+    size_t i, k, nx, ny, in = 0, hit = 0;
+    unsigned char *img;
+    for (i = 0; i < sec->npts; i++) {
+        x0 = fmin(x0, sec->pts[i].x);
+        y0 = fmin(y0, sec->pts[i].y);
+        x1 = fmax(x1, sec->pts[i].x);
+        y1 = fmax(y1, sec->pts[i].y);
+    }
+    nx = (size_t)((x1 - x0) / px) + 1;
+    ny = (size_t)((y1 - y0) / px) + 1;
+    img = calloc(nx * ny, 1);
+    xs = malloc((sec->npts + 1) * sizeof *xs);
+    ck_assert(img && xs);
+    /* 1: inside the section (even-odd spans of each row) */
+    for (k = 0; k < ny; k++) {
+        double y = y0 + (k + 0.5) * px;
+        size_t nxs = 0, q, r2;
+        for (r2 = 0; r2 < sec->nrings; r2++) {
+            const amp_vec2 *p = amp_polyset_ring(sec, r2);
+            size_t n = sec->rings[r2].n;
+            for (q = 0; q < n; q++) {
+                amp_vec2 a = p[q], b = p[(q + 1) % n];
+                if ((a.y > y) != (b.y > y))
+                    xs[nxs++] = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+            }
+        }
+        qsort(xs, nxs, sizeof *xs, cmp_dbl);
+        for (q = 0; q + 1 < nxs; q += 2) {
+            size_t c0 = (size_t)fmax(0, ceil((xs[q] - x0) / px - 0.5)), c1;
+            for (c1 = c0; c1 < nx && x0 + (c1 + 0.5) * px < xs[q + 1]; c1++)
+                img[k * nx + c1] = 1;
+        }
+    }
+    /* 2: under a bead */
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        if (fabs(v[0].p.z - z) > 1e-9)
+            continue;
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            amp_vec3 a = amp_v3(v[k].p.x, v[k].p.y, 0), b = amp_v3(v[k + 1].p.x, v[k + 1].p.y, 0);
+            long cx0, cx1, cy0, cy1, cx, cy;
+            if (!(v[k].r > 0) || !(v[k + 1].r > 0))
+                continue;
+            cx0 = (long)floor((fmin(a.x, b.x) - r - x0) / px);
+            cx1 = (long)ceil((fmax(a.x, b.x) + r - x0) / px);
+            cy0 = (long)floor((fmin(a.y, b.y) - r - y0) / px);
+            cy1 = (long)ceil((fmax(a.y, b.y) + r - y0) / px);
+            for (cy = cy0 < 0 ? 0 : cy0; cy <= cy1 && cy < (long)ny; cy++)
+                for (cx = cx0 < 0 ? 0 : cx0; cx <= cx1 && cx < (long)nx; cx++) {
+                    amp_vec3 c = amp_v3(x0 + (cx + 0.5) * px, y0 + (cy + 0.5) * px, 0);
+                    if (img[cy * nx + cx] == 1 && amp_v3_seg_dist2(c, a, b, NULL) <= r * r)
+                        img[cy * nx + cx] = 2;
+                }
+        }
+    }
+    for (i = 0; i < nx * ny; i++) {
+        in += img[i] != 0;
+        hit += img[i] == 2;
+    }
+    free(img);
+    free(xs);
+    return in ? (double)hit / (double)in : 0;
+}
+
+START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
+{
+    /* the idler's first and last layers are skins: >= 95 % of the section
+     * under beads (measured here by rasterising); a middle layer keeps the
+     * sparse lattice */
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    double c0, c1, cm;
+    size_t last;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_IDLER, 0.7, 0.2, 0, &sl, &ps, &st, &o);
+    last = sl.nlayers - 1;
+    ck_assert_uint_gt(st.skin_regions, 0);
+    ck_assert_uint_eq(st.island_strokes, st.islands);
+    c0 = bead_coverage(&sl.layers[0].polys, &ps, sl.layers[0].z_print, 0.225, 0.04);
+    c1 = bead_coverage(&sl.layers[last].polys, &ps, sl.layers[last].z_print, 0.225, 0.04);
+    cm = bead_coverage(&sl.layers[last / 2].polys, &ps, sl.layers[last / 2].z_print, 0.225, 0.04);
+    ck_assert_msg(c0 >= 0.95 && c1 >= 0.95 && cm < 0.8, "bottom %g, top %g, middle %g", c0, c1, cm);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -905,6 +1008,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, cycle_tree_and_merging_trace_the_same_edges_once_without_crossing);
     AMP_ADD_TEST(tc, a_sliver_first_layer_is_printed_on_the_bed);
     AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
+    AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -21,7 +21,11 @@ const char cmd_slice_usage[] =
     "                     perimeter loops at r and the Euler lattice clipped to the inset by 3r,\n"
     "                     printed at z = (i + 1) H with radius r, each path a bead of the layer's\n"
     "                     height; the stroke starts where the previous one ended\n"
-    "  --cell S           lattice cell size of --continuous in mm (default 10 r)\n"
+    "  --cell S           lattice cell size of --continuous in mm (default 10 r: about 40 %% infill)\n"
+    "  --infill P         sparse infill density in %% instead: cell = 4 r x 100 / P\n"
+    "  --bottom T, --top T  solid skin thickness in mm over downward / under upward facing surfaces\n"
+    "                     (default 0.8 each; 0: none): those regions get the dense Euler lattice (cell\n"
+    "                     4r, beads touching), still one stroke per island\n"
     "  --grid KIND        lattice of --continuous: square (default), tri or hex\n"
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
     "  --no-perimeter     --continuous without the perimeter loops\n"
@@ -181,6 +185,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "specks", (long long)st->specks);
     cli_json_int(&j, "extrusion_starts", (long long)count_starts(ps));
     cli_json_int(&j, "regions", (long long)st->regions);
+    cli_json_int(&j, "skin_regions", (long long)st->skin_regions);
     cli_json_int(&j, "strokes", (long long)st->strokes);
     cli_json_int(&j, "multi_stroke_regions", (long long)st->multi_stroke);
     cli_json_int(&j, "perimeter_loops", (long long)st->perimeter_loops);
@@ -275,7 +280,7 @@ int cmd_slice(int argc, char **argv)
     double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
     int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
-    double cell = 0, offset = 0;
+    double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8;
     const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
     amp_contpath_opts co;
     amp_mesh m;
@@ -291,6 +296,8 @@ int cmd_slice(int argc, char **argv)
                       {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
                       {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
                       {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
+                      {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
+                      {"top", CLI_DOUBLE, &skin_top, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -321,6 +328,19 @@ int cmd_slice(int argc, char **argv)
     co.pseudo_edges = pseudo && !nopseudo;
     co.join = !nojoin;
     co.support_corners = !nocorners;
+    if (!(skin_bottom >= 0) || !(skin_top >= 0) || !isfinite(skin_bottom) || !isfinite(skin_top))
+        return cli_fail("slice", CLI_USAGE, "--bottom and --top must be thicknesses >= 0 mm");
+    co.skin_bottom = skin_bottom;
+    co.skin_top = skin_top;
+    if (opts[9].seen && infill > 0)
+        return cli_fail("slice", CLI_USAGE, "--cell and --infill exclude each other");
+    if (infill != 0) {
+        if (!(infill > 0 && infill <= 100))
+            return cli_fail("slice", CLI_USAGE, "--infill must be a density in %% (0 < P <= 100)");
+        /* a square lattice of cell S with beads 2r wide covers about 4r / S
+         * of the area (two bead widths per cell side) */
+        co.cell = 4 * radius * 100 / infill;
+    }
     if (strcmp(tour, "cycle-tree") == 0)
         co.tour = AMP_TOUR_CYCLE_TREE;
     else if (strcmp(tour, "merge") == 0)

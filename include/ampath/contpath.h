@@ -60,6 +60,9 @@ typedef struct amp_contpath_opts {
     int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
                                 cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
     amp_tour_method tour;  /**< §4 construction (default AMP_TOUR_CYCLE_TREE) */
+    double skin_bottom;    /**< mm of solid layers over every downward-facing surface (default 0.8; 0: none) */
+    double skin_top;       /**< mm of solid layers under every upward-facing surface (default 0.8; 0: none) */
+    double skin_cell;      /**< lattice cell of the solid skins (<= 0: 4 r, where the beads of K̂ touch) */
     int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
                                 stroke (one extrusion start per island); 0: separate closed paths */
 } amp_contpath_opts;
@@ -82,6 +85,8 @@ typedef struct amp_contpath_stats {
     size_t island_strokes;   /**< object strokes written for the islands (= islands when joined) */
     size_t specks;           /**< closed loops under r/4 across left out when joining (inside other beads) */
     size_t regions;          /**< infill regions R̃_j that received a stroke */
+    size_t skin_regions;     /**< of which solid (the dense lattice): a point of them has no part within the
+                                  skin thickness above or below */
     size_t strokes;          /**< infill strokes (one per region when all goes well) */
     size_t multi_stroke;     /**< regions that needed more than one stroke */
     size_t perimeter_loops;  /**< perimeter paths */
