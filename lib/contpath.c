@@ -48,14 +48,16 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
     amp_cx2 k;
     amp_euler_opts eo;
     amp_status st;
+    double cell;
     if (!o || !(o->radius > 0) || !isfinite(o->radius))
         return amp_fail(err, AMP_ERR_ARG, 0, "extruder radius must be positive");
+    cell = o->cell > 0 ? o->cell : 10 * o->radius;
     for (i = 0; i < sl->nlayers; i++)
         n += sl->layers[i].polys.npts;
     if (n < 3)
         return amp_fail(err, AMP_ERR_GEOMETRY, 0, "no layer polygon to mesh");
-    pts = amp_alloc(al, n * sizeof *pts);
-    hull = amp_alloc(al, n * sizeof *hull);
+    pts = amp_alloc(al, (n + 1) * sizeof *pts);
+    hull = amp_alloc(al, (n + 1) * sizeof *hull);
     if (!pts || !hull) {
         amp_free(al, pts);
         amp_free(al, hull);
@@ -69,8 +71,21 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
     amp_cx2_init(&k, al);
     /* step 2: hull of the union of all layers' projections; step 3: K */
     st = amp_convex_hull(pts, n, al, hull, &nh, err);
+    /* the lattice starts at the hull's lowest corner: a corner moved out by
+     * an odd fraction of a cell lays it off round coordinates, so that a CAD
+     * part on a millimetre grid does not put its edges on lattice lines,
+     * where the written coordinates (10 digits) could turn a touch into a
+     * crossing; K still covers the hull (the hull of both) */
+    if (st == AMP_OK) {
+        amp_vec2 lo = hull[0];
+        for (i = 1; i < nh; i++)
+            lo = amp_v2(fmin(lo.x, hull[i].x), fmin(lo.y, hull[i].y));
+        memcpy(pts, hull, nh * sizeof *pts);
+        pts[nh] = amp_v2(lo.x - 0.2137 * cell, lo.y - 0.3719 * cell);
+        st = amp_convex_hull(pts, nh + 1, al, hull, &nh, err);
+    }
     if (st == AMP_OK)
-        st = amp_cx2_grid(&k, hull, nh, o->cell > 0 ? o->cell : 10 * o->radius, o->grid, err);
+        st = amp_cx2_grid(&k, hull, nh, cell, o->grid, err);
     /* step 4: K̂ with mitered offset δ = r, so that rim cells of K (outside
      * every R̃) hold all odd vertices and Class 2 strips are 2r wide */
     eo.offset = o->offset > 0 ? o->offset : o->radius;

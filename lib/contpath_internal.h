@@ -120,6 +120,10 @@ int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R,
                           double step);
 
 /* ---- step 6, support corners (contpath_support.c) ---- */
+/* While an island is assembled, a corner's tip carries this radius (r less
+ * 2^-30 r): the joiner takes no segment ending at a tip for a splice, and
+ * the layer code restores r before the paths are written. */
+#define AMP_CP_TOOTH_R(r) ((r) * (1.0 - 0x1p-30))
 /**
  * Corners (Fig. 5) on the bare ring stretches @p bare of one island, built
  * into its perimeter loops, paths [0, nperim) of @p ps (closed, radius r).

@@ -131,9 +131,9 @@ static int nearest(const joiner *J, const size_t *uf, size_t skip, amp_vec2 q, s
                 size_t i = g->item[k].i, j = (i + 1) % L->n;
                 amp_vec2 a = P2v(L->v[i].p), b = P2v(L->v[j].p);
                 double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-                if (L->wall || amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r > 0) ||
-                    !(L->v[j].r > 0))
-                    continue;
+                if (L->wall || amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
+                    !(L->v[j].r == J->r))
+                    continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
                 t = fmin(fmax(t, 0.0), 1.0);
                 d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
@@ -267,13 +267,13 @@ static size_t forward_span(size_t n, size_t j1, double u1, size_t j2, double u2)
     return (j2 + n - j1) % n == 0 ? n : (j2 + n - j1) % n;
 }
 
-/* Segments from..from+cnt (cyclic) of L all printed (both ends radius > 0)? */
-static int all_printed(const jloop *L, size_t from, size_t cnt)
+/* Segments from..from+cnt (cyclic) of L all printed at the nominal radius r? */
+static int all_printed(const jloop *L, size_t from, size_t cnt, double r)
 {
     size_t i;
     for (i = 0; i <= cnt + 1; i++)
-        if (!(L->v[(from + i) % L->n].r > 0))
-            return 0;
+        if (!(L->v[(from + i) % L->n].r == r))
+            return 0; /* a pseudo edge (0) or a corner's tip (tagged) */
     return 1;
 }
 
@@ -312,7 +312,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     c.sx = sx;
     c.t1 = 0.5;
     if (amp_v3_dist(X->v[sx].p, X->v[(sx + 1) % X->n].p) < 1e-6 * J->r ||
-        !second_point(X, sx, ell, &c.sx2, &c.t2) || !all_printed(X, sx, forward_span(X->n, sx, 0, c.sx2, 0)))
+        !second_point(X, sx, ell, &c.sx2, &c.t2) || !all_printed(X, sx, forward_span(X->n, sx, 0, c.sx2, 0), J->r))
         return 0;
     P1 = seg_point(X, sx, c.t1);
     P2 = seg_point(X, c.sx2, c.t2);
@@ -332,7 +332,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     if (fw > 8 && bw > 8)
         return 0;
     c.ybackward = fw <= bw;
-    if (!all_printed(&J->lp[c.ly], c.ybackward ? c.j1 : c.j2, c.ybackward ? fw : bw))
+    if (!all_printed(&J->lp[c.ly], c.ybackward ? c.j1 : c.j2, c.ybackward ? fw : bw, J->r))
         return 0;
     Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
     Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);

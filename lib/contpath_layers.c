@@ -2,6 +2,7 @@
  * regions, one stroke per island, bead heights, stroke starts
  * (continuous-toolpath-euler.txt §2.2; issues 14 and 16). */
 #include <math.h>
+#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -53,6 +54,16 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
     memcpy(v, w, n * sizeof *w);
     amp_free(ps->alloc, w);
     return AMP_OK;
+}
+
+/* v as the .amp writer will write it (10 significant digits, SPEC §3): the
+ * checks then judge the coordinates the printer gets, and a touch that
+ * rounding would turn into a crossing is caught before the file exists. */
+static double as_written(double v)
+{
+    char buf[40];
+    snprintf(buf, sizeof buf, "%.10g", v);
+    return strtod(buf, NULL);
 }
 
 /* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
@@ -223,6 +234,13 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
                 out->paths[i].h = h;
                 nobj += out->paths[i].role == AMP_ROLE_OBJECT;
             }
+        }
+        /* corners' tips lose their tag (contpath_internal.h); coordinates as written */
+        for (i = out->npaths > first ? out->paths[first].first : out->nverts; i < out->nverts; i++) {
+            if (out->verts[i].r == AMP_CP_TOOTH_R(c->o->radius))
+                out->verts[i].r = c->o->radius;
+            out->verts[i].p.x = as_written(out->verts[i].p.x);
+            out->verts[i].p.y = as_written(out->verts[i].p.y);
         }
         compact_tail(out, first, 1e-3);
         s0->islands += out->npaths > first;

@@ -69,7 +69,16 @@ static amp_pvert at_len(const amp_pathset *ps, size_t i, const double *cl, doubl
 
 /* Does segment a-b cross a segment of any path of @p ps (or an accepted
  * tooth leg)? Segments ending at a or b do not count. */
-static int blocked(const amp_pathset *ps, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs)
+static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t;
+    if ((q.x == a.x && q.y == a.y) || (q.x == b.x && q.y == b.y))
+        return 0; /* a shared vertex (the leg's own base) */
+    t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+    return hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) < tol;
+}
+
+static int blocked(const amp_pathset *ps, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs, double hair)
 {
     size_t i, k;
     double x0 = fmin(a.x, b.x), x1 = fmax(a.x, b.x), y0 = fmin(a.y, b.y), y1 = fmax(a.y, b.y);
@@ -80,6 +89,10 @@ static int blocked(const amp_pathset *ps, amp_vec2 a, amp_vec2 b, const amp_vec2
             if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
                 continue;
             if (cross2(a, b, c, d))
+                return 1;
+            /* a touch (an end on the other segment, within a hair) would
+             * become a crossing once the coordinates are rounded */
+            if (near_seg(b, c, d, hair) || near_seg(c, a, b, hair) || near_seg(d, a, b, hair))
                 return 1;
         }
     }
@@ -240,7 +253,7 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
             }
             a0 = at_len(ps, loop, cl[loop], s - hw, &seg);
             a1 = at_len(ps, loop, cl[loop], s + hw, &seg);
-            if (blocked(ps, xy(a0.p), c, legs, 2 * nt) || blocked(ps, c, xy(a1.p), legs, 2 * nt)) {
+            if (blocked(ps, xy(a0.p), c, legs, 2 * nt, 1e-4 * r) || blocked(ps, xy(a1.p), c, legs, 2 * nt, 1e-4 * r)) {
                 st->corners_left_out++;
                 continue;
             }
@@ -263,7 +276,7 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
             t[nt].s1 = s + hw;
             t[nt].loop = loop;
             t[nt].tip.p = amp_v3(c.x, c.y, a0.p.z);
-            t[nt].tip.r = r;
+            t[nt].tip.r = AMP_CP_TOOTH_R(r); /* tagged: the joiner keeps off corners */
             nt++;
         }
     }

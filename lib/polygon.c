@@ -705,6 +705,36 @@ static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
     return m;
 }
 
+/* Cut small loops out of a stitched ring in place: where segment i properly
+ * crosses segment j within the next 16 segments (a swallowtail piece kept
+ * on both sides, so the ring crosses itself near a tight reflex corner),
+ * the vertices between become the crossing point. Returns the new count. */
+static size_t untangle(amp_vec2 *p, size_t n)
+{
+    size_t i, j, k, m;
+    int again = 1;
+    while (again && n >= 4) {
+        again = 0;
+        for (i = 0; i + 2 < n && !again; i++)
+            for (j = i + 2; j < n && j <= i + 16 && !again; j++) {
+                amp_vec2 a = p[i], b = p[i + 1], c = p[j], d = p[(j + 1) % n];
+                double d1 = amp_v2_orient(a, b, c), d2 = amp_v2_orient(a, b, d), d3 = amp_v2_orient(c, d, a),
+                       d4 = amp_v2_orient(c, d, b), t;
+                if ((j + 1) % n == i || !(((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) &&
+                                          ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))))
+                    continue;
+                t = d3 / (d3 - d4);
+                p[i + 1] = amp_v2(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y));
+                /* drop p[i + 2 .. j] */
+                for (k = i + 2, m = j + 1; m < n; k++, m++)
+                    p[k] = p[m];
+                n -= j - i - 1;
+                again = 1;
+            }
+    }
+    return n;
+}
+
 /* Unused piece whose start is nearest to node @p nb within @p tol (npc + 1:
  * the ring's start node @p start is nearer: close the ring; npc: none). */
 static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t nb, size_t start, double tol)
@@ -862,6 +892,8 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
         }
         if (len >= 3)
             len = despike(loop, len, 1e-9 * r, 0.05 * r);
+        if (len >= 4)
+            len = untangle(loop, len);
         if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
             (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
             goto done;
