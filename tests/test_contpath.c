@@ -877,7 +877,7 @@ START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
     ca = ring_cover(&sl, &a, 0.225, 0.225 * 1.01);
     cb = ring_cover(&sl2, &b, 0.225, 0.225 * 1.01);
     ck_assert_msg(ca >= 0.99 && 1 - ca <= 0.5 * (1 - cb), "ring within r of material: %g with corners, %g without", ca, cb);
-    ck_assert_uint_le(sa.corners_left_out, sa.support_corners / 20);
+    ck_assert_uint_le(sa.corners_left_out, sa.support_corners / 10);
     amp_pathset_free(&a);
     amp_pathset_free(&b);
     amp_slices_free(&sl);
