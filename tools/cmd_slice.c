@@ -1,6 +1,7 @@
 /* ampath slice MESH.stl --layer H --polygons — planar layers (paper 2 §2.2 step 1, SPEC §4). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "slicetool.h"
@@ -12,49 +13,37 @@ const char cmd_slice_usage[] =
     "       [--json]\n"
     "  --layer H          layer height in mm (required); layer i is cut at z = (i + 1/2) H above the\n"
     "                     plate (mesh lowest point = 0) and printed at z = (i + 1) H\n"
-    "  --first-layer H0   height of the first layer in mm (default: H); layer 0 is cut at H0/2,\n"
-    "                     layer i >= 1 at H0 + (i - 1/2) H\n"
-    "  --polygons         write each layer's polygons (the default product): one closed path per\n"
-    "                     ring (last vertex repeats the first) at the cutting height, outer\n"
-    "                     boundaries counter-clockwise, holes clockwise, islands in order\n"
-    "  --continuous       continuous tool paths (paper 2): per island one closed stroke holding its\n"
-    "                     perimeter loops at r and the Euler lattice clipped to the inset by 3r,\n"
-    "                     printed at z = (i + 1) H with radius r, each path a bead of the layer's\n"
-    "                     height; the stroke starts where the previous one ended\n"
-    "  --cell S           lattice cell size of --continuous in mm (default 10 r: about 40 %% infill)\n"
-    "  --infill P         sparse infill density in %% instead: cell = 4 r x 100 / P\n"
-    "  --bottom T, --top T  solid skin thickness in mm over downward / under upward facing surfaces\n"
-    "                     (default 0.8 each; 0: none): those regions get the dense Euler lattice (cell\n"
-    "                     4r, beads touching), still one stroke per island\n"
-    "  --grid KIND        lattice of --continuous: square (default), tri or hex\n"
+    "  --first-layer H0   first layer height (default H): layer 0 cut at H0/2, i >= 1 at H0 + (i - 1/2) H\n"
+    "  --polygons         each layer's rings as closed paths at the cutting height (the default):\n"
+    "                     outer boundaries counter-clockwise, holes clockwise, islands in order\n"
+    "  --continuous       paper 2: per island one closed stroke (perimeter loops at r and the Euler\n"
+    "                     lattice clipped to the inset by 3r), printed at z = (i + 1) H, every path\n"
+    "                     a bead of the layer's height, started where the previous one ended\n"
+    "  --radius R         bead half-width in mm (default 0.225: a 0.45 mm bead); also the SVG inset\n"
+    "  --nozzle D         nozzle diameter: bead 1.125 D wide (r = 0.5625 D) unless --radius is given\n"
+    "  --cell S           sparse lattice cell in mm (default 10 r, about 40 % infill)\n"
+    "  --infill P         sparse infill density in % instead (cell = 4 r x 100 / P)\n"
+    "  --bottom T, --top T  solid skin thickness in mm (default 0.8 each, 0: none): regions near a\n"
+    "                     downward or upward facing surface get the dense lattice (cell 4r)\n"
+    "  --eps-c C          warn where a layer overhangs the one below by more than C r (section 2.1,\n"
+    "                     0 < C <= 1, default 1; per layer pair in --json)\n"
+    "  --grid KIND        square (default), tri or hex\n"
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
-    "  --no-perimeter     --continuous without the perimeter loops\n"
-    "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
-    "                     instead of the corners\n"
-    "  --no-corners       no support corners (step 6, Fig. 5; default: corners from the unprinted\n"
-    "                     stretches of the infill ring to the perimeter, part of the stroke)\n"
-    "  --pseudo           patch stretches closer than 2r to a lattice piece of their thin boundary\n"
-    "                     cell become pseudo edges, radius 0: travel inside the stroke (paper\n"
-    "                     Figs. 7, 8; each is one more extrusion start). Default: printed\n"
-    "  --no-pseudo        the default (kept for old scripts)\n"
-    "  --tour KIND        cycle-tree (default: the paper's cycle tree and Hierholzer traversal, §4)\n"
-    "                     or merge (angular-neighbour transitions merged wherever curves touch)\n"
-    "  --no-join          keep each island's perimeter loops and region strokes apart (default:\n"
-    "                     spliced into one closed stroke, one extrusion start per island)\n"
+    "  --tour KIND        cycle-tree (default, paper section 4) or merge (curves merged where they touch)\n"
+    "  --no-perimeter     no perimeter loops\n"
+    "  --no-corners       no support corners (step 6, Fig. 5) on the unprinted infill ring stretches\n"
+    "  --support-stretches  print those stretches as support paths instead (Remark 2.1)\n"
+    "  --pseudo           thin-cell patch stretches as pseudo edges (travel, Figs. 7, 8; each one\n"
+    "                     more extrusion start); default printed (--no-pseudo kept for old scripts)\n"
+    "  --no-join          perimeter loops and region strokes as separate paths\n"
     "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
-    "  --radius R         deposition radius (half the bead width) written on every vertex, and the\n"
-    "                     inset drawn in the SVG, in mm (default 0.225: a 0.45 mm bead)\n"
-    "  --nozzle D         nozzle diameter in mm: the bead is 1.125 D wide (r = 0.5625 D) unless\n"
-    "                     --radius is given\n"
-    "  --json             print the figures as one JSON object (layers, polygons, islands, holes,\n"
-    "                     area per layer, open chains of an open mesh, time; with --continuous:\n"
-    "                     strokes, joins, travel moves, printed/travel/support/pseudo lengths,\n"
-    "                     crossings)\n"
+    "  --json             figures as one JSON object (per layer with --polygons; strokes, starts,\n"
+    "                     lengths, check results, overhangs with --continuous)\n"
     "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
-    "(open_chains) with a warning on stderr. --continuous checks every path it writes (crossings,\n"
-    "edges printed twice, points outside the layer) and exits 1 when one fails.\n";
+    "(open_chains, per layer) with a warning on stderr. --continuous checks every path it writes\n"
+    "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
 static int ends_with(const char *s, const char *suf)
 {
@@ -171,10 +160,30 @@ static size_t count_starts(const amp_pathset *ps)
     return starts;
 }
 
+/* §2.1: overhang of every layer pair, the pairs beyond c r, the worst. */
+static size_t overhangs(const amp_slices *sl, double c, double r, double *per, double *worst, size_t *at)
+{
+    size_t i, over = 0;
+    *worst = 0;
+    *at = 0;
+    for (i = 0; i + 1 < sl->nlayers; i++) {
+        per[i] = amp_slices_overhang(sl, i, 4 * r);
+        over += per[i] > c * r;
+        if (per[i] > *worst) {
+            *worst = per[i];
+            *at = i + 1;
+        }
+    }
+    return over;
+}
+
 static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size_t crossings, size_t repeats,
-                       size_t outside, size_t failed, double radius, double t0)
+                       size_t outside, size_t failed, double radius, double t0, const amp_slices *sl,
+                       const double *per, double c)
 {
     cli_json j;
+    size_t i, over = 0;
+    double worst = 0;
     cli_json_begin(&j, stdout);
     cli_json_int(&j, "layers", (long long)st->layers);
     cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
@@ -211,6 +220,22 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "outside", (long long)outside);
     cli_json_int(&j, "failed_paths", (long long)failed);
     cli_json_num(&j, "radius", radius);
+    for (i = 0; i + 1 < sl->nlayers; i++) {
+        over += per[i] > c * radius;
+        worst = fmax(worst, per[i]);
+    }
+    cli_json_num(&j, "eps_c", c);
+    cli_json_int(&j, "overhang_pairs", (long long)over);
+    cli_json_num(&j, "max_overhang_mm", worst < HUGE_VAL ? worst : -1);
+    cli_json_arr(&j, "overhang_mm");
+    for (i = 0; i + 1 < sl->nlayers; i++)
+        cli_json_num(&j, NULL, per[i] < HUGE_VAL ? per[i] : -1);
+    cli_json_close(&j);
+    cli_json_arr(&j, "open_chain_layers");
+    for (i = 0; i < sl->nlayers; i++)
+        if (sl->layers[i].open_chains)
+            cli_json_int(&j, NULL, (long long)i);
+    cli_json_close(&j);
     cli_json_num(&j, "time_s", cli_now() - t0);
     cli_json_end(&j);
 }
@@ -218,19 +243,29 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
 /* --continuous: build, check every path independently (crossings, repeated
  * edges, points outside its layer) and report; a failed check is exit 1. */
 static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
-                          int json, double t0)
+                          int json, double t0, double epsc)
 {
     amp_pathset ps;
     amp_contpath_stats st;
     amp_error err;
-    size_t i, crossings = 0, repeats = 0, outside = 0, failed = 0;
+    size_t i, crossings = 0, repeats = 0, outside = 0, failed = 0, over, at;
+    double *per = calloc(sl->nlayers + 1, sizeof *per), worst;
     int rc = CLI_OK;
+    if (!per)
+        return cli_fail("slice", CLI_USAGE, "out of memory");
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
     if (amp_contpath_layers(sl, o, &ps, &st, &err) != AMP_OK) {
         amp_pathset_free(&ps);
+        free(per);
         return cli_fail_err("slice", &err);
     }
+    over = overhangs(sl, epsc, o->radius, per, &worst, &at);
+    if (over)
+        fprintf(stderr,
+                "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm; worst %.3g mm "
+                "under layer %lu at z %.4g): the layer above may sag\n",
+                (unsigned long)over, epsc, epsc * o->radius, worst, (unsigned long)at, sl->layers[at].z_print);
     for (i = 0; i < ps.npaths; i++) {
         amp_stroke_report rep;
         amp_status cs;
@@ -238,6 +273,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         cs = amp_pathset_stroke_check(&ps, i, reg, 1e-6, &rep, &err);
         if (cs == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
+            free(per);
             return cli_fail_err("slice", &err);
         }
         if (cs != AMP_OK && failed++ == 0)
@@ -254,7 +290,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         rc = cli_save_paths("slice", out, &ps, comment);
     }
     if (rc == CLI_OK && json)
-        json_stats(&st, &ps, crossings, repeats, outside, failed, o->radius, t0);
+        json_stats(&st, &ps, crossings, repeats, outside, failed, o->radius, t0, sl, per, epsc);
     else if (rc == CLI_OK)
         printf("%s: %lu layers, %lu islands, %lu strokes, %lu extrusion starts, %lu travel moves, printed %.1f mm, "
                "travel %.1f mm%s%s\n",
@@ -272,6 +308,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         fprintf(stderr, "ampath slice: warning: %lu layers with section area got no path\n",
                 (unsigned long)st.empty_layers);
     amp_pathset_free(&ps);
+    free(per);
     return rc;
 }
 
@@ -280,7 +317,7 @@ int cmd_slice(int argc, char **argv)
     double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
     int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
-    double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8;
+    double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8, epsc = 1.0;
     const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
     amp_contpath_opts co;
     amp_mesh m;
@@ -297,7 +334,7 @@ int cmd_slice(int argc, char **argv)
                       {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
                       {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
                       {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
-                      {"top", CLI_DOUBLE, &skin_top, 0},
+                      {"top", CLI_DOUBLE, &skin_top, 0},     {"eps-c", CLI_DOUBLE, &epsc, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -330,6 +367,8 @@ int cmd_slice(int argc, char **argv)
     co.support_corners = !nocorners;
     if (!(skin_bottom >= 0) || !(skin_top >= 0) || !isfinite(skin_bottom) || !isfinite(skin_top))
         return cli_fail("slice", CLI_USAGE, "--bottom and --top must be thicknesses >= 0 mm");
+    if (!(epsc > 0 && epsc <= 1))
+        return cli_fail("slice", CLI_USAGE, "--eps-c must be in (0, 1]");
     co.skin_bottom = skin_bottom;
     co.skin_top = skin_top;
     if (opts[9].seen && infill > 0)
@@ -356,7 +395,7 @@ int cmd_slice(int argc, char **argv)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
                 (unsigned long)sl.open_chains);
     if (rc == CLI_OK && continuous) {
-        rc = run_continuous(pos[0], out, &sl, &co, json, t0);
+        rc = run_continuous(pos[0], out, &sl, &co, json, t0, epsc);
         goto done;
     }
     if (rc == CLI_OK && out) {
@@ -401,6 +440,7 @@ int cmd_slice(int argc, char **argv)
             cli_json_int(&j, "polygons", (long long)sl.layers[i].polys.nrings);
             cli_json_int(&j, "holes", (long long)nh);
             cli_json_num(&j, "area_mm2", amp_polyset_area(&sl.layers[i].polys));
+            cli_json_int(&j, "open_chains", (long long)sl.layers[i].open_chains);
             cli_json_close(&j);
         }
         cli_json_close(&j);
