@@ -47,6 +47,7 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
     size_t n = 0, nh = 0, i;
     amp_cx2 k;
     amp_euler_opts eo;
+    amp_euler_stats es;
     amp_status st;
     double cell;
     if (!o || !(o->radius > 0) || !isfinite(o->radius))
@@ -69,6 +70,7 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
         n += sl->layers[i].polys.npts;
     }
     amp_cx2_init(&k, al);
+    memset(&es, 0, sizeof es);
     /* step 2: hull of the union of all layers' projections; step 3: K */
     st = amp_convex_hull(pts, n, al, hull, &nh, err);
     /* the lattice starts at the hull's lowest corner: a corner moved out by
@@ -91,7 +93,23 @@ amp_status amp_contpath_complex(const amp_slices *sl, const amp_contpath_opts *o
     eo.offset = o->offset > 0 ? o->offset : o->radius;
     eo.combinatorial = 1;
     if (st == AMP_OK)
-        st = amp_euler_transform(&k, &eo, khat, NULL, err);
+        st = amp_euler_transform(&k, &eo, khat, &es, err);
+    /* Class 2 cells collapsed to free edges leave odd vertices (Lemma 3.1):
+     * the Class 3 cells around them get their generalized transformation
+     * (Lemma 3.3). Regular lattices never collapse a Class 2 cell without
+     * losing the Class 1 cell too (an error: a topological change), so this
+     * acts on lattices with short edges */
+    if (st == AMP_OK && es.collapsed_class2 > 0) {
+        amp_cx2 rep;
+        amp_cx2_init(&rep, al);
+        st = amp_euler_repair(khat, &rep, NULL, err);
+        if (st == AMP_OK) {
+            amp_cx2 t = *khat;
+            *khat = rep;
+            rep = t;
+        }
+        amp_cx2_free(&rep);
+    }
     amp_cx2_free(&k);
     amp_free(al, pts);
     amp_free(al, hull);

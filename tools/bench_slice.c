@@ -76,6 +76,64 @@ static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *hav
     }
 }
 
+/* Scaling series (issue 16: linear cost): the bumpy torus scaled by s in x
+ * and y (a quarter size at s = 1), 1 mm layers, default continuous paths;
+ * the time per printed millimetre should stay flat as the part grows. */
+static int scaling(cli_json *j, int quick)
+{
+    static const double scales[] = {1, 2, 4, 8};
+    size_t ns = quick ? 3 : 4, i, v;
+    double per[4], lo = HUGE_VAL, hi = 0;
+    int rc = CLI_OK;
+    if (j)
+        cli_json_arr(j, "scaling");
+    for (i = 0; i < ns && rc == CLI_OK; i++) {
+        amp_mesh m;
+        amp_slices sl;
+        amp_slice_opts so;
+        amp_contpath_opts o;
+        amp_contpath_stats st;
+        amp_pathset ps;
+        double t0, t;
+        amp_mesh_init(&m, NULL);
+        amp_slices_init(&sl, NULL);
+        amp_pathset_init(&ps, NULL);
+        if (make_mesh(&m, 96, 48) != 0)
+            rc = CLI_FAILED;
+        for (v = 0; v < m.nverts; v++)
+            m.verts[v] = amp_v3(m.verts[v].x * scales[i] / 4, m.verts[v].y * scales[i] / 4, m.verts[v].z / 4);
+        so.layer = 0.5;
+        so.first_layer = 0;
+        amp_contpath_opts_default(&o, 0.225);
+        t0 = cli_now();
+        if (rc == CLI_OK && (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK ||
+                             amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK))
+            rc = CLI_FAILED;
+        t = cli_now() - t0;
+        per[i] = rc == CLI_OK && st.printed_length > 0 ? 1e6 * t / st.printed_length : 0;
+        lo = fmin(lo, per[i]);
+        hi = fmax(hi, per[i]);
+        if (rc == CLI_OK && j) {
+            cli_json_obj(j, NULL);
+            cli_json_num(j, "scale", scales[i]);
+            cli_json_num(j, "time_s", t);
+            cli_json_num(j, "printed_mm", st.printed_length);
+            cli_json_num(j, "us_per_mm", per[i]);
+            cli_json_close(j);
+        } else if (rc == CLI_OK)
+            printf("scale x%g: %.3f s for %.0f mm printed (%.2f us/mm)\n", scales[i], t, st.printed_length, per[i]);
+        amp_pathset_free(&ps);
+        amp_slices_free(&sl);
+        amp_mesh_free(&m);
+    }
+    if (j) {
+        cli_json_close(j);
+        cli_json_num(j, "scaling_spread", lo > 0 ? hi / lo : 0);
+    } else if (rc == CLI_OK)
+        printf("time per printed mm from x1 to x%g: spread %.2fx (flat is 1)\n", scales[ns - 1], lo > 0 ? hi / lo : 0);
+    return rc;
+}
+
 int bench_slice(cli_json *j, int quick)
 {
     amp_mesh m;
@@ -173,5 +231,7 @@ int bench_slice(cli_json *j, int quick)
     amp_pathset_free(&ps);
     amp_slices_free(&sl);
     amp_mesh_free(&m);
+    if (rc == CLI_OK)
+        rc = scaling(j, quick);
     return rc;
 }
