@@ -36,7 +36,8 @@ const char cmd_slice_usage[] =
     "  --pseudo           thin-cell patch stretches as pseudo edges (travel, Figs. 7, 8; each one\n"
     "                     more extrusion start); default printed (--no-pseudo kept for old scripts)\n"
     "  --no-join          perimeter loops and region strokes as separate paths\n"
-    "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
+    "  -o FILE            OUT.amp: all layers; OUT.svg: one layer with its inset (with --continuous:\n"
+    "                     with its strokes, beads drawn at their width)\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
     "  --json             figures as one JSON object (per layer with --polygons; strokes, starts,\n"
@@ -126,6 +127,58 @@ static amp_grid_kind grid_kind(const char *g, int *ok)
         return AMP_GRID_HEX;
     *ok = 0;
     return AMP_GRID_SQUARE;
+}
+
+/* One layer's strokes over its section: beads as wide as they print (2r,
+ * translucent), centre lines thin, pseudo edges dashed, the start marked. */
+static int write_stroke_svg(const char *file, const amp_slices *sl, const amp_pathset *ps, long li, double r)
+{
+    svg_doc s;
+    double x0, y0, x1, y1;
+    const amp_layer *L = &sl->layers[li];
+    size_t i, k, strokes = 0, starts = 0;
+    char line[200];
+    int pass;
+    slicetool_bbox(sl, &x0, &y0, &x1, &y1);
+    if (svg_open(&s, file, x0, y0, x1, y1) != 0)
+        return cli_fail("slice", CLI_USAGE, "cannot write '%s'", file);
+    svg_polyset(&s, &L->polys, "#ece4f6", "#5b2a86", 1.0);
+    for (pass = 0; pass < 3; pass++)
+        for (i = 0; i < ps->npaths; i++) {
+            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+            if (ps->paths[i].n < 2 || fabs(v[0].p.z - L->z_print) > 1e-9)
+                continue;
+            if (pass == 2) {
+                fprintf(s.f, "<circle cx=\"%.5g\" cy=\"%.5g\" r=\"%.4g\" fill=\"#c0392b\"/>\n", v[0].p.x - s.x0,
+                        s.y1 - v[0].p.y, 1.2 * r);
+                strokes++;
+                continue;
+            }
+            /* pass 0: the beads (printed segments), pass 1: centre lines */
+            fprintf(s.f, "<path fill=\"none\" stroke=\"%s\" stroke-width=\"%.4g\" stroke-linecap=\"round\" "
+                         "stroke-linejoin=\"round\"%s d=\"",
+                    pass == 0 ? "rgba(39,110,176,0.35)" : "#1d3c5a", pass == 0 ? 2 * r : 0.6 * s.px,
+                    pass == 0 ? " stroke-opacity=\"0.35\"" : "");
+            for (k = 0; k + 1 < ps->paths[i].n; k++) {
+                int printed = v[k].r > 0 || v[k + 1].r > 0;
+                if (pass == 0 && !printed)
+                    continue;
+                fprintf(s.f, "M%.5g %.5gL%.5g %.5g", v[k].p.x - s.x0, s.y1 - v[k].p.y, v[k + 1].p.x - s.x0,
+                        s.y1 - v[k + 1].p.y);
+                if (pass == 1 && printed && k > 0 && !(v[k - 1].r > 0 || v[k].r > 0))
+                    starts++;
+            }
+            fprintf(s.f, "\"/>\n");
+        }
+    snprintf(line, sizeof line, "layer %ld at z %.4g mm: %lu islands, %lu strokes (red dot: where each starts)", li,
+             L->z_print, (unsigned long)L->polys.nislands, (unsigned long)strokes);
+    svg_text(&s, 0, line);
+    snprintf(line, sizeof line, "blue: beads %.3g mm wide over the section (purple), thin: the nozzle's path", 2 * r);
+    svg_text(&s, 1, line);
+    (void)starts;
+    if (svg_close(&s) != 0)
+        return cli_fail("slice", CLI_USAGE, "writing '%s' failed", file);
+    return CLI_OK;
 }
 
 /* Layer whose printing height is z (the paths of --continuous). */
@@ -243,7 +296,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
 /* --continuous: build, check every path independently (crossings, repeated
  * edges, points outside its layer) and report; a failed check is exit 1. */
 static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
-                          int json, double t0, double epsc)
+                          int json, double t0, double epsc, long svg_layer)
 {
     amp_pathset ps;
     amp_contpath_stats st;
@@ -282,7 +335,9 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         repeats += rep.repeated_edges;
         outside += rep.outside;
     }
-    if (out) {
+    if (out && svg_layer >= 0)
+        rc = write_stroke_svg(out, sl, &ps, svg_layer, o->radius);
+    else if (out) {
         char comment[200];
         snprintf(comment, sizeof comment,
                  "ampath slice --continuous: %lu layers, %lu islands, %lu strokes, radius %g mm",
@@ -386,8 +441,6 @@ int cmd_slice(int argc, char **argv)
         co.tour = AMP_TOUR_MERGE;
     else
         return cli_fail("slice", CLI_USAGE, "--tour must be cycle-tree or merge, not '%s'", tour);
-    if (continuous && out && ends_with(out, ".svg"))
-        return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     rc = slicetool_load("slice", pos[0], layer, first, &m, &sl, &flipped);
@@ -395,7 +448,11 @@ int cmd_slice(int argc, char **argv)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
                 (unsigned long)sl.open_chains);
     if (rc == CLI_OK && continuous) {
-        rc = run_continuous(pos[0], out, &sl, &co, json, t0, epsc);
+        long li = -1;
+        if (out && ends_with(out, ".svg"))
+            li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
+        rc = li < -1 || (out && ends_with(out, ".svg") && li < 0) ? CLI_USAGE
+                                                                   : run_continuous(pos[0], out, &sl, &co, json, t0, epsc, li);
         goto done;
     }
     if (rc == CLI_OK && out) {
