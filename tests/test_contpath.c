@@ -988,6 +988,56 @@ START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 }
 END_TEST
 
+START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
+{
+    /* step 5, direct: one lattice edge crosses a 10 x 10 square region at
+     * height y0; its two free ends on the ring can be joined by the ring
+     * path below it (length 2 y0 + 10) or above it (2 (10 - y0) + 10). The
+     * paper prints the longer: the stroke must reach the far side and not
+     * the near one, whichever side is far. */
+    static const double y0s[] = {1.0, 9.0};
+    size_t t;
+    for (t = 0; t < 2; t++) {
+        amp_cx2 k;
+        amp_polyset R;
+        amp_pathset ps;
+        amp_contpath_opts o;
+        amp_contpath_stats st;
+        amp_error err;
+        amp_vec2 sq[4] = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
+        uint32_t a, b;
+        size_t i;
+        double ymin = HUGE_VAL, ymax = -HUGE_VAL;
+        amp_cx2_init(&k, NULL);
+        amp_polyset_init(&R, NULL);
+        amp_pathset_init(&ps, NULL);
+        memset(&st, 0, sizeof st);
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(-3, y0s[t]), &a, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(13, y0s[t] + 0.01), &b, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_add_edge(&k, a, b, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_add(&R, sq, 4, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_organize(&R, NULL), AMP_OK);
+        amp_contpath_opts_default(&o, 0.2);
+        ck_assert_msg(amp_contpath_region(&k, &R, 1.0, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+        ck_assert_uint_eq(st.free_ends, 2);
+        ck_assert_uint_eq(ps.npaths, 1);
+        for (i = 0; i < ps.paths[0].n; i++) {
+            ymin = fmin(ymin, amp_pathset_path_verts(&ps, 0)[i].p.y);
+            ymax = fmax(ymax, amp_pathset_path_verts(&ps, 0)[i].p.y);
+        }
+        if (y0s[t] < 5)
+            ck_assert_msg(ymax == 10 && ymin >= y0s[t], "y0 %g: stroke spans y %g..%g", y0s[t], ymin, ymax);
+        else
+            ck_assert_msg(ymin == 0 && ymax <= y0s[t] + 0.01, "y0 %g: stroke spans y %g..%g", y0s[t], ymin, ymax);
+        ck_assert_double_eq_tol(st.infill_length, 10 + 2 * (y0s[t] < 5 ? 10 - y0s[t] : y0s[t]) + 10.01, 0.02);
+        amp_cx2_free(&k);
+        amp_polyset_free(&R);
+        amp_pathset_free(&ps);
+    }
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -1009,6 +1059,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, a_sliver_first_layer_is_printed_on_the_bed);
     AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
     AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
+    AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
     suite_add_tcase(s, tc);
     return s;
 }
