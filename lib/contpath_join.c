@@ -319,7 +319,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     p1 = P2v(P1.p);
     p2 = P2v(P2.p);
     if (!nearest(J, uf, rx, p1, &c.ly, &c.j1, &c.u1, &d1) || !nearest(J, uf, rx, p2, &l2, &c.j2, &c.u2, &d2) ||
-        l2 != c.ly || d1 < 0.1 * J->r || d2 < 0.1 * J->r)
+        l2 != c.ly || d1 < 1e-3 * J->r || d2 < 1e-3 * J->r)
         return 0;
     /* a nearest point at a corner of Y (its vertex cone) moves into the
      * segment: a connector ending on a vertex would touch the segment

@@ -140,13 +140,30 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
     double d;
     size_t q, nperim = 0;
     amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
-    if (rc == AMP_OK && c->ins.nrings == 0) {
+    int thin = rc == AMP_OK && c->ins.nrings == 0;
+    if (rc == AMP_OK && c->ins.nislands > 1) {
+        /* the perimeter falls apart into lobes joined by necks thinner than
+         * a bead; without infill (a sliver) the island is treated as thin,
+         * so that a smaller inset may hold it in one piece */
+        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->reg, err);
+        thin = rc == AMP_OK && c->reg.nrings == 0;
+    }
+    if (thin) {
         /* thin island: the bead (2r wide) is wider than the part here; its
-         * centre line is the inset by the largest d < r that still exists */
-        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && c->ins.nrings == 0; d *= 0.5)
+         * centre line is the inset by the largest d < r that exists and
+         * falls apart into the fewest pieces (a wavy sliver splits where it
+         * is thinnest; a piece each would be a stroke each) */
+        double best_d = c->ins.nrings ? o->radius : 0;
+        size_t best_n = c->ins.nrings ? c->ins.nislands : (size_t)-1;
+        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && best_n > 1; d *= 0.5) {
             rc = amp_polyset_inset(&c->isl, d, 0, &c->ins, err);
-        if (rc == AMP_OK && c->ins.nrings) {
-            s0->thin_islands++;
+            if (rc == AMP_OK && c->ins.nrings && c->ins.nislands < best_n) {
+                best_n = c->ins.nislands;
+                best_d = d;
+            }
+        }
+        if (rc == AMP_OK && best_d > 0 && (rc = amp_polyset_inset(&c->isl, best_d, 0, &c->ins, err)) == AMP_OK) {
+            s0->thin_islands += best_d < o->radius;
             return ring_paths(c, &c->ins, L->z_print, s0, err);
         }
         if (rc == AMP_OK)
