@@ -735,6 +735,15 @@ static size_t untangle(amp_vec2 *p, size_t n)
     return n;
 }
 
+/* Rotate a ring in place by half its length (three reversals). */
+static void rotate_half(amp_vec2 *p, size_t n)
+{
+    size_t h = n / 2;
+    amp_ring_reverse(p, h);
+    amp_ring_reverse(p + h, n - h);
+    amp_ring_reverse(p, n);
+}
+
 /* Unused piece whose start is nearest to node @p nb within @p tol (npc + 1:
  * the ring's start node @p start is nearer: close the ring; npc: none). */
 static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t nb, size_t start, double tol)
@@ -894,6 +903,13 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
             len = despike(loop, len, 1e-9 * r, 0.05 * r);
         if (len >= 4)
             len = untangle(loop, len);
+        /* once more half a turn on: a needle or loop across the seam */
+        if (len >= 4) {
+            rotate_half(loop, len);
+            len = despike(loop, len, 1e-9 * r, 0.05 * r);
+            if (len >= 4)
+                len = untangle(loop, len);
+        }
         if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
             (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
             goto done;
