@@ -3,21 +3,23 @@
  * transformed lattice (continuous-toolpath-euler.txt §2.2 steps 2-6, §4),
  * and an independent checker of the strokes.
  *
- * Per layer and per island P of the layer:
- *   - perimeter loops: the rings of the inset of P by r (one closed path each);
- *   - the infill region R̃ = inset of P by 3r (inside the perimeter bead and at
- *     one bead radius from it); for every connected part R̃_j of it:
- *     clip the 1-skeleton of K̂ (step 5), join the free-edge end points of
- *     each ring of R̃_j in alternating pairs by paths along the ring (of the two
- *     pairings the one that connects the pieces, then the longer), join the
- *     components still apart by a ring path printed once and run back as a
- *     pseudo edge (Fig. 6), turn patch stretches of thin boundary cells into
- *     pseudo edges (Figs. 7, 8), and trace
- *     one closed Euler tour without crossovers (§4: the tour is assembled from
- *     non-crossing cycles through each vertex, merged pairwise at shared
- *     vertices — the cycle tree — by re-pairing two adjacent transitions).
- *   - optionally (Remark 2.1) the unprinted stretches of the rings of R̃_j as
- *     separate support paths.
+ * Per layer and per island P of the layer (amp_contpath_layers):
+ *   - perimeter loops: the rings of the inset of P by r (outer and holes);
+ *   - the infill regions R̃_j = parts of the inset of P by 3r (inside the
+ *     perimeter bead and one bead radius from it): clip the 1-skeleton of K̂
+ *     (step 5; the dense skin lattice near a top or bottom surface), join the
+ *     free ends of each ring of R̃_j in alternating pairs by ring paths (of
+ *     the two pairings the one that connects the pieces, then the longer),
+ *     and trace one closed tour without crossovers per component (§4: cycle
+ *     tree over the boundary cycles of the faces by depth, Hierholzer's edge
+ *     choice, q = 2 / q > 2 splices; see lib/contpath_tour.c);
+ *   - step 6: support corners from the unprinted ring stretches to the
+ *     perimeter (Fig. 5), or (Remark 2.1) the stretches as support paths;
+ *   - all spliced into one closed stroke by parallel connectors (o->join).
+ * amp_contpath_region() is the paper's step 5 + §4 for one region alone:
+ * there, components still apart are joined by a ring path printed once and
+ * run back as a pseudo edge (Fig. 6), and with o->pseudo_edges patch
+ * stretches of thin boundary cells become pseudo edges (Figs. 7, 8).
  * K is a lattice covering the convex hull of all layers (steps 2-3) and K̂ its
  * Euler transformation with mitered offset δ (default r): every vertex of K̂
  * inside R̃ has even degree because the rim cells of K lie outside R̃.
