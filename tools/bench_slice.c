@@ -3,7 +3,9 @@
  * (extrusion starts, travel). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 
@@ -134,6 +136,46 @@ static int scaling(cli_json *j, int quick)
     return rc;
 }
 
+/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
+ * gcode in at most half its wall time), when `prusa-slicer` is installed:
+ * the same mesh, 0.2 mm layers, 0.4 mm nozzle, headless --export-gcode.
+ * Skipped with a message otherwise. */
+static void prusa(cli_json *j, const amp_mesh *m, double ours_s)
+{
+    char stl[256], gc[256], cmd[800];
+    const char *tmp = getenv("TMPDIR");
+    amp_error err;
+    double t0, t;
+    int rc;
+    if (system("command -v prusa-slicer >/dev/null 2>&1") != 0) {
+        if (j)
+            cli_json_str(j, "prusaslicer", "skipped: prusa-slicer is not installed");
+        else
+            printf("PrusaSlicer side by side: skipped (prusa-slicer is not installed)\n");
+        return;
+    }
+    snprintf(stl, sizeof stl, "%s/ampath-bench-%ld.stl", tmp ? tmp : "/tmp", (long)getpid());
+    snprintf(gc, sizeof gc, "%s/ampath-bench-%ld.gcode", tmp ? tmp : "/tmp", (long)getpid());
+    if (amp_mesh_write_stl_file(m, stl, 1, &err) != AMP_OK)
+        return;
+    snprintf(cmd, sizeof cmd,
+             "prusa-slicer --export-gcode --layer-height 0.2 --nozzle-diameter 0.4 --center 125,105 -o '%s' '%s' "
+             ">/dev/null 2>&1",
+             gc, stl);
+    t0 = cli_now();
+    rc = system(cmd);
+    t = cli_now() - t0;
+    remove(stl);
+    remove(gc);
+    if (j) {
+        cli_json_num(j, "prusaslicer_s", rc == 0 ? t : -1);
+        cli_json_num(j, "continuous_vs_prusaslicer", rc == 0 && t > 0 ? ours_s / t : -1);
+    } else if (rc == 0)
+        printf("PrusaSlicer side by side: %.2f s vs ours %.2f s (%.2fx; target <= 0.5x)\n", t, ours_s, ours_s / t);
+    else
+        printf("PrusaSlicer side by side: prusa-slicer failed (exit %d)\n", rc);
+}
+
 int bench_slice(cli_json *j, int quick)
 {
     amp_mesh m;
@@ -226,6 +268,8 @@ int bench_slice(cli_json *j, int quick)
                    travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
         }
     }
+    if (rc == CLI_OK)
+        prusa(j, &m, t_slice + t_cont);
     amp_polyset_free(&isl);
     amp_polyset_free(&ins);
     amp_pathset_free(&ps);
