@@ -52,7 +52,9 @@ int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R,
                 return 1;
         }
     }
-    /* a grid inside: a hole opening above the middle of the region */
+    /* a grid inside: a hole opening above the middle of the region (at
+     * most about 16 x 16 points: the cost stays linear in the part) */
+    step = fmax(step, fmax(x1 - x0, y1 - y0) / 16);
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step) {
             amp_vec2 q = amp_v2(x, y);

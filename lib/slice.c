@@ -247,15 +247,19 @@ double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
         return HUGE_VAL;
     if (!(step > 0))
         step = 1.0;
-    /* the upper rings' vertices: the overhang of a slanted wall */
+    /* the upper rings' vertices (about 512 of them at most): the overhang
+     * of a slanted wall */
     for (k = 0; k < up->npts; k++) {
-        worst = fmax(worst, dist_to_section(lo, up->pts[k]));
+        if (k % (up->npts / 512 + 1) == 0)
+            worst = fmax(worst, dist_to_section(lo, up->pts[k]));
         x0 = fmin(x0, up->pts[k].x);
         y0 = fmin(y0, up->pts[k].y);
         x1 = fmax(x1, up->pts[k].x);
         y1 = fmax(y1, up->pts[k].y);
     }
-    /* inside: a bridge over a hole of the layer below */
+    /* inside: a bridge over a hole of the layer below (at most about
+     * 24 x 24 points) */
+    step = fmax(step, fmax(x1 - x0, y1 - y0) / 24);
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step)
             if (amp_polyset_contains(up, amp_v2(x, y), 0.0) == 1)

@@ -92,9 +92,9 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
  * the largest distance from a point of layer i + 1's section to layer i's
  * section (0 when it lies inside), i.e. the overhang; the pair is
  * ε-continuous for ε = c r when this is <= c r. Sampled at the vertices of
- * layer i + 1's rings and a grid of spacing @p step inside them (<= 0:
- * 1 mm), so it may miss an overhang narrower than the step between
- * vertices. Returns 0 when i + 1 >= nlayers or layer i + 1 is empty; a
+ * layer i + 1's rings (about 512 per layer) and a grid of spacing @p step
+ * (<= 0: 1 mm; at least a 24th of the layer's extent) inside them, so it
+ * may miss an overhang narrower than the sampling. Returns 0 when i + 1 >= nlayers or layer i + 1 is empty; a
  * layer over an empty one overhangs by +inf (HUGE_VAL).
  */
 double amp_slices_overhang(const amp_slices *sl, size_t i, double step);
