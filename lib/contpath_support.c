@@ -78,24 +78,89 @@ static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
     return hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) < tol;
 }
 
-static int blocked(const amp_pathset *ps, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs, double hair)
+/* Uniform grid of the segments of a pathset (segment = global index of its
+ * first vertex), so a corner's legs meet only the segments near them. */
+typedef struct sgrid {
+    double x0, y0, cell;
+    long nx, ny;
+    size_t *start, *item;
+} sgrid;
+
+static long sg_cell(double v, double o, double c, long n)
 {
-    size_t i, k;
-    double x0 = fmin(a.x, b.x), x1 = fmax(a.x, b.x), y0 = fmin(a.y, b.y), y1 = fmax(a.y, b.y);
-    for (i = 0; i < ps->npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        for (k = 0; k + 1 < ps->paths[i].n; k++) {
-            amp_vec2 c = xy(v[k].p), d = xy(v[k + 1].p);
-            if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
-                continue;
-            if (cross2(a, b, c, d))
-                return 1;
-            /* a touch (an end on the other segment, within a hair) would
-             * become a crossing once the coordinates are rounded */
-            if (near_seg(b, c, d, hair) || near_seg(c, a, b, hair) || near_seg(d, a, b, hair))
-                return 1;
+    long k = (long)floor((v - o) / c);
+    return k < 0 ? 0 : (k >= n ? n - 1 : k);
+}
+
+static amp_status sg_build(sgrid *g, const amp_pathset *ps, double cell, const amp_allocator *al)
+{
+    double x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+    size_t i, k, pass, ncell;
+    memset(g, 0, sizeof *g);
+    g->x0 = g->y0 = HUGE_VAL;
+    for (i = 0; i < ps->nverts; i++) {
+        g->x0 = fmin(g->x0, ps->verts[i].p.x);
+        g->y0 = fmin(g->y0, ps->verts[i].p.y);
+        x1 = fmax(x1, ps->verts[i].p.x);
+        y1 = fmax(y1, ps->verts[i].p.y);
+    }
+    g->cell = fmax(cell, fmax(x1 - g->x0, y1 - g->y0) / 1024);
+    g->nx = (long)((x1 - g->x0) / g->cell) + 1;
+    g->ny = (long)((y1 - g->y0) / g->cell) + 1;
+    ncell = (size_t)(g->nx * g->ny);
+    g->start = amp_calloc(al, ncell + 1, sizeof *g->start);
+    if (!g->start)
+        return AMP_ERR_NOMEM;
+    for (pass = 0; pass < 2; pass++) {
+        for (i = 0; i < ps->npaths; i++)
+            for (k = ps->paths[i].first; k + 1 < ps->paths[i].first + ps->paths[i].n; k++) {
+                amp_vec3 a = ps->verts[k].p, b = ps->verts[k + 1].p;
+                long cx0 = sg_cell(fmin(a.x, b.x), g->x0, g->cell, g->nx), cx1 = sg_cell(fmax(a.x, b.x), g->x0, g->cell, g->nx);
+                long cy0 = sg_cell(fmin(a.y, b.y), g->y0, g->cell, g->ny), cy1 = sg_cell(fmax(a.y, b.y), g->y0, g->cell, g->ny);
+                long x, y;
+                for (y = cy0; y <= cy1; y++)
+                    for (x = cx0; x <= cx1; x++) {
+                        if (pass == 0)
+                            g->start[y * g->nx + x + 1]++;
+                        else
+                            g->item[g->start[y * g->nx + x]++] = k;
+                    }
+            }
+        if (pass == 0) {
+            for (i = 0; i < ncell; i++)
+                g->start[i + 1] += g->start[i];
+            g->item = amp_alloc(al, (g->start[ncell] + 1) * sizeof *g->item);
+            if (!g->item)
+                return AMP_ERR_NOMEM;
         }
     }
+    for (i = ncell; i > 0; i--)
+        g->start[i] = g->start[i - 1];
+    g->start[0] = 0;
+    return AMP_OK;
+}
+
+/* Does segment a-b (a corner's leg from its base a on the perimeter to its
+ * tip b) cross a segment of @p ps or an accepted leg, or touch one within
+ * @p hair (a touch would become a crossing once coordinates are rounded)? */
+static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs,
+                   double hair)
+{
+    size_t k;
+    double x0 = fmin(a.x, b.x) - hair, x1 = fmax(a.x, b.x) + hair, y0 = fmin(a.y, b.y) - hair,
+           y1 = fmax(a.y, b.y) + hair;
+    long cx0 = sg_cell(x0, g->x0, g->cell, g->nx), cx1 = sg_cell(x1, g->x0, g->cell, g->nx);
+    long cy0 = sg_cell(y0, g->y0, g->cell, g->ny), cy1 = sg_cell(y1, g->y0, g->cell, g->ny), x, y;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
+                amp_vec2 c = xy(ps->verts[g->item[k]].p), d = xy(ps->verts[g->item[k] + 1].p);
+                if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
+                    continue;
+                if (cross2(a, b, c, d) || near_seg(b, c, d, hair) || near_seg(c, a, b, hair) ||
+                    near_seg(d, a, b, hair))
+                    return 1;
+            }
     for (k = 0; k < nlegs; k++)
         if (cross2(a, b, legs[2 * k], legs[2 * k + 1]))
             return 1;
@@ -214,13 +279,22 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
     amp_vec2 *legs = NULL;
     size_t nt = 0, cap_t = 0, cap_l = 0, i, k, j;
     amp_pathset scratch;
+    sgrid sg;
     amp_status rc = AMP_OK;
     if (nperim == 0 || bare->npaths == 0)
         return AMP_OK;
     amp_pathset_init(&scratch, al);
-    cl = amp_calloc(al, nperim, sizeof *cl);
-    if (!cl)
+    if (sg_build(&sg, ps, 2 * r, al) != AMP_OK) {
+        amp_free(al, sg.start);
+        amp_free(al, sg.item);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    }
+    cl = amp_calloc(al, nperim, sizeof *cl);
+    if (!cl) {
+        amp_free(al, sg.start);
+        amp_free(al, sg.item);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    }
     for (i = 0; i < nperim && rc == AMP_OK; i++) {
         const amp_pvert *v = amp_pathset_path_verts(ps, i);
         cl[i] = amp_alloc(al, (ps->paths[i].n + 1) * sizeof **cl);
@@ -253,7 +327,8 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
             }
             a0 = at_len(ps, loop, cl[loop], s - hw, &seg);
             a1 = at_len(ps, loop, cl[loop], s + hw, &seg);
-            if (blocked(ps, xy(a0.p), c, legs, 2 * nt, 1e-4 * r) || blocked(ps, xy(a1.p), c, legs, 2 * nt, 1e-4 * r)) {
+            if (blocked(ps, &sg, xy(a0.p), c, legs, 2 * nt, 1e-4 * r) ||
+                blocked(ps, &sg, xy(a1.p), c, legs, 2 * nt, 1e-4 * r)) {
                 st->corners_left_out++;
                 continue;
             }
@@ -312,6 +387,8 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
     amp_free(al, cl);
     amp_free(al, t);
     amp_free(al, legs);
+    amp_free(al, sg.start);
+    amp_free(al, sg.item);
     amp_pathset_free(&scratch);
     return rc;
 }
