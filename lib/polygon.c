@@ -112,7 +112,9 @@ int amp_ring_contains(const amp_vec2 *p, size_t n, amp_vec2 q, double tol)
     int in = 0;
     for (i = 0, j = n - 1; i < n; j = i++) {
         amp_vec2 a = p[j], b = p[i];
-        if (seg_dist2(q, a, b) <= tol * tol)
+        /* the distance only matters near the segment's box (tol = 0: on it) */
+        if (q.y >= fmin(a.y, b.y) - tol && q.y <= fmax(a.y, b.y) + tol && q.x >= fmin(a.x, b.x) - tol &&
+            q.x <= fmax(a.x, b.x) + tol && seg_dist2(q, a, b) <= tol * tol)
             return -1;
         /* half-open rule on y: each crossing counted once even at vertices */
         if ((a.y > q.y) != (b.y > q.y)) {
@@ -599,6 +601,35 @@ static int egrid_closer(const egrid *g, amp_vec2 q, double lim)
     return 0;
 }
 
+/* Point in the region of the grid's edges (even-odd, half-open rule as
+ * amp_ring_contains with tol 0): a ray to +x through the row of cells of q,
+ * each crossing counted in the cell that holds it. Linear in the row, not
+ * in the whole boundary. */
+static int egrid_inside(const egrid *g, amp_vec2 q)
+{
+    long ix0, ix1, iy0, iy1, x;
+    size_t k, cnt = 0;
+    egrid_range(g, q.x, q.x, q.y, q.y, &ix0, &ix1, &iy0, &iy1);
+    if (q.y < g->y0 || q.y > g->y0 + g->cell * (double)g->ny)
+        return 0;
+    for (x = ix0; x < g->nx; x++) {
+        size_t cidx = (size_t)(iy0 * g->nx + x);
+        for (k = g->start[cidx]; k < g->start[cidx + 1]; k++) {
+            amp_vec2 a = g->ea[g->item[k]], b = g->eb[g->item[k]];
+            double xi;
+            long cx, d0, d1, d2;
+            if ((a.y > q.y) == (b.y > q.y))
+                continue;
+            xi = a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y);
+            if (!(q.x < xi))
+                continue;
+            egrid_range(g, xi, xi, q.y, q.y, &cx, &d0, &d1, &d2);
+            cnt += cx == x;
+        }
+    }
+    return (int)(cnt & 1u);
+}
+
 /* Copy ring p into out without the vertices closer than tol to the segment
  * joining their kept predecessor and their successor. Returns the count. */
 static size_t simplify_ring(const amp_vec2 *p, size_t n, double tol, amp_vec2 *out)
@@ -631,6 +662,108 @@ static int cmp_piece(const void *a, const void *b)
 {
     const piece *s = a, *t = b;
     return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
+}
+
+/* Remove needles from a stitched ring in place: a vertex equal to its
+ * predecessor, and the tip B of a back-and-forth A-B-A (a swallowtail piece
+ * run both ways) or of a tiny loop A-B-C-A within @p small of A, cyclically.
+ * Returns the new count. */
+static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
+{
+    size_t m = 0, i, pass;
+    for (i = 0; i < n; i++) {
+        size_t k;
+        if (m >= 1 && hypot(p[i].x - p[m - 1].x, p[i].y - p[m - 1].y) <= tol)
+            continue;
+        /* p[i] repeats p[m - k] for a small k: p[m - k + 1 .. m - 1] is a
+         * needle (k = 2) or a tiny loop within @p small of it; cut it out */
+        for (k = 2; k <= 8 && k <= m; k++)
+            if (hypot(p[i].x - p[m - k].x, p[i].y - p[m - k].y) <= tol) {
+                size_t q;
+                for (q = m - k + 1; q < m; q++)
+                    if (hypot(p[q].x - p[i].x, p[q].y - p[i].y) > small)
+                        break;
+                if (q == m)
+                    break;
+            }
+        if (k <= 8 && k <= m) {
+            m -= k - 1;
+            continue;
+        }
+        p[m++] = p[i];
+    }
+    /* the seam: the same patterns across the end of the array */
+    for (pass = 0; pass < 4 && m >= 3; pass++) {
+        if (hypot(p[0].x - p[m - 1].x, p[0].y - p[m - 1].y) <= tol)
+            m--;
+        else if (hypot(p[1].x - p[m - 1].x, p[1].y - p[m - 1].y) <= tol) {
+            memmove(p, p + 1, (m - 1) * sizeof *p); /* p[0] was a tip */
+            m -= 2;
+        } else if (hypot(p[0].x - p[m - 2].x, p[0].y - p[m - 2].y) <= tol)
+            m -= 2; /* p[m - 1] was a tip, p[m - 2] repeats p[0] */
+    }
+    return m;
+}
+
+/* Cut small loops out of a stitched ring in place: where segment i properly
+ * crosses segment j within the next 16 segments (a swallowtail piece kept
+ * on both sides, so the ring crosses itself near a tight reflex corner),
+ * the vertices between become the crossing point. Returns the new count. */
+static size_t untangle(amp_vec2 *p, size_t n)
+{
+    size_t i, j, k, m;
+    int again = 1;
+    while (again && n >= 4) {
+        again = 0;
+        for (i = 0; i + 2 < n && !again; i++)
+            for (j = i + 2; j < n && j <= i + 16 && !again; j++) {
+                amp_vec2 a = p[i], b = p[i + 1], c = p[j], d = p[(j + 1) % n];
+                double d1 = amp_v2_orient(a, b, c), d2 = amp_v2_orient(a, b, d), d3 = amp_v2_orient(c, d, a),
+                       d4 = amp_v2_orient(c, d, b), t;
+                if ((j + 1) % n == i || !(((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) &&
+                                          ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))))
+                    continue;
+                t = d3 / (d3 - d4);
+                p[i + 1] = amp_v2(a.x + t * (b.x - a.x), a.y + t * (b.y - a.y));
+                /* drop p[i + 2 .. j] */
+                for (k = i + 2, m = j + 1; m < n; k++, m++)
+                    p[k] = p[m];
+                n -= j - i - 1;
+                again = 1;
+            }
+    }
+    return n;
+}
+
+/* Rotate a ring in place by half its length (three reversals). */
+static void rotate_half(amp_vec2 *p, size_t n)
+{
+    size_t h = n / 2;
+    amp_ring_reverse(p, h);
+    amp_ring_reverse(p + h, n - h);
+    amp_ring_reverse(p, n);
+}
+
+/* Unused piece whose start is nearest to node @p nb within @p tol (npc + 1:
+ * the ring's start node @p start is nearer: close the ring; npc: none). */
+static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t nb, size_t start, double tol)
+{
+    amp_vec2 q = c->node[nb];
+    double best = hypot(c->node[start].x - q.x, c->node[start].y - q.y);
+    size_t i, at = best <= tol ? npc + 1 : npc;
+    if (!(best <= tol))
+        best = tol;
+    for (i = 0; i < npc; i++) {
+        double d;
+        if (pc[i].used)
+            continue;
+        d = hypot(c->node[pc[i].na].x - q.x, c->node[pc[i].na].y - q.y);
+        if (d < best) {
+            best = d;
+            at = i;
+        }
+    }
+    return at;
 }
 
 static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
@@ -699,7 +832,7 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
                 a = c.node[cur];
                 b = c.node[nxt];
                 m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
-                if (!egrid_closer(&g, m, lim) && amp_polyset_contains(in, m, 0.0) == 1) {
+                if (!egrid_closer(&g, m, lim) && egrid_inside(&g, m)) {
                     void *v = pc;
                     if (amp_grow(c.al, &v, &cap_pc, npc + 1, sizeof *pc) != AMP_OK) {
                         st = AMP_ERR_NOMEM;
@@ -752,11 +885,32 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
             for (at = first[nb]; at < npc && pc[at].na == nb && pc[at].used; at++)
                 ;
             if (at >= npc || pc[at].na != nb) {
-                len = 0; /* open chain: a misclassified sliver; dropped */
-                break;
+                /* dead end: a sliver piece of a swallowtail (crossings
+                 * of nearly parallel raw segments) was misclassified.
+                 * Bridge the gap to the nearest piece start, or close the
+                 * ring, when it is within r/4 (the boundary moves by at
+                 * most the gap); otherwise the chain is dropped. */
+                at = bridge_gap(&c, pc, npc, nb, start, 0.25 * r);
+                if (at == npc + 1)
+                    break;
+                if (at >= npc) {
+                    len = 0;
+                    break;
+                }
             }
         }
-        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-12 * r * r &&
+        if (len >= 3)
+            len = despike(loop, len, 1e-9 * r, 0.05 * r);
+        if (len >= 4)
+            len = untangle(loop, len);
+        /* once more half a turn on: a needle or loop across the seam */
+        if (len >= 4) {
+            rotate_half(loop, len);
+            len = despike(loop, len, 1e-9 * r, 0.05 * r);
+            if (len >= 4)
+                len = untangle(loop, len);
+        }
+        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
             (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
             goto done;
     }

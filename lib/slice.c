@@ -218,7 +218,51 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
         if (st != AMP_OK)
             return st;
         out->open_chains += ss.open_chains;
+        L->open_chains = ss.open_chains;
         out->nonmanifold += ss.nonmanifold;
     }
     return AMP_OK;
+}
+
+/* Distance from q to the section P (0 inside). */
+static double dist_to_section(const amp_polyset *P, amp_vec2 q)
+{
+    if (amp_polyset_contains(P, q, 0.0) != 0)
+        return 0.0;
+    return amp_polyset_boundary_dist(P, q);
+}
+
+double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
+{
+    const amp_polyset *lo, *up;
+    double worst = 0, x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
+    size_t k;
+    if (i + 1 >= sl->nlayers)
+        return 0;
+    lo = &sl->layers[i].polys;
+    up = &sl->layers[i + 1].polys;
+    if (up->npts == 0)
+        return 0;
+    if (lo->npts == 0)
+        return HUGE_VAL;
+    if (!(step > 0))
+        step = 1.0;
+    /* the upper rings' vertices (about 512 of them at most): the overhang
+     * of a slanted wall */
+    for (k = 0; k < up->npts; k++) {
+        if (k % (up->npts / 512 + 1) == 0)
+            worst = fmax(worst, dist_to_section(lo, up->pts[k]));
+        x0 = fmin(x0, up->pts[k].x);
+        y0 = fmin(y0, up->pts[k].y);
+        x1 = fmax(x1, up->pts[k].x);
+        y1 = fmax(y1, up->pts[k].y);
+    }
+    /* inside: a bridge over a hole of the layer below (at most about
+     * 24 x 24 points) */
+    step = fmax(step, fmax(x1 - x0, y1 - y0) / 24);
+    for (y = y0 + 0.5 * step; y < y1; y += step)
+        for (x = x0 + 0.5 * step; x < x1; x += step)
+            if (amp_polyset_contains(up, amp_v2(x, y), 0.0) == 1)
+                worst = fmax(worst, dist_to_section(lo, amp_v2(x, y)));
+    return worst;
 }

@@ -23,6 +23,7 @@ static int cmp_vkey(const void *a, const void *b)
 
 typedef struct ekey2 {
     size_t a, b;
+    amp_vec2 at;
 } ekey2;
 
 static int cmp_ekey2(const void *p, const void *q)
@@ -82,6 +83,7 @@ static int in_arc(double a, double b, double c)
 
 typedef struct pass {
     size_t v;
+    amp_vec2 at;
     double in, out;
 } pass;
 
@@ -89,6 +91,106 @@ static int cmp_pass(const void *p, const void *q)
 {
     const pass *s = p, *t = q;
     return s->v < t->v ? -1 : (s->v > t->v ? 1 : 0);
+}
+
+/* Rows in y of the region's segments, so a point test scans one row. */
+typedef struct yrows {
+    double y0, h;
+    long nrow;
+    size_t *start, *item;
+    amp_vec2 *a, *b;
+} yrows;
+
+static long row_of(const yrows *y, double v)
+{
+    long k = (long)floor((v - y->y0) / y->h);
+    return k < 0 ? 0 : (k >= y->nrow ? y->nrow - 1 : k);
+}
+
+static void yrows_free(const amp_allocator *al, yrows *y)
+{
+    amp_free(al, y->start);
+    amp_free(al, y->item);
+    amp_free(al, y->a);
+    amp_free(al, y->b);
+}
+
+static int yrows_build(yrows *y, const amp_polyset *R, const amp_allocator *al)
+{
+    size_t r, k, id = 0, round, n = R->npts;
+    double y1 = -HUGE_VAL;
+    memset(y, 0, sizeof *y);
+    y->y0 = HUGE_VAL;
+    y->a = amp_alloc(al, (n + 1) * sizeof *y->a);
+    y->b = amp_alloc(al, (n + 1) * sizeof *y->b);
+    if (!y->a || !y->b)
+        return 0;
+    for (r = 0; r < R->nrings; r++) {
+        const amp_vec2 *p = amp_polyset_ring(R, r);
+        size_t m = R->rings[r].n;
+        for (k = 0; k < m; k++, id++) {
+            y->a[id] = p[k];
+            y->b[id] = p[(k + 1) % m];
+            y->y0 = fmin(y->y0, p[k].y);
+            y1 = fmax(y1, p[k].y);
+        }
+    }
+    y->nrow = (long)sqrt((double)n) + 1;
+    y->h = fmax((y1 - y->y0) / (double)y->nrow, 1e-12);
+    y->start = amp_calloc(al, (size_t)y->nrow + 1, sizeof *y->start);
+    if (!y->start)
+        return 0;
+    for (round = 0; round < 2; round++) {
+        for (id = 0; id < n; id++) {
+            long r0 = row_of(y, fmin(y->a[id].y, y->b[id].y)), r1 = row_of(y, fmax(y->a[id].y, y->b[id].y)), q;
+            for (q = r0; q <= r1; q++) {
+                if (round == 0)
+                    y->start[q + 1]++;
+                else
+                    y->item[y->start[q]++] = id;
+            }
+        }
+        if (round == 0) {
+            for (k = 0; k < (size_t)y->nrow; k++)
+                y->start[k + 1] += y->start[k];
+            y->item = amp_alloc(al, (y->start[y->nrow] + 1) * sizeof *y->item);
+            if (!y->item)
+                return 0;
+        }
+    }
+    for (k = (size_t)y->nrow; k > 0; k--)
+        y->start[k] = y->start[k - 1];
+    y->start[0] = 0;
+    return 1;
+}
+
+static double dist2(amp_vec2 q, amp_vec2 a, amp_vec2 b)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t = 0, ex, ey;
+    if (l2 > 0)
+        t = fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0);
+    ex = a.x + t * dx - q.x;
+    ey = a.y + t * dy - q.y;
+    return ex * ex + ey * ey;
+}
+
+/* 0 outside, 1 inside (even-odd, half-open crossing rule), -1 within tol
+ * of the boundary. */
+static int yrows_contains(const yrows *y, amp_vec2 q, double tol)
+{
+    long r0 = row_of(y, q.y - tol), r1 = row_of(y, q.y + tol), r, rq = row_of(y, q.y);
+    size_t k;
+    int in = 0;
+    for (r = r0; r <= r1; r++)
+        for (k = y->start[r]; k < y->start[r + 1]; k++)
+            if (dist2(q, y->a[y->item[k]], y->b[y->item[k]]) <= tol * tol)
+                return -1;
+    for (k = y->start[rq]; k < y->start[rq + 1]; k++) {
+        amp_vec2 a = y->a[y->item[k]], b = y->b[y->item[k]];
+        if ((a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y))
+            in = !in;
+    }
+    return in;
 }
 
 amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
@@ -109,7 +211,11 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
     ekey2 *ek = NULL;
     pass *ps = NULL;
     amp_status st = AMP_OK;
+    amp_vec2 where = amp_v2(0, 0); /* first violation, for the message */
+    int found = 0;
+    yrows yr;
     memset(&r, 0, sizeof r);
+    memset(&yr, 0, sizeof yr);
     if (n == 0)
         goto report;
     vk = amp_alloc(al, n * sizeof *vk);
@@ -150,6 +256,7 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
             /* only material counts as printed twice */
             ek[ne].a = id[i] < id[i + 1] ? id[i] : id[i + 1];
             ek[ne].b = id[i] < id[i + 1] ? id[i + 1] : id[i];
+            ek[ne].at = pts[i];
             ne++;
         }
         ns++;
@@ -158,8 +265,11 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
     if (ne > 1)
         qsort(ek, ne, sizeof *ek, cmp_ekey2);
     for (i = 1; i < ne; i++)
-        if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b)
+        if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b) {
             r.repeated_edges++;
+            if (!found++)
+                where = ek[i].at;
+        }
     /* segment pairs, swept over x */
     if (ns > 1)
         qsort(sg, ns, sizeof *sg, cmp_seg2);
@@ -168,7 +278,11 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
             if (sg[i].ia == sg[j].ia || sg[i].ia == sg[j].ib || sg[i].ib == sg[j].ia || sg[i].ib == sg[j].ib)
                 continue;
-            r.crossings += (size_t)seg_conflict(&sg[i], &sg[j]);
+            if (seg_conflict(&sg[i], &sg[j])) {
+                r.crossings++;
+                if (!found++)
+                    where = sg[i].a;
+            }
         }
     }
     /* passes through a vertex visited more than once must not interleave */
@@ -186,6 +300,7 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         if (a == 0 || b + 1 >= n || b != i)
             continue;
         ps[np].v = id[i];
+        ps[np].at = pts[i];
         ps[np].in = atan2(pts[a - 1].y - pts[i].y, pts[a - 1].x - pts[i].x);
         ps[np].out = atan2(pts[b + 1].y - pts[i].y, pts[b + 1].x - pts[i].x);
         np++;
@@ -196,28 +311,45 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         for (j = i + 1; j < np && ps[j].v == ps[i].v; j++) {
             int c1 = in_arc(ps[i].in, ps[i].out, ps[j].in), c2 = in_arc(ps[i].in, ps[i].out, ps[j].out);
             if (ps[j].in != ps[i].in && ps[j].in != ps[i].out && ps[j].out != ps[i].in && ps[j].out != ps[i].out &&
-                c1 != c2)
+                c1 != c2) {
                 r.crossings++;
+                if (!found++)
+                    where = ps[i].at;
+            }
         }
-    if (region)
+    if (region && region->npts && !yrows_build(&yr, region, al)) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+        goto out;
+    }
+    if (region && region->npts)
         for (i = 0; i < n; i++) {
-            if (amp_polyset_contains(region, pts[i], tol) == 0)
+            if (yrows_contains(&yr, pts[i], tol) == 0) {
                 r.outside++;
-            if (i + 1 < n &&
-                amp_polyset_contains(region, amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y)),
-                                     tol) == 0)
-                r.outside++;
+                if (!found++)
+                    where = pts[i];
+            }
+            if (i + 1 < n) {
+                amp_vec2 mid = amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y));
+                if (yrows_contains(&yr, mid, tol) == 0) {
+                    r.outside++;
+                    if (!found++)
+                        where = mid;
+                }
+            }
         }
 report:
     if (r.crossings || r.repeated_edges || r.outside)
-        st = amp_fail(err, AMP_ERR_CHECK, 0, "stroke: %lu crossings, %lu edges printed twice, %lu points outside",
-                      (unsigned long)r.crossings, (unsigned long)r.repeated_edges, (unsigned long)r.outside);
+        st = amp_fail(err, AMP_ERR_CHECK, 0,
+                      "stroke: %lu crossings, %lu edges printed twice, %lu points outside (first near %.6g, %.6g)",
+                      (unsigned long)r.crossings, (unsigned long)r.repeated_edges, (unsigned long)r.outside, where.x,
+                      where.y);
 out:
     amp_free(al, vk);
     amp_free(al, id);
     amp_free(al, sg);
     amp_free(al, ek);
     amp_free(al, ps);
+    yrows_free(al, &yr);
     if (rep)
         *rep = r;
     return st;

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "fx_meshes.h"
+#include "fx_parts.h"
 #include "runtool.h"
 #include "testutil.h"
 
@@ -382,10 +383,11 @@ START_TEST(all_layers_of_a_sphere_and_torus_pair)
     ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
     ck_assert_uint_eq(st.layers, sl.nlayers);
     ck_assert_uint_gt(st.islands, sl.nlayers); /* two bodies on most layers */
-    ck_assert_uint_eq(st.strokes, st.islands);
-    ck_assert_uint_eq(st.multi_stroke, 0);
+    ck_assert_uint_ge(st.strokes, st.regions);
     ck_assert_uint_eq(st.odd_vertices, 0);
-    ck_assert_uint_eq(ps.npaths, st.strokes + st.perimeter_loops);
+    /* perimeters and region strokes joined: one closed path per island */
+    ck_assert_uint_eq(ps.npaths, st.islands);
+    ck_assert_uint_eq(st.island_strokes, st.islands);
     ck_assert_uint_eq(st.travel_moves, ps.npaths - 1);
     ck_assert(st.printed_length > st.infill_length && st.infill_length > 0);
     /* pseudo edges are in the paths but print nothing */
@@ -426,8 +428,9 @@ START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
         amp_contpath_opts_default(&o, 0.5);
         ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_gt(st.islands, sl.nlayers / 2);
-        ck_assert_uint_eq(st.strokes, st.islands);
-        ck_assert_uint_eq(st.multi_stroke, 0);
+        /* a region's components are spliced to the perimeter, not joined inside it (Fig. 6) */
+        ck_assert_uint_ge(st.strokes, st.regions);
+        ck_assert_uint_eq(st.island_strokes, st.islands);
         ck_assert_uint_eq(st.odd_vertices, 0);
         /* pseudo edges (thin cells, return runs of joins) are a small part of the infill */
         ck_assert_msg(st.pseudo_length <= 0.1 * st.infill_length, "%s: pseudo %g of %g mm", names[n],
@@ -505,9 +508,11 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --radius 0.4 --continuous -o %s --json", stl, amp);
     ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
-    /* 12 layers x 3 regions (the neck splits R̃), one stroke each */
-    ck_assert_msg(strstr(out, "\"layers\":12,\"islands\":36,\"strokes\":36,\"multi_stroke_islands\":0") != NULL, "%s",
-                  out);
+    /* 12 layers x 2 islands x one stroke; 3 regions per layer (the neck splits R̃) */
+    ck_assert_msg(strstr(out, "\"layers\":12,\"empty_layers\":0,\"islands\":24,") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"island_strokes\":24,\"specks\":0,\"extrusion_starts\":24,\"regions\":36,"
+                              "\"skin_regions\":12,\"strokes\":36,\"multi_stroke_regions\":0") != NULL,
+                  "%s", out);
     ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"odd_vertices\":0") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"joins\":") != NULL && strstr(out, "\"pseudo_length_mm\":") != NULL, "%s", out);
@@ -535,6 +540,504 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
 }
 END_TEST
 
+
+/* ---- real parts (issue 16): counted from the G-code text, not the library ---- */
+
+/* Extrusion starts per layer height in a G-code file: an extruding move
+ * (XY change with E growing) after a move without extrusion (XY or Z). Returns the
+ * number of distinct heights written into z[] / starts[] (at most cap). */
+static size_t gcode_starts(const char *file, double *z, size_t *starts, size_t cap, double *first_z)
+{
+    FILE *f = fopen(file, "r");
+    char line[512];
+    double X = 0, Y = 0, Z = 0, E = 0;
+    int rel = 0, printing = 0;
+    size_t nz = 0, k;
+    ck_assert(f != NULL);
+    *first_z = -1;
+    while (fgets(line, sizeof line, f)) {
+        double x = X, y = Y, zz = Z, e = E, v;
+        char *p;
+        int has_e = 0;
+        if (strncmp(line, "M83", 3) == 0)
+            rel = 1;
+        if (strncmp(line, "M82", 3) == 0)
+            rel = 0;
+        if (strncmp(line, "G92", 3) == 0 && (p = strchr(line, 'E')) != NULL)
+            E = atof(p + 1);
+        if (strncmp(line, "G0 ", 3) != 0 && strncmp(line, "G1 ", 3) != 0)
+            continue;
+        if ((p = strchr(line, ';')) != NULL)
+            *p = 0;
+        for (p = line + 3; *p; p++) {
+            if (p[-1] != ' ')
+                continue;
+            v = atof(p + 1);
+            if (*p == 'X')
+                x = v;
+            else if (*p == 'Y')
+                y = v;
+            else if (*p == 'Z')
+                zz = v;
+            else if (*p == 'E') {
+                e = rel ? E + v : v;
+                has_e = 1;
+            }
+        }
+        if (x != X || y != Y || zz != Z) { /* a move; a Z-only move (layer change) never extrudes */
+            int extrudes = (x != X || y != Y) && has_e && e > E + 1e-9;
+            if (extrudes && !printing) {
+                for (k = 0; k < nz && fabs(z[k] - zz) > 1e-6; k++)
+                    ;
+                if (k == nz) {
+                    ck_assert_uint_lt(nz, cap);
+                    z[nz] = zz;
+                    starts[nz++] = 0;
+                }
+                starts[k]++;
+                if (*first_z < 0)
+                    *first_z = zz;
+            }
+            printing = extrudes;
+        }
+        X = x;
+        Y = y;
+        Z = zz;
+        E = e;
+    }
+    fclose(f);
+    return nz;
+}
+
+/* Every layer of the part: as many extrusion starts in the G-code as the
+ * section has islands (one stroke per island), the check of every path
+ * clean, and the first bead on the lowest layer. */
+static void part_one_start_per_island(fx_part part, double step)
+{
+    static char out[1 << 17];
+    static double z[4096];
+    static size_t starts[4096];
+    amp_mesh m;
+    amp_error err;
+    char args[2048], name[64], stl[400], amp[400], gc[420];
+    const char *q;
+    size_t nz, k, islands_total = 0, starts_total = 0;
+    double first_z;
+    snprintf(name, sizeof name, "%s.stl", fx_part_name(part));
+    snprintf(stl, sizeof stl, "%s", amp_test_tmp(name));
+    snprintf(name, sizeof name, "%s.amp", fx_part_name(part));
+    snprintf(amp, sizeof amp, "%s", amp_test_tmp(name));
+    snprintf(gc, sizeof gc, "%s.gcode", amp);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, part, step), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    amp_mesh_free(&m);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s --json", stl, amp);
+    ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", fx_part_name(part), out);
+    ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL, "%s",
+                  out);
+    ck_assert_msg(strstr(out, "\"empty_layers\":0,") != NULL, "%s", out);
+    snprintf(args, sizeof args, "gcode %s -o %s", amp, gc);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    nz = gcode_starts(gc, z, starts, 4096, &first_z);
+    /* islands per layer from the sections themselves (slice --polygons) */
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons --json", stl);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    for (q = strstr(out, "\"z_print\":"); q; q = strstr(q + 1, "\"z_print\":")) {
+        double zp = atof(q + 10);
+        long isl = atol(strstr(q, "\"islands\":") + 10);
+        size_t got = 0;
+        for (k = 0; k < nz; k++)
+            if (fabs(z[k] - zp) < 1e-3)
+                got = starts[k];
+        ck_assert_msg(got == (size_t)isl, "%s: layer at z %g has %ld islands and %lu extrusion starts",
+                      fx_part_name(part), zp, isl, (unsigned long)got);
+        islands_total += (size_t)isl;
+    }
+    for (k = 0; k < nz; k++)
+        starts_total += starts[k];
+    ck_assert_uint_eq(starts_total, islands_total);
+    /* the first bead is laid on the lowest layer, nothing below it */
+    for (k = 0; k < nz; k++)
+        ck_assert(z[k] >= first_z - 1e-9);
+    remove(stl);
+    remove(amp);
+    remove(gc);
+}
+
+START_TEST(torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode)
+{
+    part_one_start_per_island(FX_PART_TORUS, 0.8);
+    part_one_start_per_island(FX_PART_IDLER, 0.7);
+}
+END_TEST
+
+START_TEST(screw_bunny_and_open_mesh_get_one_extrusion_start_per_island_counted_in_the_gcode)
+{
+    part_one_start_per_island(FX_PART_SCREW, 0.5);
+    part_one_start_per_island(FX_PART_BUNNY, 0.6);
+    part_one_start_per_island(FX_PART_OPEN, 0.6);
+}
+END_TEST
+
+/* Slice a part in the library with the defaults (0.45 mm beads). */
+static void layers_of(fx_part part, double step, double layer, double first, amp_slices *sl, amp_pathset *ps,
+                      amp_contpath_stats *st, const amp_contpath_opts *o)
+{
+    amp_mesh m;
+    amp_slice_opts so;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, part, step), AMP_OK);
+    so.layer = layer;
+    so.first_layer = first;
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, sl, &err), AMP_OK);
+    ck_assert_msg(amp_contpath_layers(sl, o, ps, st, &err) == AMP_OK, "%s", err.msg);
+    amp_mesh_free(&m);
+}
+
+START_TEST(paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is)
+{
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    size_t i, k;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0.3, &sl, &ps, &st, &o);
+    ck_assert_uint_gt(ps.npaths, 10);
+    for (i = 0; i < ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
+        double z = v[0].p.z;
+        /* first layer 0.3 thick, then 0.2 */
+        ck_assert_msg(fabs(ps.paths[i].h - (fabs(z - 0.3) < 1e-9 ? 0.3 : 0.2)) < 1e-9, "path %lu at z %g: h %g",
+                      (unsigned long)i, z, ps.paths[i].h);
+        ck_assert_double_gt(amp_path_length(&ps, i), 0); /* no zero-length path */
+        if (i > 0) {
+            /* a closed stroke starts at its printed vertex nearest to the previous end */
+            const amp_pvert *pv = amp_pathset_path_verts(&ps, i - 1);
+            amp_vec3 e = pv[ps.paths[i - 1].n - 1].p;
+            double d0 = hypot(v[0].p.x - e.x, v[0].p.y - e.y);
+            for (k = 1; k + 1 < ps.paths[i].n; k++)
+                if (v[k].r > 0 && v[k - 1].r > 0 && v[k + 1].r > 0)
+                    ck_assert(hypot(v[k].p.x - e.x, v[k].p.y - e.y) >= d0 - 1e-9);
+        }
+    }
+    ck_assert_uint_eq(st.island_strokes, st.islands);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
+
+START_TEST(cycle_tree_and_merging_trace_the_same_edges_once_without_crossing)
+{
+    /* §4: the cycle-tree traversal (Hierholzer on the boundary cycles,
+     * q = 2 / q > 2 splices) and the older merging must both run every edge
+     * of the patched complex exactly once: same printed length, no edge
+     * twice, no crossing; the cycle tree has many levels on a wide part */
+    amp_slices sl, sl2;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_contpath_opts o;
+    amp_error err;
+    size_t i;
+    amp_slices_init(&sl, NULL);
+    amp_slices_init(&sl2, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl, &a, &sa, &o);
+    o.tour = AMP_TOUR_MERGE;
+    layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl2, &b, &sb, &o);
+    ck_assert_uint_eq(sa.tour_fallbacks, 0);
+    ck_assert_uint_gt(sa.tree_levels, 3);
+    ck_assert_uint_gt(sa.cycles, sa.regions);
+    ck_assert_uint_eq(sa.strokes, sb.strokes);
+    ck_assert_double_eq_tol(sa.infill_length, sb.infill_length, 1e-6 * sa.infill_length);
+    ck_assert_uint_eq(a.npaths, sa.islands);
+    for (i = 0; i < a.npaths; i++)
+        ck_assert_msg(amp_pathset_stroke_check(&a, i, NULL, 0, NULL, &err) == AMP_OK, "path %lu: %s", (unsigned long)i,
+                      err.msg);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+    amp_slices_free(&sl2);
+}
+END_TEST
+
+static double vee_f(amp_vec3 p, void *u)
+{
+    (void)u;
+    /* a prism standing on its ridge: the first sections are thinner than a bead */
+    return fmax(fmax(fabs(p.x) - 0.8 * p.z, p.z - 4), fabs(p.y) - 6);
+}
+
+START_TEST(a_sliver_first_layer_is_printed_on_the_bed)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    amp_error err;
+    size_t i, first_layer_paths = 0;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_implicit(&m, vee_f, NULL, amp_v3(-4, -7, -0.13), amp_v3(4, 7, 4.3), 0.25), AMP_OK);
+    so.layer = 0.2;
+    so.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
+    ck_assert_double_gt(amp_polyset_area(&sl.layers[0].polys), 0);
+    amp_contpath_opts_default(&o, 0.225);
+    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.empty_layers, 0);
+    ck_assert_uint_eq(st.dropped_islands, 0);
+    ck_assert_uint_ge(st.thin_islands, 1);
+    for (i = 0; i < ps.npaths; i++)
+        first_layer_paths += fabs(amp_pathset_path_verts(&ps, i)[0].p.z - sl.layers[0].z_print) < 1e-9;
+    ck_assert_uint_eq(first_layer_paths, 1);
+    ck_assert_double_eq_tol(amp_pathset_path_verts(&ps, 0)[0].p.z, 0.2, 1e-9);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+/* Fraction of the points of the infill rings (the inset by 3r of every
+ * island, computed here from the sections) within @p reach of a printed
+ * segment at the layer's height: every 4th layer, points 0.05 mm apart. */
+static double ring_cover(const amp_slices *sl, const amp_pathset *ps, double r, double reach)
+{
+    amp_polyset isl, ins;
+    size_t li, k, q, i, j, total = 0, covered = 0;
+    amp_polyset_init(&isl, NULL);
+    amp_polyset_init(&ins, NULL);
+    for (li = 0; li < sl->nlayers; li += 4) {
+        const amp_layer *L = &sl->layers[li];
+        for (k = 0; k < L->polys.nislands; k++) {
+            ck_assert_int_eq(amp_polyset_island(&L->polys, k, &isl, NULL), AMP_OK);
+            ck_assert_int_eq(amp_polyset_inset(&isl, 3 * r, 0, &ins, NULL), AMP_OK);
+            for (q = 0; q < ins.nrings; q++) {
+                const amp_vec2 *p = amp_polyset_ring(&ins, q);
+                size_t n = ins.rings[q].n;
+                for (j = 0; j < n; j++) {
+                    amp_vec2 a = p[j], b = p[(j + 1) % n];
+                    double len = hypot(b.x - a.x, b.y - a.y), t;
+                    for (t = 0; t < len; t += 0.05) {
+                        amp_vec3 x = amp_v3(a.x + (b.x - a.x) * t / len, a.y + (b.y - a.y) * t / len, 0);
+                        double best = HUGE_VAL;
+                        for (i = 0; i < ps->npaths && best > reach; i++) {
+                            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+                            size_t e;
+                            if (fabs(v[0].p.z - L->z_print) > 1e-9)
+                                continue;
+                            for (e = 0; e + 1 < ps->paths[i].n && best > reach; e++)
+                                if (v[e].r > 0 && v[e + 1].r > 0)
+                                    best = fmin(best, sqrt(amp_v3_seg_dist2(x, amp_v3(v[e].p.x, v[e].p.y, 0),
+                                                                            amp_v3(v[e + 1].p.x, v[e + 1].p.y, 0),
+                                                                            NULL)));
+                        }
+                        total++;
+                        covered += best <= reach;
+                    }
+                }
+            }
+        }
+    }
+    amp_polyset_free(&isl);
+    amp_polyset_free(&ins);
+    return total ? (double)covered / (double)total : 0;
+}
+
+START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
+{
+    /* step 6: with the corners every point of the rings of R̃ lies within r
+     * of material (the ring's own patches, lattice ends, or a corner); the
+     * same slicing without corners leaves stretches bare */
+    amp_slices sl, sl2;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_contpath_opts o;
+    double ca, cb;
+    amp_slices_init(&sl, NULL);
+    amp_slices_init(&sl2, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
+    o.support_corners = 0;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl2, &b, &sb, &o);
+    ck_assert_uint_gt(sa.support_corners, 100);
+    ck_assert_uint_eq(sb.support_corners, 0);
+    ck_assert_double_gt(sa.unprinted_length, 0);
+    ca = ring_cover(&sl, &a, 0.225, 0.225 * 1.01);
+    cb = ring_cover(&sl2, &b, 0.225, 0.225 * 1.01);
+    ck_assert_msg(ca >= 0.99 && 1 - ca <= 0.5 * (1 - cb), "ring within r of material: %g with corners, %g without", ca, cb);
+    ck_assert_uint_le(sa.corners_left_out, sa.support_corners / 10);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+    amp_slices_free(&sl2);
+}
+END_TEST
+
+static int cmp_dbl(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : (x > y ? 1 : 0);
+}
+
+/* Independent bead coverage of one layer: the section rasterised by
+ * scanlines (pixel @p px), every printed segment at height z stamped as a
+ * capsule of radius r; the fraction of the section's pixels under a bead. */
+static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, double z, double r, double px)
+{
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, *xs;
+    size_t i, k, nx, ny, in = 0, hit = 0;
+    unsigned char *img;
+    for (i = 0; i < sec->npts; i++) {
+        x0 = fmin(x0, sec->pts[i].x);
+        y0 = fmin(y0, sec->pts[i].y);
+        x1 = fmax(x1, sec->pts[i].x);
+        y1 = fmax(y1, sec->pts[i].y);
+    }
+    nx = (size_t)((x1 - x0) / px) + 1;
+    ny = (size_t)((y1 - y0) / px) + 1;
+    img = calloc(nx * ny, 1);
+    xs = malloc((sec->npts + 1) * sizeof *xs);
+    ck_assert(img && xs);
+    /* 1: inside the section (even-odd spans of each row) */
+    for (k = 0; k < ny; k++) {
+        double y = y0 + (k + 0.5) * px;
+        size_t nxs = 0, q, r2;
+        for (r2 = 0; r2 < sec->nrings; r2++) {
+            const amp_vec2 *p = amp_polyset_ring(sec, r2);
+            size_t n = sec->rings[r2].n;
+            for (q = 0; q < n; q++) {
+                amp_vec2 a = p[q], b = p[(q + 1) % n];
+                if ((a.y > y) != (b.y > y))
+                    xs[nxs++] = a.x + (y - a.y) * (b.x - a.x) / (b.y - a.y);
+            }
+        }
+        qsort(xs, nxs, sizeof *xs, cmp_dbl);
+        for (q = 0; q + 1 < nxs; q += 2) {
+            size_t c0 = (size_t)fmax(0, ceil((xs[q] - x0) / px - 0.5)), c1;
+            for (c1 = c0; c1 < nx && x0 + (c1 + 0.5) * px < xs[q + 1]; c1++)
+                img[k * nx + c1] = 1;
+        }
+    }
+    /* 2: under a bead */
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        if (fabs(v[0].p.z - z) > 1e-9)
+            continue;
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            amp_vec3 a = amp_v3(v[k].p.x, v[k].p.y, 0), b = amp_v3(v[k + 1].p.x, v[k + 1].p.y, 0);
+            long cx0, cx1, cy0, cy1, cx, cy;
+            if (!(v[k].r > 0) || !(v[k + 1].r > 0))
+                continue;
+            cx0 = (long)floor((fmin(a.x, b.x) - r - x0) / px);
+            cx1 = (long)ceil((fmax(a.x, b.x) + r - x0) / px);
+            cy0 = (long)floor((fmin(a.y, b.y) - r - y0) / px);
+            cy1 = (long)ceil((fmax(a.y, b.y) + r - y0) / px);
+            for (cy = cy0 < 0 ? 0 : cy0; cy <= cy1 && cy < (long)ny; cy++)
+                for (cx = cx0 < 0 ? 0 : cx0; cx <= cx1 && cx < (long)nx; cx++) {
+                    amp_vec3 c = amp_v3(x0 + (cx + 0.5) * px, y0 + (cy + 0.5) * px, 0);
+                    if (img[cy * nx + cx] == 1 && amp_v3_seg_dist2(c, a, b, NULL) <= r * r)
+                        img[cy * nx + cx] = 2;
+                }
+        }
+    }
+    for (i = 0; i < nx * ny; i++) {
+        in += img[i] != 0;
+        hit += img[i] == 2;
+    }
+    free(img);
+    free(xs);
+    return in ? (double)hit / (double)in : 0;
+}
+
+START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
+{
+    /* the idler's first and last layers are skins: >= 95 % of the section
+     * under beads (measured here by rasterising); a middle layer keeps the
+     * sparse lattice */
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    double c0, c1, cm;
+    size_t last;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_IDLER, 0.7, 0.2, 0, &sl, &ps, &st, &o);
+    last = sl.nlayers - 1;
+    ck_assert_uint_gt(st.skin_regions, 0);
+    ck_assert_uint_eq(st.island_strokes, st.islands);
+    c0 = bead_coverage(&sl.layers[0].polys, &ps, sl.layers[0].z_print, 0.225, 0.04);
+    c1 = bead_coverage(&sl.layers[last].polys, &ps, sl.layers[last].z_print, 0.225, 0.04);
+    cm = bead_coverage(&sl.layers[last / 2].polys, &ps, sl.layers[last / 2].z_print, 0.225, 0.04);
+    ck_assert_msg(c0 >= 0.95 && c1 >= 0.95 && cm < 0.8, "bottom %g, top %g, middle %g", c0, c1, cm);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
+
+START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
+{
+    /* step 5, direct: one lattice edge crosses a 10 x 10 square region at
+     * height y0; its two free ends on the ring can be joined by the ring
+     * path below it (length 2 y0 + 10) or above it (2 (10 - y0) + 10). The
+     * paper prints the longer: the stroke must reach the far side and not
+     * the near one, whichever side is far. */
+    static const double y0s[] = {1.0, 9.0};
+    size_t t;
+    for (t = 0; t < 2; t++) {
+        amp_cx2 k;
+        amp_polyset R;
+        amp_pathset ps;
+        amp_contpath_opts o;
+        amp_contpath_stats st;
+        amp_error err;
+        amp_vec2 sq[4] = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
+        uint32_t a, b;
+        size_t i;
+        double ymin = HUGE_VAL, ymax = -HUGE_VAL;
+        amp_cx2_init(&k, NULL);
+        amp_polyset_init(&R, NULL);
+        amp_pathset_init(&ps, NULL);
+        memset(&st, 0, sizeof st);
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(-3, y0s[t]), &a, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(13, y0s[t] + 0.01), &b, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_add_edge(&k, a, b, NULL), AMP_OK);
+        ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_add(&R, sq, 4, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_organize(&R, NULL), AMP_OK);
+        amp_contpath_opts_default(&o, 0.2);
+        ck_assert_msg(amp_contpath_region(&k, &R, 1.0, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+        ck_assert_uint_eq(st.free_ends, 2);
+        ck_assert_uint_eq(ps.npaths, 1);
+        for (i = 0; i < ps.paths[0].n; i++) {
+            ymin = fmin(ymin, amp_pathset_path_verts(&ps, 0)[i].p.y);
+            ymax = fmax(ymax, amp_pathset_path_verts(&ps, 0)[i].p.y);
+        }
+        if (y0s[t] < 5)
+            ck_assert_msg(ymax == 10 && ymin >= y0s[t], "y0 %g: stroke spans y %g..%g", y0s[t], ymin, ymax);
+        else
+            ck_assert_msg(ymin == 0 && ymax <= y0s[t] + 0.01, "y0 %g: stroke spans y %g..%g", y0s[t], ymin, ymax);
+        ck_assert_double_eq_tol(st.infill_length, 10 + 2 * (y0s[t] < 5 ? 10 - y0s[t] : y0s[t]) + 10.01, 0.02);
+        amp_cx2_free(&k);
+        amp_polyset_free(&R);
+        amp_pathset_free(&ps);
+    }
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -549,6 +1052,14 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, built_in_models_get_one_crossing_free_stroke_per_island);
     AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
     AMP_ADD_TEST(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
+    AMP_ADD_TEST(tc, torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode);
+    AMP_ADD_TEST(tc, screw_bunny_and_open_mesh_get_one_extrusion_start_per_island_counted_in_the_gcode);
+    AMP_ADD_TEST(tc, paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is);
+    AMP_ADD_TEST(tc, cycle_tree_and_merging_trace_the_same_edges_once_without_crossing);
+    AMP_ADD_TEST(tc, a_sliver_first_layer_is_printed_on_the_bed);
+    AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
+    AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
+    AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -1,6 +1,7 @@
 /* Polygon operations: area, containment, hull, islands, inward offset. */
 #include <math.h>
 
+#include "fx_parts.h"
 #include "testutil.h"
 
 static void add_rect(amp_polyset *ps, double x0, double y0, double x1, double y1, int ccw)
@@ -252,6 +253,36 @@ START_TEST(inset_survives_near_duplicate_points_from_a_section_through_vertices)
 }
 END_TEST
 
+START_TEST(inset_of_marching_tetrahedra_torus_sections_matches_sampling)
+{
+    /* sections of a meshed torus have many short edges at grid-plane
+     * directions: the raw offset's swallowtails there used to break a ring
+     * apart, and the whole ring (outer boundary or hole) vanished */
+    static const double zs[] = {1.3, 2.7, 5.1};
+    static const double rs[] = {0.225, 0.675};
+    amp_mesh m;
+    size_t iz, ir;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, FX_PART_TORUS, 0), AMP_OK);
+    for (iz = 0; iz < 3; iz++) {
+        amp_polyset sec, out;
+        amp_polyset_init(&sec, NULL);
+        amp_polyset_init(&out, NULL);
+        ck_assert_int_eq(amp_slice_plane(&m, zs[iz], &sec, NULL, NULL), AMP_OK);
+        ck_assert_uint_eq(sec.nrings, 2);
+        for (ir = 0; ir < 2; ir++) {
+            ck_assert_int_eq(amp_polyset_inset(&sec, rs[ir], 0, &out, NULL), AMP_OK);
+            ck_assert_uint_eq(out.nislands, 1);
+            ck_assert_uint_eq(out.nrings, 2);
+            ck_assert_int_eq(inset_disagreements(&sec, rs[ir], &out, 0.25, 0.05), 0);
+        }
+        amp_polyset_free(&sec);
+        amp_polyset_free(&out);
+    }
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
@@ -265,6 +296,7 @@ static Suite *polygon_suite(void)
     AMP_ADD_TEST(tc, inset_checker_rejects_a_wrong_offset);
     AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
     AMP_ADD_TEST(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
+    AMP_ADD_TEST(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -171,6 +171,25 @@ START_TEST(open_mesh_is_reported_as_open_chains)
         ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
         ck_assert_uint_eq(ss.open_chains, 1);
         ck_assert_uint_eq(ps.nrings, 1);
+        /* all layers: the open chains are counted on the layers they are in
+         * (the removed triangle spans a few of them), the rest is closed */
+        {
+            amp_slices sl;
+            amp_slice_opts so = {0.1, 0};
+            size_t li, sum = 0, open_layers = 0;
+            amp_slices_init(&sl, NULL);
+            ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+            for (li = 0; li < sl.nlayers; li++) {
+                sum += sl.layers[li].open_chains;
+                open_layers += sl.layers[li].open_chains > 0;
+                /* the closed sphere is there on every layer it spans */
+                ck_assert_uint_ge(sl.layers[li].polys.nislands, 1);
+            }
+            ck_assert_uint_eq(sum, sl.open_chains);
+            ck_assert_uint_ge(open_layers, 1);
+            ck_assert_uint_lt(open_layers, sl.nlayers / 4);
+            amp_slices_free(&sl);
+        }
     }
     amp_polyset_free(&ps);
     amp_mesh_free(&m);
@@ -238,7 +257,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert_uint_gt(n, 4);
         ck_assert(v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y); /* closed */
         ck_assert_near(v[0].p.z, (i / 2 + 0.5) * 0.5, 1e-6);               /* cut height above the plate */
-        ck_assert_near(v[0].r, 0.5, 1e-9);
+        ck_assert_near(v[0].r, 0.225, 1e-9); /* default: a 0.45 mm bead */
         for (k = 0; k + 1 < n; k++)
             a += v[k].p.x * v[k + 1].p.y - v[k + 1].p.x * v[k].p.y;
         ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);
@@ -277,6 +296,45 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
 }
 END_TEST
 
+/* A stair of voxel blocks (1 mm cells): columns 0-9 on the lower 4 layers
+ * of cells, columns 3-12 above: the upper part overhangs by 3 mm. */
+static int stair(int i, int j, int k, void *u)
+{
+    (void)u;
+    (void)j;
+    return k < 4 ? i < 10 : (i >= 3 && i < 13);
+}
+
+START_TEST(overhang_of_consecutive_layers_measures_eps_continuity)
+{
+    /* §2.1: the layer pair across the step overhangs by 3 mm (the upper
+     * layer's far corner is 3 mm from the lower section), every other
+     * pair by 0; a layer over an empty one is infinite */
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so = {0.5, 0};
+    amp_error err;
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    ck_assert_int_eq(fx_voxels(&m, 13, 4, 8, 1.0, stair, NULL), AMP_OK);
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
+    ck_assert_uint_eq(sl.nlayers, 16);
+    for (i = 0; i + 1 < sl.nlayers; i++) {
+        double o = amp_slices_overhang(&sl, i, 0.25);
+        if (i == 7)
+            ck_assert_double_eq_tol(o, 3.0, 1e-9);
+        else
+            ck_assert_double_eq_tol(o, 0.0, 1e-9);
+    }
+    ck_assert_double_eq(amp_slices_overhang(&sl, sl.nlayers - 1, 0.25), 0.0);
+    amp_polyset_clear(&sl.layers[3].polys);
+    ck_assert(amp_slices_overhang(&sl, 3, 0.25) == HUGE_VAL);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -287,6 +345,7 @@ static Suite *slice_suite(void)
     AMP_ADD_TEST(tc, open_mesh_is_reported_as_open_chains);
     AMP_ADD_TEST(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
     AMP_ADD_TEST(tc, cli_writes_closed_oriented_polygons_per_layer);
+    AMP_ADD_TEST(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     suite_add_tcase(s, tc);
     return s;
 }

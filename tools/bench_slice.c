@@ -3,7 +3,9 @@
  * (extrusion starts, travel). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cli.h"
 
@@ -74,6 +76,104 @@ static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *hav
             *have = 1;
         }
     }
+}
+
+/* Scaling series (issue 16: linear cost): the bumpy torus scaled by s in x
+ * and y (a quarter size at s = 1), 1 mm layers, default continuous paths;
+ * the time per printed millimetre should stay flat as the part grows. */
+static int scaling(cli_json *j, int quick)
+{
+    static const double scales[] = {1, 2, 4, 8};
+    size_t ns = quick ? 3 : 4, i, v;
+    double per[4], lo = HUGE_VAL, hi = 0;
+    int rc = CLI_OK;
+    if (j)
+        cli_json_arr(j, "scaling");
+    for (i = 0; i < ns && rc == CLI_OK; i++) {
+        amp_mesh m;
+        amp_slices sl;
+        amp_slice_opts so;
+        amp_contpath_opts o;
+        amp_contpath_stats st;
+        amp_pathset ps;
+        double t0, t;
+        amp_mesh_init(&m, NULL);
+        amp_slices_init(&sl, NULL);
+        amp_pathset_init(&ps, NULL);
+        if (make_mesh(&m, 96, 48) != 0)
+            rc = CLI_FAILED;
+        for (v = 0; v < m.nverts; v++)
+            m.verts[v] = amp_v3(m.verts[v].x * scales[i] / 4, m.verts[v].y * scales[i] / 4, m.verts[v].z / 4);
+        so.layer = 0.5;
+        so.first_layer = 0;
+        amp_contpath_opts_default(&o, 0.225);
+        t0 = cli_now();
+        if (rc == CLI_OK && (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK ||
+                             amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK))
+            rc = CLI_FAILED;
+        t = cli_now() - t0;
+        per[i] = rc == CLI_OK && st.printed_length > 0 ? 1e6 * t / st.printed_length : 0;
+        lo = fmin(lo, per[i]);
+        hi = fmax(hi, per[i]);
+        if (rc == CLI_OK && j) {
+            cli_json_obj(j, NULL);
+            cli_json_num(j, "scale", scales[i]);
+            cli_json_num(j, "time_s", t);
+            cli_json_num(j, "printed_mm", st.printed_length);
+            cli_json_num(j, "us_per_mm", per[i]);
+            cli_json_close(j);
+        } else if (rc == CLI_OK)
+            printf("scale x%g: %.3f s for %.0f mm printed (%.2f us/mm)\n", scales[i], t, st.printed_length, per[i]);
+        amp_pathset_free(&ps);
+        amp_slices_free(&sl);
+        amp_mesh_free(&m);
+    }
+    if (j) {
+        cli_json_close(j);
+        cli_json_num(j, "scaling_spread", lo > 0 ? hi / lo : 0);
+    } else if (rc == CLI_OK)
+        printf("time per printed mm from x1 to x%g: spread %.2fx (flat is 1)\n", scales[ns - 1], lo > 0 ? hi / lo : 0);
+    return rc;
+}
+
+/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
+ * gcode in at most half its wall time), when `prusa-slicer` is installed:
+ * the same mesh, 0.2 mm layers, 0.4 mm nozzle, headless --export-gcode.
+ * Skipped with a message otherwise. */
+static void prusa(cli_json *j, const amp_mesh *m, double ours_s)
+{
+    char stl[256], gc[256], cmd[800];
+    const char *tmp = getenv("TMPDIR");
+    amp_error err;
+    double t0, t;
+    int rc;
+    if (system("command -v prusa-slicer >/dev/null 2>&1") != 0) {
+        if (j)
+            cli_json_str(j, "prusaslicer", "skipped: prusa-slicer is not installed");
+        else
+            printf("PrusaSlicer side by side: skipped (prusa-slicer is not installed)\n");
+        return;
+    }
+    snprintf(stl, sizeof stl, "%s/ampath-bench-%ld.stl", tmp ? tmp : "/tmp", (long)getpid());
+    snprintf(gc, sizeof gc, "%s/ampath-bench-%ld.gcode", tmp ? tmp : "/tmp", (long)getpid());
+    if (amp_mesh_write_stl_file(m, stl, 1, &err) != AMP_OK)
+        return;
+    snprintf(cmd, sizeof cmd,
+             "prusa-slicer --export-gcode --layer-height 0.2 --nozzle-diameter 0.4 --center 125,105 -o '%s' '%s' "
+             ">/dev/null 2>&1",
+             gc, stl);
+    t0 = cli_now();
+    rc = system(cmd);
+    t = cli_now() - t0;
+    remove(stl);
+    remove(gc);
+    if (j) {
+        cli_json_num(j, "prusaslicer_s", rc == 0 ? t : -1);
+        cli_json_num(j, "continuous_vs_prusaslicer", rc == 0 && t > 0 ? ours_s / t : -1);
+    } else if (rc == 0)
+        printf("PrusaSlicer side by side: %.2f s vs ours %.2f s (%.2fx; target <= 0.5x)\n", t, ours_s, ours_s / t);
+    else
+        printf("PrusaSlicer side by side: prusa-slicer failed (exit %d)\n", rc);
 }
 
 int bench_slice(cli_json *j, int quick)
@@ -168,10 +268,14 @@ int bench_slice(cli_json *j, int quick)
                    travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
         }
     }
+    if (rc == CLI_OK)
+        prusa(j, &m, t_slice + t_cont);
     amp_polyset_free(&isl);
     amp_polyset_free(&ins);
     amp_pathset_free(&ps);
     amp_slices_free(&sl);
     amp_mesh_free(&m);
+    if (rc == CLI_OK)
+        rc = scaling(j, quick);
     return rc;
 }

@@ -1,6 +1,7 @@
 /* ampath slice MESH.stl --layer H --polygons — planar layers (paper 2 §2.2 step 1, SPEC §4). */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "slicetool.h"
@@ -12,33 +13,38 @@ const char cmd_slice_usage[] =
     "       [--json]\n"
     "  --layer H          layer height in mm (required); layer i is cut at z = (i + 1/2) H above the\n"
     "                     plate (mesh lowest point = 0) and printed at z = (i + 1) H\n"
-    "  --first-layer H0   height of the first layer in mm (default: H); layer 0 is cut at H0/2,\n"
-    "                     layer i >= 1 at H0 + (i - 1/2) H\n"
-    "  --polygons         write each layer's polygons (the default product): one closed path per\n"
-    "                     ring (last vertex repeats the first) at the cutting height, outer\n"
-    "                     boundaries counter-clockwise, holes clockwise, islands in order\n"
-    "  --continuous       continuous tool paths (paper 2): per island a perimeter loop at r, then one\n"
-    "                     closed stroke over the Euler lattice clipped to the inset by 3r, printed at\n"
-    "                     z = (i + 1) H with radius r on every vertex\n"
-    "  --cell S           lattice cell size of --continuous in mm (default 10 r)\n"
-    "  --grid KIND        lattice of --continuous: square (default), tri or hex\n"
+    "  --first-layer H0   first layer height (default H): layer 0 cut at H0/2, i >= 1 at H0 + (i - 1/2) H\n"
+    "  --polygons         each layer's rings as closed paths at the cutting height (the default):\n"
+    "                     outer boundaries counter-clockwise, holes clockwise, islands in order\n"
+    "  --continuous       paper 2: per island one closed stroke (perimeter loops at r and the Euler\n"
+    "                     lattice clipped to the inset by 3r), printed at z = (i + 1) H, every path\n"
+    "                     a bead of the layer's height, started where the previous one ended\n"
+    "  --radius R         bead half-width in mm (default 0.225: a 0.45 mm bead); also the SVG inset\n"
+    "  --nozzle D         nozzle diameter: bead 1.125 D wide (r = 0.5625 D) unless --radius is given\n"
+    "  --cell S           sparse lattice cell in mm (default 10 r, about 40 % infill)\n"
+    "  --infill P         sparse infill density in % instead (cell = 4 r x 100 / P)\n"
+    "  --bottom T, --top T  solid skin thickness in mm (default 0.8 each, 0: none): regions near a\n"
+    "                     downward or upward facing surface get the dense lattice (cell 4r)\n"
+    "  --eps-c C          warn where a layer overhangs the one below by more than C r (section 2.1,\n"
+    "                     0 < C <= 1, default 1; per layer pair in --json)\n"
+    "  --grid KIND        square (default), tri or hex\n"
     "  --offset D         mitered offset of the Euler transformation in mm (default r)\n"
-    "  --no-perimeter     --continuous without the perimeter loops\n"
-    "  --support-stretches  print the unprinted ring stretches as support paths (Remark 2.1)\n"
-    "  --no-pseudo        print every patch of thin boundary cells (default: stretches closer than\n"
-    "                     2r to a lattice piece of their cell are pseudo edges, radius 0: travel\n"
-    "                     inside the stroke, paper Figs. 7, 8)\n"
-    "  -o FILE            OUT.amp: all layers; OUT.svg: a picture of one layer with its inset\n"
+    "  --tour KIND        cycle-tree (default, paper section 4) or merge (curves merged where they touch)\n"
+    "  --no-perimeter     no perimeter loops\n"
+    "  --no-corners       no support corners (step 6, Fig. 5) on the unprinted infill ring stretches\n"
+    "  --support-stretches  print those stretches as support paths instead (Remark 2.1)\n"
+    "  --pseudo           thin-cell patch stretches as pseudo edges (travel, Figs. 7, 8; each one\n"
+    "                     more extrusion start); default printed (--no-pseudo kept for old scripts)\n"
+    "  --no-join          perimeter loops and region strokes as separate paths\n"
+    "  -o FILE            OUT.amp: all layers; OUT.svg: one layer with its inset (with --continuous:\n"
+    "                     with its strokes, beads drawn at their width)\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
-    "  --radius R         deposition radius written on every vertex, and the inset drawn in\n"
-    "                     the SVG, in mm (default 0.5)\n"
-    "  --json             print the figures as one JSON object (layers, polygons, islands, holes,\n"
-    "                     area per layer, open chains of an open mesh, time; with --continuous:\n"
-    "                     strokes, joins, travel moves, printed/travel/support/pseudo lengths,\n"
-    "                     crossings)\n"
+    "  --json             figures as one JSON object (per layer with --polygons; strokes, starts,\n"
+    "                     lengths, check results, overhangs with --continuous)\n"
     "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
-    "(open_chains) with a warning on stderr.\n";
+    "(open_chains, per layer) with a warning on stderr. --continuous checks every path it writes\n"
+    "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
 static int ends_with(const char *s, const char *suf)
 {
@@ -123,78 +129,251 @@ static amp_grid_kind grid_kind(const char *g, int *ok)
     return AMP_GRID_SQUARE;
 }
 
-/* --continuous: build, self-check (crossings, repeated edges) and report. */
+/* One layer's strokes over its section: beads as wide as they print (2r,
+ * translucent), centre lines thin, pseudo edges dashed, the start marked. */
+static int write_stroke_svg(const char *file, const amp_slices *sl, const amp_pathset *ps, long li, double r)
+{
+    svg_doc s;
+    double x0, y0, x1, y1;
+    const amp_layer *L = &sl->layers[li];
+    size_t i, k, strokes = 0, starts = 0;
+    char line[200];
+    int pass;
+    slicetool_bbox(sl, &x0, &y0, &x1, &y1);
+    if (svg_open(&s, file, x0, y0, x1, y1) != 0)
+        return cli_fail("slice", CLI_USAGE, "cannot write '%s'", file);
+    svg_polyset(&s, &L->polys, "#ece4f6", "#5b2a86", 1.0);
+    for (pass = 0; pass < 3; pass++)
+        for (i = 0; i < ps->npaths; i++) {
+            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+            if (ps->paths[i].n < 2 || fabs(v[0].p.z - L->z_print) > 1e-9)
+                continue;
+            if (pass == 2) {
+                fprintf(s.f, "<circle cx=\"%.5g\" cy=\"%.5g\" r=\"%.4g\" fill=\"#c0392b\"/>\n", v[0].p.x - s.x0,
+                        s.y1 - v[0].p.y, 1.2 * r);
+                strokes++;
+                continue;
+            }
+            /* pass 0: the beads (printed segments), pass 1: centre lines */
+            fprintf(s.f, "<path fill=\"none\" stroke=\"%s\" stroke-width=\"%.4g\" stroke-linecap=\"round\" "
+                         "stroke-linejoin=\"round\"%s d=\"",
+                    pass == 0 ? "rgba(39,110,176,0.35)" : "#1d3c5a", pass == 0 ? 2 * r : 0.6 * s.px,
+                    pass == 0 ? " stroke-opacity=\"0.35\"" : "");
+            for (k = 0; k + 1 < ps->paths[i].n; k++) {
+                int printed = v[k].r > 0 || v[k + 1].r > 0;
+                if (pass == 0 && !printed)
+                    continue;
+                fprintf(s.f, "M%.5g %.5gL%.5g %.5g", v[k].p.x - s.x0, s.y1 - v[k].p.y, v[k + 1].p.x - s.x0,
+                        s.y1 - v[k + 1].p.y);
+                if (pass == 1 && printed && k > 0 && !(v[k - 1].r > 0 || v[k].r > 0))
+                    starts++;
+            }
+            fprintf(s.f, "\"/>\n");
+        }
+    snprintf(line, sizeof line, "layer %ld at z %.4g mm: %lu islands, %lu strokes (red dot: where each starts)", li,
+             L->z_print, (unsigned long)L->polys.nislands, (unsigned long)strokes);
+    svg_text(&s, 0, line);
+    snprintf(line, sizeof line, "blue: beads %.3g mm wide over the section (purple), thin: the nozzle's path", 2 * r);
+    svg_text(&s, 1, line);
+    (void)starts;
+    if (svg_close(&s) != 0)
+        return cli_fail("slice", CLI_USAGE, "writing '%s' failed", file);
+    return CLI_OK;
+}
+
+/* Layer whose printing height is z (the paths of --continuous). */
+static const amp_polyset *layer_region(const amp_slices *sl, double z)
+{
+    size_t i;
+    for (i = 0; i < sl->nlayers; i++)
+        if (fabs(sl->layers[i].z_print - z) < 1e-9)
+            return &sl->layers[i].polys;
+    return NULL;
+}
+
+/* Extrusion starts counted like a G-code reader would: a printed segment
+ * (radius > 0 at an end) after a travel (a new path, or a pseudo edge). */
+static size_t count_starts(const amp_pathset *ps)
+{
+    size_t i, k, starts = 0;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        int printing = 0;
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            int pr = (v[k].r > 0 || v[k + 1].r > 0) && amp_v3_dist(v[k].p, v[k + 1].p) > 0;
+            int tr = !(v[k].r > 0 || v[k + 1].r > 0) && amp_v3_dist(v[k].p, v[k + 1].p) > 0;
+            if (pr && !printing)
+                starts++;
+            if (pr)
+                printing = 1;
+            else if (tr)
+                printing = 0;
+        }
+    }
+    return starts;
+}
+
+/* §2.1: overhang of every layer pair, the pairs beyond c r, the worst. */
+static size_t overhangs(const amp_slices *sl, double c, double r, double *per, double *worst, size_t *at)
+{
+    size_t i, over = 0;
+    *worst = 0;
+    *at = 0;
+    for (i = 0; i + 1 < sl->nlayers; i++) {
+        per[i] = amp_slices_overhang(sl, i, 4 * r);
+        over += per[i] > c * r;
+        if (per[i] > *worst) {
+            *worst = per[i];
+            *at = i + 1;
+        }
+    }
+    return over;
+}
+
+static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size_t crossings, size_t repeats,
+                       size_t outside, size_t failed, double radius, double t0, const amp_slices *sl,
+                       const double *per, double c)
+{
+    cli_json j;
+    size_t i, over = 0;
+    double worst = 0;
+    cli_json_begin(&j, stdout);
+    cli_json_int(&j, "layers", (long long)st->layers);
+    cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
+    cli_json_int(&j, "islands", (long long)st->islands);
+    cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
+    cli_json_int(&j, "dropped_islands", (long long)st->dropped_islands);
+    cli_json_int(&j, "island_strokes", (long long)st->island_strokes);
+    cli_json_int(&j, "specks", (long long)st->specks);
+    cli_json_int(&j, "extrusion_starts", (long long)count_starts(ps));
+    cli_json_int(&j, "regions", (long long)st->regions);
+    cli_json_int(&j, "skin_regions", (long long)st->skin_regions);
+    cli_json_int(&j, "strokes", (long long)st->strokes);
+    cli_json_int(&j, "multi_stroke_regions", (long long)st->multi_stroke);
+    cli_json_int(&j, "perimeter_loops", (long long)st->perimeter_loops);
+    cli_json_int(&j, "support_paths", (long long)st->support_paths);
+    cli_json_int(&j, "paths", (long long)ps->npaths);
+    cli_json_int(&j, "travel_moves", (long long)st->travel_moves);
+    cli_json_num(&j, "printed_length_mm", st->printed_length);
+    cli_json_num(&j, "infill_length_mm", st->infill_length);
+    cli_json_num(&j, "travel_length_mm", st->travel_length);
+    cli_json_num(&j, "support_length_mm", st->support_length);
+    cli_json_num(&j, "unprinted_ring_length_mm", st->unprinted_length);
+    cli_json_int(&j, "support_corners", (long long)st->support_corners);
+    cli_json_int(&j, "corners_left_out", (long long)st->corners_left_out);
+    cli_json_int(&j, "cycles", (long long)st->cycles);
+    cli_json_int(&j, "tree_levels", (long long)st->tree_levels);
+    cli_json_int(&j, "tour_fallbacks", (long long)st->tour_fallbacks);
+    cli_json_int(&j, "joins", (long long)st->joins);
+    cli_json_num(&j, "pseudo_length_mm", st->pseudo_length);
+    cli_json_int(&j, "free_ends", (long long)st->free_ends);
+    cli_json_int(&j, "odd_vertices", (long long)st->odd_vertices);
+    cli_json_int(&j, "crossings", (long long)crossings);
+    cli_json_int(&j, "repeated_edges", (long long)repeats);
+    cli_json_int(&j, "outside", (long long)outside);
+    cli_json_int(&j, "failed_paths", (long long)failed);
+    cli_json_num(&j, "radius", radius);
+    for (i = 0; i + 1 < sl->nlayers; i++) {
+        over += per[i] > c * radius;
+        worst = fmax(worst, per[i]);
+    }
+    cli_json_num(&j, "eps_c", c);
+    cli_json_int(&j, "overhang_pairs", (long long)over);
+    cli_json_num(&j, "max_overhang_mm", worst < HUGE_VAL ? worst : -1);
+    cli_json_arr(&j, "overhang_mm");
+    for (i = 0; i + 1 < sl->nlayers; i++)
+        cli_json_num(&j, NULL, per[i] < HUGE_VAL ? per[i] : -1);
+    cli_json_close(&j);
+    cli_json_arr(&j, "open_chain_layers");
+    for (i = 0; i < sl->nlayers; i++)
+        if (sl->layers[i].open_chains)
+            cli_json_int(&j, NULL, (long long)i);
+    cli_json_close(&j);
+    cli_json_num(&j, "time_s", cli_now() - t0);
+    cli_json_end(&j);
+}
+
+/* --continuous: build, check every path independently (crossings, repeated
+ * edges, points outside its layer) and report; a failed check is exit 1. */
 static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
-                          int json, double t0)
+                          int json, double t0, double epsc, long svg_layer)
 {
     amp_pathset ps;
     amp_contpath_stats st;
     amp_error err;
-    size_t i, crossings = 0, repeats = 0;
+    size_t i, crossings = 0, repeats = 0, outside = 0, failed = 0, over, at;
+    double *per = calloc(sl->nlayers + 1, sizeof *per), worst;
     int rc = CLI_OK;
+    if (!per)
+        return cli_fail("slice", CLI_USAGE, "out of memory");
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
     if (amp_contpath_layers(sl, o, &ps, &st, &err) != AMP_OK) {
         amp_pathset_free(&ps);
+        free(per);
         return cli_fail_err("slice", &err);
     }
+    over = overhangs(sl, epsc, o->radius, per, &worst, &at);
+    if (over)
+        fprintf(stderr,
+                "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm; worst %.3g mm "
+                "under layer %lu at z %.4g): the layer above may sag\n",
+                (unsigned long)over, epsc, epsc * o->radius, worst, (unsigned long)at, sl->layers[at].z_print);
     for (i = 0; i < ps.npaths; i++) {
         amp_stroke_report rep;
-        if (amp_pathset_stroke_check(&ps, i, NULL, 0, &rep, &err) == AMP_ERR_NOMEM) {
+        amp_status cs;
+        const amp_polyset *reg = ps.paths[i].n ? layer_region(sl, amp_pathset_path_verts(&ps, i)[0].p.z) : NULL;
+        cs = amp_pathset_stroke_check(&ps, i, reg, 1e-6, &rep, &err);
+        if (cs == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
+            free(per);
             return cli_fail_err("slice", &err);
         }
+        if (cs != AMP_OK && failed++ == 0)
+            fprintf(stderr, "ampath slice: path %lu fails its check: %s\n", (unsigned long)i, err.msg);
         crossings += rep.crossings;
         repeats += rep.repeated_edges;
+        outside += rep.outside;
     }
-    if (out) {
+    if (out && svg_layer >= 0)
+        rc = write_stroke_svg(out, sl, &ps, svg_layer, o->radius);
+    else if (out) {
         char comment[200];
         snprintf(comment, sizeof comment,
-                 "ampath slice --continuous: %lu layers, %lu strokes, %lu perimeter loops, radius %g mm",
-                 (unsigned long)st.layers, (unsigned long)st.strokes, (unsigned long)st.perimeter_loops, o->radius);
+                 "ampath slice --continuous: %lu layers, %lu islands, %lu strokes, radius %g mm",
+                 (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.island_strokes, o->radius);
         rc = cli_save_paths("slice", out, &ps, comment);
     }
-    if (rc == CLI_OK && json) {
-        cli_json j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "layers", (long long)st.layers);
-        cli_json_int(&j, "islands", (long long)st.islands);
-        cli_json_int(&j, "strokes", (long long)st.strokes);
-        cli_json_int(&j, "multi_stroke_islands", (long long)st.multi_stroke);
-        cli_json_int(&j, "perimeter_loops", (long long)st.perimeter_loops);
-        cli_json_int(&j, "support_paths", (long long)st.support_paths);
-        cli_json_int(&j, "paths", (long long)ps.npaths);
-        cli_json_int(&j, "travel_moves", (long long)st.travel_moves);
-        cli_json_num(&j, "printed_length_mm", st.printed_length);
-        cli_json_num(&j, "infill_length_mm", st.infill_length);
-        cli_json_num(&j, "travel_length_mm", st.travel_length);
-        cli_json_num(&j, "support_length_mm", st.support_length);
-        cli_json_num(&j, "unprinted_ring_length_mm", st.unprinted_length);
-        cli_json_int(&j, "joins", (long long)st.joins);
-        cli_json_num(&j, "pseudo_length_mm", st.pseudo_length);
-        cli_json_int(&j, "free_ends", (long long)st.free_ends);
-        cli_json_int(&j, "odd_vertices", (long long)st.odd_vertices);
-        cli_json_int(&j, "crossings", (long long)crossings);
-        cli_json_int(&j, "repeated_edges", (long long)repeats);
-        cli_json_num(&j, "radius", o->radius);
-        cli_json_num(&j, "time_s", cli_now() - t0);
-        cli_json_end(&j);
-    } else if (rc == CLI_OK)
-        printf("%s: %lu layers, %lu islands, %lu strokes, %lu travel moves, printed %.1f mm, travel %.1f mm%s%s\n",
-               file, (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.strokes,
-               (unsigned long)st.travel_moves, st.printed_length, st.travel_length, out ? " -> " : "",
-               out ? out : "");
+    if (rc == CLI_OK && json)
+        json_stats(&st, &ps, crossings, repeats, outside, failed, o->radius, t0, sl, per, epsc);
+    else if (rc == CLI_OK)
+        printf("%s: %lu layers, %lu islands, %lu strokes, %lu extrusion starts, %lu travel moves, printed %.1f mm, "
+               "travel %.1f mm%s%s\n",
+               file, (unsigned long)st.layers, (unsigned long)st.islands, (unsigned long)st.island_strokes,
+               (unsigned long)count_starts(&ps), (unsigned long)st.travel_moves, st.printed_length, st.travel_length,
+               out ? " -> " : "", out ? out : "");
+    if (rc == CLI_OK && failed) {
+        fprintf(stderr,
+                "ampath slice: %lu paths fail the stroke check (%lu crossings, %lu edges printed twice, %lu points "
+                "outside their layer): a bug, please report it\n",
+                (unsigned long)failed, (unsigned long)crossings, (unsigned long)repeats, (unsigned long)outside);
+        rc = CLI_FAILED;
+    }
+    if (rc == CLI_OK && st.empty_layers)
+        fprintf(stderr, "ampath slice: warning: %lu layers with section area got no path\n",
+                (unsigned long)st.empty_layers);
     amp_pathset_free(&ps);
+    free(per);
     return rc;
 }
 
 int cmd_slice(int argc, char **argv)
 {
-    double layer = 0, first = 0, radius = 0.5, z = 0, t0 = cli_now();
+    double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, npos = 0, rc, ok;
-    double cell = 0, offset = 0;
-    const char *pos[1], *out = NULL, *grid = "square";
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
+    double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8, epsc = 1.0;
+    const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
     amp_contpath_opts co;
     amp_mesh m;
     amp_slices sl;
@@ -206,13 +385,22 @@ int cmd_slice(int argc, char **argv)
                       {"continuous", CLI_FLAG, &continuous, 0}, {"cell", CLI_DOUBLE, &cell, 0},
                       {"grid", CLI_STR, &grid, 0},          {"offset", CLI_DOUBLE, &offset, 0},
                       {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
-                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},
+                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
+                      {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
+                      {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
+                      {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
+                      {"top", CLI_DOUBLE, &skin_top, 0},     {"eps-c", CLI_DOUBLE, &epsc, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
     if (!opts[0].seen)
         return cli_fail("slice", CLI_USAGE, "--layer H is required");
+    if (opts[15].seen && !opts[6].seen) {
+        if (!(nozzle > 0) || !isfinite(nozzle))
+            return cli_fail("slice", CLI_USAGE, "--nozzle must be positive");
+        radius = 0.5 * 1.125 * nozzle; /* a bead 1.125 x the nozzle wide, as slicers extrude */
+    }
     if (!(radius > 0) || !isfinite(radius))
         return cli_fail("slice", CLI_USAGE, "--radius must be positive");
     if (continuous && polygons)
@@ -229,9 +417,30 @@ int cmd_slice(int argc, char **argv)
         co.offset = offset;
     co.perimeters = !noperim;
     co.support_stretches = stretches;
-    co.pseudo_edges = !nopseudo;
-    if (continuous && out && ends_with(out, ".svg"))
-        return cli_fail("slice", CLI_USAGE, "--continuous writes a .amp file (use 'ampath preview' for a picture)");
+    co.pseudo_edges = pseudo && !nopseudo;
+    co.join = !nojoin;
+    co.support_corners = !nocorners;
+    if (!(skin_bottom >= 0) || !(skin_top >= 0) || !isfinite(skin_bottom) || !isfinite(skin_top))
+        return cli_fail("slice", CLI_USAGE, "--bottom and --top must be thicknesses >= 0 mm");
+    if (!(epsc > 0 && epsc <= 1))
+        return cli_fail("slice", CLI_USAGE, "--eps-c must be in (0, 1]");
+    co.skin_bottom = skin_bottom;
+    co.skin_top = skin_top;
+    if (opts[9].seen && infill > 0)
+        return cli_fail("slice", CLI_USAGE, "--cell and --infill exclude each other");
+    if (infill != 0) {
+        if (!(infill > 0 && infill <= 100))
+            return cli_fail("slice", CLI_USAGE, "--infill must be a density in %% (0 < P <= 100)");
+        /* a square lattice of cell S with beads 2r wide covers about 4r / S
+         * of the area (two bead widths per cell side) */
+        co.cell = 4 * radius * 100 / infill;
+    }
+    if (strcmp(tour, "cycle-tree") == 0)
+        co.tour = AMP_TOUR_CYCLE_TREE;
+    else if (strcmp(tour, "merge") == 0)
+        co.tour = AMP_TOUR_MERGE;
+    else
+        return cli_fail("slice", CLI_USAGE, "--tour must be cycle-tree or merge, not '%s'", tour);
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     rc = slicetool_load("slice", pos[0], layer, first, &m, &sl, &flipped);
@@ -239,7 +448,11 @@ int cmd_slice(int argc, char **argv)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
                 (unsigned long)sl.open_chains);
     if (rc == CLI_OK && continuous) {
-        rc = run_continuous(pos[0], out, &sl, &co, json, t0);
+        long li = -1;
+        if (out && ends_with(out, ".svg"))
+            li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
+        rc = li < -1 || (out && ends_with(out, ".svg") && li < 0) ? CLI_USAGE
+                                                                   : run_continuous(pos[0], out, &sl, &co, json, t0, epsc, li);
         goto done;
     }
     if (rc == CLI_OK && out) {
@@ -284,6 +497,7 @@ int cmd_slice(int argc, char **argv)
             cli_json_int(&j, "polygons", (long long)sl.layers[i].polys.nrings);
             cli_json_int(&j, "holes", (long long)nh);
             cli_json_num(&j, "area_mm2", amp_polyset_area(&sl.layers[i].polys));
+            cli_json_int(&j, "open_chains", (long long)sl.layers[i].open_chains);
             cli_json_close(&j);
         }
         cli_json_close(&j);

@@ -3,21 +3,23 @@
  * transformed lattice (continuous-toolpath-euler.txt §2.2 steps 2-6, §4),
  * and an independent checker of the strokes.
  *
- * Per layer and per island P of the layer:
- *   - perimeter loops: the rings of the inset of P by r (one closed path each);
- *   - the infill region R̃ = inset of P by 3r (inside the perimeter bead and at
- *     one bead radius from it); for every connected part R̃_j of it:
- *     clip the 1-skeleton of K̂ (step 5), join the free-edge end points of
- *     each ring of R̃_j in alternating pairs by paths along the ring (of the two
- *     pairings the one that connects the pieces, then the longer), join the
- *     components still apart by a ring path printed once and run back as a
- *     pseudo edge (Fig. 6), turn patch stretches of thin boundary cells into
- *     pseudo edges (Figs. 7, 8), and trace
- *     one closed Euler tour without crossovers (§4: the tour is assembled from
- *     non-crossing cycles through each vertex, merged pairwise at shared
- *     vertices — the cycle tree — by re-pairing two adjacent transitions).
- *   - optionally (Remark 2.1) the unprinted stretches of the rings of R̃_j as
- *     separate support paths.
+ * Per layer and per island P of the layer (amp_contpath_layers):
+ *   - perimeter loops: the rings of the inset of P by r (outer and holes);
+ *   - the infill regions R̃_j = parts of the inset of P by 3r (inside the
+ *     perimeter bead and one bead radius from it): clip the 1-skeleton of K̂
+ *     (step 5; the dense skin lattice near a top or bottom surface), join the
+ *     free ends of each ring of R̃_j in alternating pairs by ring paths (of
+ *     the two pairings the one that connects the pieces, then the longer),
+ *     and trace one closed tour without crossovers per component (§4: cycle
+ *     tree over the boundary cycles of the faces by depth, Hierholzer's edge
+ *     choice, q = 2 / q > 2 splices; see lib/contpath_tour.c);
+ *   - step 6: support corners from the unprinted ring stretches to the
+ *     perimeter (Fig. 5), or (Remark 2.1) the stretches as support paths;
+ *   - all spliced into one closed stroke by parallel connectors (o->join).
+ * amp_contpath_region() is the paper's step 5 + §4 for one region alone:
+ * there, components still apart are joined by a ring path printed once and
+ * run back as a pseudo edge (Fig. 6), and with o->pseudo_edges patch
+ * stretches of thin boundary cells become pseudo edges (Figs. 7, 8).
  * K is a lattice covering the convex hull of all layers (steps 2-3) and K̂ its
  * Euler transformation with mitered offset δ (default r): every vertex of K̂
  * inside R̃ has even degree because the rim cells of K lie outside R̃.
@@ -43,6 +45,12 @@
 extern "C" {
 #endif
 
+/** How §4's tour is built from the patched complex of a region. */
+typedef enum amp_tour_method {
+    AMP_TOUR_CYCLE_TREE = 0, /**< the paper: boundary cycles by level (Hierholzer), cycle tree, q = 2 / q > 2 splices */
+    AMP_TOUR_MERGE = 1       /**< ends paired with their angular neighbour, curves merged wherever they touch */
+} amp_tour_method;
+
 typedef struct amp_contpath_opts {
     double radius;         /**< extruder (deposition) radius r > 0, mm */
     double cell;           /**< lattice cell size of K (<= 0: 10 r) */
@@ -50,16 +58,37 @@ typedef struct amp_contpath_opts {
     double offset;         /**< mitered offset δ of K̂ (<= 0: r) */
     int perimeters;        /**< 1: print the perimeter loop(s) of each island */
     int support_stretches; /**< 1: print the unprinted ring stretches as support paths (Remark 2.1) */
+    int support_corners;   /**< 1 (default): step 6, corners from the unprinted ring stretches to the perimeter */
     int pseudo_edges;      /**< 1: patch stretches closer than 2r to a lattice piece of their thin boundary
                                 cell become pseudo edges (Figs. 7, 8); 0: all patches printed */
+    amp_tour_method tour;  /**< §4 construction (default AMP_TOUR_CYCLE_TREE) */
+    double skin_bottom;    /**< mm of solid layers over every downward-facing surface (default 0.8; 0: none) */
+    double skin_top;       /**< mm of solid layers under every upward-facing surface (default 0.8; 0: none) */
+    double skin_cell;      /**< lattice cell of the solid skins (<= 0: 4 r, where the beads of K̂ touch) */
+    int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
+                                stroke (one extrusion start per island); 0: separate closed paths */
 } amp_contpath_opts;
 
-/** Fill @p o with the defaults for radius @p r (square grid, perimeters on, pseudo edges on). */
+/**
+ * Fill @p o with the defaults for radius @p r: square grid, cell 10 r,
+ * offset r, perimeters on, joined strokes (one start per island), thin-cell
+ * patches printed (pseudo_edges 0: a travel inside a stroke would be one
+ * more extrusion start in the G-code; the overlap it avoids is at most a
+ * bead's width over a short stretch).
+ */
 void amp_contpath_opts_default(amp_contpath_opts *o, double r);
 
 typedef struct amp_contpath_stats {
     size_t layers;
-    size_t islands;          /**< infill regions R̃_j that received a stroke */
+    size_t empty_layers;     /**< layers with section area that received no path (0 expected) */
+    size_t islands;          /**< islands of the sections (outer ring with its holes) that received paths */
+    size_t thin_islands;     /**< islands narrower than 2r printed by a perimeter of a smaller inset */
+    size_t dropped_islands;  /**< islands narrower than r/32: nothing printed */
+    size_t island_strokes;   /**< object strokes written for the islands (= islands when joined) */
+    size_t specks;           /**< closed loops under r/4 across left out when joining (inside other beads) */
+    size_t regions;          /**< infill regions R̃_j that received a stroke */
+    size_t skin_regions;     /**< of which solid (the dense lattice): a point of them has no part within the
+                                  skin thickness above or below */
     size_t strokes;          /**< infill strokes (one per region when all goes well) */
     size_t multi_stroke;     /**< regions that needed more than one stroke */
     size_t perimeter_loops;  /**< perimeter paths */
@@ -67,13 +96,18 @@ typedef struct amp_contpath_stats {
     size_t travel_moves;     /**< moves between consecutive paths */
     size_t free_ends;        /**< free-edge end points patched (Σ m) */
     size_t odd_vertices;     /**< odd vertices left after patching (0 expected) */
+    size_t cycles;           /**< boundary cycles of the cycle trees (§4.1), over all regions */
+    size_t tree_levels;      /**< deepest cycle tree (levels) */
+    size_t tour_fallbacks;   /**< regions whose faces were not 2-coloured: AMP_TOUR_MERGE used instead */
     size_t joins;            /**< components joined by a patch printed once and run back as a pseudo edge (Fig. 6) */
     double printed_length;   /**< mm, all object paths, pseudo edges excluded */
     double infill_length;    /**< mm, strokes only, pseudo edges excluded */
     double pseudo_length;    /**< mm, pseudo edges inside the strokes (travel without extrusion) */
     double travel_length;    /**< mm, straight moves between paths (3-D) */
     double support_length;   /**< mm, Remark 2.1 stretches printed */
-    double unprinted_length; /**< mm, ring stretches of R̃ left unprinted */
+    double unprinted_length; /**< mm, ring stretches of R̃ left unprinted by the lattice and its patches */
+    size_t support_corners;  /**< step 6 corners built into the perimeter loops */
+    size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour or find no perimeter */
 } amp_contpath_stats;
 
 /**
@@ -96,8 +130,14 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
                                amp_error *err);
 
 /**
- * All layers: perimeters and one stroke per infill region, in print order,
- * at each layer's printing height z_print. @p out is appended to.
+ * All layers: per island (in nearest-first order) the perimeter loop(s) at
+ * r and one stroke per infill region, spliced into one closed stroke when
+ * o->join (see contpath_join.c), at each layer's printing height z_print,
+ * every path a planar bead of the layer's thickness (amp_path.h). A closed
+ * stroke starts at its vertex nearest to where the previous one ended. An
+ * island narrower than 2r (no inset by r) gets the perimeter of the inset
+ * by r/2, r/4, ... r/32 instead (counted in thin_islands). @p out is
+ * appended to.
  */
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);

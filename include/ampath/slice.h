@@ -43,6 +43,7 @@ typedef struct amp_layer {
     double z_cut;      /**< height of the section (above the plate) */
     double z_print;    /**< height at which the layer's paths are printed */
     amp_polyset polys; /**< islands: CCW outer ring followed by its CW holes */
+    size_t open_chains; /**< section chains of this layer that did not close (dropped: open mesh) */
 } amp_layer;
 
 /** All layers of a mesh plus the defects met while slicing. */
@@ -85,6 +86,18 @@ void amp_slices_free(amp_slices *s);
  * Open-mesh defects are not errors: they are counted in @p out.
  */
 amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices *out, amp_error *err);
+
+/**
+ * ε-continuity of layers i and i + 1 (continuous-toolpath-euler.txt §2.1):
+ * the largest distance from a point of layer i + 1's section to layer i's
+ * section (0 when it lies inside), i.e. the overhang; the pair is
+ * ε-continuous for ε = c r when this is <= c r. Sampled at the vertices of
+ * layer i + 1's rings (about 512 per layer) and a grid of spacing @p step
+ * (<= 0: 1 mm; at least a 24th of the layer's extent) inside them, so it
+ * may miss an overhang narrower than the sampling. Returns 0 when i + 1 >= nlayers or layer i + 1 is empty; a
+ * layer over an empty one overhangs by +inf (HUGE_VAL).
+ */
+double amp_slices_overhang(const amp_slices *sl, size_t i, double step);
 
 #ifdef __cplusplus
 }

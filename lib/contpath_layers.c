@@ -1,0 +1,340 @@
+/* All layers: islands in print order, perimeters (thin islands included),
+ * regions, one stroke per island, bead heights, stroke starts
+ * (continuous-toolpath-euler.txt §2.2; issues 14 and 16). */
+#include <math.h>
+#include <stdio.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "contpath_internal.h"
+
+/* Work state of amp_contpath_layers(). */
+typedef struct lctx {
+    const amp_slices *sl;
+    const amp_contpath_opts *o;
+    amp_cx2 khat, kskin; /* sparse infill and solid skin lattices */
+    uint64_t *ke, *kse;
+    size_t nke, nkse;
+    int skins;
+    amp_polyset isl, ins, reg;
+    amp_pathset tmp;  /* one island's paths before joining */
+    amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
+    amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
+    int have_at;
+    unsigned char *done; /* islands of the layer already printed */
+    size_t cap_done;
+} lctx;
+
+/* Closed path @p k of @p ps (last vertex = first) is rotated to start at
+ * its vertex nearest to @p q among those whose two segments are printed, so
+ * that the stroke begins where the nozzle is (issue 14: travel). */
+static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *err)
+{
+    amp_pvert *v = amp_pathset_path_verts(ps, k), *w;
+    size_t n = ps->paths[k].n, i, best = 0;
+    double bd = HUGE_VAL;
+    if (n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y || v[0].r != v[n - 1].r)
+        return AMP_OK;
+    for (i = 0; i + 1 < n; i++) {
+        size_t prev = i ? i - 1 : n - 2;
+        double d = hypot(v[i].p.x - q.x, v[i].p.y - q.y);
+        if (d < bd && v[i].r > 0 && v[prev].r > 0 && v[i + 1].r > 0) {
+            bd = d;
+            best = i;
+        }
+    }
+    if (best == 0)
+        return AMP_OK;
+    w = amp_alloc(ps->alloc, n * sizeof *w);
+    if (!w)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering the strokes");
+    memcpy(w, v + best, (n - 1 - best) * sizeof *w);
+    memcpy(w + (n - 1 - best), v, (best + 1) * sizeof *w);
+    memcpy(v, w, n * sizeof *w);
+    amp_free(ps->alloc, w);
+    return AMP_OK;
+}
+
+/* v as the .amp writer will write it (10 significant digits, SPEC §3): the
+ * checks then judge the coordinates the printer gets, and a touch that
+ * rounding would turn into a crossing is caught before the file exists. */
+static double as_written(double v)
+{
+    char buf[40];
+    snprintf(buf, sizeof buf, "%.10g", v);
+    return strtod(buf, NULL);
+}
+
+/* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
+ * than @p tol to the last kept one (same radius): micro-segments from
+ * splices and swallowtail remnants, below a motor step, would be written as
+ * moves without extrusion. A radius change (a pseudo edge's doubled vertex)
+ * stays; the last vertex of a path stays (closure); a needle A-B-A left by
+ * the merging loses its tip. Paths left without
+ * length are removed. */
+static void compact_tail(amp_pathset *ps, size_t first, double tol)
+{
+    size_t i, w = first < ps->npaths ? ps->paths[first].first : ps->nverts, np = first;
+    for (i = first; i < ps->npaths; i++) {
+        amp_pvert *v = ps->verts + ps->paths[i].first;
+        size_t n = ps->paths[i].n, k, m = 0, start = w;
+        double len = 0;
+        for (k = 0; k < n; k++) {
+            amp_pvert x = v[k];
+            if (m > 0) {
+                amp_pvert *last = &ps->verts[w - 1];
+                double d = amp_v3_dist(x.p, last->p);
+                if (d < tol && x.r == last->r) {
+                    if (k + 1 == n && m > 1)
+                        *last = x; /* keep the closing vertex itself */
+                    continue;
+                }
+                if (m > 1 && k + 1 < n && amp_v3_dist(x.p, ps->verts[w - 2].p) < tol && x.r == ps->verts[w - 2].r &&
+                    last->r == x.r) {
+                    w--; /* A -> B -> A: the tip B of a needle goes */
+                    m--;
+                    continue;
+                }
+                len += d;
+            }
+            ps->verts[w++] = x;
+            m++;
+        }
+        if (m < 2 || !(len > 0)) {
+            w = start; /* nothing left to print */
+            continue;
+        }
+        ps->paths[np] = ps->paths[i];
+        ps->paths[np].first = start;
+        ps->paths[np].n = m;
+        np++;
+    }
+    ps->npaths = np;
+    ps->nverts = w;
+}
+
+/* Closed paths of every ring of @p P at height z, radius r, into c->tmp. */
+static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpath_stats *s0, amp_error *err)
+{
+    size_t r, q;
+    amp_status rc = AMP_OK;
+    for (r = 0; r < P->nrings && rc == AMP_OK; r++) {
+        const amp_vec2 *p = amp_polyset_ring(P, r);
+        size_t n = P->rings[r].n;
+        rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
+        for (q = 0; q <= n && rc == AMP_OK; q++)
+            rc = amp_pathset_push(&c->tmp, amp_v3(p[q % n].x, p[q % n].y, z), c->o->radius, err);
+        s0->perimeter_loops++;
+    }
+    return rc;
+}
+
+/* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
+ * for an island narrower than 2r, at the deepest smaller inset that exists:
+ * every island with area is printed) and the strokes of its regions. */
+static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_error *err)
+{
+    const amp_layer *L = &c->sl->layers[li];
+    const amp_contpath_opts *o = c->o;
+    double d;
+    size_t q, nperim = 0;
+    amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
+    int thin = rc == AMP_OK && c->ins.nrings == 0;
+    if (rc == AMP_OK && c->ins.nislands > 1) {
+        /* the perimeter falls apart into lobes joined by necks thinner than
+         * a bead; without infill (a sliver) the island is treated as thin,
+         * so that a smaller inset may hold it in one piece */
+        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->reg, err);
+        thin = rc == AMP_OK && c->reg.nrings == 0;
+    }
+    if (thin) {
+        /* thin island: the bead (2r wide) is wider than the part here; its
+         * centre line is the inset by the largest d < r that exists and
+         * falls apart into the fewest pieces (a wavy sliver splits where it
+         * is thinnest; a piece each would be a stroke each) */
+        double best_d = c->ins.nrings ? o->radius : 0;
+        size_t best_n = c->ins.nrings ? c->ins.nislands : (size_t)-1;
+        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && best_n > 1; d *= 0.5) {
+            rc = amp_polyset_inset(&c->isl, d, 0, &c->ins, err);
+            if (rc == AMP_OK && c->ins.nrings && c->ins.nislands < best_n) {
+                best_n = c->ins.nislands;
+                best_d = d;
+            }
+        }
+        if (rc == AMP_OK && best_d > 0 && (rc = amp_polyset_inset(&c->isl, best_d, 0, &c->ins, err)) == AMP_OK) {
+            s0->thin_islands += best_d < o->radius;
+            return ring_paths(c, &c->ins, L->z_print, s0, err);
+        }
+        if (rc == AMP_OK)
+            s0->dropped_islands++;
+        return rc;
+    }
+    if (rc == AMP_OK && o->perimeters) {
+        rc = ring_paths(c, &c->ins, L->z_print, s0, err);
+        nperim = c->tmp.npaths;
+    }
+    amp_pathset_clear(&c->bare);
+    /* R̃: inside the perimeter bead (2r) and one bead radius more */
+    if (rc == AMP_OK)
+        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
+    for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
+        int skin;
+        if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
+            break;
+        /* a speck of R̃ (under a hundredth of a bead's cross-section) is
+         * filled by the beads around it */
+        if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
+            continue;
+        skin = c->skins && amp_cp_region_is_skin(c->sl, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
+        s0->skin_regions += (size_t)skin;
+        rc = amp_cp_region_run(skin ? &c->kskin : &c->khat, skin ? c->kse : c->ke, skin ? c->nkse : c->nke, &c->reg,
+                               L->z_print, o, o->join && o->perimeters, &c->tmp,
+                               o->support_corners && !o->support_stretches ? &c->bare : NULL, s0, err);
+    }
+    /* step 6: corners from the bare stretches to the perimeter */
+    if (rc == AMP_OK && nperim)
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, s0, err);
+    return rc;
+}
+
+/* The unprinted island of layer L nearest to the nozzle (by its outer ring). */
+static size_t next_island(const lctx *c, const amp_layer *L)
+{
+    size_t k, r, i, best = NONE;
+    double bd = HUGE_VAL;
+    for (r = 0; r < L->polys.nrings; r++) {
+        const amp_vec2 *p = amp_polyset_ring(&L->polys, r);
+        k = (size_t)L->polys.rings[r].island;
+        if (L->polys.rings[r].hole || c->done[k])
+            continue;
+        if (!c->have_at)
+            return k;
+        for (i = 0; i < L->polys.rings[r].n; i++) {
+            double d = hypot(p[i].x - c->at.x, p[i].y - c->at.y);
+            if (d < bd) {
+                bd = d;
+                best = k;
+            }
+        }
+    }
+    return best;
+}
+
+/* One layer: its islands nearest first, each joined and started near the nozzle. */
+static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
+{
+    const amp_layer *L = &c->sl->layers[li];
+    double h = li == 0 ? L->z_print : L->z_print - c->sl->layers[li - 1].z_print;
+    size_t n, k, before = out->npaths, i, nobj;
+    amp_status rc = AMP_OK;
+    void *q = c->done;
+    if (amp_grow(out->alloc, &q, &c->cap_done, L->polys.nislands + 1, 1) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering the islands");
+    c->done = q;
+    memset(c->done, 0, L->polys.nislands + 1);
+    for (n = 0; n < L->polys.nislands && rc == AMP_OK; n++) {
+        size_t first = out->npaths;
+        k = next_island(c, L);
+        if (k == NONE)
+            break;
+        c->done[k] = 1;
+        amp_pathset_clear(&c->tmp);
+        if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
+            (rc = island_paths(c, li, s0, err)) != AMP_OK)
+            break;
+        if (c->o->join)
+            rc = amp_cp_join_loops(&c->tmp, 0, &c->isl, c->o->radius, h, out, &nobj, &s0->specks, err);
+        else {
+            rc = amp_pathset_append(out, &c->tmp, err);
+            for (i = first, nobj = 0; i < out->npaths; i++) {
+                out->paths[i].h = h;
+                nobj += out->paths[i].role == AMP_ROLE_OBJECT;
+            }
+        }
+        /* corners' tips lose their tag (contpath_internal.h); coordinates as written */
+        for (i = out->npaths > first ? out->paths[first].first : out->nverts; i < out->nverts; i++) {
+            if (out->verts[i].r == AMP_CP_TOOTH_R(c->o->radius))
+                out->verts[i].r = c->o->radius;
+            out->verts[i].p.x = as_written(out->verts[i].p.x);
+            out->verts[i].p.y = as_written(out->verts[i].p.y);
+        }
+        compact_tail(out, first, 1e-3);
+        s0->islands += out->npaths > first;
+        s0->island_strokes += nobj;
+        for (i = first; i < out->npaths && rc == AMP_OK; i++) {
+            if (c->have_at)
+                rc = rotate_to(out, i, c->at, err);
+            if (out->paths[i].n) {
+                amp_pvert e = amp_pathset_path_verts(out, i)[out->paths[i].n - 1];
+                c->at = amp_v2(e.p.x, e.p.y);
+                c->have_at = 1;
+            }
+        }
+    }
+    s0->empty_layers += rc == AMP_OK && out->npaths == before && amp_polyset_area(&L->polys) > 0;
+    return rc;
+}
+
+amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
+                               amp_contpath_stats *st, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    lctx c;
+    size_t li, q, p0 = out->npaths;
+    amp_contpath_stats s0;
+    amp_status rc;
+    memset(&s0, 0, sizeof s0);
+    memset(&c, 0, sizeof c);
+    c.sl = sl;
+    c.o = o;
+    amp_cx2_init(&c.khat, al);
+    amp_cx2_init(&c.kskin, al);
+    amp_polyset_init(&c.isl, al);
+    amp_polyset_init(&c.ins, al);
+    amp_polyset_init(&c.reg, al);
+    amp_pathset_init(&c.tmp, al);
+    amp_pathset_init(&c.bare, al);
+    rc = amp_contpath_complex(sl, o, &c.khat, err);
+    if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
+    c.skins = o->skin_bottom > 0 || o->skin_top > 0;
+    if (rc == AMP_OK && c.skins) {
+        /* the solid lattice: square cells of 4r with offset r, beads touching */
+        amp_contpath_opts so = *o;
+        so.cell = o->skin_cell > 0 ? o->skin_cell : 4 * o->radius;
+        so.grid = AMP_GRID_SQUARE;
+        so.offset = o->radius;
+        rc = amp_contpath_complex(sl, &so, &c.kskin, err);
+        if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin, al, &c.kse, &c.nkse) != AMP_OK)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
+    }
+    for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
+        s0.layers++;
+        rc = layer_paths(&c, li, out, &s0, err);
+    }
+    /* figures over the paths written by this call */
+    for (q = p0; q < out->npaths && rc == AMP_OK; q++) {
+        if (out->paths[q].role == AMP_ROLE_OBJECT)
+            s0.printed_length += amp_cp_printed_len(out, q);
+        if (q > p0 && out->paths[q - 1].n && out->paths[q].n) {
+            amp_pvert a = amp_pathset_path_verts(out, q - 1)[out->paths[q - 1].n - 1];
+            amp_pvert b = amp_pathset_path_verts(out, q)[0];
+            s0.travel_moves++;
+            s0.travel_length += amp_v3_dist(a.p, b.p);
+        }
+    }
+    amp_free(al, c.ke);
+    amp_free(al, c.kse);
+    amp_cx2_free(&c.kskin);
+    amp_free(al, c.done);
+    amp_cx2_free(&c.khat);
+    amp_polyset_free(&c.isl);
+    amp_polyset_free(&c.ins);
+    amp_polyset_free(&c.reg);
+    amp_pathset_free(&c.tmp);
+    amp_pathset_free(&c.bare);
+    if (st)
+        *st = s0;
+    return rc;
+}

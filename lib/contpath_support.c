@@ -1,0 +1,394 @@
+/* Step 6 (continuous-toolpath-euler.txt §2.2, Fig. 5): support corners where
+ * the ring of R̃ is left unprinted by the patching.
+ *
+ * Circles of radius r are put on the bare stretch p̃ between its two free
+ * ends (whose lattice beads already hold a circle each), as many as fit
+ * with centres at most 2r apart, the gap spread evenly (Fig. 5a, b; the
+ * paper takes at most as many as fit without overlap, which can leave a
+ * stretch up to 4r between centres: here the centres are at most 2r apart so
+ * that every point of p̃ is within r of a corner). From each centre ṽ' the
+ * perpendicular reaches the outer boundary at a, 2r away (R̃ is the inset by
+ * 3r, the perimeter bead's centre line by r): the corner is the two edges
+ * from ṽ' to the perimeter at a ∓ w, w = r or less so that the corners of
+ * a stretch do not overlap (Fig. 5c), and the perimeter loop runs
+ * through them (Fig. 5d: neighbouring corners joined along the boundary), so
+ * the corners are part of the island's one stroke. A corner whose edges
+ * would cross the island's other paths, or overlap its neighbour, is left
+ * out and counted. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "contpath_internal.h"
+
+typedef struct tooth {
+    double s0, s1; /* arclength of the base on the perimeter loop */
+    size_t loop;   /* which perimeter loop */
+    amp_pvert tip;
+} tooth;
+
+static int cmp_tooth(const void *a, const void *b)
+{
+    const tooth *x = a, *y = b;
+    return x->s0 < y->s0 ? -1 : (x->s0 > y->s0 ? 1 : 0);
+}
+
+/* Proper crossing of a-b and c-d; an end within a hair (1e-9 of the
+ * lengths) of the other segment counts as touching, not crossing: a leg
+ * starts on the perimeter segment it leaves. */
+static int cross2(amp_vec2 a, amp_vec2 b, amp_vec2 c, amp_vec2 d)
+{
+    double lab = hypot(b.x - a.x, b.y - a.y), lcd = hypot(d.x - c.x, d.y - c.y), e = 1e-9 * lab * lcd;
+    double d1 = amp_v2_orient(a, b, c), d2 = amp_v2_orient(a, b, d), d3 = amp_v2_orient(c, d, a),
+           d4 = amp_v2_orient(c, d, b);
+    return ((d1 > e && d2 < -e) || (d1 < -e && d2 > e)) && ((d3 > e && d4 < -e) || (d3 < -e && d4 > e));
+}
+
+static amp_vec2 xy(amp_vec3 p) { return amp_v2(p.x, p.y); }
+
+/* Point at arclength s of closed path i (cumulative lengths cl). */
+static amp_pvert at_len(const amp_pathset *ps, size_t i, const double *cl, double s, size_t *seg)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t lo = 0, hi = ps->paths[i].n - 1;
+    amp_pvert p;
+    double t;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (cl[mid] <= s)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    t = cl[hi] > cl[lo] ? (s - cl[lo]) / (cl[hi] - cl[lo]) : 0;
+    p.p = amp_v3_add(v[lo].p, amp_v3_scale(amp_v3_sub(v[hi].p, v[lo].p), t));
+    p.r = v[lo].r;
+    *seg = lo;
+    return p;
+}
+
+/* Does segment a-b cross a segment of any path of @p ps (or an accepted
+ * tooth leg)? Segments ending at a or b do not count. */
+static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t;
+    if ((q.x == a.x && q.y == a.y) || (q.x == b.x && q.y == b.y))
+        return 0; /* a shared vertex (the leg's own base) */
+    t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+    return hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) < tol;
+}
+
+/* Uniform grid of the segments of a pathset (segment = global index of its
+ * first vertex), so a corner's legs meet only the segments near them. */
+typedef struct sgrid {
+    double x0, y0, cell;
+    long nx, ny;
+    size_t *start, *item;
+} sgrid;
+
+static long sg_cell(double v, double o, double c, long n)
+{
+    long k = (long)floor((v - o) / c);
+    return k < 0 ? 0 : (k >= n ? n - 1 : k);
+}
+
+static amp_status sg_build(sgrid *g, const amp_pathset *ps, double cell, const amp_allocator *al)
+{
+    double x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+    size_t i, k, pass, ncell;
+    memset(g, 0, sizeof *g);
+    g->x0 = g->y0 = HUGE_VAL;
+    for (i = 0; i < ps->nverts; i++) {
+        g->x0 = fmin(g->x0, ps->verts[i].p.x);
+        g->y0 = fmin(g->y0, ps->verts[i].p.y);
+        x1 = fmax(x1, ps->verts[i].p.x);
+        y1 = fmax(y1, ps->verts[i].p.y);
+    }
+    g->cell = fmax(cell, fmax(x1 - g->x0, y1 - g->y0) / 1024);
+    g->nx = (long)((x1 - g->x0) / g->cell) + 1;
+    g->ny = (long)((y1 - g->y0) / g->cell) + 1;
+    ncell = (size_t)(g->nx * g->ny);
+    g->start = amp_calloc(al, ncell + 1, sizeof *g->start);
+    if (!g->start)
+        return AMP_ERR_NOMEM;
+    for (pass = 0; pass < 2; pass++) {
+        for (i = 0; i < ps->npaths; i++)
+            for (k = ps->paths[i].first; k + 1 < ps->paths[i].first + ps->paths[i].n; k++) {
+                amp_vec3 a = ps->verts[k].p, b = ps->verts[k + 1].p;
+                long cx0 = sg_cell(fmin(a.x, b.x), g->x0, g->cell, g->nx), cx1 = sg_cell(fmax(a.x, b.x), g->x0, g->cell, g->nx);
+                long cy0 = sg_cell(fmin(a.y, b.y), g->y0, g->cell, g->ny), cy1 = sg_cell(fmax(a.y, b.y), g->y0, g->cell, g->ny);
+                long x, y;
+                for (y = cy0; y <= cy1; y++)
+                    for (x = cx0; x <= cx1; x++) {
+                        if (pass == 0)
+                            g->start[y * g->nx + x + 1]++;
+                        else
+                            g->item[g->start[y * g->nx + x]++] = k;
+                    }
+            }
+        if (pass == 0) {
+            for (i = 0; i < ncell; i++)
+                g->start[i + 1] += g->start[i];
+            g->item = amp_alloc(al, (g->start[ncell] + 1) * sizeof *g->item);
+            if (!g->item)
+                return AMP_ERR_NOMEM;
+        }
+    }
+    for (i = ncell; i > 0; i--)
+        g->start[i] = g->start[i - 1];
+    g->start[0] = 0;
+    return AMP_OK;
+}
+
+/* Does segment a-b (a corner's leg from its base a on the perimeter to its
+ * tip b) cross a segment of @p ps or an accepted leg, or touch one within
+ * @p hair (a touch would become a crossing once coordinates are rounded)? */
+static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs,
+                   double hair)
+{
+    size_t k;
+    double x0 = fmin(a.x, b.x) - hair, x1 = fmax(a.x, b.x) + hair, y0 = fmin(a.y, b.y) - hair,
+           y1 = fmax(a.y, b.y) + hair;
+    long cx0 = sg_cell(x0, g->x0, g->cell, g->nx), cx1 = sg_cell(x1, g->x0, g->cell, g->nx);
+    long cy0 = sg_cell(y0, g->y0, g->cell, g->ny), cy1 = sg_cell(y1, g->y0, g->cell, g->ny), x, y;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
+                amp_vec2 c = xy(ps->verts[g->item[k]].p), d = xy(ps->verts[g->item[k] + 1].p);
+                if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
+                    continue;
+                if (cross2(a, b, c, d) || near_seg(b, c, d, hair) || near_seg(c, a, b, hair) ||
+                    near_seg(d, a, b, hair))
+                    return 1;
+            }
+    for (k = 0; k < nlegs; k++)
+        if (cross2(a, b, legs[2 * k], legs[2 * k + 1]))
+            return 1;
+    return 0;
+}
+
+/* Nearest point of the perimeter loops [0, nperim) of @p ps to q: loop and arclength. */
+static double nearest_perimeter(const amp_pathset *ps, size_t nperim, double *const *cl, amp_vec2 q, size_t *loop,
+                                double *s)
+{
+    size_t i, k;
+    double best = HUGE_VAL;
+    for (i = 0; i < nperim; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        for (k = 0; k + 1 < ps->paths[i].n; k++) {
+            amp_vec2 a = xy(v[k].p), b = xy(v[k + 1].p);
+            double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
+            t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+            d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
+            if (d < best) {
+                best = d;
+                *loop = i;
+                *s = cl[i][k] + t * (cl[i][k + 1] - cl[i][k]);
+            }
+        }
+    }
+    return best;
+}
+
+/* Replace the vertices of path i of @p ps by w[0 .. m) (later paths move). */
+static amp_status replace_path(amp_pathset *ps, size_t i, const amp_pvert *w, size_t m, amp_error *err)
+{
+    size_t n = ps->paths[i].n, first = ps->paths[i].first, j;
+    void *q = ps->verts;
+    if (m > n && amp_grow(ps->alloc, &q, &ps->cap_verts, ps->nverts + (m - n), sizeof *ps->verts) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    ps->verts = q;
+    memmove(ps->verts + first + m, ps->verts + first + n, (ps->nverts - first - n) * sizeof *ps->verts);
+    memcpy(ps->verts + first, w, m * sizeof *w);
+    for (j = i + 1; j < ps->npaths; j++)
+        ps->paths[j].first = ps->paths[j].first + m - n;
+    ps->paths[i].n = m;
+    ps->nverts = ps->nverts + m - n;
+    return AMP_OK;
+}
+
+/* Rebuild perimeter loop i of @p ps in place with its teeth (sorted, disjoint). */
+static amp_status insert_teeth(amp_pathset *ps, size_t i, const double *cl, const tooth *t, size_t nt,
+                               amp_pathset *scratch, amp_error *err)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, k = 0, j, seg;
+    amp_status st;
+    amp_pathset_clear(scratch);
+    if ((st = amp_pathset_begin(scratch, ps->paths[i].role, err)) != AMP_OK)
+        return st;
+    for (j = 0; j < nt && st == AMP_OK; j++) {
+        amp_pvert a = at_len(ps, i, cl, t[j].s0, &seg), b;
+        for (; k < n && cl[k] < t[j].s0 && st == AMP_OK; k++)
+            st = amp_pathset_push(scratch, v[k].p, v[k].r, err);
+        b = at_len(ps, i, cl, t[j].s1, &seg);
+        if (st == AMP_OK)
+            st = amp_pathset_push(scratch, a.p, a.r, err);
+        if (st == AMP_OK)
+            st = amp_pathset_push(scratch, t[j].tip.p, a.r, err);
+        if (st == AMP_OK)
+            st = amp_pathset_push(scratch, b.p, b.r, err);
+        for (; k < n && cl[k] <= t[j].s1; k++)
+            ;
+    }
+    for (; k < n && st == AMP_OK; k++)
+        st = amp_pathset_push(scratch, v[k].p, v[k].r, err);
+    if (st != AMP_OK)
+        return st;
+    /* same vertex count or more: the path is replaced by moving the tail */
+    return replace_path(ps, i, amp_pathset_path_verts(scratch, 0), scratch->paths[0].n, err);
+}
+
+/* Centres of the corner circles on bare polyline b: at most 2r apart, the
+ * ends excluded on an open stretch (its free ends carry lattice beads). */
+static size_t centres(const amp_pvert *b, size_t n, double r, double *len, int *closed)
+{
+    size_t k;
+    double L = 0;
+    for (k = 0; k + 1 < n; k++)
+        L += amp_v3_dist(b[k].p, b[k + 1].p);
+    *len = L;
+    *closed = n > 2 && b[0].p.x == b[n - 1].p.x && b[0].p.y == b[n - 1].p.y;
+    if (!(L > 0))
+        return 0;
+    k = (size_t)ceil(L / (2 * r) - 1e-9);
+    return *closed ? (k < 3 ? 3 : k) : (k > 0 ? k - 1 : 0);
+}
+
+/* Point at arclength s of polyline b. */
+static amp_vec2 poly_at(const amp_pvert *b, size_t n, double s)
+{
+    size_t k;
+    for (k = 0; k + 1 < n; k++) {
+        double l = amp_v3_dist(b[k].p, b[k + 1].p);
+        if (s <= l || k + 2 == n) {
+            double t = l > 0 ? fmin(s / l, 1.0) : 0;
+            return amp_v2(b[k].p.x + t * (b[k + 1].p.x - b[k].p.x), b[k].p.y + t * (b[k + 1].p.y - b[k].p.y));
+        }
+        s -= l;
+    }
+    return xy(b[0].p);
+}
+
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+                                  amp_contpath_stats *st, amp_error *err)
+{
+    const amp_allocator *al = ps->alloc;
+    double **cl = NULL;
+    tooth *t = NULL;
+    amp_vec2 *legs = NULL;
+    size_t nt = 0, cap_t = 0, cap_l = 0, i, k, j;
+    amp_pathset scratch;
+    sgrid sg;
+    amp_status rc = AMP_OK;
+    if (nperim == 0 || bare->npaths == 0)
+        return AMP_OK;
+    amp_pathset_init(&scratch, al);
+    if (sg_build(&sg, ps, 2 * r, al) != AMP_OK) {
+        amp_free(al, sg.start);
+        amp_free(al, sg.item);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    }
+    cl = amp_calloc(al, nperim, sizeof *cl);
+    if (!cl) {
+        amp_free(al, sg.start);
+        amp_free(al, sg.item);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    }
+    for (i = 0; i < nperim && rc == AMP_OK; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        cl[i] = amp_alloc(al, (ps->paths[i].n + 1) * sizeof **cl);
+        if (!cl[i]) {
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+            break;
+        }
+        cl[i][0] = 0;
+        for (k = 1; k < ps->paths[i].n; k++)
+            cl[i][k] = cl[i][k - 1] + amp_v3_dist(v[k - 1].p, v[k].p);
+    }
+    for (i = 0; i < bare->npaths && rc == AMP_OK; i++) {
+        const amp_pvert *b = amp_pathset_path_verts(bare, i);
+        size_t n = bare->paths[i].n, m;
+        double L, hw;
+        int closed;
+        m = centres(b, n, r, &L, &closed);
+        /* half the base: the corners of one stretch must not overlap */
+        hw = m ? fmin(r, 0.45 * L / (double)(closed ? m : m + 1)) : r;
+        for (k = 0; k < m && rc == AMP_OK; k++) {
+            amp_vec2 c = poly_at(b, n, closed ? L * (double)k / (double)m : L * (double)(k + 1) / (double)(m + 1));
+            size_t loop = 0, seg;
+            double s = 0, d = nearest_perimeter(ps, nperim, cl, c, &loop, &s), tot;
+            amp_pvert a0, a1;
+            tot = cl[loop][ps->paths[loop].n - 1];
+            /* the perimeter is 2r out; the base r to either side */
+            if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {
+                st->corners_left_out++;
+                continue;
+            }
+            a0 = at_len(ps, loop, cl[loop], s - hw, &seg);
+            a1 = at_len(ps, loop, cl[loop], s + hw, &seg);
+            if (blocked(ps, &sg, xy(a0.p), c, legs, 2 * nt, 1e-4 * r) ||
+                blocked(ps, &sg, xy(a1.p), c, legs, 2 * nt, 1e-4 * r)) {
+                st->corners_left_out++;
+                continue;
+            }
+            {
+                void *q = t, *ql = legs;
+                if (amp_grow(al, &q, &cap_t, nt + 1, sizeof *t) != AMP_OK ||
+                    amp_grow(al, &ql, &cap_l, 4 * (nt + 1), sizeof *legs) != AMP_OK) {
+                    rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+                    break;
+                }
+                t = q;
+                legs = ql;
+            }
+            /* the two legs of tooth k are legs[4k .. 4k + 3] (two segments) */
+            legs[4 * nt] = xy(a0.p);
+            legs[4 * nt + 1] = c;
+            legs[4 * nt + 2] = c;
+            legs[4 * nt + 3] = xy(a1.p);
+            t[nt].s0 = s - hw;
+            t[nt].s1 = s + hw;
+            t[nt].loop = loop;
+            t[nt].tip.p = amp_v3(c.x, c.y, a0.p.z);
+            t[nt].tip.r = AMP_CP_TOOTH_R(r); /* tagged: the joiner keeps off corners */
+            nt++;
+        }
+    }
+    /* per perimeter loop: teeth sorted by base, overlapping ones left out */
+    for (i = 0; i < nperim && rc == AMP_OK; i++) {
+        size_t mt = 0;
+        tooth *u = NULL;
+        if (nt)
+            u = amp_alloc(al, nt * sizeof *u);
+        if (nt && !u) {
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+            break;
+        }
+        for (k = 0; k < nt; k++)
+            if (t[k].loop == i)
+                u[mt++] = t[k];
+        if (mt > 1)
+            qsort(u, mt, sizeof *u, cmp_tooth);
+        for (k = 0, j = 0; k < mt; k++) {
+            if (j > 0 && u[k].s0 < u[j - 1].s1) {
+                st->corners_left_out++;
+                continue;
+            }
+            u[j++] = u[k];
+        }
+        st->support_corners += j;
+        if (j)
+            rc = insert_teeth(ps, i, cl[i], u, j, &scratch, err);
+        amp_free(al, u);
+    }
+    for (i = 0; i < nperim; i++)
+        amp_free(al, cl[i]);
+    amp_free(al, cl);
+    amp_free(al, t);
+    amp_free(al, legs);
+    amp_free(al, sg.start);
+    amp_free(al, sg.item);
+    amp_pathset_free(&scratch);
+    return rc;
+}
