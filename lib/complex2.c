@@ -378,9 +378,13 @@ amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell,
     if ((xmax - xmin) / cell * (ymax - ymin) / cell > 4e6)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 4000000 cells (cell %g too small)", cell);
     o = amp_v2(xmin - cell, ymin - cell);
-    if (kind == AMP_GRID_SQUARE) {
-        axx = cell, ayx = 0, ayy = cell;
-        j0 = 0, j1 = (long)((ymax - o.y) / cell) + 1;
+    if (kind == AMP_GRID_SQUARE || kind == AMP_GRID_STRIPS_X || kind == AMP_GRID_STRIPS_Y) {
+        /* a strip lattice is the square lattice stretched along one axis */
+        axx = kind == AMP_GRID_STRIPS_X ? AMP_GRID_STRIP_ASPECT * cell : cell;
+        ayy = kind == AMP_GRID_STRIPS_Y ? AMP_GRID_STRIP_ASPECT * cell : cell;
+        ayx = 0;
+        o = amp_v2(xmin - axx, ymin - ayy);
+        j0 = 0, j1 = (long)((ymax - o.y) / ayy) + 1;
     } else if (kind == AMP_GRID_TRI) {
         axx = cell, ayx = 0.5 * cell, ayy = cell * 0.8660254037844386;
         j0 = 0, j1 = (long)((ymax - o.y) / ayy) + 1;
@@ -398,15 +402,15 @@ amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell,
             i1 = (long)((xmax - o.x) / (cell * 1.7320508075688772)) + 2;
         } else {
             i0 = 0;
-            i1 = (long)((xmax - o.x) / cell) + 1;
+            i1 = (long)((xmax - o.x) / axx) + 1;
         }
         for (ci = i0; ci <= i1 && st == AMP_OK; ci++) {
             size_t t, ntype = kind == AMP_GRID_TRI ? 2 : 1;
             for (t = 0; t < ntype; t++) {
                 int64_t X[6], Y[6];
-                size_t m = kind == AMP_GRID_SQUARE ? 4 : (kind == AMP_GRID_TRI ? 3 : 6), c;
+                size_t m = kind == AMP_GRID_TRI ? 3 : (kind == AMP_GRID_HEX ? 6 : 4), c;
                 for (c = 0; c < m; c++) {
-                    if (kind == AMP_GRID_SQUARE) {
+                    if (m == 4) {
                         X[c] = ci + sq[0][c][0];
                         Y[c] = cj + sq[0][c][1];
                     } else if (kind == AMP_GRID_TRI) {
@@ -459,7 +463,7 @@ amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell,
         vid[keys[i].corner] = id;
     }
     {
-        size_t m = kind == AMP_GRID_SQUARE ? 4 : (kind == AMP_GRID_TRI ? 3 : 6);
+        size_t m = kind == AMP_GRID_TRI ? 3 : (kind == AMP_GRID_HEX ? 6 : 4);
         for (j = 0; j < ncell && st == AMP_OK; j++)
             st = amp_cx2_add_face(k, vid + j * m, m, AMP_CELL_INPUT, err);
     }

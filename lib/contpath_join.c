@@ -299,6 +299,40 @@ static int second_point(const jloop *X, size_t sx, double ell, size_t *sx2, doub
     return 0;
 }
 
+/* Parameter @p u on segment i of L moved off its ends by a tenth of the
+ * segment or a tenth of a bead radius, whichever is less. */
+static double into_segment(const jloop *L, size_t i, double u, double r)
+{
+    double len = amp_v3_dist(L->v[i].p, L->v[(i + 1) % L->n].p);
+    double m = fmin(0.1, 0.1 * r / fmax(len, 1e-12));
+    return fmin(fmax(u, m), 1 - m);
+}
+
+/* q1 == q2: both nearest points of Y are one corner of it (a small loop, or
+ * the end of a skin strip). The connectors then straddle that corner: q1
+ * on the segment before it and q2 on the one after, each up to half the
+ * connector spacing from the corner, in the order that keeps the two
+ * connectors from crossing (spreading both over one long segment would
+ * stretch a connector across the strips beside it). */
+static void straddle_corner(const joiner *J, cut *c, amp_vec2 p1, amp_vec2 p2, double ell)
+{
+    const jloop *Y = &J->lp[c->ly];
+    size_t a = c->u1 >= 0.5 ? c->j1 : (c->j1 + Y->n - 1) % Y->n, b = (a + 1) % Y->n;
+    double la = amp_v3_dist(Y->v[a].p, Y->v[b].p), lb = amp_v3_dist(Y->v[b].p, Y->v[(b + 1) % Y->n].p);
+    c->j1 = a;
+    c->u1 = 1 - fmin(0.5 * ell, 0.4 * la) / fmax(la, 1e-12);
+    c->j2 = b;
+    c->u2 = fmin(0.5 * ell, 0.4 * lb) / fmax(lb, 1e-12);
+    if (proper_cross(p1, P2v(seg_point(Y, c->j1, c->u1).p), p2, P2v(seg_point(Y, c->j2, c->u2).p))) {
+        size_t j = c->j1;
+        double u = c->u1;
+        c->j1 = c->j2;
+        c->u1 = c->u2;
+        c->j2 = j;
+        c->u2 = u;
+    }
+}
+
 /* Try a splice of the loop holding segment sx of lx with another set. */
 static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, amp_status *st)
 {
@@ -323,9 +357,15 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
         return 0;
     /* a nearest point at a corner of Y (its vertex cone) moves into the
      * segment: a connector ending on a vertex would touch the segment
-     * before it too */
-    c.u1 = fmin(fmax(c.u1, 0.1), 0.9);
-    c.u2 = fmin(fmax(c.u2, 0.1), 0.9);
+     * before it too. The move is a tenth of a bead at most: on a long
+     * segment (a skin strip) a tenth of its length would stretch the
+     * connector across the strips beside it */
+    c.u1 = into_segment(&J->lp[c.ly], c.j1, c.u1, J->r);
+    c.u2 = into_segment(&J->lp[c.ly], c.j2, c.u2, J->r);
+    Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
+    Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
+    if (hypot(Q1.p.x - Q2.p.x, Q1.p.y - Q2.p.y) < 1e-3 * ell)
+        straddle_corner(J, &c, p1, p2, ell);
     /* the left-out stretch of Y must be short and printed throughout */
     fw = forward_span(J->lp[c.ly].n, c.j1, c.u1, c.j2, c.u2);
     bw = forward_span(J->lp[c.ly].n, c.j2, c.u2, c.j1, c.u1);
@@ -334,30 +374,8 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
     c.ybackward = fw <= bw;
     if (!all_printed(&J->lp[c.ly], c.ybackward ? c.j1 : c.j2, c.ybackward ? fw : bw, J->r))
         return 0;
-    Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
-    Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
-    q1 = P2v(Q1.p);
-    q2 = P2v(Q2.p);
-    /* q1 == q2 (both in one corner's cone of a small Y): spread them over
-     * segment j1, in the order that keeps the connectors apart */
-    if (hypot(q1.x - q2.x, q1.y - q2.y) < 1e-3 * ell) {
-        c.j2 = c.j1;
-        c.u1 = 0.3;
-        c.u2 = 0.7;
-        Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
-        Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
-        if (proper_cross(p1, P2v(Q1.p), p2, P2v(Q2.p))) {
-            c.u1 = 0.7;
-            c.u2 = 0.3;
-            Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
-            Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
-        }
-        q1 = P2v(Q1.p);
-        q2 = P2v(Q2.p);
-        c.ybackward = c.u2 >= c.u1;
-        fw = c.ybackward ? 0 : J->lp[c.ly].n;
-        bw = c.ybackward ? J->lp[c.ly].n : 0;
-    }
+    q1 = P2v(seg_point(&J->lp[c.ly], c.j1, c.u1).p);
+    q2 = P2v(seg_point(&J->lp[c.ly], c.j2, c.u2).p);
     if (proper_cross(p1, q1, p2, q2))
         return 0;
     if (connector_blocked(J, p1, q1, lx, sx, c.ly, c.j1) || connector_blocked(J, p2, q2, lx, c.sx2, c.ly, c.j2))

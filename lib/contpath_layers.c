@@ -13,9 +13,9 @@
 typedef struct lctx {
     const amp_slices *sl;
     const amp_contpath_opts *o;
-    amp_cx2 khat, kskin; /* sparse infill and solid skin lattices */
-    uint64_t *ke, *kse;
-    size_t nke, nkse;
+    amp_cx2 khat, kskin[2]; /* sparse infill; solid skins along x (even layers) and y (odd) */
+    uint64_t *ke, *kse[2];
+    size_t nke, nkse[2];
     int skins;
     amp_polyset isl, ins, reg;
     amp_pathset tmp;  /* one island's paths before joining */
@@ -186,11 +186,15 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * filled by the beads around it */
         if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
             continue;
+        /* a solid region needs no support corners (step 6): its strips lie
+         * at most one bead from every point of R̃'s unprinted stretches, and
+         * corners over them would print that plastic twice */
         skin = c->skins && amp_cp_region_is_skin(c->sl, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
         s0->skin_regions += (size_t)skin;
-        rc = amp_cp_region_run(skin ? &c->kskin : &c->khat, skin ? c->kse : c->ke, skin ? c->nkse : c->nke, &c->reg,
+        rc = amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
+                               skin ? c->nkse[li & 1] : c->nke, &c->reg,
                                L->z_print, o, o->join && o->perimeters, &c->tmp,
-                               o->support_corners && !o->support_stretches ? &c->bare : NULL, s0, err);
+                               o->support_corners && !o->support_stretches && !skin ? &c->bare : NULL, s0, err);
     }
     /* step 6: corners from the bare stretches to the perimeter */
     if (rc == AMP_OK && nperim)
@@ -289,7 +293,8 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     c.sl = sl;
     c.o = o;
     amp_cx2_init(&c.khat, al);
-    amp_cx2_init(&c.kskin, al);
+    amp_cx2_init(&c.kskin[0], al);
+    amp_cx2_init(&c.kskin[1], al);
     amp_polyset_init(&c.isl, al);
     amp_polyset_init(&c.ins, al);
     amp_polyset_init(&c.reg, al);
@@ -299,14 +304,18 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     c.skins = o->skin_bottom > 0 || o->skin_top > 0;
-    if (rc == AMP_OK && c.skins) {
-        /* the solid lattice: square cells of 4r with offset r, beads touching */
+    for (li = 0; li < 2 && rc == AMP_OK && c.skins; li++) {
+        /* the solid lattices: strips 4r wide with offset r, so that the
+         * beads along the long sides lie side by side and cover the region
+         * once (a square lattice of 4r covers it twice: beads both ways),
+         * along x on even layers and along y on odd ones, as slicers turn
+         * their solid infill by 90 degrees */
         amp_contpath_opts so = *o;
         so.cell = o->skin_cell > 0 ? o->skin_cell : 4 * o->radius;
-        so.grid = AMP_GRID_SQUARE;
+        so.grid = li ? AMP_GRID_STRIPS_Y : AMP_GRID_STRIPS_X;
         so.offset = o->radius;
-        rc = amp_contpath_complex(sl, &so, &c.kskin, err);
-        if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin, al, &c.kse, &c.nkse) != AMP_OK)
+        rc = amp_contpath_complex(sl, &so, &c.kskin[li], err);
+        if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin[li], al, &c.kse[li], &c.nkse[li]) != AMP_OK)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     }
     for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
@@ -325,8 +334,10 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         }
     }
     amp_free(al, c.ke);
-    amp_free(al, c.kse);
-    amp_cx2_free(&c.kskin);
+    amp_free(al, c.kse[0]);
+    amp_free(al, c.kse[1]);
+    amp_cx2_free(&c.kskin[0]);
+    amp_cx2_free(&c.kskin[1]);
     amp_free(al, c.done);
     amp_cx2_free(&c.khat);
     amp_polyset_free(&c.isl);

@@ -21,8 +21,8 @@ const char cmd_slice_usage[] =
     "                     a bead of the layer's height, started where the previous one ended\n"
     "  --radius R         bead half-width in mm (default 0.225: a 0.45 mm bead); also the SVG inset\n"
     "  --nozzle D         nozzle diameter: bead 1.125 D wide (r = 0.5625 D) unless --radius is given\n"
-    "  --cell S           sparse lattice cell in mm (default 10 r, about 40 % infill)\n"
-    "  --infill P         sparse infill density in % instead (cell = 4 r x 100 / P)\n"
+    "  --cell S           sparse lattice cell in mm (default 10 r, about 64 % infill)\n"
+    "  --infill P         sparse infill density in % instead (cell = 4 r / (1 - sqrt(1 - P / 100)))\n"
     "  --bottom T, --top T  solid skin thickness in mm (default 0.8 each, 0: none): regions near a\n"
     "                     downward or upward facing surface get the dense lattice (cell 4r)\n"
     "  --eps-c C          warn where a layer overhangs the one below by more than C r (section 2.1,\n"
@@ -431,9 +431,10 @@ int cmd_slice(int argc, char **argv)
     if (infill != 0) {
         if (!(infill > 0 && infill <= 100))
             return cli_fail("slice", CLI_USAGE, "--infill must be a density in %% (0 < P <= 100)");
-        /* a square lattice of cell S with beads 2r wide covers about 4r / S
-         * of the area (two bead widths per cell side) */
-        co.cell = 4 * radius * 100 / infill;
+        /* every line of a square lattice of cell S carries two beads (a
+         * band 4r wide): x = 4r / S of the area lies under the bands of one
+         * direction, 2x - x^2 under both; solved for the density */
+        co.cell = 4 * radius / (1 - sqrt(1 - infill / 100));
     }
     if (strcmp(tour, "cycle-tree") == 0)
         co.tour = AMP_TOUR_CYCLE_TREE;

@@ -101,13 +101,30 @@ amp_status amp_cx2_check(const amp_cx2 *k, amp_cx2_report *rep, amp_error *err);
  */
 amp_status amp_cx2_check_even(const amp_cx2 *k, size_t *odd, amp_error *err);
 
-/** Grid kinds for amp_cx2_grid(). */
-typedef enum amp_grid_kind { AMP_GRID_SQUARE = 0, AMP_GRID_TRI = 1, AMP_GRID_HEX = 2 } amp_grid_kind;
+/**
+ * Grid kinds for amp_cx2_grid(). The strip kinds are rectangles @p cell wide
+ * and AMP_GRID_STRIP_ASPECT x @p cell long, along x or along y: with offset
+ * cell / 4 the beads of their Euler transformation lie side by side along
+ * the long sides and cover the area once (the short sides add 1 /
+ * AMP_GRID_STRIP_ASPECT), where a square lattice of the same cell covers it
+ * twice (its beads run both ways) — the solid skins of the continuous paths.
+ */
+typedef enum amp_grid_kind {
+    AMP_GRID_SQUARE = 0,
+    AMP_GRID_TRI = 1,
+    AMP_GRID_HEX = 2,
+    AMP_GRID_STRIPS_X = 3,
+    AMP_GRID_STRIPS_Y = 4
+} amp_grid_kind;
+
+/** Length over width of the cells of AMP_GRID_STRIPS_X and _Y. */
+#define AMP_GRID_STRIP_ASPECT 80
 
 /**
  * Mesh a convex polygon @p hull (CCW, @p n >= 3 points) with a pure
  * 2-complex K (§2.2 step 3): the cells of a regular square, equilateral
- * triangle or hexagon lattice of edge length @p cell that meet the hull's
+ * triangle or hexagon lattice of edge length @p cell (or of a strip lattice,
+ * see amp_grid_kind) that meet the hull's
  * interior. K covers the hull (cells are not cut, so no sliver cells appear;
  * the excess is removed by clipping per layer). @p k is emptied first and is
  * built on return. AMP_ERR_ARG for a bad cell size or hull, AMP_ERR_LIMIT

@@ -64,7 +64,7 @@ typedef struct amp_contpath_opts {
     amp_tour_method tour;  /**< §4 construction (default AMP_TOUR_CYCLE_TREE) */
     double skin_bottom;    /**< mm of solid layers over every downward-facing surface (default 0.8; 0: none) */
     double skin_top;       /**< mm of solid layers under every upward-facing surface (default 0.8; 0: none) */
-    double skin_cell;      /**< lattice cell of the solid skins (<= 0: 4 r, where the beads of K̂ touch) */
+    double skin_cell;      /**< strip width of the solid skins (<= 0: 4 r, where the beads of K̂ lie side by side) */
     int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
                                 stroke (one extrusion start per island); 0: separate closed paths */
 } amp_contpath_opts;
