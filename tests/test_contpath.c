@@ -496,6 +496,32 @@ START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
 }
 END_TEST
 
+START_TEST(printer_profile_sets_the_bead_width_of_a_continuous_slice)
+{
+    /* SPEC §4: beads 1.125 x the profile's nozzle; --radius still wins */
+    amp_mesh m;
+    amp_error err;
+    char args[768], out[4096];
+    const char *stl = amp_test_tmp("pplate.stl"), *amp = amp_test_tmp("pplate.amp"), *ini = amp_test_tmp("p06.ini");
+    FILE *f = fopen(ini, "w");
+    ck_assert_ptr_nonnull(f);
+    fputs("# a PrusaSlicer printer with a 0.6 mm nozzle\nnozzle_diameter = 0.6,0.6\nbed_shape = 0x0,250x0,250x210,0x210\n", f);
+    fclose(f);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 2.0), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer %s --json -o %s", stl, ini, amp);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"radius\":0.3375") != NULL, "%s", out);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer %s --radius 0.3 --json -o %s", stl, ini, amp);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"radius\":0.3,") != NULL, "%s", out);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer no-such-printer -o %s", stl, amp);
+    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
 {
     amp_mesh m;
@@ -1059,6 +1085,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, built_in_models_get_one_crossing_free_stroke_per_island);
     AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
     AMP_ADD_TEST(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
+    AMP_ADD_TEST(tc, printer_profile_sets_the_bead_width_of_a_continuous_slice);
     AMP_ADD_TEST(tc, torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode);
     AMP_ADD_TEST(tc, screw_bunny_and_open_mesh_get_one_extrusion_start_per_island_counted_in_the_gcode);
     AMP_ADD_TEST(tc, paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is);

@@ -21,6 +21,8 @@ const char cmd_slice_usage[] =
     "                     a bead of the layer's height, started where the previous one ended\n"
     "  --radius R         bead half-width in mm (default 0.225: a 0.45 mm bead); also the SVG inset\n"
     "  --nozzle D         nozzle diameter: bead 1.125 D wide (r = 0.5625 D) unless --radius is given\n"
+    "  --printer P        printer profile (built-in name or .ini, as for gcode): its nozzle sets the\n"
+    "                     bead unless --nozzle or --radius is given\n"
     "  --cell S           sparse lattice cell in mm (default 10 r, about 64 % infill)\n"
     "  --infill P         sparse infill density in % instead (cell = 4 r / (1 - sqrt(1 - P / 100)))\n"
     "  --bottom T, --top T  solid skin thickness in mm (default 0.8 each, 0: none): regions near a\n"
@@ -373,7 +375,7 @@ int cmd_slice(int argc, char **argv)
     long index = -1;
     int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8, epsc = 1.0;
-    const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree";
+    const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree", *printer = NULL;
     amp_contpath_opts co;
     amp_mesh m;
     amp_slices sl;
@@ -390,12 +392,26 @@ int cmd_slice(int argc, char **argv)
                       {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
                       {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
                       {"top", CLI_DOUBLE, &skin_top, 0},     {"eps-c", CLI_DOUBLE, &epsc, 0},
-                      {NULL, CLI_FLAG, NULL, 0}};
+                      {"printer", CLI_STR, &printer, 0},     {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
     if (!opts[0].seen)
         return cli_fail("slice", CLI_USAGE, "--layer H is required");
+    if (printer && !opts[15].seen && !opts[6].seen) {
+        /* the profile's nozzle sets the bead (SPEC §4: 1.125 x the nozzle), as --nozzle does */
+        amp_printer *pr = malloc(sizeof *pr);
+        amp_error err;
+        if (!pr)
+            return cli_fail("slice", CLI_USAGE, "out of memory");
+        if (amp_printer_load(pr, printer, &err) != AMP_OK) {
+            free(pr);
+            return cli_fail("slice", CLI_USAGE, "%s", err.msg);
+        }
+        nozzle = pr->nozzle_diameter;
+        opts[15].seen = 1;
+        free(pr);
+    }
     if (opts[15].seen && !opts[6].seen) {
         if (!(nozzle > 0) || !isfinite(nozzle))
             return cli_fail("slice", CLI_USAGE, "--nozzle must be positive");
