@@ -1,0 +1,2 @@
+class BridgeClient: pass
+class BridgeError(Exception): pass

@@ -1,0 +1,2 @@
+def preview(*a, **k):
+    raise NotImplementedError
