@@ -289,6 +289,12 @@ class PathSet(_Owner):
         return _to_buf(lambda sink, buf, err: lib.amp_pathset_write(
             self._ref, None if comment is None else comment.encode(), sink, buf, err)).decode()
 
+    def as_written(self):
+        """A new PathSet as it would be read back from its `.amp` file (coordinates rounded to the file's
+        10 significant digits): what the next `ampath` command sees, so that a chain of stages reproduces
+        the tool's chain bit for bit."""
+        return PathSet.parse(self.to_amp())
+
     def write(self, filename, comment=None):
         """Write the `.amp` file (replaced atomically)."""
         err = _err()
