@@ -236,6 +236,11 @@ class amp_field_stats(Structure):
                 ("length_before", c_double), ("length_after", c_double), ("radius", c_double)]
 
 
+class amp_preview_stats(Structure):
+    _fields_ = [("width", c_int), ("height", c_int), ("paths", c_size_t), ("support", c_size_t),
+                ("vertices", c_size_t), ("drawn", c_size_t), ("bytes", c_size_t)]
+
+
 _D = c_double
 _GCODE_OPTS = [
     ("flavor", c_int), ("filament_diameter", _D), ("flow", _D), ("max_volumetric_flow", _D), ("print_feed", _D),
@@ -284,7 +289,7 @@ STRUCTS = {cls.__name__: cls for cls in (
     amp_tri, amp_mesh, amp_stl_stats, amp_head, amp_cover_opts, amp_cover_stats, amp_cover_gap, amp_order_opts,
     amp_order_stats, amp_mdr_opts, amp_mdr_stats, amp_support_opts, amp_support_stats, amp_ring, amp_polyset,
     amp_slice_opts, amp_layer, amp_slices, amp_contpath_opts, amp_contpath_stats, amp_stroke_report,
-    amp_gouge_violation, amp_field, amp_field_opts, amp_field_stats, amp_gcode_opts, amp_gcode_stats,
+    amp_gouge_violation, amp_field, amp_field_opts, amp_field_stats, amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
     amp_printer)}
 
 # ---------------------------------------------------------------- prototypes
@@ -313,6 +318,7 @@ _PROTOS = {
     "amp_out_open": (c_int, [P(amp_out), c_char_p, E]),
     "amp_out_commit": (c_int, [P(amp_out), E]),
     "amp_out_abort": (None, [P(amp_out)]),
+    "amp_out_sink": (c_int, [P(amp_out), c_char_p, c_size_t]),
     "amp_spline_init": (None, [P(amp_spline)]),
     "amp_spline_free": (None, [P(amp_spline)]),
     "amp_spline_read_file": (c_int, [c_char_p, c_void_p, P(P(amp_spline)), P(c_size_t), E]),
@@ -365,6 +371,8 @@ _PROTOS = {
                                     E]),
     "amp_pathset_stroke_check": (c_int, [P(amp_pathset), c_size_t, c_void_p, c_double, P(amp_stroke_report), E]),
     "amp_gouge_check": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),
+    "amp_preview_png": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
+    "amp_preview_svg": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
     "amp_printer_builtin_count": (c_size_t, []),
     "amp_printer_builtin_name": (c_char_p, [c_size_t]),
     "amp_printer_builtin_about": (c_char_p, [c_size_t]),
