@@ -29,7 +29,9 @@ STATUS_NAMES = {0: "AMP_OK", -1: "AMP_ERR_ARG", -2: "AMP_ERR_NOMEM", -3: "AMP_ER
 
 
 class Error(Exception):
-    """Every failure of the library: .status (negative amp_status), .name ("AMP_ERR_PARSE"),
+    """Every failure of the library, and every bad argument value the binding refuses itself (then with
+    AMP_ERR_ARG, as the library would); an unknown keyword option is a TypeError, as for any Python call.
+    Fields: .status (negative amp_status), .name ("AMP_ERR_PARSE"),
     .reason (amp_strerror: "parse error"), .message (the library's one-line message) and .line."""
 
     def __init__(self, status, message, line=0):
@@ -211,7 +213,7 @@ class PathSet(_Owner):
     def add(self, points, role="object", radius=None, h=0.0):
         """Append a path. @points: a sequence (or NumPy array) of (x, y, z, r), or of (x, y, z) with @radius."""
         if role not in _ROLES:
-            raise ValueError("role must be 'object' or 'support'")
+            _fail("role must be 'object' or 'support'")
         if _np is not None and isinstance(points, _np.ndarray):
             points = points.tolist()
         with self._lock:
@@ -220,7 +222,7 @@ class PathSet(_Owner):
             for p in points:
                 if len(p) == 3:
                     if radius is None:
-                        raise ValueError("points without a radius need radius=")
+                        _fail("points without a radius need radius=")
                     x, y, z, r = p[0], p[1], p[2], radius
                 else:
                     x, y, z, r = p

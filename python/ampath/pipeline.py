@@ -17,6 +17,12 @@ from .core import Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _f
 _DIRS = {"u": 0, "v": 1, "w": 2, 0: 0, 1: 1, 2: 2}
 
 
+def _dir(d):
+    if d not in _DIRS:
+        _fail("dir must be u, v or w, got %r" % (d,))
+    return _DIRS[d]
+
+
 def _run(fn, out, progress=None):
     """Call a stage that appends to @out; free @out on failure."""
     try:
@@ -35,11 +41,9 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
     o = L.amp_cover_opts()
     lib.amp_cover_opts_default(ctypes.byref(o))
     o.eps = eps
-    if dir not in _DIRS:
-        raise ValueError("dir must be u, v or w")
-    o.dir = _DIRS[dir]
+    o.dir = _dir(dir)
     if measure not in ("arclen", "iso"):
-        raise ValueError("measure must be arclen or iso")
+        _fail("measure must be arclen or iso")
     o.measure = 0 if measure == "arclen" else 1
     _apply(o, opts, "cover", skip=("eps", "dir", "measure"))
     pr = _Progress(progress)
@@ -68,14 +72,14 @@ def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
     "box" or a Trivariate (curves along @dir). Options: step, min_len, radius (amp_field_opts)."""
     f, o, st, err = L.amp_field(), L.amp_field_opts(), L.amp_field_stats(), _err()
     if isinstance(field, Trivariate):
-        _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _DIRS[dir], ctypes.byref(err)), err)
+        _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
     else:
         _check(lib.amp_field_builtin(ctypes.byref(f), _b(field), lib.amp_mesh_bbox(mesh._ref), ctypes.byref(err)),
                err)
     lib.amp_field_opts_default(ctypes.byref(o))
     o.spacing = spacing
     if pattern not in ("grid", "hex"):
-        raise ValueError("pattern must be grid or hex")
+        _fail("pattern must be grid or hex")
     o.pattern = 0 if pattern == "grid" else 1
     _apply(o, opts, "field", skip=("spacing", "pattern"))
     out = PathSet()
@@ -107,8 +111,6 @@ def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts
 
 def mdr(paths, nominal=0.5, progress=None, **opts):
     """Paper 1 §5.2 (`ampath mdr`): deposition radius per vertex. Options: r_min, r_max, fragment."""
-    if not nominal > 0:
-        _fail("nominal must be positive (got %r)" % (nominal,), -6)
     o = L.amp_mdr_opts()
     lib.amp_mdr_opts_default(ctypes.byref(o), nominal)
     _apply(o, opts, "mdr", skip=("nominal",))
@@ -213,7 +215,7 @@ class Slices:
         lib.amp_contpath_opts_default(ctypes.byref(o), radius)
         grids = {"square": 0, "tri": 1, "hex": 2}
         if grid not in grids:
-            raise ValueError("grid must be square, tri or hex")
+            _fail("grid must be square, tri or hex")
         o.grid = grids[grid]
         _apply(o, opts, "continuous", skip=("radius", "grid"))
         out, st, err = PathSet(), L.amp_contpath_stats(), _err()

@@ -6,7 +6,7 @@ import os
 
 from . import _lib as L
 from ._lib import lib
-from .core import _check, _err, _to_buf, _todict
+from .core import _check, _err, _fail, _to_buf, _todict
 
 
 def preview(paths, format="png", width=1600, output=None, stats=None):
@@ -19,7 +19,7 @@ def preview(paths, format="png", width=1600, output=None, stats=None):
         if ext in (".png", ".svg"):
             format = ext[1:]
     if format not in ("png", "svg"):
-        raise ValueError("format must be 'png' or 'svg'")
+        _fail("format must be 'png' or 'svg'")
     fn = lib.amp_preview_png if format == "png" else lib.amp_preview_svg
     st = L.amp_preview_stats()
     data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))

@@ -51,6 +51,19 @@ class Errors(TmpCase):
         self.assertEqual(cm.exception.message, tool_message("order", tool("order", good, "--theta", 95,
                                                                           ok=False).stderr))
 
+    def test_bad_values_refused_by_the_library_or_the_binding_raise_error(self):
+        good = self.write("ok.amp", "ampath-paths 1\npath object 2\n0 0 0 0.5\n10 0 0 0.5\n")
+        with ampath.PathSet.read(good) as ps:
+            with self.assertRaises(ampath.Error) as cm:
+                ampath.mdr(ps, nominal=-1)
+            self.assertEqual(cm.exception.name, "AMP_ERR_RANGE")
+            with self.assertRaises(ampath.Error) as cm:
+                ps.add([(0, 0, 0)], role="scaffold")
+            self.assertEqual(cm.exception.name, "AMP_ERR_ARG")
+        with ampath.Trivariate.model("helix") as v, self.assertRaises(ampath.Error) as cm:
+            ampath.cover(v, eps=1, dir="x")
+        self.assertIn("dir must be u, v or w", cm.exception.message)
+
     def test_bad_printer_and_unknown_option(self):
         good = self.write("ok.amp", "ampath-paths 1\npath object 2\n0 0 0.2 0.5\n10 0 0.2 0.5\n")
         with ampath.PathSet.read(good) as ps:
