@@ -1,13 +1,32 @@
 """ampath.BridgeClient against the real daemon (bridge/ampath-bridge --daemon) and the virtual printer
 (tools/ampath-vprinter), started as tests/test_daemon.c starts them. The job is G-code made by Python."""
 
+import json
 import os
 import signal
 import subprocess
+import sys
 import time
 import unittest
 
-from amptest import BRIDGE, VPRINTER, TmpCase, ampath
+from amptest import BRIDGE, HERE, VPRINTER, TmpCase, ampath
+
+EXAMPLE = os.path.join(HERE, "..", "examples", "host_plugin.py")
+
+
+def box_stl(path, sx=12.0, sy=8.0, sz=1.2):
+    """An ASCII STL of a closed box on the plate (two outward triangles per face)."""
+    v = [(x * sx, y * sy, z * sz) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    with open(path, "w") as f:
+        f.write("solid box\n")
+        for a, b, c, d in quads:
+            for tri in ((a, b, c), (a, c, d)):
+                f.write("facet normal 0 0 0\nouter loop\n")
+                for k in tri:
+                    f.write("vertex %g %g %g\n" % v[k])
+                f.write("endloop\nendfacet\n")
+        f.write("endsolid box\n")
 
 FAST = ["--timeout", "0.3", "--settle-ms", "5", "--boot-wait", "0.3", "--baud", "1000000"]
 DEADLINE = 120.0  # generous: the machine may be loaded; nothing here measures time
@@ -98,6 +117,22 @@ class Bridge(TmpCase):
             self.assertEqual(st["acked"], st["total"])
             self.assertEqual(st["errors"], 0)
         self.assertEqual(len(self.executed()), st["total"])
+
+    def test_the_example_host_plugin_slices_an_upload_and_prints_it(self):
+        stl = self.p("upload.stl")
+        box_stl(stl)
+        r = subprocess.run([sys.executable, EXAMPLE, stl, "--printer", "ender3", "--bridge", self.sock, "--follow"],
+                           capture_output=True, text=True, timeout=DEADLINE)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        figures = json.loads(r.stdout)
+        self.assertEqual(figures["bridge"], "done")
+        self.assertEqual(figures["printer"], "ender3")
+        self.assertEqual(figures["gcode"], self.p("upload.gcode"))
+        self.assertGreater(figures["strokes"], 0)
+        with open(figures["gcode"]) as f:
+            moves = sum(1 for l in f if l.startswith(("G0 ", "G1 ")))
+        done = sum(1 for l in self.executed() if " G0 " in l or " G1 " in l)
+        self.assertEqual(done, moves)
 
     def test_refusals_raise_bridge_error_with_the_reply(self):
         with ampath.BridgeClient(self.sock) as b:
