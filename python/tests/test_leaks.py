@@ -35,6 +35,29 @@ except (OSError, AttributeError):
     _libc = None
 
 
+def _gomp():
+    try:
+        g = ctypes.CDLL("libgomp.so.1", mode=os.RTLD_NOLOAD)  # only if the library brought it in
+        return g if hasattr(g, "omp_set_num_threads") else None
+    except OSError:
+        return None
+
+
+class one_thread:
+    """OpenMP on one thread while measuring: waking a team for every tiny parallel region costs
+    milliseconds per call on a loaded machine (the runs here are about memory, not threads)."""
+
+    def __enter__(self):
+        self.g = _gomp()
+        if self.g:
+            self.n = self.g.omp_get_max_threads()
+            self.g.omp_set_num_threads(1)
+
+    def __exit__(self, *exc):
+        if self.g:
+            self.g.omp_set_num_threads(self.n)
+
+
 def malloc_in_use():
     """Bytes in use from malloc, over all arenas, mmapped blocks included."""
     m = _libc.mallinfo2()
@@ -63,6 +86,10 @@ def one_run(leak=None):
 @unittest.skipUnless(os.path.exists("/proc/self/statm") and _libc is not None, "needs /proc and glibc >= 2.33")
 class Leaks(unittest.TestCase):
     def measure(self, runs, leak=None):
+        with one_thread():
+            return self._measure(runs, leak)
+
+    def _measure(self, runs, leak=None):
         for _ in range(20):  # warm-up: allocator arenas, caches
             one_run()
         gc.collect()
