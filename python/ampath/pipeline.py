@@ -12,7 +12,7 @@ import math
 
 from . import _lib as L
 from ._lib import lib
-from .core import Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _Progress, _todict
+from .core import Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _Owner, _Progress, _todict
 
 _DIRS = {"u": 0, "v": 1, "w": 2, 0: 0, 1: 1, 2: 2}
 
@@ -147,15 +147,17 @@ def support(paths, mesh, z_offs=0.5, theta_deg=72.0, **opts):
 # ---------------------------------------------------------------- slicing
 
 
-class Slices:
+class Slices(_Owner):
     """The layers of a sliced mesh (amp_slices), owned; .layers lists (z_cut, z_print, rings) per layer with
     rings as lists of (x, y) and a hole flag."""
 
     def __init__(self, mesh, layer, first_layer=0.0):
-        if not (layer > 0 and math.isfinite(layer)):
-            _fail("layer must be a positive height in mm", -1)
+        super().__init__()
         self._sl = L.amp_slices()
         lib.amp_slices_init(ctypes.byref(self._sl), None)
+        if not (layer > 0 and math.isfinite(layer)):
+            self.close()
+            _fail("layer must be a positive height in mm")
         self.layer = layer
         # the slicer chains segments by their direction: the orientation must agree (as the tool does)
         self.flipped = mesh.orient()
@@ -165,20 +167,11 @@ class Slices:
             self.close()
         _check(st, err)
 
-    def close(self):
-        if self._sl is not None:
-            lib.amp_slices_free(ctypes.byref(self._sl))
-            self._sl = None
-
-    __del__ = close
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.close()
+    def _release(self):
+        lib.amp_slices_free(ctypes.byref(self._sl))
 
     def __len__(self):
+        self._live()
         return self._sl.nlayers
 
     @property
@@ -186,6 +179,7 @@ class Slices:
         return self._sl.open_chains
 
     def _rings(self, i):
+        self._live()
         P = self._sl.layers[i].polys
         for r in range(P.nrings):
             ring = P.rings[r]
@@ -221,6 +215,7 @@ class Slices:
         out, st, err = PathSet(), L.amp_contpath_stats(), _err()
 
         def go():
+            self._live()
             _check(lib.amp_contpath_layers(ctypes.byref(self._sl), ctypes.byref(o), out._ref, ctypes.byref(st),
                                            ctypes.byref(err)), err)
             out.stats = _todict(st)

@@ -4,7 +4,7 @@ ownership (close, context managers)."""
 import threading
 import unittest
 
-from amptest import TmpCase, ampath, read, tool
+from amptest import TmpCase, ampath, read, strip_comments, tool
 
 try:
     import numpy
@@ -125,6 +125,23 @@ class Stages(TmpCase):
                 t.join()
         self.assertTrue(results[0])
         self.assertEqual(results.count(results[0]), 3)
+
+    def test_field_and_slices_match_the_tool(self):
+        tool("model", "helix", "-o", self.p("h.stl"))
+        tool("field", self.p("h.stl"), "--field", "helix-square", "--spacing", 2, "--samples", 0,
+             "-o", self.p("f.amp"))
+        with ampath.Mesh.load(self.p("h.stl")) as m:
+            with ampath.field(m, "helix-square", spacing=2) as ps:
+                self.assertEqual(strip_comments(ps.to_amp()), strip_comments(read(self.p("f.amp"))))
+                self.assertEqual(ps.stats["pieces"], len(ps))
+            with ampath.Slices(m, 1.0) as sl:
+                layers = sl.layers
+                self.assertEqual(len(sl), len(layers))
+                self.assertGreater(len(layers), 30)
+                self.assertAlmostEqual(layers[0]["z_cut"], 0.5)
+                self.assertTrue(all(r["points"] for L in layers for r in L["rings"]))
+                self.assertGreater(sum(L["area"] for L in layers), 0)
+            self.assertRaises(ampath.Error, len, sl)
 
     def test_printer_profiles(self):
         self.assertIn("generic", ampath.printer_names())
