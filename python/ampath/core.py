@@ -7,6 +7,7 @@ any number of threads may read one PathSet/Trivariate/Mesh at once (the C API's 
 modification (add, close) takes the object's lock.
 """
 
+import contextlib
 import ctypes
 import math
 import os
@@ -115,14 +116,33 @@ def _head(z_offs, theta_deg):
 
 
 class _Owner:
-    """Common close/context-manager/__del__ logic for objects that own C memory."""
+    """Common close/context-manager/__del__ logic for objects that own C memory. A library call reading
+    the object holds it (_using): close() from another thread then waits for the call to return instead
+    of freeing memory under it (ctypes releases the GIL during the call)."""
 
     def __init__(self):
         self._lock = threading.RLock()
+        self._idle = threading.Condition(self._lock)
+        self._users = 0
         self._open = True
+
+    @contextlib.contextmanager
+    def _using(self):
+        with self._lock:
+            self._live()
+            self._users += 1
+        try:
+            yield self
+        finally:
+            with self._lock:
+                self._users -= 1
+                if self._users == 0:
+                    self._idle.notify_all()
 
     def close(self):
         with self._lock:
+            while self._users:
+                self._idle.wait()
             if self._open:
                 self._open = False
                 self._release()
@@ -211,12 +231,15 @@ class PathSet(_Owner):
         return ps
 
     def add(self, points, role="object", radius=None, h=0.0):
-        """Append a path. @points: a sequence (or NumPy array) of (x, y, z, r), or of (x, y, z) with @radius."""
+        """Append a path. @points: a sequence (or NumPy array) of (x, y, z, r), or of (x, y, z) with @radius.
+        Waits for library calls reading this set in other threads (the arrays may move)."""
         if role not in _ROLES:
             _fail("role must be 'object' or 'support'")
         if _np is not None and isinstance(points, _np.ndarray):
             points = points.tolist()
         with self._lock:
+            while self._users:
+                self._idle.wait()
             err = _err()
             _check(lib.amp_pathset_begin(self._ref, _ROLES[role], ctypes.byref(err)), err)
             for p in points:
@@ -233,9 +256,14 @@ class PathSet(_Owner):
 
     def extend(self, other):
         """Append copies of all paths of @other."""
+        if other is self:
+            _fail("extend: a set cannot be appended to itself")
         with self._lock:
-            err = _err()
-            _check(lib.amp_pathset_append(self._ref, other._ref, ctypes.byref(err)), err)
+            while self._users:
+                self._idle.wait()
+            with other._using():
+                err = _err()
+                _check(lib.amp_pathset_append(self._ref, other._ref, ctypes.byref(err)), err)
         return self
 
     def __len__(self):
@@ -288,8 +316,9 @@ class PathSet(_Owner):
 
     def to_amp(self, comment=None):
         """The `.amp` text (SPEC §3) as a str; @comment becomes `# ` lines after the header."""
-        return _to_buf(lambda sink, buf, err: lib.amp_pathset_write(
-            self._ref, None if comment is None else comment.encode(), sink, buf, err)).decode()
+        with self._using():
+            return _to_buf(lambda sink, buf, err: lib.amp_pathset_write(
+                self._ref, None if comment is None else comment.encode(), sink, buf, err)).decode()
 
     def as_written(self):
         """A new PathSet as it would be read back from its `.amp` file (coordinates rounded to the file's
@@ -300,13 +329,25 @@ class PathSet(_Owner):
     def write(self, filename, comment=None):
         """Write the `.amp` file (replaced atomically)."""
         err = _err()
-        _check(lib.amp_pathset_write_file(self._ref, _b(filename), None if comment is None else comment.encode(),
-                                          ctypes.byref(err)), err)
+        with self._using():
+            _check(lib.amp_pathset_write_file(self._ref, _b(filename),
+                                              None if comment is None else comment.encode(), ctypes.byref(err)),
+                   err)
 
     def __repr__(self):
         if not self._open:
             return "PathSet(closed)"
         return "PathSet(%d paths, %d vertices)" % (self._ps.npaths, self._ps.nverts)
+
+
+@contextlib.contextmanager
+def _hold(*objs):
+    """Hold every owned object among @objs for the duration of a library call."""
+    with contextlib.ExitStack() as stack:
+        for o in objs:
+            if isinstance(o, _Owner):
+                stack.enter_context(o._using())
+        yield
 
 
 def _to_buf(write):
@@ -498,6 +539,8 @@ class Mesh(_Owner):
     def orient(self):
         """Make the triangle orientation consistent (outward); returns the number of triangles flipped."""
         with self._lock:
+            while self._users:  # a call reading the mesh (or its BVH) finishes first
+                self._idle.wait()
             n, err = ctypes.c_size_t(), _err()
             _check(lib.amp_mesh_orient(self._ref, ctypes.byref(n), ctypes.byref(err)), err)
             if n.value:

@@ -12,7 +12,8 @@ import math
 
 from . import _lib as L
 from ._lib import lib
-from .core import Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _Owner, _Progress, _todict
+from .core import (Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _hold, _Owner,
+                   _Progress, _todict)
 
 _DIRS = {"u": 0, "v": 1, "w": 2, 0: 0, 1: 1, 2: 2}
 
@@ -23,10 +24,11 @@ def _dir(d):
     return _DIRS[d]
 
 
-def _run(fn, out, progress=None):
-    """Call a stage that appends to @out; free @out on failure."""
+def _run(fn, out, progress=None, inputs=()):
+    """Call a stage that appends to @out, holding its @inputs; free @out on failure."""
     try:
-        fn()
+        with _hold(*inputs):
+            fn()
         if progress is not None:
             progress.done()
     except BaseException:
@@ -54,14 +56,15 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
         _check(lib.amp_cover_trivariate(trivariate._ref, ctypes.byref(o), out._ref, ctypes.byref(st),
                                         ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out, pr)
+    return _run(go, out, pr, (trivariate,))
 
 
 def coverage_gap(trivariate, paths, samples=20000, seed=1):
     """Independent coverage measurement (amp_cover_measure_gap) as a dict."""
     g, err = L.amp_cover_gap(), _err()
-    _check(lib.amp_cover_measure_gap(trivariate._ref, paths._ref, samples, seed, ctypes.byref(g),
-                                     ctypes.byref(err)), err)
+    with _hold(trivariate, paths):
+        _check(lib.amp_cover_measure_gap(trivariate._ref, paths._ref, samples, seed, ctypes.byref(g),
+                                         ctypes.byref(err)), err)
     d = _todict(g)
     d["over_coverage"] = g.deposited / g.volume if g.volume > 0 else 0.0
     return d
@@ -88,7 +91,7 @@ def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
         _check(lib.amp_field_cover(ctypes.byref(f), mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
                                    ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out)
+    return _run(go, out, None, (mesh,))
 
 
 def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts):
@@ -106,7 +109,7 @@ def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts
     def go():
         _check(lib.amp_order(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out, pr)
+    return _run(go, out, pr, (paths,))
 
 
 def mdr(paths, nominal=0.5, progress=None, **opts):
@@ -121,7 +124,7 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
     def go():
         _check(lib.amp_mdr(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out, pr)
+    return _run(go, out, pr, (paths,))
 
 
 def support(paths, mesh, z_offs=0.5, theta_deg=72.0, **opts):
@@ -141,7 +144,7 @@ def support(paths, mesh, z_offs=0.5, theta_deg=72.0, **opts):
         _check(lib.amp_support(paths._ref, mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
                                ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out)
+    return _run(go, out, None, (paths, mesh))
 
 
 # ---------------------------------------------------------------- slicing
@@ -162,7 +165,8 @@ class Slices(_Owner):
         # the slicer chains segments by their direction: the orientation must agree (as the tool does)
         self.flipped = mesh.orient()
         o, err = L.amp_slice_opts(layer, first_layer), _err()
-        st = lib.amp_slice_mesh(mesh._ref, ctypes.byref(o), ctypes.byref(self._sl), ctypes.byref(err))
+        with _hold(mesh):
+            st = lib.amp_slice_mesh(mesh._ref, ctypes.byref(o), ctypes.byref(self._sl), ctypes.byref(err))
         if st:
             self.close()
         _check(st, err)
@@ -219,7 +223,7 @@ class Slices(_Owner):
             _check(lib.amp_contpath_layers(ctypes.byref(self._sl), ctypes.byref(o), out._ref, ctypes.byref(st),
                                            ctypes.byref(err)), err)
             out.stats = _todict(st)
-        return _run(go, out)
+        return _run(go, out, None, (self,))
 
 
 def slice(mesh, layer, first_layer=0.0, continuous=False, radius=0.5, **opts):
@@ -239,6 +243,11 @@ def _planar(path):
 def check(paths, trivariate=None, z_offs=0.5, theta_deg=72.0, eps=None, samples=20000, seed=1):
     """Independent verification as `ampath check` does it, figures as a dict: "coverage" (with a
     trivariate), "gouge" (object paths), "strokes" (planar paths), each with "ran" and "ok", and "ok"."""
+    with _hold(paths, trivariate):
+        return _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed)
+
+
+def _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed):
     res = {}
     h = _head(z_offs, theta_deg)
     if trivariate is not None:
@@ -358,6 +367,11 @@ def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_
     amp_gcode_opts (print_feed, retract_length, z_hop, fan_speed, arcs, ...) overriding the profile's.
     With @output the file is written safely (replaced only after a complete write) and .text is None."""
     o, pr, keep = _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts)
+    with _hold(paths):
+        return _gcode_held(paths, output, o, pr, keep)
+
+
+def _gcode_held(paths, output, o, pr, keep):
     st, err = L.amp_gcode_stats(), _err()
     if output is None:
         from .core import _to_buf

@@ -6,7 +6,7 @@ import os
 
 from . import _lib as L
 from ._lib import lib
-from .core import _check, _err, _fail, _to_buf, _todict
+from .core import _check, _err, _fail, _hold, _to_buf, _todict
 
 
 def preview(paths, format="png", width=1600, output=None, stats=None):
@@ -22,7 +22,8 @@ def preview(paths, format="png", width=1600, output=None, stats=None):
         _fail("format must be 'png' or 'svg'")
     fn = lib.amp_preview_png if format == "png" else lib.amp_preview_svg
     st = L.amp_preview_stats()
-    data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))
+    with _hold(paths):
+        data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))
     if output is not None:
         f, err = L.amp_out(), _err()
         _check(lib.amp_out_open(ctypes.byref(f), os.fsencode(output), ctypes.byref(err)), err)

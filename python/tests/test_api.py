@@ -143,6 +143,35 @@ class Stages(TmpCase):
                 self.assertGreater(sum(L["area"] for L in layers), 0)
             self.assertRaises(ampath.Error, len, sl)
 
+    def test_close_from_another_thread_waits_for_the_call_reading_the_object(self):
+        started, release, closing = threading.Event(), threading.Event(), threading.Event()
+        result = {}
+
+        def hold(_fraction):  # keeps the library call open until the main thread says so
+            started.set()
+            release.wait()
+
+        with ampath.Trivariate.model("helix") as v:
+            ps = ampath.cover(v, eps=3)
+        worker = threading.Thread(target=lambda: result.setdefault("out", ampath.order(ps, progress=hold)))
+        worker.start()
+        self.assertTrue(started.wait(600))
+
+        def close():
+            closing.set()
+            ps.close()
+        closer = threading.Thread(target=close)
+        closer.start()
+        self.assertTrue(closing.wait(600))
+        closer.join(0.5)
+        self.assertTrue(closer.is_alive(), "close() freed the paths while order() was reading them")
+        release.set()
+        worker.join()
+        closer.join()
+        with result["out"] as out:
+            self.assertGreater(len(out), 0)
+        self.assertRaises(ampath.Error, len, ps)
+
     def test_printer_profiles(self):
         self.assertIn("generic", ampath.printer_names())
         p = ampath.Printer("voron-350")
