@@ -112,7 +112,7 @@ class Stages(TmpCase):
             self.assertEqual(res["gouge"]["violation"]["later_path"], 1)
 
     def test_stages_in_threads_give_the_same_paths(self):
-        with ampath.Trivariate.model("helix") as v, ampath.cover(v, eps=2) as ps:
+        with ampath.Trivariate.model("helix") as v, ampath.cover(v, eps=3) as ps:
             results = [None] * 3
 
             def run(i):
