@@ -92,6 +92,30 @@ int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, siz
     return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
 }
 
+/* q is inside the head printing p, beyond the tolerance (SPEC §2) */
+static int point_clear(double zo, double k, amp_vec3 p, amp_vec3 q)
+{
+    double dz = q.z - p.z - zo - AMP_CONE_TOL, dx = q.x - p.x, dy = q.y - p.y;
+    return dz > 0.0 && dz * dz > k * k * (dx * dx + dy * dy);
+}
+
+/* Box bound of the clearance between segment [a0, a1] and a box: may the cone over the segment reach it? */
+static int seg_may_see(double zo, double k, amp_vec3 a0, amp_vec3 a1, const amp_box3 *b)
+{
+    double lo = a0.z < a1.z ? a0.z : a1.z, room = b->max.z - lo - zo - AMP_CONE_TOL, gx, gy, ex, ey;
+    if (room <= 0.0)
+        return 0;
+    gx = (a0.x < a1.x ? a0.x : a1.x) - b->max.x;
+    ex = b->min.x - (a0.x > a1.x ? a0.x : a1.x);
+    gy = (a0.y < a1.y ? a0.y : a1.y) - b->max.y;
+    ey = b->min.y - (a0.y > a1.y ? a0.y : a1.y);
+    gx = gx > ex ? gx : ex;
+    gy = gy > ey ? gy : ey;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    return room * room > k * k * (gx * gx + gy * gy);
+}
+
 int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b)
 {
     const amp_fragment *fa = &fs->frag[a], *fb = &fs->frag[b];
@@ -101,10 +125,18 @@ int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a,
     /* box bound of the clearance: highest point of b over lowest of a, nearest in xy */
     if (fb->box.max.z - fa->box.min.z - zo - k * amp_box_xy_gap(fa->box, fb->box) <= AMP_CONE_TOL)
         return 0;
+    /* quick accept: the clearance of two segments is at least that of any two of their points, and the
+     * fragment ends usually show a blocker far below at once */
+    if (point_clear(zo, k, fa->p0, fb->p0) || point_clear(zo, k, fa->p0, fb->p1) ||
+        point_clear(zo, k, fa->p1, fb->p0) || point_clear(zo, k, fa->p1, fb->p1))
+        return 1;
     na = amp_fragment_npoints(fa);
     nb = amp_fragment_npoints(fb);
     for (i = 0; i + 1 < na; i++) {
         amp_vec3 a0 = amp_fragment_point(fs, fa, i), a1 = amp_fragment_point(fs, fa, i + 1);
+        /* the box bound again for this segment of a against all of b */
+        if (!seg_may_see(zo, k, a0, a1, &fb->box))
+            continue;
         for (j = 0; j + 1 < nb; j++) {
             amp_vec3 b0 = amp_fragment_point(fs, fb, j), b1 = amp_fragment_point(fs, fb, j + 1);
             if (amp_cone_clearance_k(zo, k, a0, a1, b0, b1) > AMP_CONE_TOL)

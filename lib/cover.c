@@ -25,6 +25,13 @@ void amp_cover_opts_default(amp_cover_opts *o)
     o->progress_user = NULL;
 }
 
+double amp_over_coverage(const amp_pathset *ps, double model_volume)
+{
+    if (!ps || !(model_volume > 0.0) || !isfinite(model_volume))
+        return NAN;
+    return amp_pathset_volume(ps, AMP_ROLE_OBJECT) / model_volume;
+}
+
 typedef struct ctx {
     const amp_spline *v; /* the trivariate */
     amp_spline ref;      /* v with every cell boundary of the two surface directions as a knot (arc-length bounds) */

@@ -86,12 +86,14 @@ static double nearest(const seggrid *g, amp_vec3 p)
         if (r > 0 && best2 < HUGE_VAL && sqrt(best2) <= (r - 1) * g->h)
             break;
         for (z = c[2] - r; z <= c[2] + r; z++)
-            for (y = c[1] - r; y <= c[1] + r; y++)
-                for (x = c[0] - r; x <= c[0] + r; x++) {
+            for (y = c[1] - r; y <= c[1] + r; y++) {
+                /* a row inside the ring's faces meets the ring at its two ends only */
+                int face = abs(z - c[2]) == r || abs(y - c[1]) == r, step = face || r == 0 ? 1 : 2 * r;
+                if (y < 0 || z < 0 || y >= g->n[1] || z >= g->n[2])
+                    continue;
+                for (x = c[0] - r; x <= c[0] + r; x += step) {
                     size_t id, k;
-                    if (x < 0 || y < 0 || z < 0 || x >= g->n[0] || y >= g->n[1] || z >= g->n[2])
-                        continue;
-                    if (abs(x - c[0]) != r && abs(y - c[1]) != r && abs(z - c[2]) != r)
+                    if (x < 0 || x >= g->n[0])
                         continue;
                     id = (size_t)x + (size_t)g->n[0] * ((size_t)y + (size_t)g->n[1] * (size_t)z);
                     for (k = g->start[id]; k < g->start[id + 1]; k++) {
@@ -100,6 +102,7 @@ static double nearest(const seggrid *g, amp_vec3 p)
                         best2 = d2 < best2 ? d2 : best2;
                     }
                 }
+            }
     }
     return sqrt(best2);
 }
@@ -119,7 +122,7 @@ static amp_status build_grid(seggrid *g, const amp_pathset *ps, amp_box3 box, co
     box = amp_box3_inflate(box, 1e-6);
     sz = amp_box3_size(box);
     vol = fmax(sz.x, 1e-3) * fmax(sz.y, 1e-3) * fmax(sz.z, 1e-3);
-    g->h = cbrt(vol / (double)nseg) * 1.5;
+    g->h = cbrt(vol / (double)nseg) * 0.75;
     g->h = fmax(g->h, fmax(fmax(sz.x, sz.y), sz.z) / 200);
     g->o = box.min;
     g->n[0] = (int)(sz.x / g->h) + 1;

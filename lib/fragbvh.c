@@ -193,6 +193,70 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     return found;
 }
 
+/* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins. */
+static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                  const unsigned char *done, uint32_t root, uint32_t skip)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0;
+    const amp_fragment *fr = &fs->frag[f];
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
+    stack[top++] = root;
+    while (top) {
+        uint32_t id = stack[--top];
+        const amp_fbvh_node *nd = &b->node[id];
+        double room = reach - nd->minz, gx, gy, ex, ey;
+        /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
+        if (room <= 0.0 || id == skip)
+            continue;
+        gx = nd->box.min.x - fr->box.max.x;
+        ex = fr->box.min.x - nd->box.max.x;
+        gy = nd->box.min.y - fr->box.max.y;
+        ey = fr->box.min.y - nd->box.max.y;
+        gx = gx > ex ? gx : ex;
+        gy = gy > ey ? gy : ey;
+        gx = gx > 0.0 ? gx : 0.0;
+        gy = gy > 0.0 ? gy : 0.0;
+        if (k * k * (gx * gx + gy * gy) >= room * room)
+            continue;
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if (g != f && !done[g] && amp_fragment_below_k(fs, zo, k, g, f))
+                    return g;
+            }
+        } else if (top + 2 <= STACK_MAX) {
+            /* the lower child first: blockers lie below */
+            const amp_fbvh_node *l = &b->node[nd->left], *r = &b->node[nd->right];
+            if (l->minz < r->minz) {
+                stack[top++] = nd->right;
+                stack[top++] = nd->left;
+            } else {
+                stack[top++] = nd->left;
+                stack[top++] = nd->right;
+            }
+        }
+    }
+    return AMP_FBVH_NONE;
+}
+
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                 const unsigned char *done, uint32_t near)
+{
+    uint32_t id, prev = AMP_FBVH_NONE;
+    if (b->nnodes == 0)
+        return AMP_FBVH_NONE;
+    /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
+     * near it are tried first and the whole tree is covered once the root is reached */
+    for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
+        uint32_t g = subtree_any_below(b, fs, zo, k, f, done, id, prev);
+        if (g != AMP_FBVH_NONE)
+            return g;
+    }
+    return AMP_FBVH_NONE;
+}
+
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
                           int (*cb)(void *user, uint32_t g), void *user)
 {

@@ -45,6 +45,13 @@ void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned ch
 uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
                              const unsigned char *done, size_t *tests);
 
+/* Some fragment g != f not done below f (head: tip height zo, k = cot(theta)), AMP_FBVH_NONE if none;
+ * searched outwards from the leaf of @p near (f itself when AMP_FBVH_NONE), so a blocker close to @p near is
+ * found first. Any blocker will do: this is the cheap form of amp_fbvh_find_below for Algorithm 2's waiting
+ * lists. */
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                 const unsigned char *done, uint32_t near);
+
 /* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
  * Returns the number of fragments reported. */
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,

@@ -110,7 +110,7 @@ static amp_status ugrid_build(ugrid *g, const amp_allocator *a, const amp_vec3 *
         g->nx = (size_t)(sz.x / cell) + 1;
         g->ny = (size_t)(sz.y / cell) + 1;
         g->nz = (size_t)(sz.z / cell) + 1;
-        if ((double)g->nx * (double)g->ny * (double)g->nz <= 4.0 * (double)n + 64.0)
+        if ((double)g->nx * (double)g->ny * (double)g->nz <= 8.0 * (double)n + 64.0)
             break;
         cell *= 1.5; /* keep the grid linear in the input: coarser cells, more candidates each */
     }
@@ -140,11 +140,6 @@ static void ugrid_free(ugrid *g, const amp_allocator *a)
     amp_free(a, g->start);
     amp_free(a, g->item);
 }
-
-typedef struct nb {
-    uint32_t other;
-    double d;
-} nb;
 
 typedef struct hent {
     double key;
@@ -188,25 +183,388 @@ static hent hpop(hent *h, size_t *n)
     return top;
 }
 
+/*
+ * Which neighbour pairs can matter (§5.2 growth). A pair at distance d stops a tube at d/2 when both grow,
+ * at d - r' when the other one stopped first at r'; that r' is at most max(d/2, r_min) (the other tube
+ * stopped while this one still grew, then was raised to r_min). So the pair's event lies in
+ * [min(d/2, d - r_min), max(d/2, d - r_min)]. A tube stops by U = min(r_max, min over its pairs of the upper
+ * end), and a pair whose lower end exceeds U can never stop it: only d <= max(2U, U + r_min) is kept. The
+ * growth over the kept pairs is exactly the growth over all pairs within 2 r_max, with a bounded number of
+ * neighbours per tube instead of every fragment within 2 r_max (57 M pairs at eps 0.5 on the helix).
+ */
+typedef struct mdr_ctx {
+    const amp_allocator *a;
+    const amp_fragments *fs;
+    const amp_mdr_opts *o;
+    ugrid g;
+    amp_vec3 *ctr;
+    amp_vec3 *gpts; /* ctr in the grid's item order */
+    double *rho;   /* half the box diagonal: every point of the fragment is this close to its centre */
+    double *arc;   /* arc length at each fragment's end along its path */
+    double rho_max, reach;
+    amp_error *err;
+} mdr_ctx;
+
+static double pair_upper(const mdr_ctx *c, double d) { return fmax(0.5 * d, d - c->o->r_min); }
+
+/* Fragments i and j may be neighbours at all: along one path only parts further apart than 2 r_max count. */
+static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j)
+{
+    const amp_fragments *fs = c->fs;
+    if (i == j)
+        return 0;
+    if (fs->frag[i].path == fs->frag[j].path) {
+        uint32_t lo = i < j ? i : j, hi = i < j ? j : i;
+        return c->arc[hi - 1] - c->arc[lo] >= c->reach;
+    }
+    return 1;
+}
+
+/* Visit the fragments whose centres lie within @p R of fragment i's centre (cells nearest first in z-y-x order
+ * of a box). Calls back with the centre distance; stops when the callback returns non-zero. */
+typedef int (*nb_visit)(mdr_ctx *c, uint32_t i, uint32_t j, double cdist, void *user);
+
+static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, nb_visit cb, void *user)
+{
+    const ugrid *g = &c->g;
+    amp_vec3 p = c->ctr[i];
+    size_t x0, y0, z0, x1, y1, z1, y, z;
+    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
+    cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
+    cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
+    for (z = z0; z <= z1; z++)
+        for (y = y0; y <= y1; y++) {
+            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
+            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
+            for (q = g->start[row + x0]; q < qe; q++) {
+                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= R2 && d2 > s2 && cb(c, i, g->item[q], sqrt(d2), user))
+                    return;
+            }
+        }
+}
+
+/* One tube's neighbour search: the bound U so far, the distance kept (max(2U, U + r_min)), the ball already
+ * searched, and where the kept neighbours go (a caller's buffer; overflow is flagged, not grown, so that the
+ * search may run on any thread without allocating). */
+typedef struct scan_state {
+    double u, cut, done_r;
+    uint32_t *other;
+    double *dist;
+    size_t n, cap;
+    int overflow;
+} scan_state;
+
+static double cut_of(const mdr_ctx *c, double u) { return fmin(c->reach, fmax(2.0 * u, u + c->o->r_min)); }
+
+/* Squared distance between two boxes: a lower bound of the fragments' distance. */
+static double box_dist2(const amp_box3 *a, const amp_box3 *b)
+{
+    double gx = a->min.x - b->max.x, gy = a->min.y - b->max.y, gz = a->min.z - b->max.z;
+    double hx = b->min.x - a->max.x, hy = b->min.y - a->max.y, hz = b->min.z - a->max.z;
+    gx = gx > hx ? gx : hx;
+    gy = gy > hy ? gy : hy;
+    gz = gz > hz ? gz : hz;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    gz = gz > 0.0 ? gz : 0.0;
+    return gx * gx + gy * gy + gz * gz;
+}
+
+static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
+{
+    scan_state *s = user;
+    double d;
+    if (cd - c->rho[i] - c->rho[j] > s->cut || box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) >
+                                                                         s->cut * s->cut || !pair_allowed(c, i, j))
+        return 0;
+    d = frag_dist(c->fs, i, j);
+    if (d >= c->reach)
+        return 0;
+    if (pair_upper(c, d) < s->u) {
+        s->u = pair_upper(c, d);
+        s->cut = cut_of(c, s->u);
+    }
+    if (d <= s->cut) {
+        if (s->n == s->cap) {
+            s->overflow = 1;
+            return 1;
+        }
+        s->other[s->n] = j;
+        s->dist[s->n++] = d;
+    }
+    return 0;
+}
+
+/* The neighbours tube i keeps (d <= max(2U, U + r_min)), searched in growing balls: every fragment within
+ * d of i has its centre within d + rho_i + rho_max, so the search ends once the ball reaches that for the
+ * current distance kept. Returns 0 on buffer overflow. */
+static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
+{
+    double R = 0.5 * c->o->nominal + c->rho[i] + c->rho_max, need;
+    size_t k, m = 0;
+    s->u = c->o->r_max;
+    s->cut = c->reach;
+    s->done_r = -1.0;
+    s->n = 0;
+    s->overflow = 0;
+    for (;;) {
+        for_near(c, i, R, s->done_r, scan_visit, s);
+        if (s->overflow)
+            return 0;
+        need = s->cut + c->rho[i] + c->rho_max;
+        if (R >= need)
+            break;
+        s->done_r = R;
+        R = need;
+    }
+    for (k = 0; k < s->n; k++)
+        if (s->dist[k] <= s->cut) {
+            s->other[m] = s->other[k];
+            s->dist[m++] = s->dist[k];
+        }
+    s->n = m;
+    return 1;
+}
+
+/* Neighbour lists in compressed rows: tube i keeps other[row[i] .. row[i+1]-1] (the pairs that can stop it,
+ * with their distances); rother[rrow[i] ..] are the tubes that keep i (those i's stop may concern). */
+typedef struct nbrs {
+    size_t *row, *rrow;
+    uint32_t *other, *rother;
+    double *dist, *rdist;
+    size_t n, cap;
+} nbrs;
+
+static amp_status nbrs_append(mdr_ctx *c, nbrs *nb, const uint32_t *other, const double *dist, size_t n)
+{
+    if (n == 0)
+        return AMP_OK;
+    if (nb->n + n > nb->cap) {
+        void *p = nb->other, *q = nb->dist;
+        size_t cap = nb->cap;
+        if (amp_grow(c->a, &p, &cap, nb->n + n, sizeof *nb->other) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        nb->other = p;
+        cap = nb->cap;
+        if (amp_grow(c->a, &q, &cap, nb->n + n, sizeof *nb->dist) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        nb->dist = q;
+        nb->cap = cap;
+    }
+    memcpy(nb->other + nb->n, other, n * sizeof *other);
+    memcpy(nb->dist + nb->n, dist, n * sizeof *dist);
+    nb->n += n;
+    return AMP_OK;
+}
+
+#define SCAN_CHUNK 16384
+#define SCAN_PER_TUBE 32
+
+/* The reverse lists (who keeps whom), by counting. */
+static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
+{
+    size_t i, q, nf = c->fs->n, *fill;
+    nb->rrow = amp_calloc(c->a, nf + 1, sizeof *nb->rrow);
+    nb->rother = amp_calloc(c->a, nb->n + 1, sizeof *nb->rother);
+    nb->rdist = amp_calloc(c->a, nb->n + 1, sizeof *nb->rdist);
+    fill = amp_calloc(c->a, nf + 1, sizeof *fill);
+    if (!nb->rrow || !nb->rother || !nb->rdist || !fill) {
+        amp_free(c->a, fill);
+        return AMP_ERR_NOMEM;
+    }
+    for (q = 0; q < nb->n; q++)
+        nb->rrow[nb->other[q] + 1]++;
+    for (i = 0; i < nf; i++)
+        nb->rrow[i + 1] += nb->rrow[i];
+    memcpy(fill, nb->rrow, (nf + 1) * sizeof *fill);
+    for (i = 0; i < nf; i++)
+        for (q = nb->row[i]; q < nb->row[i + 1]; q++) {
+            size_t at = fill[nb->other[q]]++;
+            nb->rother[at] = (uint32_t)i;
+            nb->rdist[at] = nb->dist[q];
+        }
+    amp_free(c->a, fill);
+    return AMP_OK;
+}
+
+/*
+ * Every tube's kept neighbours. Tubes are searched in chunks of SCAN_CHUNK (few parallel regions), in parallel
+ * (OpenMP): each search writes into a fixed slice of a buffer allocated beforehand, and the chunk is appended
+ * in tube order afterwards, so the lists are the same whatever the thread count. A tube whose slice
+ * overflows is searched again alone.
+ */
+static amp_status find_neighbours(mdr_ctx *c, nbrs *nb)
+{
+    size_t nf = c->fs->n, base, slot = SCAN_CHUNK * SCAN_PER_TUBE;
+    uint32_t *bo = amp_calloc(c->a, slot, sizeof *bo);
+    double *bd = amp_calloc(c->a, slot, sizeof *bd);
+    size_t *cnt = amp_calloc(c->a, SCAN_CHUNK, sizeof *cnt);
+    amp_status st = AMP_OK;
+    nb->row = amp_calloc(c->a, nf + 1, sizeof *nb->row);
+    if (!bo || !bd || !cnt || !nb->row)
+        st = AMP_ERR_NOMEM;
+    for (base = 0; base < nf && st == AMP_OK; base += SCAN_CHUNK) {
+        long k, m = (long)(nf - base < SCAN_CHUNK ? nf - base : SCAN_CHUNK);
+        if (c->o->progress)
+            c->o->progress(c->o->progress_user, 0.5 * (double)base / (double)nf);
+#pragma omp parallel for schedule(dynamic, 16)
+        for (k = 0; k < m; k++) {
+            scan_state s;
+            s.other = bo + (size_t)k * SCAN_PER_TUBE;
+            s.dist = bd + (size_t)k * SCAN_PER_TUBE;
+            s.cap = SCAN_PER_TUBE;
+            cnt[k] = scan_tube(c, (uint32_t)(base + (size_t)k), &s) ? s.n : (size_t)-1;
+        }
+        for (k = 0; k < m && st == AMP_OK; k++) {
+            size_t i = base + (size_t)k;
+            if (cnt[k] == (size_t)-1) {
+                /* a crowded tube: search again with room for every candidate */
+                scan_state s;
+                size_t cap = SCAN_PER_TUBE;
+                memset(&s, 0, sizeof s);
+                do {
+                    amp_free(c->a, s.other);
+                    amp_free(c->a, s.dist);
+                    cap *= 4;
+                    s.other = amp_calloc(c->a, cap, sizeof *s.other);
+                    s.dist = amp_calloc(c->a, cap, sizeof *s.dist);
+                    s.cap = cap;
+                } while (s.other && s.dist && !scan_tube(c, (uint32_t)i, &s));
+                st = s.other && s.dist ? nbrs_append(c, nb, s.other, s.dist, s.n) : AMP_ERR_NOMEM;
+                amp_free(c->a, s.other);
+                amp_free(c->a, s.dist);
+            } else {
+                st = nbrs_append(c, nb, bo + (size_t)k * SCAN_PER_TUBE, bd + (size_t)k * SCAN_PER_TUBE, cnt[k]);
+            }
+            nb->row[i + 1] = nb->n;
+        }
+    }
+    amp_free(c->a, bo);
+    amp_free(c->a, bd);
+    amp_free(c->a, cnt);
+    if (st == AMP_OK)
+        st = nbrs_reverse(c, nb);
+    return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
+}
+
+/* The tube's stopping radius now: the earliest event over its pairs (d/2 with a growing neighbour, d - r'
+ * with one stopped at r'), at most r_max. */
+static double tube_key(const mdr_ctx *c, const nbrs *nb, const unsigned char *frozen, const double *r, size_t f)
+{
+    double key = c->o->r_max;
+    size_t q;
+    for (q = nb->row[f]; q < nb->row[f + 1]; q++)
+        key = fmin(key, frozen[nb->other[q]] ? nb->dist[q] - r[nb->other[q]] : 0.5 * nb->dist[q]);
+    return key;
+}
+
+/* §5.2: all tubes grow together, event by event. A tube's key only rises when a neighbour stops at r' <= d/2,
+ * so it is recomputed when popped (and pushed back if it rose); a neighbour raised to r_min may lower it,
+ * and only then is it pushed again. */
+static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *frozen, double *sched,
+                       amp_mdr_stats *s)
+{
+    const amp_mdr_opts *o = c->o;
+    size_t i, nh = 0, caph = 0, nfrozen = 0, n = c->fs->n;
+    hent *heap = NULL;
+    amp_status st = AMP_OK;
+    for (i = 0; i < n && st == AMP_OK; i++) {
+        if (nb->row[i] == nb->row[i + 1]) {
+            frozen[i] = 1;
+            r[i] = fmin(fmax(o->nominal, o->r_min), o->r_max);
+            s->isolated++;
+            continue;
+        }
+        sched[i] = tube_key(c, nb, frozen, r, i);
+        st = hpush(c->a, &heap, &nh, &caph, sched[i], (uint32_t)i);
+    }
+    while (nh && st == AMP_OK) {
+        hent e = hpop(heap, &nh);
+        size_t q;
+        double key;
+        if (frozen[e.f] || e.key != sched[e.f])
+            continue;
+        key = tube_key(c, nb, frozen, r, e.f);
+        if (key > e.key * (1 + 1e-12) + 1e-15) {
+            /* a neighbour stopped earlier, so this tube touches it later than the pair's midpoint */
+            sched[e.f] = key;
+            st = hpush(c->a, &heap, &nh, &caph, key, e.f);
+            continue;
+        }
+        frozen[e.f] = 1;
+        if (o->progress && (++nfrozen & 4095) == 0)
+            o->progress(o->progress_user, 0.5 + 0.5 * (double)nfrozen / (double)n);
+        if (key >= o->r_max)
+            s->at_max++;
+        if (key < o->r_min * (1 - 1e-9))
+            s->at_min++;
+        r[e.f] = fmin(fmax(key, o->r_min), o->r_max);
+        for (q = nb->rrow[e.f]; q < nb->rrow[e.f + 1] && st == AMP_OK; q++) {
+            uint32_t nbo = nb->rother[q];
+            double ev = fmax(0.0, nb->rdist[q] - r[e.f]);
+            if (!frozen[nbo] && ev < sched[nbo]) {
+                sched[nbo] = ev;
+                st = hpush(c->a, &heap, &nh, &caph, ev, nbo);
+            }
+        }
+    }
+    amp_free(c->a, heap);
+    return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for the growth queue");
+}
+
+/* Output: cut points become vertices; a cut point takes the smaller radius of its two fragments. */
+static amp_status mdr_emit(const amp_fragments *fs, const amp_pathset *in, const double *r, amp_pathset *out,
+                           amp_mdr_stats *s, amp_error *err)
+{
+    amp_status stt = AMP_OK;
+    size_t i;
+    s->r_lo = HUGE_VAL;
+    s->r_hi = 0.0;
+    for (i = 0; i < in->npaths && stt == AMP_OK; i++) {
+        size_t f;
+        if (in->paths[i].n == 0)
+            continue;
+        stt = amp_pathset_begin(out, in->paths[i].role, err);
+        for (f = fs->first[i]; stt == AMP_OK && f < fs->first[i + 1]; f++) {
+            const amp_fragment *fr = &fs->frag[f];
+            size_t q;
+            s->r_lo = fmin(s->r_lo, r[f]);
+            s->r_hi = fmax(s->r_hi, r[f]);
+            if (f == fs->first[i])
+                stt = amp_pathset_push(out, fr->p0, r[f], err);
+            for (q = 0; stt == AMP_OK && q < fr->nin; q++)
+                stt = amp_pathset_push(out, in->verts[fr->vfirst + q].p, r[f], err);
+            if (stt == AMP_OK && in->paths[i].n > 1)
+                stt = amp_pathset_push(out, fr->p1, f + 1 < fs->first[i + 1] ? fmin(r[f], r[f + 1]) : r[f], err);
+        }
+    }
+    if (stt == AMP_OK)
+        s->deposited = amp_pathset_volume(out, -1);
+    if (fs->n == 0)
+        s->r_lo = 0.0;
+    return stt;
+}
+
 amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *out, amp_mdr_stats *st,
                    amp_error *err)
 {
-    const amp_allocator *a = out->alloc;
+    const amp_allocator *a;
     amp_fragments fs;
     amp_mdr_stats s;
-    ugrid g;
-    amp_vec3 *ctr = NULL;
-    size_t *row = NULL, npairs = 0, cap_pairs = 0, i, nh = 0, caph = 0, nfrozen = 0;
-    nb *adj = NULL;
-    uint32_t(*pairs)[2] = NULL;
-    double *pd = NULL, *r = NULL, reach;
+    mdr_ctx c;
+    nbrs nb;
+    size_t i;
+    double *r = NULL, *sched = NULL;
     unsigned char *frozen = NULL;
-    hent *heap = NULL;
     amp_status stt;
-    memset(&s, 0, sizeof s);
-    memset(&g, 0, sizeof g);
     if (!in || !o || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_mdr: NULL argument");
+    a = out->alloc;
+    memset(&s, 0, sizeof s);
+    memset(&c, 0, sizeof c);
+    memset(&nb, 0, sizeof nb);
     if (!(o->nominal > 0.0) || !isfinite(o->nominal) || !(o->fragment > 0.0) || !isfinite(o->fragment))
         return amp_fail(err, AMP_ERR_RANGE, 0, "nominal radius and fragment length must be positive (got %g, %g)",
                         o->nominal, o->fragment);
@@ -215,179 +573,60 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
     if ((stt = amp_fragments_build(&fs, in, o->fragment, a, err)) != AMP_OK)
         return stt;
     s.fragments = fs.n;
-    reach = 2.0 * o->r_max;
-    ctr = amp_calloc(a, fs.n ? fs.n : 1, sizeof *ctr);
+    c.a = a;
+    c.fs = &fs;
+    c.o = o;
+    c.err = err;
+    c.reach = 2.0 * o->r_max;
+    c.ctr = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.ctr);
+    c.rho = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.rho);
+    c.arc = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.arc);
     r = amp_calloc(a, fs.n ? fs.n : 1, sizeof *r);
+    sched = amp_calloc(a, fs.n ? fs.n : 1, sizeof *sched);
     frozen = amp_calloc(a, fs.n ? fs.n : 1, 1);
-    row = amp_calloc(a, fs.n + 1, sizeof *row);
-    if (!ctr || !r || !frozen || !row) {
+    if (!c.ctr || !c.rho || !c.arc || !r || !sched || !frozen) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu tubes", (unsigned long)fs.n);
         goto done;
     }
     for (i = 0; i < fs.n; i++) {
-        ctr[i] = amp_box3_center(fs.frag[i].box);
-        /* r[] holds the arc length at each fragment's end until the growth starts */
-        r[i] = (i > 0 && fs.frag[i - 1].path == fs.frag[i].path ? r[i - 1] : 0.0) + frag_length(&fs, i);
+        c.ctr[i] = amp_box3_center(fs.frag[i].box);
+        c.rho[i] = 0.5 * amp_v3_len(amp_box3_size(fs.frag[i].box));
+        c.rho_max = fmax(c.rho_max, c.rho[i]);
+        c.arc[i] = (i > 0 && fs.frag[i - 1].path == fs.frag[i].path ? c.arc[i - 1] : 0.0) + frag_length(&fs, i);
     }
-    /* neighbour pairs: fragment centres within reach + one fragment length (each reaches half of it) */
-    if ((stt = ugrid_build(&g, a, ctr, fs.n, reach + o->fragment, err)) != AMP_OK)
+    /* cells about a fragment long: the searches reach only a few cells beyond the nearest neighbour */
+    if ((stt = ugrid_build(&c.g, a, c.ctr, fs.n, fmax(o->fragment, 2.0 * c.rho_max), err)) != AMP_OK)
         goto done;
-    for (i = 0; i < fs.n; i++) {
-        size_t ix, iy, iz, x, y, z;
-        if (o->progress && (i & 4095) == 0) /* finding neighbours: the first half of the work */
-            o->progress(o->progress_user, 0.5 * (double)i / (double)fs.n);
-        cell_of(&g, ctr[i], &ix, &iy, &iz);
-        for (z = iz ? iz - 1 : 0; z <= iz + 1 && z < g.nz; z++)
-            for (y = iy ? iy - 1 : 0; y <= iy + 1 && y < g.ny; y++)
-                for (x = ix ? ix - 1 : 0; x <= ix + 1 && x < g.nx; x++) {
-                    size_t c = (z * g.ny + y) * g.nx + x, q;
-                    for (q = g.start[c]; q < g.start[c + 1]; q++) {
-                        uint32_t j = g.item[q];
-                        double d;
-                        if (j <= i)
-                            continue;
-                        /* along one path the tube is continuous: only parts further apart than 2 r_max count */
-                        if (fs.frag[i].path == fs.frag[j].path && r[j - 1] - r[i] < reach)
-                            continue;
-                        if (amp_v3_dist(ctr[i], ctr[j]) > reach + o->fragment)
-                            continue;
-                        d = frag_dist(&fs, i, j);
-                        if (d >= reach)
-                            continue;
-                        {
-                            void *pp = pairs, *dd = pd;
-                            size_t c2 = cap_pairs;
-                            if (amp_grow(a, &pp, &c2, npairs + 1, sizeof *pairs) != AMP_OK) {
-                                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
-                                goto done;
-                            }
-                            pairs = pp;
-                            c2 = cap_pairs;
-                            if (amp_grow(a, &dd, &c2, npairs + 1, sizeof *pd) != AMP_OK) {
-                                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
-                                goto done;
-                            }
-                            pd = dd;
-                            cap_pairs = c2;
-                        }
-                        pairs[npairs][0] = (uint32_t)i;
-                        pairs[npairs][1] = j;
-                        pd[npairs++] = d;
-                        row[i + 1]++;
-                        row[j + 1]++;
-                    }
-                }
+    c.gpts = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.gpts);
+    if (!c.gpts) {
+        stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu tubes", (unsigned long)fs.n);
+        goto done;
     }
-    s.pairs = npairs;
     for (i = 0; i < fs.n; i++)
-        row[i + 1] += row[i];
-    adj = amp_calloc(a, 2 * npairs + 1, sizeof *adj);
-    if (!adj) {
-        stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
+        c.gpts[i] = c.ctr[c.g.item[i]];
+    if ((stt = find_neighbours(&c, &nb)) != AMP_OK)
         goto done;
-    }
-    {
-        size_t *fill = amp_calloc(a, fs.n + 1, sizeof *fill);
-        if (!fill) {
-            stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
-            goto done;
-        }
-        memcpy(fill, row, (fs.n + 1) * sizeof *fill);
-        for (i = 0; i < npairs; i++) {
-            adj[fill[pairs[i][0]]].other = pairs[i][1];
-            adj[fill[pairs[i][0]]++].d = pd[i];
-            adj[fill[pairs[i][1]]].other = pairs[i][0];
-            adj[fill[pairs[i][1]]++].d = pd[i];
-        }
-        amp_free(a, fill);
-    }
-    memset(r, 0, fs.n * sizeof *r);
-    /* §5.2: all tubes grow together; an event is a tube touching another (d/2 if both grow, d - r if one stopped) */
-    for (i = 0; i < fs.n; i++) {
-        size_t q;
-        double key = o->r_max;
-        if (row[i] == row[i + 1]) {
-            frozen[i] = 1;
-            r[i] = fmin(fmax(o->nominal, o->r_min), o->r_max);
-            s.isolated++;
-            continue;
-        }
-        for (q = row[i]; q < row[i + 1]; q++)
-            key = fmin(key, 0.5 * adj[q].d);
-        if (hpush(a, &heap, &nh, &caph, key, (uint32_t)i) != AMP_OK) {
-            stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the growth queue");
-            goto done;
-        }
-    }
-    while (nh) {
-        hent e = hpop(heap, &nh);
-        size_t q;
-        double key = o->r_max;
-        if (frozen[e.f])
-            continue;
-        for (q = row[e.f]; q < row[e.f + 1]; q++)
-            key = fmin(key, frozen[adj[q].other] ? adj[q].d - r[adj[q].other] : 0.5 * adj[q].d);
-        if (key > e.key * (1 + 1e-12) + 1e-15) {
-            /* a neighbour stopped earlier, so this tube touches it later than the pair's midpoint */
-            if (hpush(a, &heap, &nh, &caph, key, e.f) != AMP_OK) {
-                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the growth queue");
-                goto done;
-            }
-            continue;
-        }
-        frozen[e.f] = 1;
-        if (o->progress && (++nfrozen & 4095) == 0)
-            o->progress(o->progress_user, 0.5 + 0.5 * (double)nfrozen / (double)fs.n);
-        if (key >= o->r_max)
-            s.at_max++;
-        if (key < o->r_min * (1 - 1e-9))
-            s.at_min++;
-        r[e.f] = fmin(fmax(key, o->r_min), o->r_max);
-        for (q = row[e.f]; q < row[e.f + 1]; q++) {
-            uint32_t nbo = adj[q].other;
-            if (!frozen[nbo] && hpush(a, &heap, &nh, &caph, fmax(0.0, adj[q].d - r[e.f]), nbo) != AMP_OK) {
-                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the growth queue");
-                goto done;
-            }
-        }
-    }
-    /* output: cut points become vertices; a cut point takes the smaller radius of its two fragments */
-    s.r_lo = HUGE_VAL;
-    s.r_hi = 0.0;
-    for (i = 0; i < in->npaths && stt == AMP_OK; i++) {
-        size_t f;
-        if (in->paths[i].n == 0)
-            continue;
-        stt = amp_pathset_begin(out, in->paths[i].role, err);
-        for (f = fs.first[i]; stt == AMP_OK && f < fs.first[i + 1]; f++) {
-            const amp_fragment *fr = &fs.frag[f];
-            size_t q;
-            s.r_lo = fmin(s.r_lo, r[f]);
-            s.r_hi = fmax(s.r_hi, r[f]);
-            if (f == fs.first[i])
-                stt = amp_pathset_push(out, fr->p0, r[f], err);
-            for (q = 0; stt == AMP_OK && q < fr->nin; q++)
-                stt = amp_pathset_push(out, in->verts[fr->vfirst + q].p, r[f], err);
-            if (stt == AMP_OK && in->paths[i].n > 1)
-                stt = amp_pathset_push(out, fr->p1, f + 1 < fs.first[i + 1] ? fmin(r[f], r[f + 1]) : r[f], err);
-        }
-    }
-    if (stt == AMP_OK)
-        s.deposited = amp_pathset_volume(out, -1);
-    if (fs.n == 0)
-        s.r_lo = 0.0;
-    if (st)
+    s.pairs = nb.n;
+    if ((stt = grow(&c, &nb, r, frozen, sched, &s)) != AMP_OK)
+        goto done;
+    stt = mdr_emit(&fs, in, r, out, &s, err);
+    if (stt == AMP_OK && st)
         *st = s;
 done:
-    ugrid_free(&g, a);
-    amp_free(a, ctr);
+    ugrid_free(&c.g, a);
+    amp_free(a, c.ctr);
+    amp_free(a, c.gpts);
+    amp_free(a, c.rho);
+    amp_free(a, c.arc);
+    amp_free(a, nb.row);
+    amp_free(a, nb.other);
+    amp_free(a, nb.dist);
+    amp_free(a, nb.rrow);
+    amp_free(a, nb.rother);
+    amp_free(a, nb.rdist);
     amp_free(a, r);
+    amp_free(a, sched);
     amp_free(a, frozen);
-    amp_free(a, row);
-    amp_free(a, adj);
-    amp_free(a, pairs);
-    amp_free(a, pd);
-    amp_free(a, heap);
     amp_fragments_free(&fs);
     return stt;
 }

@@ -11,13 +11,16 @@
 #define LOOKAHEAD_CAP 64
 /* most sub-curves between two merge partners */
 #define MERGE_MAX_PIECES 256
+/* runs at least this fraction as long as the longest equally cut one are equally good for the nearest choice */
+#define NEAR_LEN_SLACK 0.9
 
 void amp_order_opts_default(amp_order_opts *o)
 {
     amp_head_default(&o->head);
     o->improve = 1;
-    o->lookahead = 4;
+    o->lookahead = 16;
     o->merge_window = 2000;
+    o->nearest = 1;
     o->progress = NULL;
     o->progress_user = NULL;
 }
@@ -138,21 +141,45 @@ typedef struct runent {
     double zmin;
 } runent;
 
+/* Printable runs by the xy cell of each end, one list per number of new cuts (0, 1, 2): the nearest run of
+ * GetBest's best class is found by a ring search around the head. Entries are removed lazily (a run that grew,
+ * shrank or was printed is unlinked when a search meets it). */
+typedef struct rgent {
+    uint32_t s, e;    /* the run */
+    uint32_t next;    /* next entry of the cell, NONE at the end; next free entry when free */
+    uint32_t end;     /* 0: the entry stands for the run's start point, 1: for its end point */
+} rgent;
+
+typedef struct rgrid {
+    uint32_t *cell;   /* 3 * nx * ny list heads */
+    uint32_t nx, ny;
+    double x0, y0, inv, size;
+    rgent *ent;
+    size_t nent, cap, live[3];
+    uint32_t freel;
+} rgrid;
+
 typedef struct orderer {
     const amp_allocator *a;
     const amp_fragments *fs;
     const amp_head *h;
+    double k; /* cot(theta) */
     const amp_order_opts *o;
     amp_fbvh bvh;
     unsigned char *done;  /* 0 unprinted, 1 printed, 2 printed tentatively (look-ahead) */
     unsigned char *ready; /* nothing unprinted below: member of the set B of Alg. 2, line 4 */
     uint32_t *whead, *wnext, *rs, *re;
+    uint32_t *waits; /* the blocker an unprinted, unready fragment waits on */
+    uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
     double *rz;
     runent *heap;
     size_t nheap, cap_heap;
     piece *pc;
     size_t npc, cap_pc;
     size_t nprinted;
+    rgrid grid;          /* printable runs by position, for the nearest choice (NULL cells: not used) */
+    amp_vec3 head_pos;   /* where the last printed run ended */
+    int have_head;
     amp_order_stats st;
     amp_error *err;
 } orderer;
@@ -180,19 +207,14 @@ static int run_better(const runent *x, const runent *y)
     return x->s < y->s;
 }
 
-static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
+static amp_status heap_insert(orderer *o, const runent *rp)
 {
     void *p = o->heap;
-    runent r;
+    runent r = *rp;
     size_t i;
     if (amp_grow(o->a, &p, &o->cap_heap, o->nheap + 1, sizeof *o->heap) != AMP_OK)
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the printable runs");
     o->heap = p;
-    r.s = s;
-    r.e = e;
-    r.len = e - s + 1;
-    r.cuts = (uint32_t)(s != cfirst(o, s)) + (uint32_t)(e != clast(o, e));
-    r.zmin = o->rz[s];
     i = o->nheap++;
     while (i > 0 && run_better(&r, &o->heap[(i - 1) / 2])) {
         o->heap[i] = o->heap[(i - 1) / 2];
@@ -200,6 +222,23 @@ static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
     }
     o->heap[i] = r;
     return AMP_OK;
+}
+
+static amp_status rgrid_add(orderer *o, uint32_t s, uint32_t e, uint32_t cuts);
+
+/* A new printable run [s, e]: into the heap of GetBest and, for the nearest choice, into the grid. */
+static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
+{
+    runent r;
+    amp_status st;
+    r.s = s;
+    r.e = e;
+    r.len = e - s + 1;
+    r.cuts = (uint32_t)(s != cfirst(o, s)) + (uint32_t)(e != clast(o, e));
+    r.zmin = o->rz[s];
+    if ((st = heap_insert(o, &r)) != AMP_OK)
+        return st;
+    return o->grid.cell ? rgrid_add(o, s, e, r.cuts) : AMP_OK;
 }
 
 static runent heap_pop(orderer *o)
@@ -225,6 +264,156 @@ static runent heap_pop(orderer *o)
 static int run_valid(const orderer *o, const runent *r)
 {
     return o->ready[r->s] && !o->done[r->s] && !o->done[r->e] && o->re[r->s] == r->e && o->rs[r->e] == r->s;
+}
+
+/* ---- printable runs by position (nearest choice) ---- */
+
+static void rgrid_free(const amp_allocator *a, rgrid *g)
+{
+    amp_free(a, g->cell);
+    amp_free(a, g->ent);
+    memset(g, 0, sizeof *g);
+}
+
+/* Cells of about 4 fragments' extent over the xy box of all fragments, at most 512 a side. */
+static amp_status rgrid_init(orderer *o)
+{
+    rgrid *g = &o->grid;
+    amp_box3 all = amp_box3_empty();
+    double w, hgt, side;
+    size_t i, ncell;
+    for (i = 0; i < o->fs->n; i++)
+        all = amp_box3_union(all, o->fs->frag[i].box);
+    w = all.max.x - all.min.x;
+    hgt = all.max.y - all.min.y;
+    side = 4.0 * o->fs->max_len;
+    side = fmax(side, sqrt(fmax(w * hgt, 1e-12) / 262144.0));
+    side = fmax(side, fmax(w, hgt) / 512.0);
+    side = fmax(side, 1e-6);
+    g->size = side;
+    g->inv = 1.0 / side;
+    g->x0 = all.min.x;
+    g->y0 = all.min.y;
+    g->nx = (uint32_t)(w / side) + 1;
+    g->ny = (uint32_t)(hgt / side) + 1;
+    g->freel = NONE;
+    ncell = 3 * (size_t)g->nx * g->ny;
+    g->cell = amp_calloc(o->a, ncell, sizeof *g->cell);
+    if (!g->cell)
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the run grid");
+    for (i = 0; i < ncell; i++)
+        g->cell[i] = NONE;
+    return AMP_OK;
+}
+
+static uint32_t rgrid_cx(const rgrid *g, double x)
+{
+    double t = (x - g->x0) * g->inv;
+    return t <= 0.0 ? 0 : (t >= (double)(g->nx - 1) ? g->nx - 1 : (uint32_t)t);
+}
+
+static uint32_t rgrid_cy(const rgrid *g, double y)
+{
+    double t = (y - g->y0) * g->inv;
+    return t <= 0.0 ? 0 : (t >= (double)(g->ny - 1) ? g->ny - 1 : (uint32_t)t);
+}
+
+static amp_vec3 run_end_point(const orderer *o, uint32_t s, uint32_t e, uint32_t end)
+{
+    return end ? o->fs->frag[e].p1 : o->fs->frag[s].p0;
+}
+
+static amp_status rgrid_add(orderer *o, uint32_t s, uint32_t e, uint32_t cuts)
+{
+    rgrid *g = &o->grid;
+    uint32_t end;
+    for (end = 0; end < 2; end++) {
+        amp_vec3 p = run_end_point(o, s, e, end);
+        uint32_t id, *head = &g->cell[((size_t)cuts * g->ny + rgrid_cy(g, p.y)) * g->nx + rgrid_cx(g, p.x)];
+        if (g->freel != NONE) {
+            id = g->freel;
+            g->freel = g->ent[id].next;
+        } else {
+            void *q = g->ent;
+            if (g->nent >= NONE || amp_grow(o->a, &q, &g->cap, g->nent + 1, sizeof *g->ent) != AMP_OK)
+                return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the run grid");
+            g->ent = q;
+            id = (uint32_t)g->nent++;
+        }
+        g->ent[id].s = s;
+        g->ent[id].e = e;
+        g->ent[id].end = end;
+        g->ent[id].next = *head;
+        *head = id;
+        g->live[cuts]++;
+    }
+    return AMP_OK;
+}
+
+/* Scan one cell: drop stale entries, keep the nearest valid run end (ties: lower start fragment). */
+static void rgrid_scan(orderer *o, uint32_t cuts, uint32_t cx, uint32_t cy, amp_vec3 at, runent *best,
+                       double *bestd, uint32_t *bestend)
+{
+    rgrid *g = &o->grid;
+    uint32_t *link = &g->cell[((size_t)cuts * g->ny + cy) * g->nx + cx];
+    while (*link != NONE) {
+        uint32_t id = *link;
+        rgent *en = &g->ent[id];
+        runent r;
+        double d;
+        r.s = en->s;
+        r.e = en->e;
+        if (!run_valid(o, &r)) {
+            *link = en->next;
+            en->next = g->freel;
+            g->freel = id;
+            g->live[cuts]--;
+            continue;
+        }
+        d = amp_v3_dist(at, run_end_point(o, r.s, r.e, en->end));
+        if (d < *bestd || (d == *bestd && (r.s < best->s || (r.s == best->s && en->end < *bestend)))) {
+            *bestd = d;
+            *best = r;
+            *bestend = en->end;
+        }
+        link = &en->next;
+    }
+}
+
+/* The printable run with @p cuts new cuts whose nearer end is nearest to @p at; 0 when there is none. */
+static int rgrid_nearest(orderer *o, uint32_t cuts, amp_vec3 at, runent *out, double *dist)
+{
+    rgrid *g = &o->grid;
+    uint32_t cx = rgrid_cx(g, at.x), cy = rgrid_cy(g, at.y), r, rmax = g->nx > g->ny ? g->nx : g->ny, bestend = 0;
+    double bestd = HUGE_VAL;
+    runent best;
+    memset(&best, 0, sizeof best);
+    best.s = NONE;
+    for (r = 0; r <= rmax && g->live[cuts]; r++) {
+        long j, i, step;
+        /* every point of ring r is at least (r - 1) cells from the head's cell in xy */
+        if (r > 0 && bestd <= (double)(r - 1) * g->size)
+            break;
+        for (j = (long)cy - (long)r; j <= (long)cy + (long)r; j++) {
+            if (j < 0 || j >= (long)g->ny)
+                continue;
+            step = (j == (long)cy - (long)r || j == (long)cy + (long)r) ? 1 : 2 * (long)r;
+            for (i = (long)cx - (long)r; i <= (long)cx + (long)r; i += step ? step : 1) {
+                if (i >= 0 && i < (long)g->nx)
+                    rgrid_scan(o, cuts, (uint32_t)i, (uint32_t)j, at, &best, &bestd, &bestend);
+                if (step == 0)
+                    break;
+            }
+        }
+    }
+    if (best.s == NONE)
+        return 0;
+    best.len = best.e - best.s + 1;
+    best.cuts = cuts;
+    best.zmin = o->rz[best.s];
+    *out = best;
+    *dist = bestd;
+    return 1;
 }
 
 /* Pop the best run still printable as a whole; 0 when none is left. */
@@ -262,18 +451,6 @@ static amp_status make_ready(orderer *o, uint32_t f)
     return heap_push(o, s, e);
 }
 
-/* Below(f) ∩ F (Alg. 2, line 4) by a hierarchy query; f waits on the blocker it finds. */
-static amp_status recheck(orderer *o, uint32_t f)
-{
-    uint32_t g = amp_fbvh_find_below(&o->bvh, o->fs, o->h, f, o->done, NULL);
-    o->st.queries++;
-    if (g == NONE)
-        return make_ready(o, f);
-    o->wnext[f] = o->whead[g];
-    o->whead[g] = f;
-    return AMP_OK;
-}
-
 static void mark_done(orderer *o, uint32_t f)
 {
     o->done[f] = 1;
@@ -281,20 +458,41 @@ static void mark_done(orderer *o, uint32_t f)
     amp_fbvh_deactivate(&o->bvh, o->fs, o->done, f);
 }
 
-/* f was printed: the fragments waiting on it look for another blocker or become printable. */
-static amp_status release(orderer *o, uint32_t f)
+/* Fragments [s, e] were printed: the fragments waiting on them look for another blocker or become printable.
+ * The queries only read the printed marks and the hierarchy; they are answered first and applied afterwards
+ * in the order of the waiting lists. (Run in parallel they gained nothing: most batches are a few fragments,
+ * and a thread waiting between batches slows the ordering on a shared machine.) */
+static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
 {
-    uint32_t w = o->whead[f];
-    o->whead[f] = NONE;
-    while (w != NONE) {
-        uint32_t next = o->wnext[w];
-        amp_status st = o->done[w] ? AMP_OK : recheck(o, w);
-        if (st != AMP_OK)
-            return st;
-        w = next;
+    size_t nb = 0, k;
+    long q;
+    uint32_t f;
+    amp_status st = AMP_OK;
+    for (f = s; f <= e; f++) {
+        uint32_t w = o->whead[f];
+        o->whead[f] = NONE;
+        for (; w != NONE; w = o->wnext[w])
+            if (!o->done[w])
+                o->batch[nb++] = w;
     }
-    return AMP_OK;
+    for (q = 0; q < (long)nb; q++)
+        o->found[q] =
+            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, o->batch[q], o->done, o->waits[o->batch[q]]);
+    o->st.queries += nb;
+    for (k = 0; k < nb && st == AMP_OK; k++) {
+        uint32_t w = o->batch[k], g = o->found[k];
+        if (g == NONE)
+            st = make_ready(o, w);
+        else {
+            o->wnext[w] = o->whead[g];
+            o->whead[g] = w;
+            o->waits[w] = g;
+        }
+    }
+    return st;
 }
+
+static amp_status release(orderer *o, uint32_t f) { return release_range(o, f, f); }
 
 /* x (printable, at one end of its run) is printed alone: the rest of its run stays a run. */
 static amp_status split_off(orderer *o, uint32_t x)
@@ -341,12 +539,9 @@ static amp_status add_piece(orderer *o, uint32_t lo, uint32_t hi, int dir)
 static amp_status print_run(orderer *o, uint32_t s, uint32_t e)
 {
     uint32_t f;
-    amp_status st = AMP_OK;
     for (f = s; f <= e; f++)
         mark_done(o, f);
-    for (f = s; f <= e && st == AMP_OK; f++)
-        st = release(o, f);
-    return st;
+    return release_range(o, s, e);
 }
 
 /* Look-ahead: how many fragments past the run would become printable one after another in direction dir. */
@@ -357,9 +552,15 @@ static uint32_t simulate(orderer *o, uint32_t s, uint32_t e, int dir)
         o->done[f] = 2;
     x = step_along(dir > 0 ? e : s, dir, lo, hi);
     while (x != NONE && cnt < LOOKAHEAD_CAP && !o->done[x]) {
-        o->st.queries++;
-        if (amp_fbvh_find_below(&o->bvh, o->fs, o->h, x, o->done, NULL) != NONE)
+        /* a fragment still waiting on a blocker that is not in the simulated run stays blocked, and a ready one
+         * stays printable: only a fragment waiting on the run itself needs a query */
+        if (!o->ready[x] && o->done[o->waits[x]] != 2)
             break;
+        if (!o->ready[x]) {
+            o->st.queries++;
+            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, x, o->done, o->waits[x]) != NONE)
+                break;
+        }
         o->done[x] = 2;
         cnt++;
         x = step_along(x, dir, lo, hi);
@@ -384,12 +585,45 @@ static amp_status step_plain(orderer *o)
     return print_run(o, r.s, r.e);
 }
 
+/* One way to print a candidate run: its direction and what the look-ahead predicts. */
+typedef struct choice {
+    uint32_t cuts, len; /* new cuts and run length after the continuation */
+    double dist;        /* from the head to the start in this direction */
+    int dir;
+} choice;
+
+/*
+ * GetBest among the options (Alg. 2, line 5): fewest new cuts after the look-ahead's continuation. Runs as
+ * good as that and within NEAR_LEN_SLACK of the longest such run count as equally good, and the one that
+ * starts nearest to the head is taken (issue 14: shorter travel between paths); without the nearest choice
+ * the longest run is taken. Ties keep the first option (heap order, then forward before backward).
+ */
+static size_t choose(const orderer *o, const choice *c, size_t n)
+{
+    size_t i, best = 0;
+    uint32_t cuts = 3, len = 0;
+    for (i = 0; i < n; i++)
+        if (c[i].cuts < cuts || (c[i].cuts == cuts && c[i].len > len)) {
+            cuts = c[i].cuts;
+            len = c[i].len;
+            best = i;
+        }
+    if (!o->grid.cell || !o->have_head)
+        return best;
+    for (i = 0; i < n; i++)
+        if (c[i].cuts == cuts && (double)c[i].len >= NEAR_LEN_SLACK * (double)len &&
+            (c[i].dist < c[best].dist || (c[i].dist == c[best].dist && c[i].len > c[best].len)))
+            best = i;
+    return best;
+}
+
 static amp_status step_improved(orderer *o)
 {
-    runent cand[16];
-    size_t nc = 0, i, best = 0, k = o->o->lookahead;
-    int bestdir = 1;
-    uint32_t bestcuts = 3, bestlen = 0, x;
+    runent cand[17];
+    choice opt[34];
+    size_t nc = 0, i, best, k = o->o->lookahead, from_grid = (size_t)-1;
+    int bestdir;
+    uint32_t x;
     amp_status st;
     if (k < 1)
         k = 1;
@@ -405,32 +639,43 @@ static amp_status step_improved(orderer *o)
         return amp_fail(o->err, AMP_ERR_GEOMETRY, 0,
                         "inaccessibility cycle among %lu unprinted fragments (Lemma 5.1 violated numerically)",
                         (unsigned long)(o->fs->n - o->nprinted));
+    if (o->grid.cell && o->have_head) {
+        /* the nearest run with as few cuts as GetBest's best competes with the heap's longest runs */
+        double d;
+        if (rgrid_nearest(o, cand[0].cuts, o->head_pos, &cand[nc], &d)) {
+            for (i = 0; i < nc && cand[i].s != cand[nc].s; i++)
+                ;
+            if (i == nc)
+                from_grid = nc++;
+        }
+    }
     for (i = 0; i < nc; i++) {
         /* look ahead in both directions: how far the curve can be continued right after this run */
         uint32_t s = cand[i].s, e = cand[i].e, lo = cfirst(o, s), hi = clast(o, s);
         uint32_t fw = simulate(o, s, e, 1), bw = simulate(o, s, e, -1);
-        uint32_t cf = (uint32_t)(s != lo) + (uint32_t)(e + fw != hi), cb = (uint32_t)(s - bw != lo) + (uint32_t)(e != hi);
-        if (cf < bestcuts || (cf == bestcuts && e - s + 1 + fw > bestlen)) {
-            bestcuts = cf;
-            bestlen = e - s + 1 + fw;
-            best = i;
-            bestdir = 1;
-        }
-        if (cb < bestcuts || (cb == bestcuts && e - s + 1 + bw > bestlen)) {
-            bestcuts = cb;
-            bestlen = e - s + 1 + bw;
-            best = i;
-            bestdir = -1;
-        }
+        choice *f = &opt[2 * i], *b = &opt[2 * i + 1];
+        f->cuts = (uint32_t)(s != lo) + (uint32_t)(e + fw != hi);
+        b->cuts = (uint32_t)(s - bw != lo) + (uint32_t)(e != hi);
+        f->len = e - s + 1 + fw;
+        b->len = e - s + 1 + bw;
+        f->dir = 1;
+        b->dir = -1;
+        f->dist = o->have_head ? amp_v3_dist(o->head_pos, o->fs->frag[s].p0) : 0.0;
+        b->dist = o->have_head ? amp_v3_dist(o->head_pos, o->fs->frag[e].p1) : 0.0;
     }
+    best = choose(o, opt, 2 * nc);
+    bestdir = opt[best].dir;
+    best /= 2;
+    /* the runs not chosen go back to the heap (the grid still holds them) */
     for (i = 0; i < nc; i++)
-        if (i != best && (st = heap_push(o, cand[i].s, cand[i].e)) != AMP_OK)
+        if (i != best && i != from_grid && (st = heap_insert(o, &cand[i])) != AMP_OK)
             return st;
     o->st.steps++;
     {
         uint32_t s = cand[best].s, e = cand[best].e, lo = cfirst(o, s), hi = clast(o, s);
         if ((st = print_run(o, s, e)) != AMP_OK)
             return st;
+        o->have_head = 1;
         /* prefer continuing the curve just printed: extend while the next fragment has become printable */
         if (bestdir > 0) {
             for (x = e + 1; e < hi && x <= hi && open_at(o, x); x++) {
@@ -441,6 +686,7 @@ static amp_status step_improved(orderer *o)
                 if ((st = release(o, x)) != AMP_OK)
                     return st;
             }
+            o->head_pos = o->fs->frag[x - 1].p1;
             return add_piece(o, s, x - 1, 1);
         }
         for (x = s; x > lo && open_at(o, x - 1); x--) {
@@ -451,6 +697,7 @@ static amp_status step_improved(orderer *o)
             if ((st = release(o, x - 1)) != AMP_OK)
                 return st;
         }
+        o->head_pos = o->fs->frag[x].p0;
         return add_piece(o, x, e, -1);
     }
 }
@@ -663,6 +910,29 @@ static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out
     return AMP_OK;
 }
 
+/* Alg. 2, line 4 for the initial set: independent queries, run in parallel, applied in fragment order. */
+static amp_status initial_set(orderer *o)
+{
+    size_t i, n = o->fs->n;
+    long f;
+    amp_status st = AMP_OK;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (f = 0; f < (long)n; f++)
+        o->found[f] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, (uint32_t)f, o->done, NONE);
+    o->st.queries += n;
+    for (i = 0; i < n && st == AMP_OK; i++) {
+        uint32_t g = o->found[i];
+        if (g == NONE)
+            st = make_ready(o, (uint32_t)i);
+        else {
+            o->wnext[i] = o->whead[g];
+            o->whead[g] = (uint32_t)i;
+            o->waits[i] = g;
+        }
+    }
+    return st;
+}
+
 static void orderer_free(orderer *o)
 {
     amp_fbvh_free(&o->bvh);
@@ -673,8 +943,12 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->rs);
     amp_free(o->a, o->re);
     amp_free(o->a, o->rz);
+    amp_free(o->a, o->waits);
+    amp_free(o->a, o->batch);
+    amp_free(o->a, o->found);
     amp_free(o->a, o->heap);
     amp_free(o->a, o->pc);
+    rgrid_free(o->a, &o->grid);
 }
 
 amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_pathset *out, amp_order_stats *stats,
@@ -685,8 +959,6 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     orderer o;
     amp_status st;
     size_t i, n;
-    long f;
-    uint32_t *blocker = NULL;
     if (!in || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_order: NULL pathset");
     if (!opts) {
@@ -702,6 +974,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.a = out->alloc;
     o.fs = &fs;
     o.h = &opts->head;
+    o.k = 1.0 / tan(opts->head.theta);
     o.o = opts;
     o.err = err;
     n = fs.n;
@@ -719,28 +992,19 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.rs = amp_calloc(o.a, n + 1, sizeof *o.rs);
     o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
     o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
-    blocker = amp_calloc(o.a, n + 1, sizeof *blocker);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !blocker) {
+    o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
+    o.batch = amp_calloc(o.a, n + 1, sizeof *o.batch);
+    o.found = amp_calloc(o.a, n + 1, sizeof *o.found);
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.batch || !o.found) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
         goto done;
     }
     for (i = 0; i < n; i++)
         o.whead[i] = o.wnext[i] = NONE;
-    /* Alg. 2, line 4 for the initial set: independent queries, run in parallel */
-#pragma omp parallel for schedule(dynamic, 256)
-    for (f = 0; f < (long)n; f++)
-        blocker[f] = amp_fbvh_find_below(&o.bvh, &fs, o.h, (uint32_t)f, o.done, NULL);
-    o.st.queries += n;
-    for (i = 0; i < n && st == AMP_OK; i++) {
-        if (blocker[i] == NONE)
-            st = make_ready(&o, (uint32_t)i);
-        else {
-            o.wnext[i] = o.whead[blocker[i]];
-            o.whead[blocker[i]] = (uint32_t)i;
-        }
-    }
-    amp_free(o.a, blocker);
-    blocker = NULL;
+    if (opts->improve && opts->nearest && n > 0)
+        st = rgrid_init(&o);
+    if (st == AMP_OK)
+        st = initial_set(&o);
     /* Alg. 2, lines 3-8 */
     {
         size_t next_report = 0;
@@ -768,7 +1032,6 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     if (stats)
         *stats = o.st;
 done:
-    amp_free(o.a, blocker);
     orderer_free(&o);
     amp_fragments_free(&fs);
     return st;

@@ -577,6 +577,161 @@ static inline int curve_block(const amp_spline *s, const double *par, size_t n, 
         return bad;
 }
 
+/*
+ * A small knot index for unsorted parameter lists: the span holding the start of each of nb equal buckets of
+ * the domain, and every span's reciprocal knot differences in the compact order (j, r) -> j(j-1)/2 + r. A
+ * point's span is its bucket's span moved over the few knots inside the bucket, so a shuffled list costs a
+ * table read instead of a binary search and k(k-1)/2 divisions per point; the spans and reciprocals are the
+ * ones the sorted path computes, so both give the same bits.
+ */
+typedef struct span_index {
+    size_t *bucket;
+    double *inv;
+    size_t nb, first, last, ntri;
+    double lo, scale;
+} span_index;
+
+static void span_index_free(const amp_spline *s, span_index *x)
+{
+    amp_free(s->alloc, x->bucket);
+    amp_free(s->alloc, x->inv);
+}
+
+/* Build the index of a polynomial curve; 0 (and nothing allocated) when memory is short. */
+static int span_index_build(const amp_spline *s, span_index *x)
+{
+    const double *U = s->knots[0];
+    int k = s->order[0], j, r;
+    size_t nc = s->count[0], b, i;
+    double hi;
+    memset(x, 0, sizeof *x);
+    amp_spline_domain(s, 0, &x->lo, &hi);
+    x->first = amp_spl_span(U, k, nc, x->lo, 0);
+    x->last = amp_spl_span(U, k, nc, hi, 0);
+    x->nb = 2 * (x->last - x->first + 1);
+    x->scale = hi > x->lo ? (double)x->nb / (hi - x->lo) : 0.0;
+    x->ntri = (size_t)k * (size_t)(k - 1) / 2;
+    x->bucket = amp_calloc(s->alloc, x->nb, sizeof *x->bucket);
+    x->inv = amp_calloc(s->alloc, (x->last + 1) * (x->ntri ? x->ntri : 1), sizeof *x->inv);
+    if (!x->bucket || !x->inv) {
+        span_index_free(s, x);
+        return 0;
+    }
+    for (b = 0, i = x->first; b < x->nb; b++) {
+        double t = x->lo + (double)b / x->scale;
+        while (i < x->last && t >= U[i + 1])
+            i++;
+        x->bucket[b] = i;
+    }
+    for (i = x->first; i <= x->last; i++)
+        for (j = 1; j < k; j++)
+            for (r = 0; r < j; r++)
+                x->inv[i * x->ntri + (size_t)(j * (j - 1) / 2 + r)] =
+                    1.0 / (U[i + 1 + (size_t)r] - U[i + 1 + (size_t)r - (size_t)j]);
+    return 1;
+}
+
+/* The span of t (clamped to the domain), as amp_spl_span finds it. */
+static inline size_t span_index_find(const span_index *x, const double *U, double t)
+{
+    double f = (t - x->lo) * x->scale;
+    size_t i = x->bucket[f <= 0.0 ? 0 : (f >= (double)(x->nb - 1) ? x->nb - 1 : (size_t)f)];
+    while (i < x->last && t >= U[i + 1])
+        i++;
+    while (i > x->first && t < U[i]) /* rounding of the bucket may land one knot late */
+        i--;
+    return i;
+}
+
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline int curve_block_indexed(const amp_spline *s, const span_index *x, const double *par, size_t n,
+                                      amp_vec3 *out, const int k)
+{
+    const double *U = s->knots[0];
+    double lo = x->lo, hi;
+    size_t i, cur = x->first;
+    int bad = 0;
+    amp_spline_domain(s, 0, &lo, &hi);
+    for (i = 0; i < n; i++) {
+        double t = par[i], Nb[AMP_SPLINE_MAX_ORDER], xx = 0, y = 0, z = 0;
+        const double *p, *I;
+        int a, j, r;
+        if (isnan(t)) {
+            bad = 1;
+            out[i] = amp_v3(NAN, NAN, NAN);
+            continue;
+        }
+        t = t < lo ? lo : (t > hi ? hi : t);
+        if (!(U[cur] <= t && t < U[cur + 1]))
+            cur = span_index_find(x, U, t);
+        I = x->inv + cur * x->ntri;
+        if (k == 4) {
+            /* the cubic recurrence written out, as curve_block */
+            const double *u = U + cur;
+            double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
+            double n0, n1, n2, tmp, sv;
+            tmp = I[0];
+            n0 = r1 * tmp;
+            n1 = l1 * tmp;
+            tmp = n0 * I[1];
+            n0 = r1 * tmp;
+            sv = l2 * tmp;
+            tmp = n1 * I[2];
+            n1 = sv + r2 * tmp;
+            n2 = l1 * tmp;
+            tmp = n0 * I[3];
+            Nb[0] = r1 * tmp;
+            sv = l3 * tmp;
+            tmp = n1 * I[4];
+            Nb[1] = sv + r2 * tmp;
+            sv = l2 * tmp;
+            tmp = n2 * I[5];
+            Nb[2] = sv + r3 * tmp;
+            Nb[3] = l1 * tmp;
+            p = s->cp + 4 * (cur - 3);
+            out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
+                            Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
+                            Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+            continue;
+        }
+        /* NURBS Book A2.2 with the span's reciprocals (basis_inv's recurrence) */
+        Nb[0] = 1.0;
+        for (j = 1; j < k; j++) {
+            double saved = 0.0;
+            for (r = 0; r < j; r++) {
+                double tmp = Nb[r] * I[j * (j - 1) / 2 + r];
+                Nb[r] = saved + (U[cur + 1 + (size_t)r] - t) * tmp;
+                saved = (t - U[cur + 1 + (size_t)r - (size_t)j]) * tmp;
+            }
+            Nb[j] = saved;
+        }
+        p = s->cp + 4 * (cur + 1 - (size_t)k);
+        for (a = 0; a < k; a++, p += 4) {
+            xx += Nb[a] * p[0];
+            y += Nb[a] * p[1];
+            z += Nb[a] * p[2];
+        }
+        out[i] = amp_v3(xx, y, z);
+    }
+    return bad;
+}
+
+static int indexed_block(const amp_spline *s, const span_index *x, const double *par, size_t n, amp_vec3 *out)
+{
+    switch (s->order[0]) {
+    case 2:
+        return curve_block_indexed(s, x, par, n, out, 2);
+    case 3:
+        return curve_block_indexed(s, x, par, n, out, 3);
+    case 4:
+        return curve_block_indexed(s, x, par, n, out, 4);
+    default:
+        return curve_block_indexed(s, x, par, n, out, s->order[0]);
+    }
+}
+
 /* One block of a parameter list, sequential, reusing the previous span as a hint. */
 static int eval_block(const amp_spline *s, const double *par, size_t n, amp_vec3 *out)
 {
@@ -623,14 +778,21 @@ amp_status amp_spline_eval_list(const amp_spline *s, const double *par, size_t n
 {
     enum { BLOCK = 512 };
     long nb = (long)((n + BLOCK - 1) / BLOCK), b;
-    int bad = 0;
+    int bad = 0, indexed = 0;
+    span_index x;
+    /* a polynomial curve and a list long enough to pay for the index: spans by table (unsorted lists) */
+    if (s->dim == 1 && !s->rational && n >= 256)
+        indexed = span_index_build(s, &x);
 #ifdef _OPENMP
 #pragma omp parallel for schedule(static) reduction(| : bad) if (n > 4 * BLOCK)
 #endif
     for (b = 0; b < nb; b++) {
         size_t lo = (size_t)b * BLOCK, m = n - lo < BLOCK ? n - lo : BLOCK;
-        bad |= eval_block(s, par + lo * (size_t)s->dim, m, out + lo);
+        bad |= indexed ? indexed_block(s, &x, par + lo, m, out + lo)
+                       : eval_block(s, par + lo * (size_t)s->dim, m, out + lo);
     }
+    if (indexed)
+        span_index_free(s, &x);
     if (bad)
         return amp_fail(err, AMP_ERR_RANGE, 0, "NaN parameter in batched evaluation");
     return AMP_OK;

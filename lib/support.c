@@ -12,6 +12,8 @@ void amp_support_opts_default(amp_support_opts *o)
     o->layer_height = 0.4;
     o->radius = 0.2;
     o->min_gap = 1.0;
+    o->progress = NULL;
+    o->progress_user = NULL;
 }
 
 /* One stretch of a vertical ray that needs support: air from z0 (plate or solid) up to the underside z1. */
@@ -119,6 +121,17 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
                 {
                     amp_status s = amp_pathset_begin(sup, AMP_ROLE_SUPPORT, err);
                     size_t k;
+                    if (s == AMP_OK && j == i + 1) { /* a one-ray column: a short row along it, never a point */
+                        double gx = c->x0 + (double)(along_x ? i : row) * c->sp, gy = c->y0 + (double)(along_x ? row : i) * c->sp;
+                        double dx = along_x ? 0.125 * c->sp : 0.0, dy = along_x ? 0.0 : 0.125 * c->sp;
+                        s = amp_pathset_push(sup, amp_v3(gx - dx, gy - dy, z), o->radius, err);
+                        if (s == AMP_OK)
+                            s = amp_pathset_push(sup, amp_v3(gx + dx, gy + dy, z), o->radius, err);
+                        if (s != AMP_OK)
+                            return s;
+                        i = j;
+                        continue;
+                    }
                     for (k = i; s == AMP_OK && k < j; k++) {
                         size_t gx = along_x ? k : row, gy = along_x ? row : k;
                         s = amp_pathset_push(sup, amp_v3(c->x0 + (double)gx * c->sp, c->y0 + (double)gy * c->sp, z),
@@ -139,9 +152,10 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
 #define LEFT_OUT (NOPATH - 1)
 
 /*
- * Over the object fragments, the smallest path index (want_min) of a fragment
- * above s, or the largest (!want_min) of a fragment below s. Branch and bound
- * on per-node index bounds; NOPATH when none.
+ * Over the object fragments (indices < nobj, which is the print order of the
+ * object paths), the smallest index (want_min) of a fragment above s, or the
+ * largest (!want_min) of a fragment below s. Branch and bound on per-node
+ * index bounds; NOPATH when none.
  */
 static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_head *hd, const uint32_t *nmin,
                        const uint32_t *nmax, size_t nobj, uint32_t s, int want_min)
@@ -165,12 +179,13 @@ static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_hea
         if (nd->left == 0) {
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t g = b->order[q], p = fs->frag[g].path;
-                if (p >= nobj || (best != NOPATH && (want_min ? p >= best : p <= best)))
+                uint32_t g = b->order[q];
+                if (g >= nobj || fs->ps->paths[fs->frag[g].path].role != AMP_ROLE_OBJECT ||
+                    (best != NOPATH && (want_min ? g >= best : g <= best)))
                     continue;
                 if (want_min ? amp_fragment_below_k(fs, hd->z_offs, k, s, g)
                              : amp_fragment_below_k(fs, hd->z_offs, k, g, s))
-                    best = p;
+                    best = g;
             }
         } else if (top + 2 <= 128) {
             stack[top++] = nd->left;
@@ -180,7 +195,8 @@ static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_hea
     return best;
 }
 
-/* Support fragment f has no gouge-free slot: mark it left out and count it. */
+/* Support fragment f has no gouge-free slot: mark it left out and count it (Lemma 5.1 makes this not happen
+ * for fragments shorter than z_offs sin(theta); kept as a guard against rounding, and reported). */
 static void leave_out(const amp_fragments *fs, uint32_t *late, size_t f, amp_support_stats *s)
 {
     late[f] = LEFT_OUT;
@@ -188,24 +204,52 @@ static void leave_out(const amp_fragments *fs, uint32_t *late, size_t f, amp_sup
     s->trimmed += amp_v3_dist(fs->frag[f].p0, fs->frag[f].p1);
 }
 
-/* A piece of a support row: fragments [f0, f1) printed together just before object path pos. */
+/*
+ * A piece of a support row: fragments [f0, f1) printed together just before
+ * object fragment pos (an index into the object fragments, which are in print
+ * order; nobj_frag = after the last object path). hi is the last object
+ * fragment below the piece (NOPATH: none): pos must stay > hi.
+ */
 typedef struct piece {
     size_t f0, f1;
-    uint32_t pos;
+    uint32_t pos, hi;
 } piece;
 
-/* Append the fragments of @p pc that are not left out, one path per run of consecutive kept fragments. */
-static amp_status emit_piece(amp_pathset *out, const amp_fragments *fs, const uint32_t *late, const piece *pc,
-                             amp_pvert **run, size_t *cap, amp_error *err)
+/*
+ * The insertion point for a piece that may go anywhere in (hi, want]: the
+ * start of want's object path when that is still after hi (no object path is
+ * split), else want itself (the path is split there). want <= hi (a support
+ * piece above moved it too early) is raised to hi + 1.
+ */
+static uint32_t slot(const amp_fragments *fs, uint32_t nobj_frag, uint32_t hi, uint32_t want)
+{
+    uint32_t st;
+    if (hi != NOPATH && want <= hi)
+        want = hi + 1;
+    if (want >= nobj_frag)
+        return nobj_frag;
+    st = (uint32_t)fs->first[fs->frag[want].path];
+    return hi == NOPATH || st > hi ? st : want;
+}
+
+/*
+ * Append fragments [a, b) as paths of @p role, one per run of kept fragments
+ * (late[f] != LEFT_OUT; late may be NULL). Fragment cut points inside a
+ * segment are collinear and only written where a run starts or ends. Runs of
+ * zero length are not written when @p skip_empty.
+ */
+static amp_status emit_frags(amp_pathset *out, const amp_fragments *fs, amp_role role, double h, size_t a, size_t b,
+                             const uint32_t *late, int skip_empty, amp_pvert **run, size_t *cap, amp_error *err)
 {
     const amp_pathset *ps = fs->ps;
-    size_t f = pc->f0;
+    size_t f = a;
     amp_status st = AMP_OK;
-    while (st == AMP_OK && f < pc->f1) {
+    while (st == AMP_OK && f < b) {
         size_t n = 0, g;
-        for (; f < pc->f1 && late[f] == LEFT_OUT; f++)
+        double len = 0.0;
+        for (; f < b && late && late[f] == LEFT_OUT; f++)
             ;
-        for (g = f; g < pc->f1 && late[g] != LEFT_OUT; g++) {
+        for (g = f; g < b && !(late && late[g] == LEFT_OUT); g++) {
             const amp_fragment *fr = &fs->frag[g];
             size_t v;
             if (amp_grow(out->alloc, (void **)run, cap, n + fr->nin + 2, sizeof **run) != AMP_OK)
@@ -216,12 +260,18 @@ static amp_status emit_piece(amp_pathset *out, const amp_fragments *fs, const ui
             }
             for (v = 0; v < fr->nin; v++)
                 (*run)[n++] = ps->verts[fr->vfirst + v];
-            (*run)[n].p = fr->p1;
-            (*run)[n++].r = fr->r1;
+            len += amp_v3_dist(fr->p0, fr->p1);
+            if (g + 1 == b || (late && late[g + 1] == LEFT_OUT)) {
+                (*run)[n].p = fr->p1;
+                (*run)[n++].r = fr->r1;
+            }
         }
         f = g;
-        if (n >= 2)
-            st = amp_pathset_add(out, AMP_ROLE_SUPPORT, *run, n, err);
+        if (n >= 2 && !(skip_empty && !(len > 0.0))) {
+            st = amp_pathset_add(out, role, *run, n, err);
+            if (st == AMP_OK && h > 0.0)
+                st = amp_pathset_set_height(out, h, err);
+        }
     }
     return st;
 }
@@ -263,79 +313,299 @@ static void cell_range(const sctx *c, const amp_box3 *b, size_t r, size_t nx, si
     *y1 = b1 < 0 ? 0 : (size_t)b1 >= ny ? ny - 1 : (size_t)b1;
 }
 
+/* Smallest slot in the field over the cells of fragment f (its xy box). */
+static uint32_t field_min(const sctx *c, const amp_fragments *fs, const uint32_t *d, size_t nx, size_t ny, size_t f)
+{
+    size_t x0, x1, y0, y1, x, y;
+    uint32_t m = NOPATH;
+    cell_range(c, &fs->frag[f].box, 0, nx, ny, &x0, &x1, &y0, &y1);
+    for (y = y0; y <= y1; y++)
+        for (x = x0; x <= x1; x++)
+            m = d[y * nx + x] < m ? d[y * nx + x] : m;
+    return m;
+}
+
+/* Add pieces [p0, p1) of a layer dz above the current one to the field (disc of the cone at that height). */
+static void field_add(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, const piece *pcs, size_t p0,
+                      size_t p1, double dz, uint32_t *d, size_t nx, size_t ny)
+{
+    double cs = c->sp / SUB, cot = 1.0 / tan(o->head.theta);
+    size_t r = (size_t)ceil((dz - o->head.z_offs) / cot / cs) + 1, k, f, x0, x1, y0, y1, x, y;
+    for (k = p0; k < p1; k++)
+        for (f = pcs[k].f0; f < pcs[k].f1; f++) {
+            cell_range(c, &fs->frag[f].box, r, nx, ny, &x0, &x1, &y0, &y1);
+            for (y = y0; y <= y1; y++)
+                for (x = x0; x <= x1; x++)
+                    d[y * nx + x] = pcs[k].pos < d[y * nx + x] ? pcs[k].pos : d[y * nx + x];
+        }
+}
+
 /*
- * A lower support piece L must be printed no later than any piece H above it:
- * pos(L) = min(pos(L), pos(H)). Going down layer by layer, a field over a fine
- * xy grid holds, per cell, the smallest pos of the pieces above that cell's
- * points at the current height: H enters once it is more than z_offs higher
- * (disc of radius (dz - z_offs) / cot(theta), grown by one cell), and
- * every layer down the discs grow by layer_height / cot(theta). Square cells
- * and square dilation over-approximate the cone, which only ever moves pieces
- * earlier (safe), never later.
+ * Cut support row i into as few pieces as possible such that every piece has
+ * a slot: after the last object fragment below any of its fragments (late)
+ * and no later than the first object fragment or support piece above any of
+ * them (first, and the field d of pieces above). Fragments are shorter than
+ * z_offs sin(theta), so a single fragment s always has a slot: if object point
+ * a is below s and s below point b (object or support), the two cone
+ * inequalities add up (|s| < z_offs sin(theta) bounds the move inside s) to a
+ * below b, so b is placed after a (§5.1 Def. 5.1). Square cells over-
+ * approximate the cones: a bound below late[f] can only come from them and is
+ * raised to late[f] + 1.
  */
-static amp_status order_pieces(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, piece *pcs,
-                               size_t npc, amp_error *err)
+static amp_status cut_row(const sctx *c, const amp_fragments *fs, size_t i, uint32_t nf, const uint32_t *first,
+                          uint32_t *late, const uint32_t *d, size_t nx, size_t ny, piece **pcs, size_t *npc,
+                          size_t *pcap, amp_support_stats *s, amp_error *err)
+{
+    size_t f = fs->first[i];
+    while (f < fs->first[i + 1]) {
+        piece pc;
+        uint32_t lo = NOPATH, hi = NOPATH;
+        pc.f0 = f;
+        for (; f < fs->first[i + 1]; f++) {
+            uint32_t ub = field_min(c, fs, d, nx, ny, f), nlo, nhi = hi;
+            ub = first[f] < ub ? first[f] : ub;
+            if (late[f] != NOPATH) {
+                if (first[f] != NOPATH && first[f] <= late[f]) { /* no slot even alone (rounding only) */
+                    if (f > pc.f0)
+                        break;
+                    leave_out(fs, late, f, s);
+                    pc.f0 = f + 1;
+                    continue;
+                }
+                ub = ub <= late[f] ? late[f] + 1 : ub;
+                nhi = hi == NOPATH || late[f] > hi ? late[f] : hi;
+            }
+            nlo = ub < lo ? ub : lo;
+            if (nhi != NOPATH && nlo <= nhi)
+                break;
+            lo = nlo;
+            hi = nhi;
+        }
+        if (f == pc.f0)
+            continue;
+        pc.f1 = f;
+        pc.hi = hi;
+        pc.pos = slot(fs, nf, hi, lo == NOPATH ? nf : lo);
+        if (amp_grow(c->a, (void **)pcs, pcap, *npc + 1, sizeof **pcs) != AMP_OK)
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+        (*pcs)[(*npc)++] = pc;
+    }
+    return AMP_OK;
+}
+
+/* Layer index of a support row (rows are flat, on z = (layer + 1) h). */
+static size_t row_layer(const amp_fragments *fs, size_t i, double h)
+{
+    double z = fs->ps->verts[fs->ps->paths[i].first].p.z / h - 1.0;
+    return z > 0.0 ? (size_t)floor(z + 0.5) : 0;
+}
+
+/*
+ * Place the support rows, top layer first. A lower support piece L must be
+ * printed no later than any piece H above it (Def. 5.1): a field over a fine
+ * xy grid holds, per cell, the smallest slot of the pieces above that cell's
+ * points at the current height: H enters once its layer is more than z_offs
+ * higher (disc of radius (dz - z_offs) / cot(theta), grown by one cell), and
+ * every layer down the discs grow by layer_height / cot(theta). Square cells
+ * and square dilation over-approximate the cone (moves pieces earlier, never
+ * later). The pieces come out bottom layer first.
+ */
+static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, size_t nobj,
+                               const uint32_t *first, uint32_t *late, piece **pcs, size_t *npc, amp_support_stats *s,
+                               amp_error *err)
 {
     double cs = c->sp / SUB, h = o->layer_height, cot = 1.0 / tan(o->head.theta);
-    size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, *lfirst;
+    size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, pcap = 0;
     size_t step = (size_t)ceil(h / cot / cs), lag = (size_t)floor(o->head.z_offs / h) + 1;
-    uint32_t *d, *tmp;
+    size_t *rfirst, *pfirst;
+    uint32_t *d, *tmp, nf = (uint32_t)fs->first[nobj];
+    amp_status st = AMP_OK;
     long l;
-    if (npc == 0)
+    for (i = nobj; i < fs->npaths; i++)
+        nl = row_layer(fs, i, h) + 1 > nl ? row_layer(fs, i, h) + 1 : nl;
+    if (nl == 0)
         return AMP_OK;
-    for (i = 0; i < npc; i++) {
-        size_t li = (size_t)floor(fs->frag[pcs[i].f0].p0.z / h + 0.5);
-        nl = li + 1 > nl ? li + 1 : nl;
-    }
     d = amp_calloc(c->a, nx * ny, sizeof *d);
     tmp = amp_calloc(c->a, nx * ny, sizeof *tmp);
-    lfirst = amp_calloc(c->a, nl + 2, sizeof *lfirst);
-    if (!d || !tmp || !lfirst) {
-        amp_free(c->a, d);
-        amp_free(c->a, tmp);
-        amp_free(c->a, lfirst);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering support pieces");
+    rfirst = amp_calloc(c->a, nl + 2, sizeof *rfirst);
+    pfirst = amp_calloc(c->a, 2 * nl + 2, sizeof *pfirst);
+    if (!d || !tmp || !rfirst || !pfirst) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering support pieces");
+        goto done;
     }
-    /* pieces are made layer by layer: lfirst[l] = first piece of layer l */
-    for (i = 0; i < npc; i++)
-        lfirst[(size_t)floor(fs->frag[pcs[i].f0].p0.z / h + 0.5) + 1]++;
+    /* fill() makes the rows layer by layer: rows of layer l are nobj + [rfirst[l], rfirst[l + 1]) */
+    for (i = nobj; i < fs->npaths; i++)
+        rfirst[row_layer(fs, i, h) + 1]++;
     for (i = 0; i <= nl; i++)
-        lfirst[i + 1] += lfirst[i];
+        rfirst[i + 1] += rfirst[i];
     for (i = 0; i < nx * ny; i++)
         d[i] = NOPATH;
-    for (l = (long)nl - 1; l >= 0; l--) {
-        size_t m = (size_t)l + lag, k;
+    for (l = (long)nl - 1; st == AMP_OK && l >= 0; l--) {
+        size_t m = (size_t)l + lag;
         if ((size_t)l + 1 < nl)
             dilate_min(d, tmp, nx, ny, step);
-        if (m < nl) { /* layer m is now more than z_offs above layer l */
-            double dz = (double)(m - (size_t)l) * h - o->head.z_offs;
-            size_t r = (size_t)ceil(dz / cot / cs) + 1;
-            for (k = lfirst[m]; k < lfirst[m + 1]; k++) {
-                size_t f;
-                for (f = pcs[k].f0; f < pcs[k].f1; f++) {
-                    size_t x0, x1, y0, y1, x, y;
-                    cell_range(c, &fs->frag[f].box, r, nx, ny, &x0, &x1, &y0, &y1);
-                    for (y = y0; y <= y1; y++)
-                        for (x = x0; x <= x1; x++)
-                            d[y * nx + x] = pcs[k].pos < d[y * nx + x] ? pcs[k].pos : d[y * nx + x];
-                }
-            }
-        }
-        for (k = lfirst[l]; k < lfirst[l + 1]; k++) {
-            size_t f;
-            for (f = pcs[k].f0; f < pcs[k].f1; f++) {
-                size_t x0, x1, y0, y1, x, y;
-                cell_range(c, &fs->frag[f].box, 0, nx, ny, &x0, &x1, &y0, &y1);
-                for (y = y0; y <= y1; y++)
-                    for (x = x0; x <= x1; x++)
-                        pcs[k].pos = d[y * nx + x] < pcs[k].pos ? d[y * nx + x] : pcs[k].pos;
-            }
-        }
+        if (m < nl) /* layer m is now more than z_offs above layer l; its pieces are [pfirst[2m], pfirst[2m+1]) */
+            field_add(c, o, fs, *pcs, pfirst[2 * m], pfirst[2 * m + 1], (double)(m - (size_t)l) * h, d, nx, ny);
+        pfirst[2 * (size_t)l] = *npc;
+        for (i = nobj + rfirst[l]; st == AMP_OK && i < nobj + rfirst[l + 1]; i++)
+            st = cut_row(c, fs, i, nf, first, late, d, nx, ny, pcs, npc, &pcap, s, err);
+        pfirst[2 * (size_t)l + 1] = *npc;
+        if (o->progress && l % 8 == 0)
+            o->progress(o->progress_user, 0.6 + 0.35 * (double)(nl - (size_t)l) / (double)nl);
     }
+    /* bottom layer first: a piece is emitted before the pieces above it in the same slot */
+    for (i = 0; st == AMP_OK && i < *npc / 2; i++) {
+        piece t = (*pcs)[i];
+        (*pcs)[i] = (*pcs)[*npc - 1 - i];
+        (*pcs)[*npc - 1 - i] = t;
+    }
+done:
     amp_free(c->a, d);
     amp_free(c->a, tmp);
-    amp_free(c->a, lfirst);
-    return AMP_OK;
+    amp_free(c->a, rfirst);
+    amp_free(c->a, pfirst);
+    return st;
+}
+
+/* Per BVH node: smallest and largest object fragment index under it (NOPATH / 0 when none). */
+static void node_bounds(const amp_fbvh *b, const amp_fragments *fs, const amp_pathset *in, size_t nobj_frag,
+                        uint32_t *nmin, uint32_t *nmax)
+{
+    size_t i;
+    for (i = b->nnodes; i-- > 0;) {
+        const amp_fbvh_node *nd = &b->node[i];
+        nmin[i] = NOPATH;
+        nmax[i] = 0;
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if (g < nobj_frag && in->paths[fs->frag[g].path].role == AMP_ROLE_OBJECT) {
+                    nmin[i] = g < nmin[i] ? g : nmin[i];
+                    nmax[i] = g > nmax[i] ? g : nmax[i];
+                }
+            }
+        } else {
+            nmin[i] = nmin[nd->left] < nmin[nd->right] ? nmin[nd->left] : nmin[nd->right];
+            nmax[i] = nmax[nd->left] > nmax[nd->right] ? nmax[nd->left] : nmax[nd->right];
+        }
+    }
+}
+
+/* Reverse the vertices of paths [p0, out->npaths): a support row prints the same either way. */
+static void reverse_paths(amp_pathset *out, size_t p0)
+{
+    size_t i;
+    for (i = p0; i < out->npaths; i++) {
+        amp_pvert *v = amp_pathset_path_verts(out, i);
+        size_t a = 0, b = out->paths[i].n;
+        while (b > a + 1) {
+            amp_pvert t = v[a];
+            v[a++] = v[--b];
+            v[b] = t;
+        }
+    }
+}
+
+/*
+ * The pieces ord[k0, k1) of one slot, layer by layer (lowest first, as made);
+ * within a layer (one height: no piece is below another) the nearest piece
+ * next, from either end, so that the nozzle travels little between them.
+ */
+static amp_status emit_slot(amp_pathset *out, const amp_fragments *fs, const uint32_t *late, const piece *pcs,
+                            const size_t *ord, size_t k0, size_t k1, unsigned char *used, amp_pvert **run, size_t *cap,
+                            amp_error *err)
+{
+    amp_status st = AMP_OK;
+    size_t g0 = k0;
+    while (st == AMP_OK && g0 < k1) {
+        double z = fs->frag[pcs[ord[g0]].f0].p0.z;
+        size_t g1 = g0, left, k;
+        while (g1 < k1 && fabs(fs->frag[pcs[ord[g1]].f0].p0.z - z) < 1e-9)
+            used[g1++ - k0] = 0;
+        for (left = g1 - g0; st == AMP_OK && left > 0; left--) {
+            amp_vec3 cur = out->nverts ? out->verts[out->nverts - 1].p : fs->frag[pcs[ord[g0]].f0].p0;
+            size_t best = g0, p0 = out->npaths;
+            double bd = HUGE_VAL;
+            int rev = 0;
+            for (k = g0; k < g1; k++) {
+                const piece *pc = &pcs[ord[k]];
+                double ds = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f0].p0);
+                double de = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f1 - 1].p1);
+                if (ds < bd || de < bd) {
+                    best = k;
+                    rev = de < ds;
+                    bd = fmin(ds, de);
+                }
+            }
+            used[best - k0] = 1;
+            st = emit_frags(out, fs, AMP_ROLE_SUPPORT, 0.0, pcs[ord[best]].f0, pcs[ord[best]].f1, late, 1, run, cap,
+                            err);
+            if (st == AMP_OK && rev)
+                reverse_paths(out, p0);
+        }
+        g0 = g1;
+    }
+    return st;
+}
+
+/*
+ * Emit in print order: object path k, with the pieces placed before each of its
+ * fragments; a piece placed inside path k splits it there. Pieces placed after
+ * the last object fragment (nothing above them) come last. In one slot the
+ * pieces keep the order they were made (layer by layer, lowest first).
+ */
+static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragments *fs, const uint32_t *late,
+                           const piece *pcs, size_t npc, amp_pathset *out, amp_support_stats *s, amp_error *err)
+{
+    const amp_allocator *a = out->alloc;
+    size_t nf = fs->first[nobj], i, g, k = 0, run_cap = 0;
+    size_t *cnt = amp_calloc(a, nf + 2, sizeof *cnt), *ord = amp_calloc(a, npc + 1, sizeof *ord);
+    unsigned char *used = amp_calloc(a, npc + 1, 1);
+    amp_pvert *run = NULL;
+    amp_status st = AMP_OK;
+    if (!cnt || !ord || !used) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+        goto done;
+    }
+    for (i = 0; i < npc; i++)
+        cnt[(pcs[i].pos >= nf ? nf : pcs[i].pos) + 1]++;
+    for (i = 0; i <= nf; i++)
+        cnt[i + 1] += cnt[i];
+    for (i = 0; i < npc; i++)
+        ord[cnt[pcs[i].pos >= nf ? nf : pcs[i].pos]++] = i;
+    /* now cnt[g] = end of the pieces of slot g in ord */
+    for (i = 0; st == AMP_OK && i < nobj; i++) {
+        size_t f0 = fs->first[i], f1 = fs->first[i + 1], cut = f0;
+        for (g = f0; st == AMP_OK && g < f1; g++) {
+            if (k == cnt[g])
+                continue;
+            if (g > cut) {
+                st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, g, NULL, 1, &run, &run_cap, err);
+                s->splits++;
+                cut = g;
+            }
+            st = emit_slot(out, fs, late, pcs, ord, k, cnt[g], used, &run, &run_cap, err);
+            k = cnt[g];
+        }
+        if (st == AMP_OK && cut == f0) {
+            st = amp_pathset_add(out, in->paths[i].role, amp_pathset_path_verts(in, i), in->paths[i].n, err);
+            if (st == AMP_OK && in->paths[i].h > 0.0)
+                st = amp_pathset_set_height(out, in->paths[i].h, err);
+        } else if (st == AMP_OK) {
+            st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, f1, NULL, 1, &run, &run_cap, err);
+        }
+    }
+    i = out->npaths;
+    if (st == AMP_OK)
+        st = emit_slot(out, fs, late, pcs, ord, k, cnt[nf], used, &run, &run_cap, err);
+    s->unplaced = out->npaths - i;
+done:
+    amp_free(a, cnt);
+    amp_free(a, ord);
+    amp_free(a, used);
+    amp_free(a, run);
+    return st;
 }
 
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
@@ -347,10 +617,8 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     amp_fragments fs;
     amp_fbvh b;
     uint32_t *nmin = NULL, *nmax = NULL, *first = NULL, *late = NULL;
-    amp_pvert *run = NULL;
     piece *pcs = NULL;
-    size_t run_cap = 0, npc = 0, pcap = 0;
-    size_t i, nobj;
+    size_t npc = 0, i, nobj;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
@@ -374,10 +642,17 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
-    /* §5.3 ordering: the support below an object path is printed before it */
-    if ((stt = amp_fragments_build(&fs, &all, o->head.z_offs, c.a, err)) != AMP_OK ||
+    if (o->progress)
+        o->progress(o->progress_user, 0.1);
+    /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
+     * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
+    if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
         (stt = amp_fbvh_build(&b, &fs, c.a, err)) != AMP_OK)
         goto done;
+    if (fs.n >= LEFT_OUT) {
+        stt = amp_fail(err, AMP_ERR_LIMIT, 0, "too many fragments for support");
+        goto done;
+    }
     nmin = amp_calloc(c.a, b.nnodes + 1, sizeof *nmin);
     nmax = amp_calloc(c.a, b.nnodes + 1, sizeof *nmax);
     first = amp_calloc(c.a, fs.n + 1, sizeof *first);
@@ -386,112 +661,24 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
         goto done;
     }
-    for (i = b.nnodes; i-- > 0;) {
-        const amp_fbvh_node *nd = &b.node[i];
-        nmin[i] = NOPATH;
-        nmax[i] = 0;
-        if (nd->left == 0) {
-            uint32_t q;
-            for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t p = fs.frag[b.order[q]].path;
-                if (p < nobj && in->paths[p].role == AMP_ROLE_OBJECT) {
-                    nmin[i] = p < nmin[i] ? p : nmin[i];
-                    nmax[i] = p > nmax[i] ? p : nmax[i];
-                }
-            }
-        } else {
-            nmin[i] = nmin[nd->left] < nmin[nd->right] ? nmin[nd->left] : nmin[nd->right];
-            nmax[i] = nmax[nd->left] > nmax[nd->right] ? nmax[nd->left] : nmax[nd->right];
-        }
-    }
-    /* per support fragment: the first object path above it (it must come before) and the last one below it
-     * (it must come after) */
+    node_bounds(&b, &fs, in, fs.first[nobj], nmin, nmax);
+    /* per support fragment: the first object fragment above it (it must come before) and the last one below
+     * it (it must come after) */
     {
         long f0 = (long)fs.first[nobj], f;
 #pragma omp parallel for schedule(dynamic, 64)
         for (f = f0; f < (long)fs.n; f++) {
-            first[f] = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 1);
-            late[f] = search(&b, &fs, &o->head, nmin, nmax, nobj, (uint32_t)f, 0);
+            first[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 1);
+            late[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 0);
         }
     }
-    /* Cut each row into as few pieces as possible such that every piece has a slot: the first object above
-     * any of its fragments comes after the last object below any of them. A fragment with no slot of its own
-     * (an object printed later lies below it: a thin overhang gap, a steep underside) is left out. */
-    for (i = nobj; i < all.npaths; i++) {
-        size_t f = fs.first[i];
-        while (f < fs.first[i + 1]) {
-            piece pc;
-            uint32_t lo = NOPATH, hi = 0;
-            int any_late = 0;
-            pc.f0 = f;
-            for (; f < fs.first[i + 1]; f++) {
-                uint32_t nlo = first[f] < lo ? first[f] : lo, nhi = hi;
-                int nany = any_late;
-                if (late[f] != NOPATH) {
-                    nhi = late[f] > hi ? late[f] : hi;
-                    nany = 1;
-                }
-                if (nany && nlo != NOPATH && nhi >= nlo) {
-                    if (f == pc.f0) { /* no slot even alone */
-                        leave_out(&fs, late, f, &s);
-                        pc.f0 = f + 1;
-                        continue;
-                    }
-                    break;
-                }
-                lo = nlo;
-                hi = nhi;
-                any_late = nany;
-            }
-            if (f == pc.f0)
-                continue;
-            pc.f1 = f;
-            pc.pos = lo;
-            if ((stt = amp_grow(c.a, (void **)&pcs, &pcap, npc + 1, sizeof *pcs)) != AMP_OK) {
-                stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
-                goto done;
-            }
-            pcs[npc++] = pc;
-        }
-    }
-    /* Support-support gouging: a piece must be printed before every piece above it (Def. 5.1). */
-    if ((stt = order_pieces(&c, o, &fs, pcs, npc, err)) != AMP_OK)
+    /* object before support above it, support before object and support above it (Def. 5.1) */
+    if (o->progress)
+        o->progress(o->progress_user, 0.6);
+    if ((stt = place_pieces(&c, o, &fs, nobj, first, late, &pcs, &npc, &s, err)) != AMP_OK)
         goto done;
-    /* Moving a piece earlier can put it before an object below it: those fragments are left out too. */
-    for (i = 0; i < npc; i++) {
-        size_t f;
-        for (f = pcs[i].f0; f < pcs[i].f1; f++)
-            if (late[f] != NOPATH && late[f] != LEFT_OUT && pcs[i].pos != NOPATH && late[f] >= pcs[i].pos)
-                leave_out(&fs, late, f, &s);
-    }
-    /* emit: the pieces of object path k (in the order they were made) right before it, unplaced ones last */
-    {
-        size_t *cnt = amp_calloc(c.a, nobj + 2, sizeof *cnt), *ord = amp_calloc(c.a, npc + 1, sizeof *ord);
-        size_t k;
-        if (!cnt || !ord) {
-            amp_free(c.a, cnt);
-            amp_free(c.a, ord);
-            stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
-            goto done;
-        }
-        for (i = 0; i < npc; i++)
-            cnt[(pcs[i].pos == NOPATH ? nobj : pcs[i].pos) + 1]++;
-        for (i = 0; i <= nobj; i++)
-            cnt[i + 1] += cnt[i];
-        for (i = 0; i < npc; i++)
-            ord[cnt[pcs[i].pos == NOPATH ? nobj : pcs[i].pos]++] = i;
-        for (i = 0, k = 0; stt == AMP_OK && i <= nobj; i++) {
-            size_t before = out->npaths;
-            for (; stt == AMP_OK && k < cnt[i]; k++)
-                stt = emit_piece(out, &fs, late, &pcs[ord[k]], &run, &run_cap, err);
-            if (i == nobj)
-                s.unplaced = out->npaths - before;
-            if (stt == AMP_OK && i < nobj)
-                stt = amp_pathset_add(out, in->paths[i].role, amp_pathset_path_verts(in, i), in->paths[i].n, err);
-        }
-        amp_free(c.a, cnt);
-        amp_free(c.a, ord);
-    }
+    if ((stt = emit_all(in, nobj, &fs, late, pcs, npc, out, &s, err)) != AMP_OK)
+        goto done;
     s.paths = 0;
     for (i = 0; i < out->npaths; i++)
         s.paths += out->paths[i].role == AMP_ROLE_SUPPORT;
@@ -505,7 +692,6 @@ done:
     amp_free(c.a, first);
     amp_free(c.a, late);
     amp_free(c.a, pcs);
-    amp_free(c.a, run);
     amp_fbvh_free(&b);
     amp_fragments_free(&fs);
     amp_pathset_free(&all);

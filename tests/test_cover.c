@@ -6,6 +6,10 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "runtool.h"
 #include "testutil.h"
 
@@ -206,6 +210,191 @@ START_TEST(volume_and_gap_measurement_agree_with_closed_forms)
 }
 END_TEST
 
+
+/* A trilinear trivariate (order 2, 2 x 2 x 2) from its eight corners P(i, j, k) and weights. */
+static void trilinear(amp_spline *v, const amp_vec3 *P, const double *w)
+{
+    int k[3] = {2, 2, 2}, i;
+    size_t n[3] = {2, 2, 2};
+    ck_assert_int_eq(amp_spline_create(v, NULL, 3, k, n, w != NULL, NULL), AMP_OK);
+    for (i = 0; i < 8; i++)
+        amp_spline_cp_set(v, amp_spline_index(v, (size_t)(i & 1), (size_t)((i >> 1) & 1), (size_t)(i >> 2)), P[i],
+                          w ? w[i] : 1.0);
+}
+
+/*
+ * Wedge A: x = 16 u, y = 4 v, z = w (0.5 + 15.5 u): the w-curves are 0.5 mm
+ * long at u = 0 and 16 mm at u = 1. Covered along w at eps 1 (neighbours
+ * within thr = 0.95 mm), the thick end needs 2^5 - 1 = 31 middle surfaces
+ * (16 / 2^4 > 0.95 >= 16 / 2^5); the thin end none. Untrimmed, each of those
+ * would span the whole 16 mm in u, and Elber-Cohen's halving covers a surface
+ * 16 mm wide with curves 16 / 2^5 = 0.5 mm apart (16 / 2^4 > 0.95): 33 curves,
+ * 33 * 33 = 1089 in all. Trimmed to the cells whose w-curves are too long
+ * (Algorithm 1, lines 6-10), a middle surface of depth k only reaches where
+ * h(u) > 0.95 * 2^(k-1): the curves fill the wedge, whose volume is about half
+ * its bounding box (mean h 8.25 of 16 mm). Measured: 567 curves.
+ */
+START_TEST(trimmed_mid_surfaces_cover_a_wedge_with_far_fewer_curves)
+{
+    amp_vec3 P[8];
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    double gap;
+    int i;
+    for (i = 0; i < 8; i++) {
+        int a = i & 1, b = (i >> 1) & 1, c = i >> 2;
+        P[i] = amp_v3(16.0 * a, 4.0 * b, c * (0.5 + 15.5 * a));
+    }
+    trilinear(&v, P, NULL);
+    amp_cover_opts_default(&o);
+    o.eps = 1.0;
+    o.dir = 2;
+    gap = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(gap <= o.eps, "gap %g", gap);
+    ck_assert_int_eq(st.depth_limited, 0);
+    ck_assert_msg(st.surfaces == 33, "%lu surfaces", (unsigned long)st.surfaces);
+    ck_assert_msg(st.curves < 0.6 * 1089, "%lu curves, untrimmed needs 1089", (unsigned long)st.curves);
+    amp_spline_free(&v);
+}
+END_TEST
+
+/*
+ * Wedge B: x = u (0.5 + 15.5 v), y = 16 v, z = 4 w: on every w-surface the
+ * v-curves at u = 0 and u = 1 are 0.5 mm apart at v = 0 and 16 mm at v = 1.
+ * Elber-Cohen adds the middle curve only over the t-cells where its
+ * neighbours are too far apart. At v = 1 the halving needs 2^5 - 1 = 31
+ * middle curves (16 / 2^4 > 0.95 >= 16 / 2^5); drawn over the whole range,
+ * each is 16 mm long: 31 * 16 + 2 * 16 = 528 mm per surface. Drawn where
+ * needed, the curves fill the surface's trapezoid, about half the rectangle
+ * (mean width 8.25 of 16 mm). Measured: 249 mm per surface.
+ */
+START_TEST(elber_cohen_mid_curves_cover_only_where_neighbours_drift_apart)
+{
+    amp_vec3 P[8];
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    double gap, per_surface;
+    int i;
+    for (i = 0; i < 8; i++) {
+        int a = i & 1, b = (i >> 1) & 1, c = i >> 2;
+        P[i] = amp_v3(a * (0.5 + 15.5 * b), 16.0 * b, 4.0 * c);
+    }
+    trilinear(&v, P, NULL);
+    amp_cover_opts_default(&o);
+    o.eps = 1.0;
+    o.dir = 2;
+    gap = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(gap <= o.eps, "gap %g", gap);
+    per_surface = st.length / (double)st.surfaces;
+    ck_assert_msg(per_surface < 0.6 * 528.0, "%g mm per surface (%lu surfaces, %lu curves)", per_surface,
+                  (unsigned long)st.surfaces, (unsigned long)st.curves);
+    amp_spline_free(&v);
+}
+END_TEST
+
+/*
+ * Lemma A.2 for a rational trivariate: layer k = 1 has weight 100 at one
+ * corner. The w-curve at u = 1/2, v = 0 runs from (5, 0, 0) to
+ * (100 (0,0,1) + (10,0,1)) / 101 = (0.099, 0, 1): 5.0 mm, while no control
+ * edge along w is longer than 1 mm, so the lemma's polynomial bound (the sum
+ * of the longest edges) is violated; the weight-ratio correction restores it.
+ * Covered along w at eps 2 with one trimming cell (the cell's control block
+ * is the whole net; finer cells refine the net by knot insertion, which
+ * evens out the weights inside each block), a bound without the correction
+ * would see 1 mm curves and add no middle surface: two surfaces 5 mm apart
+ * along that curve, against neighbours within thr = 1.9 mm that Algorithm 1
+ * promises. (The sampled gap then happens to stay at 0.77 mm, the v-curves
+ * crowding where the weight pulls the top surface; the guarantee is lost all
+ * the same.) Measured with the correction: 30 surfaces, gap 0.40 mm.
+ */
+START_TEST(rational_correction_of_lemma_a2_is_needed_and_sufficient)
+{
+    amp_vec3 P[8];
+    double w[8], bound, edge = 0.0, len = 0.0, gap;
+    amp_spline v;
+    amp_cover_opts o;
+    amp_cover_stats st;
+    int i;
+    for (i = 0; i < 8; i++) {
+        int a = i & 1, b = (i >> 1) & 1, c = i >> 2;
+        P[i] = amp_v3(10.0 * a, 10.0 * b, c);
+        w[i] = i == 4 ? 100.0 : 1.0;
+    }
+    trilinear(&v, P, w);
+    for (i = 0; i < 4; i++)
+        edge = fmax(edge, amp_v3_dist(P[i], P[i + 4]));
+    {
+        double p[3] = {0.5, 0.0, 0.0}, q[3] = {0.5, 0.0, 1.0};
+        amp_vec3 x, y;
+        amp_spline_eval(&v, p, &x, NULL);
+        amp_spline_eval(&v, q, &y, NULL);
+        len = amp_v3_dist(x, y); /* the curve is a straight segment (degree 1 in w) */
+    }
+    ck_assert_msg(len > 4.5 * edge, "curve %g, longest edge %g", len, edge);
+    bound = amp_spline_polygon_length_bound(&v, 2, NULL);
+    ck_assert_msg(bound >= len, "bound %g < curve length %g", bound, len);
+    amp_cover_opts_default(&o);
+    o.eps = 2.0;
+    o.dir = 2;
+    o.cells = 1;
+    gap = cover_gap(&v, &o, &st, NULL);
+    ck_assert_msg(gap <= o.eps, "gap %g > eps (%lu surfaces)", gap, (unsigned long)st.surfaces);
+    /* the 5 mm w-curve must be cut into pieces of at most thr = 1.9 mm: halving needs 4, 3 middle surfaces */
+    ck_assert_msg(st.surfaces >= 5, "%lu surfaces", (unsigned long)st.surfaces);
+    amp_spline_free(&v);
+}
+END_TEST
+
+
+/* The number after "key": in a JSON text (the first occurrence after @p from). */
+static double json_after(const char *js, const char *from, const char *key)
+{
+    char pat[128];
+    const char *p = from ? strstr(js, from) : js;
+    ck_assert_msg(p != NULL, "%s missing in %s", from, js);
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(p, pat);
+    ck_assert_msg(p != NULL, "%s missing in %s", key, js);
+    return strtod(p + strlen(pat), NULL);
+}
+
+/* One over-coverage (cover.h amp_over_coverage): mdr and check report the same figure on the same result. */
+START_TEST(mdr_and_check_report_one_over_coverage)
+{
+    char args[1024], a[8192], b[8192];
+    const char *cov = amp_test_tmp("oc-cover.amp"), *m = amp_test_tmp("oc-mdr.amp");
+    amp_pathset ps;
+    amp_spline v;
+    amp_error err;
+    double om, oc, want;
+    snprintf(args, sizeof args, "cover torus-quarter --eps 3 -o %s", cov);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "mdr %s --nominal 1 --trivariate torus-quarter --json -o %s", cov, m);
+    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    snprintf(args, sizeof args, "check %s --trivariate torus-quarter --no-gouge --samples 2000 --json", m);
+    amp_test_run_tool(args, b, sizeof b); /* the gap may exceed eps after MDR: only the figure matters here */
+    om = json_after(a, NULL, "over_coverage");
+    oc = json_after(b, "\"coverage\"", "over_coverage");
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, m, &err), AMP_OK);
+    ck_assert_int_eq(amp_trivariate_model("torus-quarter", NULL, &v, NULL), AMP_OK);
+    want = amp_pathset_volume(&ps, AMP_ROLE_OBJECT) / amp_trivariate_volume(&v);
+    ck_assert_msg(fabs(om - want) <= 1e-6 * want && fabs(oc - want) <= 1e-6 * want, "mdr %g, check %g, want %g", om,
+                  oc, want);
+    /* without a model mdr does not guess one: null, and the union-of-tubes overlap instead */
+    snprintf(args, sizeof args, "mdr %s --nominal 1 --json", cov);
+    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_ptr_nonnull(strstr(a, "\"over_coverage\":null"));
+    ck_assert_msg(json_after(a, NULL, "overlap") > 0.5, "%s", a);
+    amp_spline_free(&v);
+    amp_pathset_free(&ps);
+    remove(cov);
+    remove(m);
+}
+END_TEST
+
 START_TEST(bad_input_is_rejected)
 {
     amp_spline v;
@@ -273,6 +462,97 @@ START_TEST(cli_cover_and_check_report_and_fail_properly)
 }
 END_TEST
 
+#ifdef _OPENMP
+/* Appends G-code text to a growing buffer. */
+typedef struct text_buf {
+    char *p;
+    size_t n, cap;
+} text_buf;
+
+static amp_status text_sink(void *user, const char *data, size_t len)
+{
+    text_buf *b = user;
+    if (b->n + len > b->cap) {
+        b->cap = 2 * (b->n + len);
+        b->p = realloc(b->p, b->cap);
+        ck_assert_ptr_nonnull(b->p);
+    }
+    memcpy(b->p + b->n, data, len);
+    b->n += len;
+    return AMP_OK;
+}
+
+/* The helix job of `make demo` (coarser), every stage with @p threads OpenMP threads; its G-code in @p g and the
+ * ordered paths with their radii in @p ordered. */
+static void helix_job(int threads, text_buf *g, amp_pathset *ordered)
+{
+    amp_spline v;
+    amp_cover_opts co;
+    amp_order_opts oo;
+    amp_mdr_opts mo;
+    amp_support_opts so;
+    amp_gcode_opts go;
+    amp_pathset a, b, c;
+    amp_mesh m;
+    amp_bvh *bvh = NULL;
+    amp_error err;
+    omp_set_num_threads(threads);
+    amp_spline_init(&v);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_pathset_init(&c, NULL);
+    amp_mesh_init(&m, NULL);
+    amp_cover_opts_default(&co);
+    co.eps = 2.0;
+    co.dir = 0;
+    amp_order_opts_default(&oo);
+    amp_mdr_opts_default(&mo, 0.5);
+    amp_support_opts_default(&so);
+    amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_cover_trivariate(&v, &co, &a, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_order(&a, &oo, &b, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_mdr(&b, &mo, ordered, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 0, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&bvh, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_support(ordered, bvh, &so, &c, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_gcode_write(&c, &go, text_sink, g, NULL, &err), AMP_OK);
+    amp_bvh_free(bvh);
+    amp_mesh_free(&m);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_pathset_free(&c);
+    amp_spline_free(&v);
+}
+
+/* Issue 18: the library's parallel parts (coverage, ordering's first queries, MDR neighbour search, support
+ * rays) must not change any output: the whole job on 1 and on 2 threads, byte for byte. */
+START_TEST(helix_job_is_byte_identical_on_one_and_two_threads)
+{
+    text_buf g1 = {NULL, 0, 0}, g2 = {NULL, 0, 0};
+    amp_pathset p1, p2;
+    size_t i;
+    int saved = omp_get_max_threads();
+    amp_pathset_init(&p1, NULL);
+    amp_pathset_init(&p2, NULL);
+    helix_job(1, &g1, &p1);
+    helix_job(2, &g2, &p2);
+    omp_set_num_threads(saved);
+    ck_assert_uint_eq(p1.npaths, p2.npaths);
+    ck_assert_uint_eq(p1.nverts, p2.nverts);
+    for (i = 0; i < p1.nverts; i++)
+        ck_assert_msg(memcmp(&p1.verts[i], &p2.verts[i], sizeof p1.verts[i]) == 0, "vertex %lu differs", (unsigned long)i);
+    ck_assert_uint_gt(g1.n, 100000);
+    ck_assert_uint_eq(g1.n, g2.n);
+    ck_assert(memcmp(g1.p, g2.p, g1.n) == 0);
+    amp_pathset_free(&p1);
+    amp_pathset_free(&p2);
+    free(g1.p);
+    free(g2.p);
+}
+END_TEST
+#endif
+
 static Suite *cover_suite(void)
 {
     Suite *s = suite_create("cover");
@@ -285,6 +565,13 @@ static Suite *cover_suite(void)
     tcase_add_test(tc, volume_and_gap_measurement_agree_with_closed_forms);
     tcase_add_test(tc, bad_input_is_rejected);
     tcase_add_test(tc, cli_cover_and_check_report_and_fail_properly);
+    tcase_add_test(tc, trimmed_mid_surfaces_cover_a_wedge_with_far_fewer_curves);
+    tcase_add_test(tc, elber_cohen_mid_curves_cover_only_where_neighbours_drift_apart);
+    tcase_add_test(tc, rational_correction_of_lemma_a2_is_needed_and_sufficient);
+    tcase_add_test(tc, mdr_and_check_report_one_over_coverage);
+#ifdef _OPENMP
+    tcase_add_test(tc, helix_job_is_byte_identical_on_one_and_two_threads);
+#endif
     suite_add_tcase(s, tc);
     return s;
 }

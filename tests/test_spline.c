@@ -11,6 +11,12 @@
 #define PI 3.14159265358979323846
 
 static unsigned long rng_state = 12345;
+static int dbl_cmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : (x > y);
+}
+
 static double rnd(void)
 {
     rng_state = rng_state * 6364136223846793005UL + 1442695040888963407UL;
@@ -457,6 +463,66 @@ static double iso_length(const amp_spline *s, int d, double a, double b)
     return len;
 }
 
+/* Issue 18: a long parameter list in random order (the knot index, 256 points and more) gives exactly the points
+ * of the same list sorted and of short lists (the span cache), for orders 2..5, uniform and random knots,
+ * knots of multiplicity 2, parameters on knots, at and beyond both domain ends. */
+START_TEST(shuffled_long_lists_give_the_points_of_sorted_and_short_lists)
+{
+    int k;
+    for (k = 2; k <= 5; k++) {
+        int nonuniform;
+        for (nonuniform = 0; nonuniform < 2; nonuniform++) {
+            amp_spline s;
+            int order[1];
+            size_t count[1] = {40}, n = 3000, i, *perm = malloc(3000 * sizeof *perm);
+            double *par = malloc(n * sizeof *par), *sorted = malloc(n * sizeof *sorted), lo, hi;
+            amp_vec3 *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b), *c = malloc(n * sizeof *c);
+            order[0] = k;
+            random_spline(&s, 1, order, count, 0, 1, nonuniform);
+            if (nonuniform)
+                s.knots[0][k + 10] = s.knots[0][k + 9]; /* a double knot inside */
+            amp_spline_domain(&s, 0, &lo, &hi);
+            for (i = 0; i < n; i++) {
+                if (i % 7 == 0)
+                    par[i] = s.knots[0][(size_t)k - 1 + i % (count[0] - (size_t)k + 2)];
+                else
+                    par[i] = lo - 0.1 + (hi - lo + 0.2) * rnd();
+                perm[i] = i;
+            }
+            par[1] = lo;
+            par[2] = hi;
+            for (i = n; i > 1; i--) {
+                size_t q = (size_t)(rnd() * (double)i) % i, t = perm[i - 1];
+                perm[i - 1] = perm[q];
+                perm[q] = t;
+            }
+            for (i = 0; i < n; i++)
+                sorted[i] = par[i];
+            qsort(sorted, n, sizeof *sorted, dbl_cmp);
+            for (i = 0; i < n; i++)
+                par[i] = sorted[perm[i]];
+            ck_assert_int_eq(amp_spline_eval_list(&s, par, n, a, NULL), AMP_OK);
+            ck_assert_int_eq(amp_spline_eval_list(&s, sorted, n, b, NULL), AMP_OK);
+            for (i = 0; i < n; i += 200)
+                ck_assert_int_eq(amp_spline_eval_list(&s, par + i, n - i < 200 ? n - i : 200, c + i, NULL), AMP_OK);
+            for (i = 0; i < n; i++) {
+                ck_assert_msg(a[i].x == b[perm[i]].x && a[i].y == b[perm[i]].y && a[i].z == b[perm[i]].z,
+                              "order %d: t = %.17g differs between shuffled and sorted lists", k, par[i]);
+                ck_assert_msg(a[i].x == c[i].x && a[i].y == c[i].y && a[i].z == c[i].z,
+                              "order %d: t = %.17g differs between a long and a short list", k, par[i]);
+            }
+            amp_spline_free(&s);
+            free(perm);
+            free(par);
+            free(sorted);
+            free(a);
+            free(b);
+            free(c);
+        }
+    }
+}
+END_TEST
+
 START_TEST(control_polygon_bound_holds_and_is_tight_on_a_straight_net)
 {
     amp_spline s;
@@ -813,6 +879,7 @@ static Suite *spline_suite(void)
     tcase_add_test(tc, isoparametric_extraction_matches_the_trivariate);
     tcase_add_test(tc, reversal_mirrors_the_parameter);
     tcase_add_test(tc, batched_list_and_grid_match_single_points);
+    tcase_add_test(tc, shuffled_long_lists_give_the_points_of_sorted_and_short_lists);
     tcase_add_test(tc, control_polygon_bound_holds_and_is_tight_on_a_straight_net);
     tcase_add_test(tc, spl_roundtrip_keeps_several_objects);
     tcase_add_loop_test(tc, malformed_spl_is_rejected_with_line_numbers, 0,

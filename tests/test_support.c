@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "runtool.h"
 #include "testutil.h"
@@ -190,6 +191,207 @@ START_TEST(support_from_a_trivariate_matches_its_boundary_mesh)
 }
 END_TEST
 
+
+/* Sum of the lengths of the paths of one role; counts the paths of zero length. */
+static double role_length(const amp_pathset *ps, amp_role role, size_t *zero)
+{
+    double sum = 0.0;
+    size_t i;
+    *zero = 0;
+    for (i = 0; i < ps->npaths; i++)
+        if (ps->paths[i].role == role) {
+            double l = amp_path_length(ps, i);
+            sum += l;
+            *zero += !(l > 0.0);
+        }
+    return sum;
+}
+
+/* A number after "key": in a JSON text. */
+static double json_num(const char *js, const char *key)
+{
+    char pat[128];
+    const char *p;
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(js, pat);
+    ck_assert_msg(p != NULL, "%s missing in %s", key, js);
+    return strtod(p + strlen(pat), NULL);
+}
+
+/*
+ * The helix covered along u at eps 2 mm and ordered: its support used to drop
+ * 9,356 fragments (4,470 mm, 17 % of the rows) that had no gouge-free slot
+ * between whole object paths. Slots between object fragments (splitting an
+ * object path where needed) exist for every fragment (Lemma 5.1 argument in
+ * lib/support.c): nothing is dropped, no path has zero length, the sequence
+ * is gouge-free and every object path is held; the same job without its
+ * support fails the support check.
+ */
+START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
+{
+    char args[2048], js[16384];
+    const char *cov = amp_test_tmp("hx-u2.amp"), *ord = amp_test_tmp("hx-u2o.amp"), *res = amp_test_tmp("hx-u2s.amp");
+    amp_pathset out;
+    amp_error err;
+    size_t zero;
+    double made, kept;
+    amp_pathset_init(&out, NULL);
+    snprintf(args, sizeof args, "cover helix --eps 2 --dir u -o %s", cov);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "order %s -o %s", cov, ord);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "support %s --trivariate helix --json -o %s", ord, res);
+    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_msg(json_num(js, "conflicts") == 0 && json_num(js, "trimmed_mm") == 0, "%s", js);
+    ck_assert_msg(json_num(js, "unheld_paths") == 0, "%s", js);
+    made = json_num(js, "support_length_mm");
+    ck_assert_int_eq(amp_pathset_read_file(&out, res, &err), AMP_OK);
+    kept = role_length(&out, AMP_ROLE_SUPPORT, &zero);
+    ck_assert_uint_eq(zero, 0);
+    ck_assert_msg(made > 20000.0 && fabs(kept - made) <= 1e-6 * made, "made %g mm, printed %g mm", made, kept);
+    role_length(&out, AMP_ROLE_OBJECT, &zero);
+    ck_assert_uint_eq(zero, 0);
+    snprintf(args, sizeof args, "check %s --no-coverage --json", res);
+    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_msg(strstr(js, "\"gouge\":{\"ran\":true,\"ok\":true") != NULL, "%s", js);
+    ck_assert_msg(strstr(js, "\"support\":{\"ran\":true,\"ok\":true") != NULL, "%s", js);
+    /* the ordered job without support: object beads in the air under the overhang */
+    snprintf(args, sizeof args, "check %s --no-coverage --no-gouge --support --json", ord);
+    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 1);
+    ck_assert_msg(json_num(js, "unheld_paths") >= 10 && json_num(js, "unheld_mm") > 100.0, "%s", js);
+    /* without --support a job with no support paths is not judged */
+    snprintf(args, sizeof args, "check %s --no-coverage --no-gouge --json", ord);
+    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_msg(strstr(js, "\"support\":{\"ran\":false") != NULL, "%s", js);
+    amp_pathset_free(&out);
+    remove(cov);
+    remove(ord);
+    remove(res);
+}
+END_TEST
+
+/* One straight object path from a to b, radius r, sampled in vertices 0.5 mm apart or closer. */
+static void line_path(amp_pathset *ps, amp_role role, amp_vec3 a, amp_vec3 b, double r)
+{
+    size_t k, n = (size_t)ceil(amp_v3_dist(a, b) / 0.5);
+    ck_assert_int_eq(amp_pathset_begin(ps, role, NULL), AMP_OK);
+    for (k = 0; k <= n; k++)
+        ck_assert_int_eq(amp_pathset_push(ps, amp_v3_lerp(a, b, (double)k / (double)n), r, NULL), AMP_OK);
+}
+
+static amp_hold_report hold(const amp_pathset *ps)
+{
+    amp_hold_opts o;
+    amp_hold_report r;
+    amp_error err;
+    amp_hold_opts_default(&o);
+    ck_assert_msg(amp_hold_check(ps, &o, &r, &err) == AMP_OK, "%s", err.msg);
+    return r;
+}
+
+/* A floating slab is not held; the same slab on its support is; the support printed after it is not. */
+START_TEST(hold_check_needs_material_printed_earlier_under_each_bead)
+{
+    amp_pathset slab, sup, both, late;
+    amp_hold_report r;
+    amp_error err;
+    double x, z;
+    amp_pathset_init(&slab, NULL);
+    amp_pathset_init(&sup, NULL);
+    amp_pathset_init(&both, NULL);
+    amp_pathset_init(&late, NULL);
+    slab_paths(&slab); /* z 3.25 .. 4.75, beads of radius 0.25 */
+    r = hold(&slab);
+    ck_assert_uint_gt(r.failures, 0);
+    ck_assert_uint_eq(r.npaths_failed, 20); /* the 20 rows of the first layer; every layer above rests on it */
+    ck_assert_uint_eq(r.paths_failed[0], 0);
+    ck_assert_uint_eq(r.paths_failed[19], 19);
+    amp_hold_report_free(&r);
+    /* support: rows across the slab rows, every 0.4 mm up to 2.8 mm, 1 mm apart */
+    for (z = 0.4; z < 2.9; z += 0.4)
+        for (x = 0.5; x < 10; x += 1.0)
+            line_path(&sup, AMP_ROLE_SUPPORT, amp_v3(x, 0, z), amp_v3(x, 10, z), 0.2);
+    ck_assert_int_eq(amp_pathset_append(&both, &sup, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_append(&both, &slab, &err), AMP_OK);
+    r = hold(&both);
+    ck_assert_uint_eq(r.failures, 0);
+    ck_assert_uint_gt(r.samples, 1500); /* 80 rows of 9.5 mm, every 0.25 mm */
+    amp_hold_report_free(&r);
+    ck_assert_int_eq(amp_pathset_append(&late, &slab, &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_append(&late, &sup, &err), AMP_OK);
+    r = hold(&late);
+    ck_assert_uint_eq(r.npaths_failed, 20);
+    amp_hold_report_free(&r);
+    amp_pathset_free(&slab);
+    amp_pathset_free(&sup);
+    amp_pathset_free(&both);
+    amp_pathset_free(&late);
+}
+END_TEST
+
+/* Bridges between two pillars: up to 5 mm pass, longer ones fail; a short tip off a pillar passes. */
+START_TEST(hold_check_allows_short_bridges_and_tips_only)
+{
+    static const double span[3] = {4.0, 8.0, 0.0};
+    int t;
+    for (t = 0; t < 3; t++) {
+        amp_pathset ps;
+        amp_hold_report r;
+        double z, x1 = 1.0 + span[t];
+        amp_pathset_init(&ps, NULL);
+        /* two pillars of stacked short beads from the bed up to z 4.8 at x = 0 and x = x1 (one for the tip) */
+        for (z = 0.2; z < 4.9; z += 0.4) {
+            line_path(&ps, AMP_ROLE_OBJECT, amp_v3(-0.5, 0, z), amp_v3(0.5, 0, z), 0.2);
+            if (t < 2)
+                line_path(&ps, AMP_ROLE_OBJECT, amp_v3(x1 - 0.5, 0, z), amp_v3(x1 + 0.5, 0, z), 0.2);
+        }
+        if (t < 2) /* the deck across */
+            line_path(&ps, AMP_ROLE_OBJECT, amp_v3(-0.5, 0, 5.2), amp_v3(x1 + 0.5, 0, 5.2), 0.2);
+        else /* a tip: 0.6 mm beyond the last held point (1.9 mm: 45 degrees up from the pillar 1.4 mm lower) */
+            line_path(&ps, AMP_ROLE_OBJECT, amp_v3(-0.5, 0, 5.2), amp_v3(2.5, 0, 5.2), 0.2);
+        r = hold(&ps);
+        if (t == 1) {
+            ck_assert_uint_eq(r.failures, 1);
+            ck_assert_uint_eq(r.npaths_failed, 1);
+            ck_assert_uint_eq(r.paths_failed[0], ps.npaths - 1);
+            ck_assert_msg(r.worst_mm > 4.5 && r.worst_mm < 8.5, "unheld %g mm", r.worst_mm);
+        } else {
+            ck_assert_msg(r.failures == 0, "span %g: %lu failures", span[t], (unsigned long)r.failures);
+            ck_assert_uint_eq(r.bridges, (size_t)(t == 0 ? 1 : 0));
+            ck_assert_uint_eq(r.tips, (size_t)(t == 2 ? 1 : 0));
+        }
+        amp_hold_report_free(&r);
+        amp_pathset_free(&ps);
+    }
+}
+END_TEST
+
+/* The 45-degree rule: a wall leaning 40 degrees from the vertical stands, one leaning 60 degrees does not. */
+START_TEST(hold_check_applies_the_overhang_rule)
+{
+    static const double lean[2] = {40.0, 60.0};
+    int t;
+    for (t = 0; t < 2; t++) {
+        amp_pathset ps;
+        amp_hold_report r;
+        double z, sh = tan(lean[t] / 57.295779513082320876);
+        int layer = 0;
+        amp_pathset_init(&ps, NULL);
+        for (z = 0.2; z < 10; z += 0.4, layer++)
+            line_path(&ps, AMP_ROLE_OBJECT, amp_v3(z * sh, 0, z), amp_v3(z * sh, 10, z), 0.2);
+        r = hold(&ps);
+        if (t == 0) {
+            ck_assert_uint_eq(r.failures, 0);
+        } else {
+            /* layers up to the bed tolerance are held by the bed; every one after the first layer above 1 mm fails */
+            ck_assert_uint_gt(r.npaths_failed, (size_t)layer - 4);
+        }
+        amp_hold_report_free(&r);
+        amp_pathset_free(&ps);
+    }
+}
+END_TEST
+
 static Suite *support_suite(void)
 {
     Suite *s = suite_create("support");
@@ -199,6 +401,10 @@ static Suite *support_suite(void)
     tcase_add_test(tc, model_on_the_plate_needs_no_support_and_bad_options_fail);
     tcase_add_test(tc, support_command_writes_interleaved_paths_and_rejects_bad_models);
     tcase_add_test(tc, support_from_a_trivariate_matches_its_boundary_mesh);
+    tcase_add_test(tc, helix_support_keeps_every_fragment_and_holds_every_path);
+    tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
+    tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);
+    tcase_add_test(tc, hold_check_applies_the_overhang_rule);
     suite_add_tcase(s, tc);
     return s;
 }

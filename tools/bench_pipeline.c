@@ -1,26 +1,158 @@
 /*
- * Benchmark (SPEC §7): the full helix pipeline of `make demo` in one process —
+ * Benchmark (SPEC §7, issue 18): the full helix pipeline of `make demo` in one process —
  * cover (paper 1 §4.1) → order (§5.1) → MDR (§5.2) → support (§5.3) → G-code
- * (SPEC §5) — stage by stage, next to a baseline measured in the same run: the
- * planar pipeline on the same solid (slice → continuous strokes of paper 2 →
- * G-code), i.e. what a layer-based job of the same part costs.
+ * (SPEC §5), then `check` — stage by stage with time and peak memory, at eps 1
+ * (the demo) and eps 0.5, on 1 and 2 threads; the travel figures of the G-code
+ * (issue 14 item 4) with and without the nearest choice of the ordering; and the
+ * planar pipeline on the same solid (slice → continuous strokes → G-code) as the
+ * baseline of what a layer-based job of the same part costs. Every target of
+ * issue 18 is printed with its figure and "met" / "not met".
  */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#include "checkers.h"
 #include "cli.h"
 
-/* Counts G-code bytes instead of storing them. */
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+/* ---- a counting allocator: peak of the bytes live through the caller's allocator ---- */
+
+typedef struct counter {
+    size_t live, peak;
+} counter;
+
+typedef union hdr {
+    size_t size;
+    long double ld; /* C99 has no max_align_t: these keep the payload aligned for any type */
+    void *p;
+    long long ll;
+} hdr;
+
+static void count_add(counter *c, size_t add, size_t sub)
+{
+#pragma omp critical(bench_counter)
+    {
+        c->live = c->live + add - sub;
+        if (c->live > c->peak)
+            c->peak = c->live;
+    }
+}
+
+static void *cnt_alloc(void *user, size_t size)
+{
+    hdr *h = malloc(sizeof *h + size);
+    if (!h)
+        return NULL;
+    h->size = size;
+    count_add(user, size, 0);
+    return h + 1;
+}
+
+static void *cnt_realloc(void *user, void *ptr, size_t size)
+{
+    hdr *h = ptr ? (hdr *)ptr - 1 : NULL, *n;
+    size_t old = h ? h->size : 0;
+    n = realloc(h, sizeof *n + size);
+    if (!n)
+        return NULL;
+    n->size = size;
+    count_add(user, size, old);
+    return n + 1;
+}
+
+static void cnt_free(void *user, void *ptr)
+{
+    hdr *h = ptr ? (hdr *)ptr - 1 : NULL;
+    if (!h)
+        return;
+    count_add(user, 0, h->size);
+    free(h);
+}
+
+/* Counts G-code bytes and hashes them (FNV-1a), so that runs can be compared without storing the file. */
+typedef struct gsink {
+    size_t bytes;
+    uint64_t hash;
+} gsink;
+
 static amp_status count_sink(void *user, const char *data, size_t len)
 {
-    (void)data;
-    *(size_t *)user += len;
+    gsink *g = user;
+    size_t i;
+    for (i = 0; i < len; i++)
+        g->hash = (g->hash ^ (unsigned char)data[i]) * 0x100000001b3ULL;
+    g->bytes += len;
     return AMP_OK;
 }
 
-typedef struct stage_times {
-    double cover, order, mdr, support, gcode;
-} stage_times;
+enum { ST_COVER, ST_ORDER, ST_MDR, ST_SUPPORT, ST_GCODE, ST_CHECK, NSTAGES };
+static const char *const stage_name[NSTAGES] = {"cover", "order", "mdr", "support", "gcode", "check"};
 
-static int volumetric(double eps, stage_times *t, size_t *npaths, size_t *subdiv, size_t *bytes)
+typedef struct vrun {
+    double t[NSTAGES];
+    size_t peak[NSTAGES]; /* bytes live at the stage's peak (what earlier stages left included) */
+    size_t peak_all;      /* over the pipeline, check excluded */
+    size_t fragments, subdivisions, paths;
+    int check_ok;
+    gsink g;
+    amp_gcode_stats gs;
+} vrun;
+
+static double pipeline_s(const vrun *r) { return r->t[ST_COVER] + r->t[ST_ORDER] + r->t[ST_MDR] + r->t[ST_SUPPORT] + r->t[ST_GCODE]; }
+
+/* The independent checks of `ampath check` (gouging, coverage of the trivariate) on the final paths. */
+static int run_check(const amp_pathset *ps, double eps)
 {
+    check_ctx c;
+    cli_json j;
+    FILE *null = fopen("/dev/null", "w");
+    int ok;
+    if (!null)
+        return 0;
+    memset(&c, 0, sizeof c);
+    c.paths_file = "bench";
+    c.ps = ps;
+    c.trivariate = "helix";
+    amp_head_default(&c.head);
+    c.eps = eps;
+    c.eps_given = 1;
+    c.samples = 20000;
+    c.tol = 1e-6;
+    cli_json_begin(&j, null);
+    cli_json_obj(&j, "gouge");
+    ok = check_gouge(&c, &j) == CLI_OK;
+    cli_json_close(&j);
+    cli_json_obj(&j, "coverage");
+    ok = check_coverage(&c, &j) == CLI_OK && ok;
+    cli_json_end(&j);
+    fclose(null);
+    return ok;
+}
+
+static void stage_begin(counter *c, double *t0)
+{
+    c->peak = c->live;
+    *t0 = cli_now();
+}
+
+static void stage_end(counter *c, vrun *r, int s, double t0)
+{
+    r->t[s] = cli_now() - t0;
+    r->peak[s] = c->peak;
+    if (s != ST_CHECK && c->peak > r->peak_all)
+        r->peak_all = c->peak;
+}
+
+/* cover → order → mdr → support → gcode (→ check) of the helix at @p eps on @p threads threads. */
+static int volumetric(double eps, int nearest, int threads, int check, vrun *r)
+{
+    counter cnt = {0, 0};
+    amp_allocator al = {cnt_alloc, cnt_realloc, cnt_free, NULL};
     amp_spline v;
     amp_cover_opts co;
     amp_order_opts oo;
@@ -33,43 +165,61 @@ static int volumetric(double eps, stage_times *t, size_t *npaths, size_t *subdiv
     amp_bvh *bvh = NULL;
     double t0;
     int ok;
+    al.user = &cnt;
+    memset(r, 0, sizeof *r);
+    r->g.hash = 0xcbf29ce484222325ULL;
+#ifdef _OPENMP
+    omp_set_num_threads(threads);
+#else
+    (void)threads;
+#endif
     amp_spline_init(&v);
-    amp_pathset_init(&a, NULL);
-    amp_pathset_init(&b, NULL);
-    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&a, &al);
+    amp_pathset_init(&b, &al);
+    amp_mesh_init(&m, &al);
     amp_cover_opts_default(&co);
     co.eps = eps;
     co.dir = 0; /* curves along the helix, as the demo */
     amp_order_opts_default(&oo);
+    oo.nearest = nearest;
     amp_mdr_opts_default(&mo, 0.5);
     amp_support_opts_default(&so);
     amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
-    *bytes = 0;
-    t0 = cli_now();
-    ok = amp_trivariate_model("helix", NULL, &v, NULL) == AMP_OK && amp_cover_trivariate(&v, &co, &a, NULL, NULL) == AMP_OK;
-    t->cover = cli_now() - t0;
-    t0 = cli_now();
+    stage_begin(&cnt, &t0);
+    ok = amp_trivariate_model("helix", &al, &v, NULL) == AMP_OK && amp_cover_trivariate(&v, &co, &a, NULL, NULL) == AMP_OK;
+    stage_end(&cnt, r, ST_COVER, t0);
+    stage_begin(&cnt, &t0);
     ok = ok && amp_order(&a, &oo, &b, &ost, NULL) == AMP_OK;
-    t->order = cli_now() - t0;
+    stage_end(&cnt, r, ST_ORDER, t0);
     amp_pathset_clear(&a);
-    t0 = cli_now();
+    stage_begin(&cnt, &t0);
     ok = ok && amp_mdr(&b, &mo, &a, NULL, NULL) == AMP_OK;
-    t->mdr = cli_now() - t0;
+    stage_end(&cnt, r, ST_MDR, t0);
     amp_pathset_clear(&b);
-    t0 = cli_now();
+    stage_begin(&cnt, &t0);
     ok = ok && amp_mesh_from_trivariate(&m, &v, 0, NULL) == AMP_OK && amp_bvh_build(&bvh, &m, NULL) == AMP_OK &&
          amp_support(&a, bvh, &so, &b, NULL, NULL) == AMP_OK;
-    t->support = cli_now() - t0;
-    t0 = cli_now();
-    ok = ok && amp_gcode_write(&b, &go, count_sink, bytes, NULL, NULL) == AMP_OK;
-    t->gcode = cli_now() - t0;
-    *npaths = b.npaths;
-    *subdiv = ok ? ost.subdivisions : 0;
+    stage_end(&cnt, r, ST_SUPPORT, t0);
     amp_bvh_free(bvh);
     amp_mesh_free(&m);
+    amp_pathset_clear(&a);
+    stage_begin(&cnt, &t0);
+    ok = ok && amp_gcode_write(&b, &go, count_sink, &r->g, &r->gs, NULL) == AMP_OK;
+    stage_end(&cnt, r, ST_GCODE, t0);
+    if (ok && check) {
+        stage_begin(&cnt, &t0);
+        r->check_ok = run_check(&b, eps);
+        stage_end(&cnt, r, ST_CHECK, t0);
+    }
+    r->paths = b.npaths;
+    r->fragments = ost.fragments;
+    r->subdivisions = ost.subdivisions;
     amp_pathset_free(&a);
     amp_pathset_free(&b);
     amp_spline_free(&v);
+#ifdef _OPENMP
+    omp_set_num_threads(omp_get_num_procs());
+#endif
     return ok;
 }
 
@@ -82,6 +232,7 @@ static int planar(double layer, double *t, size_t *strokes, size_t *bytes)
     amp_contpath_stats st;
     amp_gcode_opts go;
     amp_pathset ps;
+    gsink g = {0, 0};
     double t0 = cli_now();
     int ok;
     amp_mesh_init(&m, NULL);
@@ -91,49 +242,218 @@ static int planar(double layer, double *t, size_t *strokes, size_t *bytes)
     so.first_layer = 0;
     amp_contpath_opts_default(&co, 0.5);
     amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
-    *bytes = 0;
     ok = amp_mesh_model("helix", 0, &m, NULL) == AMP_OK && amp_slice_mesh(&m, &so, &sl, NULL) == AMP_OK &&
          amp_contpath_layers(&sl, &co, &ps, &st, NULL) == AMP_OK &&
-         amp_gcode_write(&ps, &go, count_sink, bytes, NULL, NULL) == AMP_OK;
+         amp_gcode_write(&ps, &go, count_sink, &g, NULL, NULL) == AMP_OK;
     *t = cli_now() - t0;
     *strokes = ok ? st.strokes : 0;
+    *bytes = g.bytes;
     amp_pathset_free(&ps);
     amp_slices_free(&sl);
     amp_mesh_free(&m);
     return ok;
 }
 
+/* Subdivisions of the plain greedy Algorithm 2 on the helix covering at @p eps (the improvements' baseline). */
+static size_t greedy_subdivisions(double eps)
+{
+    amp_spline v;
+    amp_cover_opts co;
+    amp_order_opts oo;
+    amp_order_stats ost;
+    amp_pathset a, b;
+    size_t n = 0;
+    amp_spline_init(&v);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_cover_opts_default(&co);
+    co.eps = eps;
+    co.dir = 0;
+    amp_order_opts_default(&oo);
+    oo.improve = 0;
+    if (amp_trivariate_model("helix", NULL, &v, NULL) == AMP_OK && amp_cover_trivariate(&v, &co, &a, NULL, NULL) == AMP_OK &&
+        amp_order(&a, &oo, &b, &ost, NULL) == AMP_OK)
+        n = ost.subdivisions;
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_spline_free(&v);
+    return n;
+}
+
+static void machine(char *cpu, size_t cap, long *nproc)
+{
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    char line[512];
+    snprintf(cpu, cap, "unknown CPU");
+    while (f && fgets(line, sizeof line, f)) {
+        char *c = strchr(line, ':');
+        if (strncmp(line, "model name", 10) == 0 && c) {
+            snprintf(cpu, cap, "%s", c + 2);
+            cpu[strcspn(cpu, "\n")] = 0;
+            break;
+        }
+    }
+    if (f)
+        fclose(f);
+#ifdef _OPENMP
+    *nproc = omp_get_num_procs();
+#else
+    *nproc = 1;
+#endif
+}
+
+static void print_run(const char *label, double eps, const vrun *r)
+{
+    int s;
+    printf("%s eps %.1f mm, %lu fragments: pipeline %.2f s, peak %.1f MB =", label, eps, (unsigned long)r->fragments,
+           pipeline_s(r), (double)r->peak_all / 1e6);
+    for (s = 0; s < ST_CHECK; s++)
+        printf("%s %s %.2f s / %.1f MB", s ? " +" : "", stage_name[s], r->t[s], (double)r->peak[s] / 1e6);
+    if (r->t[ST_CHECK] > 0)
+        printf("; check %.2f s / %.1f MB (%s)", r->t[ST_CHECK], (double)r->peak[ST_CHECK] / 1e6,
+               r->check_ok ? "passed" : "FAILED");
+    printf("\n");
+}
+
+static void json_run(cli_json *j, const char *key, double eps, const vrun *r)
+{
+    int s;
+    char k[64];
+    cli_json_obj(j, key);
+    cli_json_num(j, "eps", eps);
+    cli_json_int(j, "fragments", (long long)r->fragments);
+    for (s = 0; s < NSTAGES; s++) {
+        snprintf(k, sizeof k, "%s_s", stage_name[s]);
+        cli_json_num(j, k, r->t[s]);
+        snprintf(k, sizeof k, "%s_peak_mb", stage_name[s]);
+        cli_json_num(j, k, (double)r->peak[s] / 1e6);
+    }
+    cli_json_num(j, "pipeline_s", pipeline_s(r));
+    cli_json_num(j, "peak_mb", (double)r->peak_all / 1e6);
+    cli_json_int(j, "subdivisions", (long long)r->subdivisions);
+    cli_json_int(j, "paths", (long long)r->paths);
+    cli_json_num(j, "print_length_mm", r->gs.print_length);
+    cli_json_num(j, "travel_length_mm", r->gs.travel_length);
+    cli_json_num(j, "travel_over_extrusion", r->gs.travel_length / fmax(r->gs.print_length, 1e-9));
+    cli_json_num(j, "travel_time_share", r->gs.travel_time / fmax(r->gs.time, 1e-9));
+    cli_json_int(j, "retractions", (long long)r->gs.retractions);
+    cli_json_int(j, "gcode_bytes", (long long)r->g.bytes);
+    cli_json_close(j);
+}
+
+static void target(cli_json *j, const char *key, const char *text, double figure, double limit, int below, const char *unit)
+{
+    int met = below ? figure <= limit : figure >= limit;
+    if (j) {
+        cli_json_obj(j, key);
+        cli_json_num(j, "figure", figure);
+        cli_json_num(j, "limit", limit);
+        cli_json_bool(j, "met", met);
+        cli_json_close(j);
+    } else {
+        printf("  target %-52s %8.3f %-4s (%s %g) %s\n", text, figure, unit, below ? "<=" : ">=", limit,
+               met ? "met" : "NOT MET");
+    }
+}
+
 int bench_pipeline(cli_json *j, int quick)
 {
-    stage_times t;
-    double eps = quick ? 2.0 : 1.0, layer = quick ? 1.0 : 0.5, total, t_planar;
-    size_t npaths, subdiv, bytes, strokes, pbytes;
-    if (!volumetric(eps, &t, &npaths, &subdiv, &bytes) || !planar(layer, &t_planar, &strokes, &pbytes))
+    vrun d, dn, f1, f2;
+    double e1 = quick ? 2.0 : 1.0, e2 = quick ? 1.0 : 0.5, layer = quick ? 1.0 : 0.5, t_planar, xt, xm, ratio;
+    size_t strokes, pbytes, g1, g2;
+    long nproc;
+    char cpu[256];
+    struct rusage ru;
+    cli_progress bar;
+    machine(cpu, sizeof cpu, &nproc);
+    cli_progress_begin(&bar, "bench pipeline");
+    if (!volumetric(e1, 1, 1, 1, &d))
         return CLI_FAILED;
-    total = t.cover + t.order + t.mdr + t.support + t.gcode;
+    cli_progress_update(&bar, 0.15);
+    if (!volumetric(e1, 0, 1, 0, &dn))
+        return CLI_FAILED;
+    cli_progress_update(&bar, 0.25);
+    g1 = greedy_subdivisions(e1);
+    cli_progress_update(&bar, 0.3);
+    if (!volumetric(e2, 1, 1, 0, &f1))
+        return CLI_FAILED;
+    cli_progress_update(&bar, 0.55);
+    if (!volumetric(e2, 1, 2, 0, &f2))
+        return CLI_FAILED;
+    cli_progress_update(&bar, 0.8);
+    g2 = greedy_subdivisions(e2);
+    if (!planar(layer, &t_planar, &strokes, &pbytes))
+        return CLI_FAILED;
+    cli_progress_end(&bar);
+    getrusage(RUSAGE_SELF, &ru);
+    /* growth exponents: log(time ratio) / log(fragment ratio) */
+    ratio = (double)f1.fragments / (double)(d.fragments ? d.fragments : 1);
+    xt = log(pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9)) / log(ratio);
+    xm = log((double)f1.peak_all / fmax((double)d.peak_all, 1.0)) / log(ratio);
     if (j) {
-        cli_json_num(j, "eps", eps);
-        cli_json_num(j, "cover_s", t.cover);
-        cli_json_num(j, "order_s", t.order);
-        cli_json_num(j, "mdr_s", t.mdr);
-        cli_json_num(j, "support_s", t.support);
-        cli_json_num(j, "gcode_s", t.gcode);
-        cli_json_num(j, "total_s", total);
-        cli_json_int(j, "paths", (long long)npaths);
-        cli_json_int(j, "subdivisions", (long long)subdiv);
-        cli_json_int(j, "gcode_bytes", (long long)bytes);
-        cli_json_num(j, "planar_layer", layer);
+        cli_json_str(j, "cpu", cpu);
+        cli_json_int(j, "nproc", nproc);
+        json_run(j, "demo", e1, &d);
+        json_run(j, "demo_without_nearest", e1, &dn);
+        json_run(j, "fine", e2, &f1);
+        json_run(j, "fine_2_threads", e2, &f2);
+        cli_json_int(j, "greedy_subdivisions_demo", (long long)g1);
+        cli_json_int(j, "greedy_subdivisions_fine", (long long)g2);
+        cli_json_num(j, "time_exponent", xt);
+        cli_json_num(j, "memory_exponent", xm);
+        cli_json_bool(j, "threads_identical", f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes);
         cli_json_num(j, "planar_s", t_planar);
         cli_json_int(j, "planar_strokes", (long long)strokes);
-        cli_json_num(j, "total_over_planar", total / (t_planar > 0 ? t_planar : 1e-9));
+        cli_json_num(j, "max_rss_mb", (double)ru.ru_maxrss / 1e3);
+        cli_json_obj(j, "targets");
     } else {
-        printf("helix pipeline eps %.1f mm: %.2f s total = cover %.2f + order %.2f + mdr %.2f + support %.2f + "
-               "gcode %.2f; %lu paths, %lu subdivisions, %.1f MB of G-code\n",
-               eps, total, t.cover, t.order, t.mdr, t.support, t.gcode, (unsigned long)npaths,
-               (unsigned long)subdiv, (double)bytes / 1e6);
-        printf("baseline, planar continuous pipeline on the helix mesh (layer %.1f mm): %.2f s, %lu strokes, "
-               "%.1f MB; volumetric / planar = %.2fx\n",
-               layer, t_planar, (unsigned long)strokes, (double)pbytes / 1e6, total / (t_planar > 0 ? t_planar : 1e-9));
+        printf("machine: %s, %ld processors; times are wall clock, memory is the peak of the bytes live through the "
+               "caller's allocator (process max RSS %.0f MB)\n",
+               cpu, nproc, (double)ru.ru_maxrss / 1e3);
+        print_run("demo helix, 1 thread,", e1, &d);
+        printf("  travel %.1f m for %.1f m of extrusion = %.2fx, travel %.0f %% of the estimated %.0f s, %lu retractions; "
+               "baseline without the nearest choice: %.2fx, %.0f %%, %lu subdivisions\n",
+               d.gs.travel_length / 1e3, d.gs.print_length / 1e3, d.gs.travel_length / fmax(d.gs.print_length, 1e-9),
+               100.0 * d.gs.travel_time / fmax(d.gs.time, 1e-9), d.gs.time, (unsigned long)d.gs.retractions,
+               dn.gs.travel_length / fmax(dn.gs.print_length, 1e-9), 100.0 * dn.gs.travel_time / fmax(dn.gs.time, 1e-9),
+               (unsigned long)dn.subdivisions);
+        printf("  subdivisions %lu, plain greedy %lu\n", (unsigned long)d.subdivisions, (unsigned long)g1);
+        print_run("fine helix, 1 thread,", e2, &f1);
+        printf("  travel %.2fx of extrusion, %.0f %% of the time; subdivisions %lu, plain greedy %lu\n",
+               f1.gs.travel_length / fmax(f1.gs.print_length, 1e-9), 100.0 * f1.gs.travel_time / fmax(f1.gs.time, 1e-9),
+               (unsigned long)f1.subdivisions, (unsigned long)g2);
+        print_run("fine helix, 2 threads,", e2, &f2);
+        printf("  eps %.1f -> %.1f: fragments x%.2f, pipeline time x%.2f (exponent %.2f), peak memory x%.2f (exponent "
+               "%.2f); 2 threads %.2fx faster, G-code %s\n",
+               e1, e2, ratio, pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9), xt,
+               (double)f1.peak_all / fmax((double)d.peak_all, 1.0), xm, pipeline_s(&f1) / fmax(pipeline_s(&f2), 1e-9),
+               f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes ? "byte-identical" : "DIFFERS");
+        printf("baseline, planar continuous pipeline on the helix mesh (layer %.1f mm): %.2f s, %lu strokes, %.1f MB; "
+               "volumetric / planar = %.2fx\n",
+               layer, t_planar, (unsigned long)strokes, (double)pbytes / 1e6, pipeline_s(&d) / fmax(t_planar, 1e-9));
+        printf("issue 18 and 14 (item 4) targets%s:\n", quick ? " (--quick: coarser sizes, not the targets' own)" : "");
     }
-    return CLI_OK;
+    target(j, "demo_pipeline_s", "demo pipeline time (s), 1 thread", pipeline_s(&d), 1.0, 1, "s");
+    target(j, "demo_check_s", "demo check time (s), 1 thread", d.t[ST_CHECK], 0.5, 1, "s");
+    target(j, "fine_pipeline_s", "eps 0.5 pipeline time (s), 1 thread", pipeline_s(&f1), 8.0, 1, "s");
+    target(j, "fine_peak_mb", "eps 0.5 pipeline peak memory (MB)", (double)f1.peak_all / 1e6, 300.0, 1, "MB");
+    target(j, "time_exponent", "time growth exponent eps 1 -> 0.5", xt, 1.1, 1, "");
+    target(j, "memory_exponent", "memory growth exponent eps 1 -> 0.5", xm, 1.1, 1, "");
+    target(j, "thread_speedup", "eps 0.5 pipeline speed-up on 2 threads", pipeline_s(&f1) / fmax(pipeline_s(&f2), 1e-9),
+           1.6, 0, "x");
+    target(j, "threads_identical", "G-code identical on 1 and 2 threads (1 = yes)",
+           f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes, 1.0, 0, "");
+    target(j, "improved_vs_greedy_demo", "subdivisions improved - greedy, demo", (double)d.subdivisions - (double)g1,
+           0.0, 1, "");
+    target(j, "improved_vs_greedy_fine", "subdivisions improved - greedy, eps 0.5", (double)f1.subdivisions - (double)g2,
+           0.0, 1, "");
+    target(j, "demo_subdivisions", "demo subdivisions (before the nearest choice: 4813)", (double)d.subdivisions,
+           4813.0, 1, "");
+    target(j, "travel_over_extrusion", "demo travel / extrusion length", d.gs.travel_length / fmax(d.gs.print_length, 1e-9),
+           0.5, 1, "x");
+    target(j, "travel_time_share", "demo travel share of the estimated time", d.gs.travel_time / fmax(d.gs.time, 1e-9),
+           0.3, 1, "");
+    if (j)
+        cli_json_close(j);
+    return d.check_ok ? CLI_OK : CLI_FAILED;
 }

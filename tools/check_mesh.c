@@ -52,11 +52,14 @@ int check_mesh(const check_ctx *c, cli_json *j)
             cli_json_int(j, "samples", c->samples);
             cli_json_int(j, "vertices_outside", (long long)outside);
             cli_json_num(j, "worst_outside_mm", worst_out);
+            cli_json_num(j, "volume_mm3", amp_mesh_volume(&m));
+            cli_json_num(j, "deposited_mm3", amp_pathset_volume(ps, AMP_ROLE_OBJECT));
+            cli_json_num(j, "over_coverage", amp_over_coverage(ps, amp_mesh_volume(&m)));
         } else {
             printf("coverage: gap %.4f mm (mean %.4f) against eps %.4f over %ld samples; %lu vertices more than "
-                   "%.2f mm outside (worst %.4f mm): %s\n",
+                   "%.2f mm outside (worst %.4f mm): %s; over-coverage %.3f\n",
                    gap, mean, eps, c->samples, (unsigned long)outside, fmax(OUTSIDE_TOL, c->tol), worst_out,
-                   rc == CLI_OK ? "ok" : "FAILED");
+                   rc == CLI_OK ? "ok" : "FAILED", amp_over_coverage(ps, amp_mesh_volume(&m)));
         }
     }
     amp_bvh_free(b);

@@ -92,14 +92,14 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         cli_json_num(j, NULL, g.worst_par[2]);
         cli_json_close(j);
         cli_json_num(j, "volume_mm3", g.volume);
-        cli_json_num(j, "deposited_mm3", g.deposited);
-        cli_json_num(j, "over_coverage", g.volume > 0 ? g.deposited / g.volume : 0);
+        cli_json_num(j, "deposited_mm3", amp_pathset_volume(c->ps, AMP_ROLE_OBJECT));
+        cli_json_num(j, "over_coverage", amp_over_coverage(c->ps, g.volume));
     } else {
         printf("coverage: largest distance to a path %.4f mm over %lu samples (eps %.4f mm from %s): %s\n", g.gap,
                (unsigned long)g.samples, eps, eps_from, rc == CLI_OK ? "ok" : "FAILED");
         printf("coverage: worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n",
                g.worst.x, g.worst.y, g.worst.z, g.worst_par[0], g.worst_par[1], g.worst_par[2],
-               g.volume > 0 ? g.deposited / g.volume : 0);
+               amp_over_coverage(c->ps, g.volume));
     }
     if (rc != CLI_OK)
         fprintf(stderr, "ampath check: coverage gap %.4f mm exceeds eps %.4f mm\n", g.gap, eps);

@@ -35,6 +35,10 @@ typedef struct check_ctx {
     int layer_given;
     double first_layer;      /* --first-layer H0 (0: same as H) */
     double tol;              /* --tol T: distance tolerance of the stroke check */
+    int support;             /* --support: require held paths even when the file has no support paths */
+    double overhang;         /* --overhang DEG, radians (default 45 degrees) */
+    double max_gap;          /* --max-gap G, mm (default 1) */
+    double bridge;           /* --bridge B, mm (default 5) */
 } check_ctx;
 
 /* No gouging (paper 1, §5.1): no earlier point inside the head cone while a later point prints. */
@@ -57,6 +61,14 @@ int check_mesh(const check_ctx *c, cli_json *j);
  * also lies inside the layer polygon of its height (tools/check_stroke.c).
  */
 int check_stroke(const check_ctx *c, cli_json *j);
+
+/*
+ * Support (paper 1 §5.3): every extruded point of an object path is printed
+ * over material printed earlier or the bed, within the overhang rule, bridges
+ * allowed (lib amp_hold_check, tools/check_support.c). Runs when the file has
+ * support paths, or on request (--support).
+ */
+int check_support(const check_ctx *c, cli_json *j);
 
 /** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
 int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);

@@ -44,6 +44,7 @@ static const cli_range cli_ranges[] = {
     {"model", "tol", 0.005, 1},    /* mesh tessellation tolerance (as amp_mesh_model): smaller means runaway triangle counts */
     {NULL, "tol", 1e-12, 100},     /* check: the inside test's distance tolerance */
     {NULL, "eps", 1e-4, 1e4},      /* coverage bound; the work estimate of cover refuses most small values */
+    {"gcode", "chord-tol", 0, 10}, /* 0: write every input segment */
     {NULL, "chord-tol", 1e-6, 100},
     {NULL, "layer", 1e-3, 100},
     {NULL, "first-layer", 0, 100}, /* 0: same as --layer */
@@ -88,6 +89,14 @@ static const cli_range cli_ranges[] = {
     {NULL, "max-feed-xy", 0.1, 1e4},
     {NULL, "max-feed-z", 0.1, 1e4},
     {NULL, "max-feed-e", 0.1, 1e4},
+    {NULL, "first-layer-feed", 0.1, 1000},
+    {NULL, "retract-min-travel", 0, 1000},
+    {NULL, "first-layer-hotend", 0, 500},
+    {NULL, "first-layer-bed", 0, 200},
+    {NULL, "fan", 0, 100},
+    {NULL, "fan-off-layers", 0, 1e6},
+    {NULL, "radius-tol", 0, 10},
+    {NULL, "min-segment", 0, 10},
     /* work limits */
     {NULL, "max-curves", 1, 1e15},
     {NULL, "max-segments", 1, 1e15},

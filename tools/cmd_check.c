@@ -14,6 +14,7 @@ static const checker checkers[] = {
     {"coverage", check_coverage},
     {"gouge", check_gouge},
     {"strokes", check_stroke},
+    {"support", check_support},
 };
 #define NCHECKERS (sizeof checkers / sizeof checkers[0])
 
@@ -38,19 +39,23 @@ const char cmd_check_usage[] =
     "  --eps E         allowed coverage gap, mm; default: the eps recorded by 'ampath cover' in the file,\n"
     "                  else the largest vertex radius\n"
     "  --samples N     coverage samples (default 20000); --seed S their seed (default 1)\n"
+    "  --support       run the support check even without support paths (a job that needs none)\n"
+    "  --overhang DEG  largest overhang from the vertical that holds a bead (default 45)\n"
+    "  --max-gap G     air tolerated under a bead, mm (default 1, as 'ampath support --min-gap')\n"
+    "  --bridge B      longest unheld stretch between held points, mm (default 5)\n"
     "  --json          one JSON object: {\"input\", \"coverage\": {\"ran\", \"ok\", ...}, \"gouge\": {...},\n"
-    "                  \"strokes\": {...}, \"ok\"}\n"
+    "                  \"strokes\": {...}, \"support\": {...}, \"ok\"}\n"
     "Exit status: 0 all checks passed, 1 a check failed, 2 bad usage or input.\n";
 
 int cmd_check(int argc, char **argv)
 {
     const char *pos[1];
-    double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0;
+    double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, overhang_deg = 45.0;
     long seed = 1;
     int json = 0, npos = 0, rc, failed = 0, usage = 0;
     int skip[NCHECKERS];
     char names[NCHECKERS][40];
-    cli_opt opts[16 + NCHECKERS];
+    cli_opt opts[20 + NCHECKERS];
     check_ctx c;
     amp_pathset ps;
     cli_json j;
@@ -59,6 +64,8 @@ int cmd_check(int argc, char **argv)
     memset(skip, 0, sizeof skip);
     c.samples = 20000;
     c.tol = 1e-6;
+    c.max_gap = 1.0;
+    c.bridge = 5.0;
     opts[n++] = (cli_opt){"trivariate", CLI_STR, &c.trivariate, 0};
     opts[n++] = (cli_opt){"mesh", CLI_STR, &c.mesh, 0};
     opts[n++] = (cli_opt){"z-offs", CLI_DOUBLE, &z_offs, 0};
@@ -71,6 +78,10 @@ int cmd_check(int argc, char **argv)
     opts[n++] = (cli_opt){"layer", CLI_DOUBLE, &c.layer, 0};
     opts[n++] = (cli_opt){"first-layer", CLI_DOUBLE, &c.first_layer, 0};
     opts[n++] = (cli_opt){"tol", CLI_DOUBLE, &c.tol, 0};
+    opts[n++] = (cli_opt){"support", CLI_FLAG, &c.support, 0};
+    opts[n++] = (cli_opt){"overhang", CLI_DOUBLE, &overhang_deg, 0};
+    opts[n++] = (cli_opt){"max-gap", CLI_DOUBLE, &c.max_gap, 0};
+    opts[n++] = (cli_opt){"bridge", CLI_DOUBLE, &c.bridge, 0};
     opts[n++] = (cli_opt){"json", CLI_FLAG, &json, 0};
     for (i = 0; i < NCHECKERS; i++) {
         snprintf(names[i], sizeof names[i], "no-%s", checkers[i].name);
@@ -96,6 +107,11 @@ int cmd_check(int argc, char **argv)
         return cli_fail("check", CLI_USAGE, "--layer needs the --mesh that was sliced");
     if (!(c.tol >= 0.0) || c.tol > 1e3)
         return cli_fail("check", CLI_USAGE, "--tol must be in [0, 1000] mm");
+    if (!(overhang_deg >= 0.0 && overhang_deg < 90.0))
+        return cli_fail("check", CLI_USAGE, "--overhang must be in [0, 90) degrees (got %g)", overhang_deg);
+    if (!(c.max_gap >= 0.0 && c.max_gap <= 1e3) || !(c.bridge >= 0.0 && c.bridge <= 1e4))
+        return cli_fail("check", CLI_USAGE, "--max-gap and --bridge must be >= 0 mm");
+    c.overhang = overhang_deg / 57.295779513082320876;
     c.seed = (unsigned long)seed;
     c.paths_file = pos[0];
     amp_pathset_init(&ps, NULL);

@@ -21,20 +21,165 @@ const char cmd_field_usage[] =
     "  --step D          sampling step along each curve, mm (default min(0.5, S/2))\n"
     "  --min-len L       drop clipped pieces shorter than L mm (default S/2)\n"
     "  --radius R        deposition radius written to the paths, mm (default: the covering radius)\n"
+    "  --within R.stl    cover only the part of the mesh inside the closed region mesh R (several fields in\n"
+    "                    one model: one run per field); --without R.stl: only the part outside R; no gap is\n"
+    "                    measured then: merge the parts' paths and run 'ampath check --mesh MESH.stl'\n"
+    "  --shells N        surface layer: N shells of curves following the surface, S/2, 3S/2, ... inside it,\n"
+    "                    along the field's direction (default 0)\n"
     "  --samples N       points sampled in the mesh to measure the coverage gap (default 10000; 0 = skip)\n"
     "  -o, --output FILE write the paths (.amp); nothing is written without it\n"
     "  --json            print one JSON object with the figures\n"
     "figures: curves, paths kept, lengths before/after clipping (mm), mesh and deposited volume (mm^3),\n"
     "coverage gap (largest distance from a sampled inside point to the nearest path, mm) over the whole\n"
     "solid and over points at least S from the surface, with the lattice's covering radius as the bound.\n"
-    "exit status: 0 ok, 2 bad usage or input\n";
+    "The covering radius is met in space, for any parametrization: a trivariate field is covered by\n"
+    "Algorithm 1 with eps = the covering radius (paper 4.2 step 1, route algorithm1); other fields on the\n"
+    "grid pattern by an adaptive lattice that inserts curves where neighbours drift apart and next to the\n"
+    "surface (route adaptive; bound_mm is the sampled bound it meets); hex is the plain lattice (uniform).\n"
+    "exit status: 0 ok, 1 the field cannot meet the spacing or the measured gap exceeds the covering radius\n"
+    "(paths still written), 2 bad usage or input\n";
+
+/* The figures of one run (JSON or human lines). */
+typedef struct report {
+    const char *field, *pattern;
+    double spacing, mesh_volume, deposited, gap_all, gap_in, mean, t_cover, t_gap;
+    long samples, shells;
+    const amp_field_stats *st;
+} report;
+
+static void print_report(const report *r, int json)
+{
+    if (json) {
+        cli_json j;
+        cli_json_begin(&j, stdout);
+        cli_json_str(&j, "field", r->field);
+        cli_json_str(&j, "pattern", r->pattern);
+        cli_json_num(&j, "spacing_mm", r->spacing);
+        cli_json_int(&j, "curves", (long long)r->st->curves);
+        cli_json_int(&j, "paths", (long long)r->st->pieces);
+        cli_json_arr(&j, "grid");
+        cli_json_int(&j, NULL, (long long)r->st->grid_a);
+        cli_json_int(&j, NULL, (long long)r->st->grid_b);
+        cli_json_close(&j);
+        cli_json_num(&j, "length_before_mm", r->st->length_before);
+        cli_json_num(&j, "length_after_mm", r->st->length_after);
+        cli_json_num(&j, "radius_mm", r->st->radius);
+        cli_json_num(&j, "mesh_volume_mm3", r->mesh_volume);
+        cli_json_num(&j, "deposited_volume_mm3", r->deposited);
+        cli_json_int(&j, "gap_samples", r->samples);
+        if (r->gap_all >= 0) {
+            cli_json_num(&j, "coverage_gap_mm", r->gap_all);
+            cli_json_num(&j, "coverage_gap_mean_mm", r->mean);
+        }
+        if (r->gap_in >= 0)
+            cli_json_num(&j, "coverage_gap_interior_mm", r->gap_in);
+        cli_json_num(&j, "covering_radius_mm", r->st->target);
+        cli_json_str(&j, "route", r->st->route == AMP_FIELD_ROUTE_ALGORITHM1 ? "algorithm1"
+                                  : r->st->route == AMP_FIELD_ROUTE_ADAPTIVE ? "adaptive" : "uniform");
+        cli_json_num(&j, "bound_mm", r->st->bound);
+        if (r->st->bound_met >= 0)
+            cli_json_bool(&j, "bound_met", r->st->bound_met);
+        cli_json_int(&j, "inserted_curves", (long long)r->st->inserted);
+        cli_json_int(&j, "shells", r->shells);
+        cli_json_int(&j, "shell_paths", (long long)r->st->shell_paths);
+        cli_json_num(&j, "shell_length_mm", r->st->shell_length);
+        cli_json_num(&j, "cover_s", r->t_cover);
+        cli_json_num(&j, "gap_s", r->t_gap);
+        cli_json_end(&j);
+    } else {
+        printf("%s, %s pattern, S = %g mm: %lu curves (%lu x %lu), %lu paths kept, %.1f of %.1f mm inside\n",
+               r->field, r->pattern, r->spacing, (unsigned long)r->st->curves, (unsigned long)r->st->grid_a,
+               (unsigned long)r->st->grid_b, (unsigned long)r->st->pieces, r->st->length_after, r->st->length_before);
+        printf("radius %.3f mm, mesh volume %.1f mm^3, deposited %.1f mm^3\n", r->st->radius, r->mesh_volume,
+               r->deposited);
+        if (r->gap_all >= 0)
+            printf("coverage gap %.3f mm (mean %.3f), %s%.3f mm at least S inside; %ld samples\n", r->gap_all,
+                   r->mean, r->gap_in >= 0 ? "" : "n/a ", r->gap_in >= 0 ? r->gap_in : 0.0, r->samples);
+        if (r->st->bound_met >= 0)
+            printf("%s covering: bound %.3f mm against the covering radius %.3f mm (%lu curves inserted)%s\n",
+                   r->st->route == AMP_FIELD_ROUTE_ALGORITHM1 ? "Algorithm 1" : "adaptive", r->st->bound, r->st->target,
+                   (unsigned long)r->st->inserted, r->st->bound_met ? "" : ": the field cannot meet the spacing");
+    }
+}
+
+static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
+/* The sweep field of --along SPINE.amp (its first path) and --side W; *sw is malloc'ed and must outlive f. */
+static int load_sweep(const char *along, double side, amp_field *f, amp_sweep **sw)
+{
+    amp_pathset spine;
+    amp_vec3 pts[AMP_SWEEP_MAX];
+    amp_error err;
+    size_t i, n;
+    amp_error_clear(&err);
+    amp_pathset_init(&spine, NULL);
+    if (cli_load_paths("field", along, &spine) != CLI_OK)
+        return CLI_USAGE;
+    n = spine.npaths ? spine.paths[0].n : 0;
+    for (i = 0; i < n && i < AMP_SWEEP_MAX; i++)
+        pts[i] = amp_pathset_path_verts(&spine, 0)[i].p;
+    amp_pathset_free(&spine);
+    *sw = malloc(sizeof **sw);
+    if (!*sw)
+        return cli_fail("field", CLI_USAGE, "out of memory");
+    if (amp_field_sweep(f, *sw, pts, n, side, &err) != AMP_OK) {
+        free(*sw);
+        *sw = NULL;
+        return cli_fail("field", CLI_USAGE, "%s: %s", along, err.msg);
+    }
+    return CLI_OK;
+}
+
+/* A closed mesh and its BVH, or nothing when @p path is NULL. */
+static amp_status load_mesh(const char *path, amp_mesh *m, amp_bvh **b, amp_error *err)
+{
+    amp_status st;
+    if (!path)
+        return AMP_OK;
+    if ((st = amp_mesh_read_stl_file(m, path, err)) != AMP_OK)
+        return st;
+    return amp_bvh_build(b, m, err);
+}
+
+/* Coverage gap over the whole solid and over points at least S inside (a thinner solid has none: -1). */
+static int measure_gap(const amp_pathset *ps, const amp_bvh *b, long samples, double spacing, double *gap_all,
+                       double *gap_in, double *mean)
+{
+    amp_error err;
+    amp_error_clear(&err);
+    if (amp_coverage_gap(ps, b, (size_t)samples, 1, 0.0, gap_all, mean, &err) != AMP_OK)
+        return cli_fail_err("field", &err);
+    if (amp_coverage_gap(ps, b, (size_t)samples, 2, spacing, gap_in, NULL, &err) != AMP_OK)
+        *gap_in = -1;
+    return CLI_OK;
+}
+
+/* Exit 1 when the field cannot meet the spacing or the measured gap exceeds the covering radius. */
+static int judge(const amp_field_stats *st, double spacing, double gap_all)
+{
+    if (st->bound_met == 0) {
+        fprintf(stderr, "ampath field: the field cannot meet spacing %g mm: covering bound %.3f mm > %.3f mm\n",
+                spacing, st->bound, st->target);
+        return CLI_FAILED;
+    }
+    if (gap_all > st->target * (1 + 1e-6)) {
+        /* e.g. a mesh reaching outside the field's volume, or the plain honeycomb next to the surface */
+        fprintf(stderr, "ampath field: measured coverage gap %.3f mm exceeds the covering radius %.3f mm\n", gap_all,
+                st->target);
+        return CLI_FAILED;
+    }
+    return CLI_OK;
+}
 
 int cmd_field(int argc, char **argv)
 {
     const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w", *along = NULL;
+    const char *within = NULL, *without = NULL;
+    amp_mesh rm[2];
+    amp_bvh *rb[2] = {NULL, NULL};
     double side = 6.0, spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
     double gap_all = -1, gap_in = -1, mean = -1;
-    long samples = 10000;
+    long samples = 10000, shells = 0;
     int json = 0, npos = 0, rc;
     amp_mesh m;
     amp_bvh *b = NULL;
@@ -44,6 +189,7 @@ int cmd_field(int argc, char **argv)
     amp_sweep *sw = NULL;
     amp_field_opts o;
     amp_field_stats st;
+    cli_progress bar;
     amp_pathset ps;
     amp_error err;
     cli_opt opts[] = {{"field", CLI_STR, &field, 0},     {"spacing", CLI_DOUBLE, &spacing, 0},
@@ -52,7 +198,8 @@ int cmd_field(int argc, char **argv)
                       {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
                       {"along", CLI_STR, &along, 0},     {"side", CLI_DOUBLE, &side, 0},
-                      {NULL, CLI_FLAG, NULL, 0}};
+                      {"shells", CLI_LONG, &shells, 0},  {"within", CLI_STR, &within, 0},
+                      {"without", CLI_STR, &without, 0}, {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
@@ -60,6 +207,8 @@ int cmd_field(int argc, char **argv)
         return cli_fail("field", CLI_USAGE, "--field NAME is required (helix-square, box, sweep, or a trivariate)");
     if (strcmp(pattern, "grid") != 0 && strcmp(pattern, "hex") != 0)
         return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", pattern);
+    if (shells < 0 || shells > 100)
+        return cli_fail("field", CLI_USAGE, "--shells must be in 0..100");
     if (samples < 0)
         return cli_fail("field", CLI_USAGE, "--samples must be >= 0");
     if (strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
@@ -71,36 +220,21 @@ int cmd_field(int argc, char **argv)
     amp_spline_init(&spl);
     amp_error_clear(&err);
     if (sweep) {
-        amp_pathset spine;
-        amp_vec3 pts[AMP_SWEEP_MAX];
-        size_t i, n;
-        amp_pathset_init(&spine, NULL);
-        if (cli_load_paths("field", along, &spine) != CLI_OK)
-            return CLI_USAGE;
-        n = spine.npaths ? spine.paths[0].n : 0;
-        for (i = 0; i < n && i < AMP_SWEEP_MAX; i++)
-            pts[i] = amp_pathset_path_verts(&spine, 0)[i].p;
-        amp_pathset_free(&spine);
-        sw = malloc(sizeof *sw);
-        if (!sw)
-            return cli_fail("field", CLI_USAGE, "out of memory");
-        if (amp_field_sweep(&f, sw, pts, n, side, &err) != AMP_OK) {
-            free(sw);
-            return cli_fail("field", CLI_USAGE, "%s: %s", along, err.msg);
-        }
+        if ((rc = load_sweep(along, side, &f, &sw)) != CLI_OK)
+            return rc;
     } else if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
         return CLI_USAGE;
     amp_mesh_init(&m, NULL);
+    amp_mesh_init(&rm[0], NULL);
+    amp_mesh_init(&rm[1], NULL);
     amp_pathset_init(&ps, NULL);
-    if (amp_mesh_read_stl_file(&m, pos[0], &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK ||
+    if (load_mesh(within, &rm[0], &rb[0], &err) != AMP_OK || load_mesh(without, &rm[1], &rb[1], &err) != AMP_OK ||
+        load_mesh(pos[0], &m, &b, &err) != AMP_OK ||
         (sweep ? AMP_OK
                : builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
                          : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
-        free(sw);
-        amp_bvh_free(b);
-        amp_mesh_free(&m);
-        amp_spline_free(&spl);
-        return cli_fail_err("field", &err);
+        rc = cli_fail_err("field", &err);
+        goto done;
     }
     amp_field_opts_default(&o);
     o.spacing = spacing;
@@ -108,64 +242,45 @@ int cmd_field(int argc, char **argv)
     o.step = step;
     o.min_len = min_len;
     o.radius = radius;
+    o.shells = (int)shells;
+    o.within = rb[0];
+    o.without = (const amp_bvh *const *)&rb[1];
+    o.nwithout = rb[1] != NULL;
     t0 = cli_now();
+    cli_progress_begin(&bar, "field");
+    o.progress = progress;
+    o.progress_user = &bar;
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
+    cli_progress_end(&bar);
     t_cover = cli_now() - t0;
+    if (within || without)
+        samples = 0; /* the gap of one part is not the model's: check the merged paths with 'ampath check --mesh' */
     if (rc == CLI_OK && samples > 0 && ps.npaths > 0) {
         t0 = cli_now();
-        if (amp_coverage_gap(&ps, b, (size_t)samples, 1, 0.0, &gap_all, &mean, &err) != AMP_OK ||
-            amp_coverage_gap(&ps, b, (size_t)samples, 2, spacing, &gap_in, NULL, &err) != AMP_OK) {
-            /* a solid thinner than 2 S has no interior sample: report the whole-solid gap only */
-            if (gap_all < 0)
-                rc = cli_fail_err("field", &err);
-            gap_in = -1;
-        }
+        rc = measure_gap(&ps, b, samples, spacing, &gap_all, &gap_in, &mean);
         t_gap = cli_now() - t0;
     }
     if (rc == CLI_OK && out)
         rc = cli_save_paths("field", out, &ps, "ampath field: direction-field curves clipped to the mesh");
     if (rc == CLI_OK) {
-        if (json) {
-            cli_json j;
-            cli_json_begin(&j, stdout);
-            cli_json_str(&j, "field", field);
-            cli_json_str(&j, "pattern", pattern);
-            cli_json_num(&j, "spacing_mm", spacing);
-            cli_json_int(&j, "curves", (long long)st.curves);
-            cli_json_int(&j, "paths", (long long)st.pieces);
-            cli_json_arr(&j, "grid");
-            cli_json_int(&j, NULL, (long long)st.grid_a);
-            cli_json_int(&j, NULL, (long long)st.grid_b);
-            cli_json_close(&j);
-            cli_json_num(&j, "length_before_mm", st.length_before);
-            cli_json_num(&j, "length_after_mm", st.length_after);
-            cli_json_num(&j, "radius_mm", st.radius);
-            cli_json_num(&j, "mesh_volume_mm3", amp_mesh_volume(&m));
-            cli_json_num(&j, "deposited_volume_mm3", amp_pathset_volume(&ps, -1));
-            cli_json_int(&j, "gap_samples", samples);
-            if (gap_all >= 0) {
-                cli_json_num(&j, "coverage_gap_mm", gap_all);
-                cli_json_num(&j, "coverage_gap_mean_mm", mean);
-            }
-            if (gap_in >= 0)
-                cli_json_num(&j, "coverage_gap_interior_mm", gap_in);
-            cli_json_num(&j, "covering_radius_mm", o.pattern == AMP_PATTERN_GRID ? spacing * 0.7071067811865476
-                                                                                 : spacing * 0.5773502691896258);
-            cli_json_num(&j, "cover_s", t_cover);
-            cli_json_num(&j, "gap_s", t_gap);
-            cli_json_end(&j);
-        } else {
-            printf("%s, %s pattern, S = %g mm: %lu curves (%lu x %lu), %lu paths kept, %.1f of %.1f mm inside\n",
-                   field, pattern, spacing, (unsigned long)st.curves, (unsigned long)st.grid_a,
-                   (unsigned long)st.grid_b, (unsigned long)st.pieces, st.length_after, st.length_before);
-            printf("radius %.3f mm, mesh volume %.1f mm^3, deposited %.1f mm^3\n", st.radius, amp_mesh_volume(&m),
-                   amp_pathset_volume(&ps, -1));
-            if (gap_all >= 0)
-                printf("coverage gap %.3f mm (mean %.3f), %s%.3f mm at least S inside; %ld samples\n", gap_all,
-                       mean, gap_in >= 0 ? "" : "n/a ", gap_in >= 0 ? gap_in : 0.0, samples);
-        }
+        report r;
+        memset(&r, 0, sizeof r);
+        r.field = field;
+        r.pattern = pattern;
+        r.st = &st;
+        r.spacing = spacing, r.mesh_volume = amp_mesh_volume(&m), r.deposited = amp_pathset_volume(&ps, -1);
+        r.samples = samples, r.shells = shells, r.gap_all = gap_all, r.gap_in = gap_in, r.mean = mean;
+        r.t_cover = t_cover, r.t_gap = t_gap;
+        print_report(&r, json);
     }
+    if (rc == CLI_OK)
+        rc = judge(&st, spacing, gap_all);
+done:
     amp_bvh_free(b);
+    amp_bvh_free(rb[0]);
+    amp_bvh_free(rb[1]);
+    amp_mesh_free(&rm[0]);
+    amp_mesh_free(&rm[1]);
     amp_pathset_free(&ps);
     amp_mesh_free(&m);
     amp_spline_free(&spl);

@@ -1,29 +1,59 @@
 /* ampath mdr — material deposition radius per vertex (paper 5.2, Def. 5.4). */
-#include "cli.h"
+#include "checkers.h"
 
 const char cmd_mdr_usage[] =
     "set the material deposition radius (MDR) along the paths (paper 5.2): tubes grow until they touch\n"
-    "usage: ampath mdr PATHS.amp [--nominal R] [--min R] [--max R] [--fragment L] [--volume V] [--samples N]\n"
-    "                  [--json] -o OUT.amp\n"
+    "usage: ampath mdr PATHS.amp [--nominal R] [--min R] [--max R] [--fragment L]\n"
+    "                  [--trivariate F | --mesh F | --volume V] [--samples N] [--json] -o OUT.amp\n"
     "  --nominal R   radius of tubes with no neighbour, mm (default 0.5)\n"
     "  --min R       smallest radius, mm (default nominal / 2); tubes raised to it may overlap\n"
     "  --max R       largest radius, mm (default 1.5 * nominal)\n"
     "  --fragment L  length of the pieces that carry one radius each, mm (default: nominal)\n"
-    "  --volume V    volume of the model, mm^3, for the over-coverage ratio (default: estimated as the\n"
-    "                volume of the union of the tubes, by Monte Carlo)\n"
-    "  --samples N   Monte-Carlo samples of that estimate (default 200000)\n"
+    "  --trivariate F, --mesh F, --volume V\n"
+    "                the model the paths cover (.spl or built-in name, closed .stl, or its volume in mm^3):\n"
+    "                over-coverage = deposited / model volume, the figure 'ampath check' reports too\n"
+    "                (docs/order.md); without a model it is not reported (null), and 'overlap' = deposited /\n"
+    "                volume of the union of the tubes (Monte Carlo) says how much is deposited twice\n"
+    "  --samples N   Monte-Carlo samples of the union estimate (default 200000)\n"
     "  --json        one JSON object: fragments, radii, deposited volume, over-coverage, time\n"
     "  -o FILE       write the paths with cut points inserted and r set per vertex (.amp)\n"
-    "Over-coverage = sum(pi r^2 L) / volume: 1 means no material is deposited twice.\n";
+    "Over-coverage = sum(pi r^2 L) of the object paths / model volume: 1 = as much plastic as the part holds.\n";
 
 static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
+/* Volume of the model: a trivariate (quadrature) or a closed mesh (divergence theorem). */
+static int model_volume(const char *tri, const char *mesh, double *volume)
+{
+    amp_error err;
+    amp_error_clear(&err);
+    if (tri) {
+        amp_spline v;
+        int rc = cli_load_trivariate("mdr", tri, &v);
+        if (rc != CLI_OK)
+            return rc;
+        *volume = amp_trivariate_volume(&v);
+        amp_spline_free(&v);
+    } else {
+        amp_mesh m;
+        amp_mesh_init(&m, NULL);
+        if (amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK) {
+            amp_mesh_free(&m);
+            return cli_fail_err("mdr", &err);
+        }
+        *volume = amp_mesh_volume(&m);
+        amp_mesh_free(&m);
+    }
+    if (!(*volume > 0.0))
+        return cli_fail("mdr", CLI_USAGE, "the model has no positive volume (%g mm^3)", *volume);
+    return CLI_OK;
+}
 
 int cmd_mdr(int argc, char **argv)
 {
     cli_progress bar;
     amp_status st_mdr;
-    const char *pos[1], *output = NULL;
-    double nominal = 0.5, rmin = -1, rmax = -1, frag = -1, volume = -1, t0, t_mdr, t_vol;
+    const char *pos[1], *output = NULL, *tri = NULL, *mesh = NULL;
+    double nominal = 0.5, rmin = -1, rmax = -1, frag = -1, volume = -1, union_vol = -1, t0, t_mdr, t_vol = 0;
     long samples = 200000;
     int json = 0, npos = 0, rc;
     amp_pathset ps, out;
@@ -34,6 +64,7 @@ int cmd_mdr(int argc, char **argv)
                       {"max", CLI_DOUBLE, &rmax, 0},         {"fragment", CLI_DOUBLE, &frag, 0},
                       {"volume", CLI_DOUBLE, &volume, 0},    {"samples", CLI_LONG, &samples, 0},
                       {"json", CLI_FLAG, &json, 0},          {"output", CLI_STR, &output, 0},
+                      {"trivariate", CLI_STR, &tri, 0},      {"mesh", CLI_STR, &mesh, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("mdr", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -49,6 +80,8 @@ int cmd_mdr(int argc, char **argv)
         o.fragment = frag;
     if (opts[4].seen && !(volume > 0.0))
         return cli_fail("mdr", CLI_USAGE, "--volume must be positive (got %g)", volume);
+    if ((opts[4].seen != 0) + (tri != NULL) + (mesh != NULL) > 1)
+        return cli_fail("mdr", CLI_USAGE, "give at most one of --trivariate, --mesh, --volume");
     if (samples < 1000)
         return cli_fail("mdr", CLI_USAGE, "--samples must be at least 1000");
     amp_pathset_init(&ps, NULL);
@@ -68,7 +101,9 @@ int cmd_mdr(int argc, char **argv)
     }
     t_mdr = cli_now() - t0;
     t0 = cli_now();
-    if (!opts[4].seen && amp_tubes_union_volume(&out, (size_t)samples, &volume, &err) != AMP_OK) {
+    if ((tri || mesh) && (rc = model_volume(tri, mesh, &volume)) != CLI_OK)
+        goto done;
+    if (!opts[4].seen && !tri && !mesh && amp_tubes_union_volume(&out, (size_t)samples, &union_vol, &err) != AMP_OK) {
         rc = cli_fail_err("mdr", &err);
         goto done;
     }
@@ -92,9 +127,10 @@ int cmd_mdr(int argc, char **argv)
         cli_json_num(&j, "radius_lo", st.r_lo);
         cli_json_num(&j, "radius_hi", st.r_hi);
         cli_json_num(&j, "deposited_mm3", st.deposited);
-        cli_json_num(&j, "volume_mm3", volume);
-        cli_json_bool(&j, "volume_estimated", !opts[4].seen);
-        cli_json_num(&j, "over_coverage", volume > 0 ? st.deposited / volume : HUGE_VAL);
+        cli_json_num(&j, "volume_mm3", volume > 0 ? volume : NAN);
+        cli_json_num(&j, "over_coverage", amp_over_coverage(&out, volume));
+        cli_json_num(&j, "tubes_union_mm3", union_vol > 0 ? union_vol : NAN);
+        cli_json_num(&j, "overlap", union_vol > 0 ? st.deposited / union_vol : NAN);
         cli_json_num(&j, "time_mdr_s", t_mdr);
         cli_json_num(&j, "time_volume_s", t_vol);
         cli_json_end(&j);
@@ -102,8 +138,12 @@ int cmd_mdr(int argc, char **argv)
         printf("%s: %lu fragments, %lu neighbour pairs; radius %.4f .. %.4f mm (%lu at min, %lu at max, %lu isolated)\n",
                pos[0], (unsigned long)st.fragments, (unsigned long)st.pairs, st.r_lo, st.r_hi,
                (unsigned long)st.at_min, (unsigned long)st.at_max, (unsigned long)st.isolated);
-        printf("deposited %.3f mm^3, volume %.3f mm^3 (%s): over-coverage %.4f\n", st.deposited, volume,
-               opts[4].seen ? "given" : "union of tubes, estimated", volume > 0 ? st.deposited / volume : 0.0);
+        if (volume > 0)
+            printf("deposited %.3f mm^3, model volume %.3f mm^3: over-coverage %.4f\n", st.deposited, volume,
+                   amp_over_coverage(&out, volume));
+        else
+            printf("deposited %.3f mm^3, union of the tubes %.3f mm^3 (estimated): overlap %.4f (give the model "
+                   "for the over-coverage)\n", st.deposited, union_vol, st.deposited / union_vol);
     }
     rc = CLI_OK;
 done:

@@ -1,4 +1,6 @@
 /* ampath support — support structure under the model (paper 5.3). */
+#include <string.h>
+
 #include "checkers.h"
 #include "headopt.h"
 
@@ -13,9 +15,59 @@ const char cmd_support_usage[] =
     "  --radius R      deposition radius of support paths, mm (default 0.2)\n"
     "  --min-gap G     air gaps under the model lower than G need no support, mm (default 1)\n"
     HEADOPT_HELP
-    "  --json          one JSON object: rays, columns, support paths and length, placement, time\n"
+    "  --json          one JSON object: rays, columns, support paths and length, placement, object splits,\n"
+    "                  unheld object paths, time\n"
     "  -o FILE         write object and support paths in print order (.amp)\n"
-    "Each support path is printed just before the first object path whose head cone lies above it.\n";
+    "Each support piece is printed just before the first object fragment whose head cone lies above it (an\n"
+    "object path is split there when needed); object paths the support still leaves unheld (the check of\n"
+    "'ampath check', 45-degree rule, air under a bead up to --min-gap) are named.\n";
+
+static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
+
+static void print_json(const char *input, const char *tri, const char *mesh, const amp_support_opts *o,
+                       const amp_support_stats *st, size_t paths_out, const amp_hold_report *hr, double t)
+{
+    cli_json j;
+    size_t i;
+    cli_json_begin(&j, stdout);
+    cli_json_str(&j, "input", input);
+    cli_json_str(&j, tri ? "trivariate" : "mesh", tri ? tri : mesh);
+    cli_json_num(&j, "spacing", o->spacing);
+    cli_json_num(&j, "layer", o->layer_height);
+    cli_json_int(&j, "rays", (long long)st->rays);
+    cli_json_int(&j, "columns", (long long)st->columns);
+    cli_json_int(&j, "support_paths", (long long)st->paths);
+    cli_json_num(&j, "support_length_mm", st->length);
+    cli_json_int(&j, "unplaced", (long long)st->unplaced);
+    cli_json_int(&j, "object_splits", (long long)st->splits);
+    cli_json_int(&j, "conflicts", (long long)st->conflicts);
+    cli_json_num(&j, "trimmed_mm", st->trimmed);
+    cli_json_int(&j, "paths_out", (long long)paths_out);
+    cli_json_int(&j, "unheld_paths", (long long)hr->npaths_failed);
+    cli_json_num(&j, "unheld_mm", hr->failed_mm);
+    cli_json_arr(&j, "unheld_path_list"); /* the first 100, indices in the output */
+    for (i = 0; i < hr->npaths_failed && i < 100; i++)
+        cli_json_int(&j, NULL, (long long)hr->paths_failed[i]);
+    cli_json_close(&j);
+    cli_json_num(&j, "time_s", t);
+    cli_json_end(&j);
+}
+
+static void print_text(const char *input, const amp_support_stats *st, const amp_hold_report *hr)
+{
+    size_t i;
+    printf("%s: %lu rays, %lu columns need support: %lu support paths, %.1f mm (%lu printed last, %lu object paths "
+           "split, %lu conflicts: %.1f mm left out)\n",
+           input, (unsigned long)st->rays, (unsigned long)st->columns, (unsigned long)st->paths, st->length,
+           (unsigned long)st->unplaced, (unsigned long)st->splits, (unsigned long)st->conflicts, st->trimmed);
+    if (hr->npaths_failed) {
+        printf("%lu object paths are not held (%.1f mm in the air), e.g. path", (unsigned long)hr->npaths_failed,
+               hr->failed_mm);
+        for (i = 0; i < hr->npaths_failed && i < 10; i++)
+            printf(" %lu", (unsigned long)hr->paths_failed[i]);
+        printf("%s\n", hr->npaths_failed > 10 ? " ..." : "");
+    }
+}
 
 int cmd_support(int argc, char **argv)
 {
@@ -24,6 +76,9 @@ int cmd_support(int argc, char **argv)
     int json = 0, npos = 0, rc;
     amp_support_opts o;
     amp_support_stats st;
+    amp_hold_opts ho;
+    amp_hold_report hr;
+    cli_progress bar;
     amp_pathset ps, out;
     amp_mesh m;
     amp_bvh *b = NULL;
@@ -50,6 +105,7 @@ int cmd_support(int argc, char **argv)
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&out, NULL);
     amp_mesh_init(&m, NULL);
+    memset(&hr, 0, sizeof hr);
     if ((rc = cli_load_paths("support", pos[0], &ps)) != CLI_OK)
         return rc;
     rc = CLI_USAGE;
@@ -66,37 +122,34 @@ int cmd_support(int argc, char **argv)
         }
         amp_spline_free(&v);
     }
-    if ((!tri && amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK) || amp_bvh_build(&b, &m, &err) != AMP_OK ||
-        amp_support(&ps, b, &o, &out, &st, &err) != AMP_OK) {
+    if ((!tri && amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK) || amp_bvh_build(&b, &m, &err) != AMP_OK) {
+        rc = cli_fail_err("support", &err);
+        goto done;
+    }
+    cli_progress_begin(&bar, "support");
+    o.progress = progress;
+    o.progress_user = &bar;
+    rc = amp_support(&ps, b, &o, &out, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("support", &err);
+    cli_progress_end(&bar);
+    if (rc != CLI_OK)
+        goto done;
+    rc = CLI_USAGE;
+    /* name what the support leaves unheld (the check of `ampath check`, paper 1 §5.3) */
+    amp_hold_opts_default(&ho);
+    ho.max_gap = o.min_gap;
+    if (amp_hold_check(&out, &ho, &hr, &err) != AMP_OK) {
         rc = cli_fail_err("support", &err);
         goto done;
     }
     if (output && cli_save_derived("support", output, &out, "ampath support", pos[0]) != CLI_OK)
         goto done;
-    if (json) {
-        cli_json j;
-        cli_json_begin(&j, stdout);
-        cli_json_str(&j, "input", pos[0]);
-        cli_json_str(&j, tri ? "trivariate" : "mesh", tri ? tri : mesh);
-        cli_json_num(&j, "spacing", o.spacing);
-        cli_json_num(&j, "layer", o.layer_height);
-        cli_json_int(&j, "rays", (long long)st.rays);
-        cli_json_int(&j, "columns", (long long)st.columns);
-        cli_json_int(&j, "support_paths", (long long)st.paths);
-        cli_json_num(&j, "support_length_mm", st.length);
-        cli_json_int(&j, "unplaced", (long long)st.unplaced);
-        cli_json_int(&j, "conflicts", (long long)st.conflicts);
-        cli_json_num(&j, "trimmed_mm", st.trimmed);
-        cli_json_int(&j, "paths_out", (long long)out.npaths);
-        cli_json_num(&j, "time_s", cli_now() - t0);
-        cli_json_end(&j);
-    } else {
-        printf("%s: %lu rays, %lu columns need support: %lu support paths, %.1f mm (%lu printed last, %lu conflicts: %.1f mm left out)\n",
-               pos[0], (unsigned long)st.rays, (unsigned long)st.columns, (unsigned long)st.paths, st.length,
-               (unsigned long)st.unplaced, (unsigned long)st.conflicts, st.trimmed);
-    }
+    if (json)
+        print_json(pos[0], tri, mesh, &o, &st, out.npaths, &hr, cli_now() - t0);
+    else
+        print_text(pos[0], &st, &hr);
     rc = CLI_OK;
 done:
+    amp_hold_report_free(&hr);
     amp_bvh_free(b);
     amp_mesh_free(&m);
     amp_pathset_free(&ps);

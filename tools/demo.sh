@@ -29,9 +29,9 @@ $A cover $D/helix.spl --eps "$EPS" --dir "$DIR" --json -o $D/helix-cover.amp > $
 step cover "$(num $D/cover.json surfaces) iso-surfaces, $(num $D/cover.json curves) curves, $(num $D/cover.json length_mm | cut -d. -f1) mm (Algorithm 1, arc-length bound)"
 
 $A order $D/helix-cover.amp --json -o $D/helix-ordered.amp > $D/order.json
-step order "$(num $D/order.json fragments) fragments -> $(num $D/order.json paths_out) gouge-free paths: $(num $D/order.json subdivisions_improved) subdivisions (plain greedy: $(num $D/order.json subdivisions_greedy))"
+step order "$(num $D/order.json fragments) fragments -> $(num $D/order.json paths_out) gouge-free paths: $(num $D/order.json subdivisions_improved) subdivisions"
 
-$A mdr $D/helix-ordered.amp --nominal 0.5 --json -o $D/helix-mdr.amp > $D/mdr.json
+$A mdr $D/helix-ordered.amp --nominal 0.5 --trivariate $D/helix.spl --json -o $D/helix-mdr.amp > $D/mdr.json
 step mdr "deposition radius $(num $D/mdr.json radius_lo | cut -c1-5)..$(num $D/mdr.json radius_hi | cut -c1-5) mm, over-coverage $(num $D/mdr.json over_coverage | cut -c1-5)"
 
 $A support $D/helix-mdr.amp --mesh $D/helix.stl --json -o $D/helix.amp > $D/support.json
@@ -50,7 +50,7 @@ step gcode "$D/helix.gcode for printer $(sed -n 's/.*"printer":"\([^"]*\)".*/\1/
 T=$(num $D/gcode.json time_s | cut -d. -f1)
 echo
 echo "paths:           $(num $D/order.json paths_out) object + $(num $D/support.json support_paths) support"
-echo "subdivisions:    $(num $D/order.json subdivisions_improved) (plain greedy $(num $D/order.json subdivisions_greedy))"
+echo "subdivisions:    $(num $D/order.json subdivisions_improved)"
 echo "coverage error:  $(echo "$GAP" | cut -c1-6) mm (eps $EPS mm)"
 TT=$(num $D/gcode.json travel_time_s | cut -d. -f1)
 echo "print length:    $(num $D/gcode.json print_length_mm | cut -d. -f1) mm extruding, $(num $D/gcode.json travel_length_mm | cut -d. -f1) mm travel ($(num $D/gcode.json travel_per_print_length | cut -c1-4) x)"

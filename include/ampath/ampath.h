@@ -24,6 +24,7 @@
 #include "spline.h"
 #include "status.h"
 #include "support.h"
+#include "support_check.h"
 #include "vec.h"
 #include "version.h"
 

@@ -106,6 +106,19 @@ typedef struct amp_cover_gap {
 amp_status amp_cover_measure_gap(const amp_spline *v, const amp_pathset *ps, size_t samples, unsigned long seed,
                                  amp_cover_gap *out, amp_error *err);
 
+/**
+ * The over-coverage of a covering (paper 1 §3.1: material deposited more than
+ * once is excess): the material the object paths deposit, Σ A·L with the
+ * cross-section A of each segment (amp_pathset_volume(), role object only:
+ * support is not part of the model), divided by the volume of the model they
+ * cover (@p model_volume, mm^3: the trivariate's amp_trivariate_volume() or a
+ * closed mesh's amp_mesh_volume()). 1: as much plastic as the part holds;
+ * above 1: excess; below 1: the tubes leave voids. The one figure that
+ * `ampath mdr` and `ampath check` report as "over_coverage" (docs/order.md).
+ * Returns NaN when @p model_volume is not positive and finite.
+ */
+double amp_over_coverage(const amp_pathset *ps, double model_volume);
+
 /** Volume of a trivariate: Gauss–Legendre quadrature (3 points per direction per cell of a 12^3 grid). */
 double amp_trivariate_volume(const amp_spline *v);
 

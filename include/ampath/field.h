@@ -113,29 +113,75 @@ typedef struct amp_field_opts {
     double step;         /**< sampling step along a curve, mm (default min(0.5, S/2)) */
     double min_len;      /**< clipped pieces shorter than this are dropped, mm (default S/2) */
     double radius;       /**< deposition radius written to the paths; 0 = the pattern's covering radius */
+    int shells;          /**< surface layer: shell curves at S/2, 3S/2, ... inside the surface (default 0) */
+    /** Several fields in one model: this field covers only the part of the solid inside @p within (a closed
+     *  region mesh's BVH; NULL: everywhere) and outside every region of @p without (the parts other fields
+     *  cover). The adaptive lattice treats the region's boundary like the surface, so the bound holds up to
+     *  the seam on each side. Borrowed; default NULL / 0. */
+    const amp_bvh *within;
+    const amp_bvh *const *without;
+    size_t nwithout;
+    /** Optional progress report (fraction 0..1, from the calling thread, a few hundred times at most). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } amp_field_opts;
 
 void amp_field_opts_default(amp_field_opts *o);
+
+/** How a field was covered (see amp_field_cover()). */
+typedef enum amp_field_route {
+    AMP_FIELD_ROUTE_ALGORITHM1 = 1, /**< trivariate field: Algorithm 1 + adaptive iso-curves (§4.1), then clipped */
+    AMP_FIELD_ROUTE_ADAPTIVE = 2,   /**< grid pattern: adaptive lattice refined in space */
+    AMP_FIELD_ROUTE_UNIFORM = 3     /**< honeycomb: the plain lattice, no bound checked */
+} amp_field_route;
 
 /** Figures of one covering. */
 typedef struct amp_field_stats {
     size_t curves;         /**< covering curves generated */
     size_t pieces;         /**< paths kept after clipping */
-    size_t grid_a, grid_b; /**< samples across the two other parameters */
+    size_t grid_a, grid_b; /**< base cells across the two other parameters (0 for a trivariate field) */
     double length_before;  /**< total length of the curves before clipping, mm */
     double length_after;   /**< total length of the kept paths, mm */
     double radius;         /**< deposition radius used, mm */
+    double target;         /**< the covering radius aimed at: S sqrt(2)/2 (grid) or S / sqrt(3) (hex), mm */
+    double bound;          /**< the covering radius the curves meet (see amp_field_cover()); NaN: not checked */
+    int bound_met;         /**< 1: bound <= target; 0: the field cannot meet the spacing; -1: not checked */
+    size_t inserted;       /**< adaptive route: curves added beyond the base lattice */
+    amp_field_route route; /**< which covering was used */
+    size_t shell_paths;    /**< surface layer: shell paths written (after the covering curves) */
+    double shell_length;   /**< their length, mm */
 } amp_field_stats;
 
 /**
  * Cover the solid of @p b with the curves of @p f and append the inside
- * pieces to @p out (role object). The number of samples across each of the
- * two other parameters is the largest length (in mm) of an iso-curve in that
- * direction, measured on a 5 x 5 set of positions, divided by the spacing;
- * so the spacing in space is at most S where the field is widest and near S
- * when its metric is uniform. Errors: AMP_ERR_ARG (bad options), the
- * evaluator's errors, AMP_ERR_LIMIT (more than 10^7 curve samples),
- * AMP_ERR_NOMEM. @p stats may be NULL. Thread-safe on @p f and @p b.
+ * pieces to @p out (role object), aiming at a covering radius
+ * target = S sqrt(2)/2 (grid) or S/sqrt(3) (hex) everywhere in the solid:
+ * - a trivariate field (amp_field_from_spline) is covered by Algorithm 1 and
+ *   the adaptive iso-curves of §4.1 with eps = target (§4.2 step 1), whatever
+ *   its parametrization; the curves are then clipped to the mesh. The bound
+ *   holds in the trivariate's volume (stats.bound = target, unless the
+ *   recursion hit its depth limit);
+ * - any other field with the grid pattern is covered by an adaptive lattice:
+ *   base cells of at most S in space (the largest iso-curve length over a 5 x 5
+ *   set of positions, divided by S), each split in two across its longer side
+ *   while some point of it inside the mesh (a 5 x 5 grid over the cell at every
+ *   sample along the curves) is farther than target from the nearest nearby
+ *   curve at the same position along them, counting only curve points inside
+ *   the mesh (the rest is clipped away): curves are inserted where neighbours
+ *   drift apart and next to the surface, down to 1/32 of a base cell.
+ *   stats.bound is the largest such cell figure, a sampled upper bound;
+ *   bound_met = 0 when a finest cell still exceeds the target (the field
+ *   cannot meet the spacing there);
+ * - the honeycomb is the plain lattice at the cell centres (no bound checked).
+ * With o->shells = N > 0 a surface layer follows: N shells of curves on the
+ * surface offset inward by S/2, 3S/2, ...: the lattice curves (corners of the
+ * base cells) that run within S/2 of the surface (shifted j S inward for
+ * shell j) projected onto the offset surface, so that the skin is printed as
+ * smooth curves along the field's direction (slicers' perimeters); they are
+ * appended after the covering curves and add to its material.
+ * Errors: AMP_ERR_ARG (bad options), the evaluator's errors, AMP_ERR_LIMIT
+ * (more than 10^7 curve samples), AMP_ERR_NOMEM. @p stats may be NULL.
+ * Thread-safe on @p f and @p b.
  */
 amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
                            amp_field_stats *stats, amp_error *err);

@@ -138,6 +138,10 @@ typedef struct amp_order_opts {
     int improve;      /**< 0: plain greedy Algorithm 2; 1: continuation, look-ahead and merging (default) */
     size_t lookahead; /**< candidate runs simulated per step when improving (default 4) */
     size_t merge_window; /**< most fragments between two sub-curves considered for a merge (default 2000) */
+    /** 1 (default): when improving, among runs that are equally good for Algorithm 2 (as few new cuts, as
+     *  long after continuation) start the one nearest to where the head stands, and let the nearest run with
+     *  as few cuts compete with the heap's best; 0: ties go to the lower run, then curve order. */
+    int nearest;
     /** Optional progress report, called from the calling thread with the fraction of fragments
      *  printed so far (0..1), a few hundred times per run at most; NULL (default) for none. */
     void (*progress)(void *user, double fraction);

@@ -6,16 +6,20 @@
  * plate z = 0, or from the top of a lower part of the solid, up to the
  * underside above) is support volume. That volume is filled on the same grid
  * with straight support paths (role support), one layer every layer_height
- * mm, rows along x on even layers and along y on odd ones. Each support path
- * is then placed just before the first object path (in the given print order)
- * whose head-cone sweep lies above it (Def. 5.1: the support is below that
- * path), so that the support under a path is printed before the path, in
- * stages. Support paths with no object path above them are printed last.
- * The reverse constraint (an object path printed later that lies below a
- * support fragment, e.g. in a thin overhang gap or under a steep underside)
- * cannot be met by any placement: such fragments are left out (the support
- * path is split around them), counted in amp_support_stats.conflicts and
- * .trimmed, so the result passes the gouge check.
+ * mm, rows along x on even layers and along y on odd ones (a one-ray column
+ * gets a row 0.25 spacing long: no support path has zero length).
+ * Ordering (Def. 5.1): the rows are cut into fragments shorter than
+ * z_offs sin(theta); each support fragment must come after the last object
+ * fragment below it and before the first object fragment (and support piece)
+ * above it. In a gouge-free object order such a slot always exists (the cone
+ * inequalities of "a below s" and "s below b" add up to "a below b"), so no
+ * fragment is dropped: a row is cut into as few pieces as possible, each piece
+ * goes into its slot, at the start of an object path when the slot allows it,
+ * else between two fragments of the object path, which is split there
+ * (amp_support_stats.splits). Pieces with nothing above them come last.
+ * conflicts / trimmed count fragments left out all the same (rounding only;
+ * 0 on every model tried). Whether the object is then actually held is the
+ * separate check of support_check.h.
  * Thread-safe; the model's BVH is only read.
  */
 #ifndef AMPATH_SUPPORT_H
@@ -38,6 +42,9 @@ typedef struct amp_support_opts {
     double layer_height; /**< vertical distance of support layers, mm (default 0.4) */
     double radius;       /**< deposition radius of support paths, mm (default 0.2) */
     double min_gap;      /**< ignore air gaps lower than this, mm (default 1) */
+    /** Optional progress report (fraction 0..1, from the calling thread, a few hundred times at most). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } amp_support_opts;
 
 void amp_support_opts_default(amp_support_opts *o);
@@ -48,15 +55,17 @@ typedef struct amp_support_stats {
     size_t paths;         /**< support paths written (after splitting around conflicts) */
     double length;        /**< length of the support rows made, mm (before trimming) */
     size_t unplaced;      /**< support paths with no object path above (printed last) */
-    size_t conflicts;     /**< support rows that also lay above an object path printed after them */
+    size_t splits;        /**< object paths split to let support in between their fragments */
+    size_t conflicts;     /**< support fragments with no gouge-free slot, left out (0 unless rounding bites) */
     double trimmed;       /**< length left out for those conflicts, mm */
 } amp_support_stats;
 
 /**
  * Add support for @p model (BVH of the closed model mesh) under the paths of
- * @p in and append everything to @p out in print order (object paths keep
- * their order; support paths are interleaved as described above; support
- * paths already in @p in are kept in place). @p st may be NULL.
+ * @p in (a gouge-free print order) and append everything to @p out in print
+ * order (object paths keep their order, some split in two or more; support
+ * paths are interleaved as described above; support paths already in @p in
+ * are kept in place). @p st may be NULL.
  * Errors: AMP_ERR_RANGE (bad options or head), AMP_ERR_LIMIT, AMP_ERR_NOMEM.
  */
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,

@@ -147,7 +147,7 @@ class amp_cover_gap(Structure):
 
 class amp_order_opts(Structure):
     _fields_ = [("head", amp_head), ("improve", c_int), ("lookahead", c_size_t), ("merge_window", c_size_t),
-                ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
+                ("nearest", c_int), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
 
 
 class amp_order_stats(Structure):
@@ -167,12 +167,12 @@ class amp_mdr_stats(Structure):
 
 class amp_support_opts(Structure):
     _fields_ = [("head", amp_head), ("spacing", c_double), ("layer_height", c_double), ("radius", c_double),
-                ("min_gap", c_double)]
+                ("min_gap", c_double), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
 
 
 class amp_support_stats(Structure):
     _fields_ = [("rays", c_size_t), ("columns", c_size_t), ("paths", c_size_t), ("length", c_double),
-                ("unplaced", c_size_t), ("conflicts", c_size_t), ("trimmed", c_double)]
+                ("unplaced", c_size_t), ("splits", c_size_t), ("conflicts", c_size_t), ("trimmed", c_double)]
 
 
 class amp_ring(Structure):
@@ -228,12 +228,15 @@ class amp_field(Structure):
 
 class amp_field_opts(Structure):
     _fields_ = [("spacing", c_double), ("pattern", c_int), ("step", c_double), ("min_len", c_double),
-                ("radius", c_double)]
+                ("radius", c_double), ("shells", c_int), ("within", c_void_p), ("without", c_void_p),
+                ("nwithout", c_size_t), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
 
 
 class amp_field_stats(Structure):
     _fields_ = [("curves", c_size_t), ("pieces", c_size_t), ("grid_a", c_size_t), ("grid_b", c_size_t),
-                ("length_before", c_double), ("length_after", c_double), ("radius", c_double)]
+                ("length_before", c_double), ("length_after", c_double), ("radius", c_double), ("target", c_double),
+                ("bound", c_double), ("bound_met", c_int), ("inserted", c_size_t), ("route", c_int),
+                ("shell_paths", c_size_t), ("shell_length", c_double)]
 
 
 class amp_preview_stats(Structure):
@@ -384,8 +387,17 @@ _PROTOS = {
     "amp_gcode_write": (c_int, [P(amp_pathset), P(amp_gcode_opts), c_void_p, c_void_p, P(amp_gcode_stats), E]),
 }
 
+# newer than some installed libraries: their absence makes only the feature unavailable
+OPTIONAL = {"amp_preview_png", "amp_preview_svg"}
+MISSING = set()
 for _name, (_res, _args) in _PROTOS.items():
-    _f = getattr(lib, _name)
+    try:
+        _f = getattr(lib, _name)
+    except AttributeError:
+        if _name not in OPTIONAL:
+            raise ImportError("%s lacks %s: a libampath older than this package?" % (LIBRARY_PATH, _name))
+        MISSING.add(_name)
+        continue
     _f.restype = _res
     _f.argtypes = _args
 

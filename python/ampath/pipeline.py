@@ -72,7 +72,7 @@ def coverage_gap(trivariate, paths, samples=20000, seed=1):
 
 def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
     """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
-    "box" or a Trivariate (curves along @dir). Options: step, min_len, radius (amp_field_opts)."""
+    "box" or a Trivariate (curves along @dir). Options: step, min_len, radius, shells (amp_field_opts)."""
     f, o, st, err = L.amp_field(), L.amp_field_opts(), L.amp_field_stats(), _err()
     if isinstance(field, Trivariate):
         _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
@@ -84,7 +84,7 @@ def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
     if pattern not in ("grid", "hex"):
         _fail("pattern must be grid or hex")
     o.pattern = 0 if pattern == "grid" else 1
-    _apply(o, opts, "field", skip=("spacing", "pattern"))
+    _apply(o, opts, "field", skip=("spacing", "pattern", "within", "without", "nwithout"))
     out = PathSet()
 
     def go():
@@ -127,24 +127,26 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
     return _run(go, out, pr, (paths,))
 
 
-def support(paths, mesh, z_offs=0.5, theta_deg=72.0, **opts):
+def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, **opts):
     """Paper 1 §5.3 (`ampath support`): support under @mesh (a Mesh, or a Trivariate whose boundary is
     tessellated as the tool does), interleaved in print order. Options: spacing, layer_height, radius,
     min_gap (amp_support_opts)."""
     if isinstance(mesh, Trivariate):
         with Mesh.from_trivariate(mesh) as m:
-            return support(paths, m, z_offs, theta_deg, **opts)
+            return support(paths, m, z_offs, theta_deg, progress, **opts)
     o = L.amp_support_opts()
     lib.amp_support_opts_default(ctypes.byref(o))
     o.head = _head(z_offs, theta_deg)
     _apply(o, opts, "support", skip=("head",))
+    pr = _Progress(progress)
+    o.progress = pr.c
     out, st, err = PathSet(), L.amp_support_stats(), _err()
 
     def go():
         _check(lib.amp_support(paths._ref, mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
                                ctypes.byref(err)), err)
         out.stats = _todict(st)
-    return _run(go, out, None, (paths, mesh))
+    return _run(go, out, pr, (paths, mesh))
 
 
 # ---------------------------------------------------------------- slicing

@@ -20,6 +20,8 @@ def preview(paths, format="png", width=1600, output=None, stats=None):
             format = ext[1:]
     if format not in ("png", "svg"):
         _fail("format must be 'png' or 'svg'")
+    if "amp_preview_png" in L.MISSING:
+        _fail("%s has no preview renderer (ampath/preview.h): a newer libampath is needed" % L.LIBRARY_PATH, -9)
     fn = lib.amp_preview_png if format == "png" else lib.amp_preview_svg
     st = L.amp_preview_stats()
     with _hold(paths):

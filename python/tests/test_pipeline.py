@@ -27,7 +27,8 @@ class HelixPipeline(TmpCase):
                             ("model", "helix", "-o", self.p("helix.stl")),
                             ("cover", self.p("helix.spl"), "--eps", 1, "--dir", "u", "-o", self.p("cover.amp")),
                             ("order", self.p("cover.amp"), "-o", self.p("ordered.amp")),
-                            ("mdr", self.p("ordered.amp"), "--nominal", 0.5, "-o", self.p("mdr.amp")),
+                            ("mdr", self.p("ordered.amp"), "--nominal", 0.5, "--trivariate", self.p("helix.spl"),
+                             "-o", self.p("mdr.amp")),
                             ("support", self.p("mdr.amp"), "--mesh", self.p("helix.stl"), "-o", self.p("helix.amp")),
                             ("gcode", self.p("helix.amp"), "--printer", "generic", "-o", self.p("helix.gcode"))])
         outputs = {}
