@@ -82,7 +82,7 @@ CHECK_CFLAGS = $(shell pkg-config --cflags check 2>/dev/null)
 CHECK_LIBS = $(shell pkg-config --libs check 2>/dev/null || echo -lcheck -lsubunit -lrt -lpthread)
 
 BUILD_PKGS := gcc make pkg-config libserialport-dev
-TEST_PKGS := $(BUILD_PKGS) check
+TEST_PKGS := $(BUILD_PKGS) check python3
 CROSS_PKGS := gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
 FUZZ_PKGS := clang libclang-rt-14-dev
 
@@ -189,6 +189,7 @@ TEST_ENV := AMP_TOOL=$(abspath $(AMPATH)) AMP_VPRINTER=$(abspath $(OUTBIN)/tools
 test-run: $(TEST_BIN) $(AMPATH) $(VPRINTER) $(BRIDGE) $(LIBSO)
 	@echo "== test suite ($(if $(filter 1,$(SAN)),ASan+UBSan,plain) build)"
 	@$(TEST_ENV) ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 sh tests/run.sh $(TEST_BIN)
+	$(if $(filter 1,$(SAN)),,@$(TEST_ENV) AMPATH_LIBRARY=$(abspath $(LIBSO)) python3 python/tests/run.py)
 
 check: deps-test
 	@$(MAKE) --no-print-directory WERROR=1 all

@@ -406,6 +406,93 @@ START_TEST(preview_bad_usage_exits_2)
 }
 END_TEST
 
+/* The renderer lives in the library (issue 20): the library's pictures written into memory are the
+ * tool's files byte for byte, PNG and SVG, at a legend size of each kind. */
+START_TEST(library_pictures_are_the_tool_files_byte_for_byte)
+{
+    static const int widths[] = {400, 800, 1600};
+    const char *in = fixture_file();
+    amp_pathset ps;
+    amp_error err;
+    size_t w, n;
+    int fmt;
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, in, NULL), AMP_OK);
+    for (w = 0; w < 3; w++)
+        for (fmt = 0; fmt < 2; fmt++) {
+            const char *out = amp_test_tmp(fmt ? "lib.svg" : "lib.png");
+            char args[1024];
+            unsigned char *d;
+            amp_buf b;
+            amp_preview_stats st;
+            snprintf(args, sizeof args, "preview %s -o %s --width %d", in, out, widths[w]);
+            ck_assert_int_eq(run(args, NULL, 0), 0);
+            d = slurp(out, &n);
+            amp_buf_init(&b, NULL);
+            amp_error_clear(&err);
+            ck_assert_int_eq(fmt ? amp_preview_svg(&ps, widths[w], amp_buf_sink, &b, &st, &err)
+                                 : amp_preview_png(&ps, widths[w], amp_buf_sink, &b, &st, &err),
+                             AMP_OK);
+            ck_assert_uint_eq(b.len, n);
+            ck_assert_uint_eq(st.bytes, n);
+            ck_assert_int_eq(st.height, widths[w] / 2 + 110);
+            ck_assert_msg(memcmp(b.data, d, n) == 0, "width %d %s differs", widths[w], fmt ? "svg" : "png");
+            amp_buf_free(&b);
+            free(d);
+            remove(out);
+        }
+    amp_pathset_free(&ps);
+    remove(in);
+}
+END_TEST
+
+/* A sink that fails once @p left bytes have gone through. */
+typedef struct failsink {
+    size_t left;
+} failsink;
+static amp_status fail_sink(void *user, const char *data, size_t len)
+{
+    failsink *f = user;
+    (void)data;
+    if (len > f->left)
+        return AMP_ERR_IO;
+    f->left -= len;
+    return AMP_OK;
+}
+
+START_TEST(library_preview_reports_sink_memory_and_argument_errors)
+{
+    amp_pathset ps, empty;
+    amp_test_failalloc fa;
+    amp_error err;
+    failsink fs;
+    amp_buf b;
+    amp_preview_stats st;
+    amp_pathset_init(&ps, NULL);
+    amp_fixture_rings(&ps, 0, 0, 4, 3, 48, 0.25);
+    fs.left = 5000;
+    amp_error_clear(&err);
+    ck_assert_int_eq(amp_preview_png(&ps, 400, fail_sink, &fs, &st, &err), AMP_ERR_IO);
+    ck_assert_int_eq(err.status, AMP_ERR_IO);
+    ck_assert_uint_le(st.bytes, 5000);
+    fs.left = 5000;
+    ck_assert_int_eq(amp_preview_svg(&ps, 400, fail_sink, &fs, NULL, &err), AMP_ERR_IO);
+    amp_buf_init(&b, NULL);
+    ck_assert_int_eq(amp_preview_png(&ps, 100, amp_buf_sink, &b, NULL, &err), AMP_ERR_RANGE);
+    ck_assert_ptr_nonnull(strstr(err.msg, "200..8000"));
+    amp_pathset_init(&empty, NULL);
+    ck_assert_int_eq(amp_preview_svg(&empty, 400, amp_buf_sink, &b, NULL, &err), AMP_ERR_ARG);
+    ck_assert_uint_eq(b.len, 0);
+    /* memory through the path set's allocator: a failing one gives AMP_ERR_NOMEM and writes nothing */
+    amp_test_failalloc_init(&fa, 0);
+    ps.alloc = &fa.a;
+    ck_assert_int_eq(amp_preview_png(&ps, 400, amp_buf_sink, &b, NULL, &err), AMP_ERR_NOMEM);
+    ck_assert_uint_eq(b.len, 0);
+    ps.alloc = NULL;
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *preview_suite(void)
 {
     Suite *s = suite_create("preview");
@@ -414,6 +501,8 @@ static Suite *preview_suite(void)
     tcase_add_test(tc, png_reader_rejects_corrupted_files);
     tcase_add_test(tc, svg_is_well_formed_with_one_group_of_polylines_per_view);
     tcase_add_test(tc, preview_bad_usage_exits_2);
+    tcase_add_test(tc, library_pictures_are_the_tool_files_byte_for_byte);
+    tcase_add_test(tc, library_preview_reports_sink_memory_and_argument_errors);
     suite_add_tcase(s, tc);
     return s;
 }

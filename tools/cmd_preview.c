@@ -4,7 +4,6 @@
 #include <string.h>
 
 #include "cli.h"
-#include "render.h"
 
 const char cmd_preview_usage[] =
     "draw the paths: isometric and top views, tubes scaled by the deposition radius, coloured by print order\n"
@@ -26,9 +25,10 @@ int cmd_preview(int argc, char **argv)
 {
     const char *pos[1], *out = NULL;
     long width = 1600;
-    int json = 0, npos = 0, rc, png, failed;
+    int json = 0, npos = 0, rc, png;
+    amp_status s;
     amp_pathset ps;
-    render_stats st;
+    amp_preview_stats st;
     double t0;
     amp_out f;
     amp_error err;
@@ -63,11 +63,15 @@ int cmd_preview(int argc, char **argv)
         amp_pathset_free(&ps);
         return cli_fail_err("preview", &err);
     }
-    failed = png ? render_png(&ps, (int)width, f.f, &st) : render_svg(&ps, (int)width, f.f, &st);
-    if (failed && !ferror(f.f)) { /* the renderer ran out of memory; nothing failed to write */
+    /* the renderer lives in the library (lib/preview.c) so that bindings write the same bytes */
+    s = png ? amp_preview_png(&ps, (int)width, amp_out_sink, &f, &st, &err)
+            : amp_preview_svg(&ps, (int)width, amp_out_sink, &f, &st, &err);
+    if (s != AMP_OK) {
+        if (f.werr)
+            amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));
         amp_out_abort(&f);
         amp_pathset_free(&ps);
-        return cli_fail("preview", CLI_USAGE, "%s: out of memory", out);
+        return cli_fail_err("preview", &err);
     }
     if (amp_out_commit(&f, &err) != AMP_OK) {
         amp_pathset_free(&ps);

@@ -17,6 +17,7 @@
 #include "order.h"
 #include "paths.h"
 #include "polygon.h"
+#include "preview.h"
 #include "printer.h"
 #include "proto.h"
 #include "slice.h"

@@ -1,9 +1,12 @@
-/* Pictures of path sets (PNG rasterised and encoded here, or SVG) for `ampath preview`. */
+/* Pictures of path sets (PNG rasterised and encoded here, or SVG): `ampath preview` and the bindings.
+ * Moved from tools/render.c into the library (issue 20) so that hosts get the same bytes as the tool;
+ * output goes through an amp_sink_fn, memory through the path set's allocator. */
 #include <math.h>
-#include <stdlib.h>
+#include <stdarg.h>
+#include <stdio.h>
 #include <string.h>
 
-#include "render.h"
+#include "ampath/preview.h"
 
 #define LEGEND_H 110
 #define MARGIN 24.0
@@ -256,7 +259,7 @@ static void text(raster *r, int x, int y, int px, const char *s)
 
 /* ---------------------------------------------------------------- PNG encoding */
 
-unsigned long render_crc32(unsigned long crc, const unsigned char *p, size_t n)
+unsigned long amp_preview_crc32(unsigned long crc, const unsigned char *p, size_t n)
 {
     size_t i;
     int k;
@@ -270,6 +273,7 @@ unsigned long render_crc32(unsigned long crc, const unsigned char *p, size_t n)
 }
 
 typedef struct bitw {
+    const amp_allocator *a;
     unsigned char *buf;
     size_t len, cap;
     unsigned long acc;
@@ -281,7 +285,7 @@ static void bw_byte(bitw *b, unsigned char c)
 {
     if (b->len == b->cap) {
         size_t cap = b->cap ? 2 * b->cap : 65536;
-        unsigned char *p = realloc(b->buf, cap);
+        unsigned char *p = amp_realloc_array(b->a, b->buf, cap, 1);
         if (!p) {
             b->oom = 1;
             return;
@@ -412,82 +416,114 @@ static void deflate_rle(bitw *b, const unsigned char *data, size_t n, size_t row
     bw_byte(b, (unsigned char)s1);
 }
 
-static int put_be32(FILE *f, unsigned long v)
+/* ---------------------------------------------------------------- output */
+
+/* The caller's sink with a byte count; the first error is kept and later writes are skipped. */
+typedef struct pv_out {
+    amp_sink_fn sink;
+    void *user;
+    size_t bytes;
+    amp_status st;
+} pv_out;
+
+static void pv_put(pv_out *o, const void *data, size_t n)
+{
+    if (o->st == AMP_OK && n) {
+        o->st = o->sink(o->user, data, n);
+        if (o->st == AMP_OK)
+            o->bytes += n;
+    }
+}
+
+static void pv_printf(pv_out *o, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* Every piece printed here is short (the legend line is at most 256 bytes): 512 always suffices. */
+static void pv_printf(pv_out *o, const char *fmt, ...)
+{
+    char buf[512];
+    va_list ap;
+    int n;
+    va_start(ap, fmt);
+    n = vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    if (n < 0 || (size_t)n >= sizeof buf) {
+        if (o->st == AMP_OK)
+            o->st = AMP_ERR_LIMIT;
+        return;
+    }
+    pv_put(o, buf, (size_t)n);
+}
+
+static void put_be32(pv_out *o, unsigned long v)
 {
     unsigned char c[4];
     c[0] = (unsigned char)(v >> 24);
     c[1] = (unsigned char)(v >> 16);
     c[2] = (unsigned char)(v >> 8);
     c[3] = (unsigned char)v;
-    return fwrite(c, 1, 4, f) == 4 ? 0 : -1;
+    pv_put(o, c, 4);
 }
 
-static int put_chunk(FILE *f, const char *type, const unsigned char *data, size_t n, size_t *bytes)
+static void put_chunk(pv_out *o, const char *type, const unsigned char *data, size_t n)
 {
-    unsigned long crc = render_crc32(0, (const unsigned char *)type, 4);
-    crc = render_crc32(crc, data, n);
-    if (put_be32(f, (unsigned long)n) || fwrite(type, 1, 4, f) != 4 || (n && fwrite(data, 1, n, f) != n) ||
-        put_be32(f, crc))
-        return -1;
-    *bytes += 12 + n;
-    return 0;
+    unsigned long crc = amp_preview_crc32(0, (const unsigned char *)type, 4);
+    crc = amp_preview_crc32(crc, data, n);
+    put_be32(o, (unsigned long)n);
+    pv_put(o, type, 4);
+    pv_put(o, data, n);
+    put_be32(o, crc);
 }
 
-static int write_png(FILE *f, const raster *r, size_t *bytes)
+/* Encode and write the raster; -1 when memory ran out (nothing written then). */
+static int write_png(pv_out *o, const raster *r, const amp_allocator *a)
 {
     static const unsigned char sig[8] = {137, 80, 78, 71, 13, 10, 26, 10};
     unsigned char ihdr[13];
-    size_t stride = 3 * (size_t)r->w, y, x, n = (stride + 1) * (size_t)r->h;
-    unsigned char *filt = malloc(n);
+    size_t stride = 3 * (size_t)r->w, y, x, n = (stride + 1) * (size_t)r->h, off;
+    unsigned char *filt = amp_alloc(a, n);
     bitw b;
-    int rc;
     if (!filt)
         return -1;
     /* filter "Up" on every row: identical rows and flat areas become zeros */
     for (y = 0; y < (size_t)r->h; y++) {
-        unsigned char *o = filt + y * (stride + 1);
+        unsigned char *f = filt + y * (stride + 1);
         const unsigned char *cur = r->rgb + y * stride, *prev = y ? cur - stride : NULL;
-        o[0] = 2;
+        f[0] = 2;
         for (x = 0; x < stride; x++)
-            o[1 + x] = (unsigned char)(cur[x] - (prev ? prev[x] : 0));
+            f[1 + x] = (unsigned char)(cur[x] - (prev ? prev[x] : 0));
     }
     memset(&b, 0, sizeof b);
+    b.a = a;
     deflate_rle(&b, filt, n, stride + 1);
-    free(filt);
+    amp_free(a, filt);
     if (b.oom) {
-        free(b.buf);
+        amp_free(a, b.buf);
         return -1;
     }
-    ihdr[0] = (unsigned char)(r->w >> 24);
-    ihdr[1] = (unsigned char)(r->w >> 16);
-    ihdr[2] = (unsigned char)(r->w >> 8);
-    ihdr[3] = (unsigned char)r->w;
-    ihdr[4] = (unsigned char)(r->h >> 24);
-    ihdr[5] = (unsigned char)(r->h >> 16);
-    ihdr[6] = (unsigned char)(r->h >> 8);
-    ihdr[7] = (unsigned char)r->h;
+    for (x = 0; x < 4; x++) {
+        ihdr[x] = (unsigned char)((unsigned long)r->w >> (24 - 8 * x));
+        ihdr[4 + x] = (unsigned char)((unsigned long)r->h >> (24 - 8 * x));
+    }
     ihdr[8] = 8;  /* bit depth */
     ihdr[9] = 2;  /* colour type RGB */
     ihdr[10] = 0; /* deflate */
     ihdr[11] = 0; /* adaptive filtering */
     ihdr[12] = 0; /* no interlace */
-    *bytes = 8;
-    rc = fwrite(sig, 1, 8, f) == 8 ? 0 : -1;
-    if (!rc)
-        rc = put_chunk(f, "IHDR", ihdr, 13, bytes);
-    {
-        /* IDAT chunks of at most 1 MiB */
-        size_t off = 0;
-        while (!rc && off < b.len) {
-            size_t m = b.len - off > (1u << 20) ? (1u << 20) : b.len - off;
-            rc = put_chunk(f, "IDAT", b.buf + off, m, bytes);
-            off += m;
-        }
+    pv_put(o, sig, 8);
+    put_chunk(o, "IHDR", ihdr, 13);
+    /* IDAT chunks of at most 1 MiB */
+    for (off = 0; o->st == AMP_OK && off < b.len;) {
+        size_t m = b.len - off > (1u << 20) ? (1u << 20) : b.len - off;
+        put_chunk(o, "IDAT", b.buf + off, m);
+        off += m;
     }
-    if (!rc)
-        rc = put_chunk(f, "IEND", NULL, 0, bytes);
-    free(b.buf);
-    return rc;
+    put_chunk(o, "IEND", NULL, 0);
+    amp_free(a, b.buf);
+    return 0;
 }
 
 /* Size of a font pixel in the legend: the 3x5 font at 3 px per dot fits 1600 px pictures. */
@@ -500,76 +536,117 @@ static void legend_common(int width, int height, int *lx, int *ly)
     (void)width;
 }
 
-int render_png(const amp_pathset *ps, int width, FILE *out, render_stats *st)
+static amp_status check_args(const amp_pathset *ps, int width, amp_sink_fn sink, amp_error *err)
 {
-    raster r;
+    if (!ps || !sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "preview: NULL path set or sink");
+    if (ps->npaths == 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "preview: no paths to draw");
+    if (width < AMP_PREVIEW_MIN_WIDTH || width > AMP_PREVIEW_MAX_WIDTH)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "preview: width must lie in %d..%d, got %d", AMP_PREVIEW_MIN_WIDTH,
+                        AMP_PREVIEW_MAX_WIDTH, width);
+    return AMP_OK;
+}
+
+/* The figures common to both formats, and the status of the whole write. */
+static amp_status finish(const amp_pathset *ps, const pv_out *o, int width, int height, size_t support,
+                         amp_preview_stats *st, amp_error *err)
+{
+    st->width = width;
+    st->height = height;
+    st->paths = ps->npaths;
+    st->support = support;
+    st->vertices = ps->nverts;
+    st->bytes = o->bytes;
+    if (o->st != AMP_OK)
+        return amp_fail(err, o->st, 0, "preview: writing the picture failed: %s", amp_strerror(o->st));
+    return AMP_OK;
+}
+
+/* Both views and the legend into the raster; returns the number of support paths. */
+static size_t draw_png(raster *r, const amp_pathset *ps, amp_preview_stats *st)
+{
+    static const unsigned char frame[3] = {210, 210, 205}, grey[3] = {150, 150, 150};
     view v[2];
-    size_t i, npix, support;
-    int k, lx, ly, rc;
+    size_t i, support;
+    int k, lx, ly, u = legend_unit(r->w);
     char line[256];
-    static const unsigned char bg[3] = {250, 250, 247}, frame[3] = {210, 210, 205};
-    int u = legend_unit(width);
-    memset(st, 0, sizeof *st);
-    r.w = width;
-    r.h = width / 2 + LEGEND_H;
-    npix = (size_t)r.w * (size_t)r.h;
-    r.rgb = malloc(3 * npix);
-    r.depth = malloc(sizeof(float) * npix);
-    if (!r.rgb || !r.depth) {
-        free(r.rgb);
-        free(r.depth);
-        return -1;
-    }
-    for (i = 0; i < npix; i++) {
-        memcpy(r.rgb + 3 * i, bg, 3);
-        r.depth[i] = -HUGE_VALF;
-    }
-    layout(v, r.w, r.h);
+    layout(v, r->w, r->h);
     for (k = 0; k < 2; k++) {
         fit_view(&v[k], ps);
         /* z-buffered, so the order only matters for speed: the last printed paths tend to be the
            nearest, so drawing them first lets the depth test reject most of the rest early */
         for (i = ps->npaths; i-- > 0;) {
-            path_colour(ps, i, r.col);
-            st->drawn += walk_path(ps, i, &v[k], raster_seg, &r);
+            path_colour(ps, i, r->col);
+            st->drawn += walk_path(ps, i, &v[k], raster_seg, r);
         }
-        text(&r, (int)v[k].x0 + 4 * u, 10, u, k == 0 ? "isometric view" : "top view");
+        text(r, (int)v[k].x0 + 4 * u, 10, u, k == 0 ? "isometric view" : "top view");
     }
-    fill_rect(&r, r.w / 2, 0, 1, r.h - LEGEND_H, frame);
-    fill_rect(&r, 0, r.h - LEGEND_H, r.w, 1, frame);
+    fill_rect(r, r->w / 2, 0, 1, r->h - LEGEND_H, frame);
+    fill_rect(r, 0, r->h - LEGEND_H, r->w, 1, frame);
     /* legend: the counts, the print-order ramp, the support swatch (sized by the picture width) */
-    legend_common(r.w, r.h, &lx, &ly);
+    legend_common(r->w, r->h, &lx, &ly);
     summary(ps, line, sizeof line, &support);
-    text(&r, lx, ly, u, line);
-    text(&r, lx, ly + 10 * u, u, "print order: first");
+    text(r, lx, ly, u, line);
+    text(r, lx, ly + 10 * u, u, "print order: first");
     for (k = 0; k < 100 * u; k++) {
         unsigned char c[3];
         ramp(k / (100.0 * u - 1), c);
-        fill_rect(&r, lx + 77 * u + k, ly + 9 * u, 1, 7 * u, c);
+        fill_rect(r, lx + 77 * u + k, ly + 9 * u, 1, 7 * u, c);
     }
-    text(&r, lx + 180 * u, ly + 10 * u, u, "last");
-    {
-        static const unsigned char grey[3] = {150, 150, 150};
-        fill_rect(&r, lx + 200 * u, ly + 9 * u, 10 * u, 7 * u, grey);
-        snprintf(line, sizeof line, "support (%lu)", (unsigned long)support);
-        text(&r, lx + 213 * u, ly + 10 * u, u, line);
+    text(r, lx + 180 * u, ly + 10 * u, u, "last");
+    fill_rect(r, lx + 200 * u, ly + 9 * u, 10 * u, 7 * u, grey);
+    snprintf(line, sizeof line, "support (%lu)", (unsigned long)support);
+    text(r, lx + 213 * u, ly + 10 * u, u, line);
+    text(r, lx, ly + 21 * u, u > 1 ? u - 1 : 1, "tube width follows the material deposition radius");
+    return support;
+}
+
+amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
+                           amp_error *err)
+{
+    static const unsigned char bg[3] = {250, 250, 247};
+    amp_preview_stats tmp;
+    pv_out o;
+    raster r;
+    size_t i, npix, support;
+    amp_status s = check_args(ps, width, sink, err);
+    if (s != AMP_OK)
+        return s;
+    if (!st)
+        st = &tmp;
+    memset(st, 0, sizeof *st);
+    r.w = width;
+    r.h = width / 2 + LEGEND_H;
+    npix = (size_t)r.w * (size_t)r.h;
+    r.rgb = amp_alloc(ps->alloc, 3 * npix);
+    r.depth = amp_calloc(ps->alloc, npix, sizeof(float));
+    if (!r.rgb || !r.depth) {
+        amp_free(ps->alloc, r.rgb);
+        amp_free(ps->alloc, r.depth);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "preview: out of memory for a %d x %d picture", r.w, r.h);
     }
-    text(&r, lx, ly + 21 * u, u > 1 ? u - 1 : 1, "tube width follows the material deposition radius");
-    rc = write_png(out, &r, &st->bytes);
-    st->width = r.w;
-    st->height = r.h;
-    st->paths = ps->npaths;
-    st->support = support;
-    st->vertices = ps->nverts;
-    free(r.rgb);
-    free(r.depth);
-    return rc;
+    for (i = 0; i < npix; i++) {
+        memcpy(r.rgb + 3 * i, bg, 3);
+        r.depth[i] = -HUGE_VALF;
+    }
+    support = draw_png(&r, ps, st);
+    o.sink = sink;
+    o.user = user;
+    o.bytes = 0;
+    o.st = AMP_OK;
+    i = (size_t)write_png(&o, &r, ps->alloc);
+    amp_free(ps->alloc, r.rgb);
+    amp_free(ps->alloc, r.depth);
+    if (i != 0)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "preview: out of memory encoding a %d x %d picture", r.w, r.h);
+    return finish(ps, &o, r.w, r.h, support, st, err);
 }
 
 /* ---------------------------------------------------------------- SVG */
 
 typedef struct svgw {
-    FILE *f;
+    pv_out *o;
     int open;         /* a polyline is open */
     double width;     /* its stroke width (px) */
     double lx, ly;    /* its last point */
@@ -581,7 +658,7 @@ static double qwidth(double r) { return floor(fmax(2 * r, 0.6) * 4 + 0.5) / 4; }
 static void svg_close(svgw *s)
 {
     if (s->open)
-        fputs("\"/>\n", s->f);
+        pv_put(s->o, "\"/>\n", 4);
     s->open = 0;
 }
 
@@ -592,72 +669,85 @@ static void svg_seg(void *user, const double a[5], const double b[5])
     double w = qwidth(0.5 * (a[3] + b[3]));
     if (!s->open || w != s->width || a[0] != s->lx || a[1] != s->ly) {
         svg_close(s);
-        fprintf(s->f, "<polyline stroke=\"%s\" stroke-width=\"%.2f\" points=\"%.1f,%.1f", s->col, w, a[0], a[1]);
+        pv_printf(s->o, "<polyline stroke=\"%s\" stroke-width=\"%.2f\" points=\"%.1f,%.1f", s->col, w, a[0], a[1]);
         s->open = 1;
         s->width = w;
     }
-    fprintf(s->f, " %.1f,%.1f", b[0], b[1]);
+    pv_printf(s->o, " %.1f,%.1f", b[0], b[1]);
     s->lx = b[0];
     s->ly = b[1];
 }
 
-int render_svg(const amp_pathset *ps, int width, FILE *out, render_stats *st)
+static void svg_legend(pv_out *o, const amp_pathset *ps, int width, int h, size_t *support)
 {
+    char line[256];
+    int k, lx, ly;
+    legend_common(width, h, &lx, &ly);
+    summary(ps, line, sizeof line, support);
+    pv_printf(o, "<g font-family=\"sans-serif\" font-size=\"15\" fill=\"#282828\" transform=\"translate(%d %d) scale(%g)\">\n",
+              lx, ly, legend_unit(width) / 3.0);
+    pv_printf(o, "<text x=\"0\" y=\"14\">%s</text>\n", line);
+    pv_printf(o, "<defs><linearGradient id=\"order\">");
+    for (k = 0; k <= 4; k++) {
+        unsigned char c[3];
+        ramp(k / 4.0, c);
+        pv_printf(o, "<stop offset=\"%d%%\" stop-color=\"#%02x%02x%02x\"/>", k * 25, c[0], c[1], c[2]);
+    }
+    pv_printf(o, "</linearGradient></defs>\n");
+    pv_printf(o, "<text x=\"0\" y=\"44\">print order: first</text>\n");
+    pv_printf(o, "<rect x=\"150\" y=\"26\" width=\"300\" height=\"24\" fill=\"url(#order)\"/>\n");
+    pv_printf(o, "<text x=\"460\" y=\"44\">last</text>\n");
+    pv_printf(o, "<rect x=\"520\" y=\"26\" width=\"30\" height=\"24\" fill=\"#969696\"/>\n");
+    pv_printf(o, "<text x=\"560\" y=\"44\">support (%lu)</text>\n", (unsigned long)*support);
+    pv_printf(o, "<text x=\"0\" y=\"78\">tube width follows the material deposition radius</text>\n");
+    pv_printf(o, "</g>\n</svg>\n");
+}
+
+amp_status amp_preview_svg(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
+                           amp_error *err)
+{
+    amp_preview_stats tmp;
     view v[2];
     size_t i, support;
-    int k, h = width / 2 + LEGEND_H, lx, ly;
-    char line[256], col[8];
+    int k, h = width / 2 + LEGEND_H;
+    char col[8];
     svgw s;
+    pv_out o;
+    amp_status rc = check_args(ps, width, sink, err);
+    if (rc != AMP_OK)
+        return rc;
+    if (!st)
+        st = &tmp;
     memset(st, 0, sizeof *st);
+    o.sink = sink;
+    o.user = user;
+    o.bytes = 0;
+    o.st = AMP_OK;
     layout(v, width, h);
-    fprintf(out,
-            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
-            "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\">\n"
-            "<rect width=\"%d\" height=\"%d\" fill=\"#fafaf7\"/>\n",
-            width, h, width, h, width, h);
+    pv_printf(&o,
+              "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+              "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%d\" height=\"%d\" viewBox=\"0 0 %d %d\">\n"
+              "<rect width=\"%d\" height=\"%d\" fill=\"#fafaf7\"/>\n",
+              width, h, width, h, width, h);
     for (k = 0; k < 2; k++) {
         fit_view(&v[k], ps);
-        fprintf(out, "<text x=\"%.0f\" y=\"18\" font-family=\"sans-serif\" font-size=\"15\">%s</text>\n",
-                v[k].x0 + 12, k == 0 ? "isometric view" : "top view");
-        fprintf(out, "<g fill=\"none\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n");
-        for (i = 0; i < ps->npaths; i++) {
+        pv_printf(&o, "<text x=\"%.0f\" y=\"18\" font-family=\"sans-serif\" font-size=\"15\">%s</text>\n",
+                  v[k].x0 + 12, k == 0 ? "isometric view" : "top view");
+        pv_printf(&o, "<g fill=\"none\" stroke-linecap=\"round\" stroke-linejoin=\"round\">\n");
+        for (i = 0; i < ps->npaths && o.st == AMP_OK; i++) {
             unsigned char c[3];
             path_colour(ps, i, c);
             snprintf(col, sizeof col, "#%02x%02x%02x", c[0], c[1], c[2]);
-            s.f = out;
+            s.o = &o;
             s.open = 0;
             s.col = col;
             st->drawn += walk_path(ps, i, &v[k], svg_seg, &s);
             svg_close(&s);
         }
-        fputs("</g>\n", out);
+        pv_printf(&o, "</g>\n");
     }
-    fprintf(out, "<line x1=\"%d\" y1=\"0\" x2=\"%d\" y2=\"%d\" stroke=\"#d2d2cd\"/>\n", width / 2, width / 2,
-            h - LEGEND_H);
-    legend_common(width, h, &lx, &ly);
-    summary(ps, line, sizeof line, &support);
-    fprintf(out, "<g font-family=\"sans-serif\" font-size=\"15\" fill=\"#282828\" transform=\"translate(%d %d) scale(%g)\">\n",
-            lx, ly, legend_unit(width) / 3.0);
-    fprintf(out, "<text x=\"0\" y=\"14\">%s</text>\n", line);
-    fprintf(out, "<defs><linearGradient id=\"order\">");
-    for (k = 0; k <= 4; k++) {
-        unsigned char c[3];
-        ramp(k / 4.0, c);
-        fprintf(out, "<stop offset=\"%d%%\" stop-color=\"#%02x%02x%02x\"/>", k * 25, c[0], c[1], c[2]);
-    }
-    fprintf(out, "</linearGradient></defs>\n");
-    fprintf(out, "<text x=\"0\" y=\"44\">print order: first</text>\n");
-    fprintf(out, "<rect x=\"150\" y=\"26\" width=\"300\" height=\"24\" fill=\"url(#order)\"/>\n");
-    fprintf(out, "<text x=\"460\" y=\"44\">last</text>\n");
-    fprintf(out, "<rect x=\"520\" y=\"26\" width=\"30\" height=\"24\" fill=\"#969696\"/>\n");
-    fprintf(out, "<text x=\"560\" y=\"44\">support (%lu)</text>\n", (unsigned long)support);
-    fprintf(out, "<text x=\"0\" y=\"78\">tube width follows the material deposition radius</text>\n");
-    fputs("</g>\n</svg>\n", out);
-    st->width = width;
-    st->height = h;
-    st->paths = ps->npaths;
-    st->support = support;
-    st->vertices = ps->nverts;
-    st->bytes = (size_t)ftell(out);
-    return ferror(out) ? -1 : 0;
+    pv_printf(&o, "<line x1=\"%d\" y1=\"0\" x2=\"%d\" y2=\"%d\" stroke=\"#d2d2cd\"/>\n", width / 2, width / 2,
+              h - LEGEND_H);
+    svg_legend(&o, ps, width, h, &support);
+    return finish(ps, &o, width, h, support, st, err);
 }

@@ -1,0 +1,402 @@
+"""The pipeline stages over libampath, each doing what the matching `ampath` command does with the library,
+so that the bytes written are the tool's (python/tests/test_pipeline.py proves it).
+
+Options are keyword arguments named after the fields of the C options structs (amp_cover_opts,
+amp_order_opts, amp_mdr_opts, amp_support_opts, amp_contpath_opts, amp_field_opts, amp_gcode_opts), on top
+of the library's defaults; the head is given as z_offs (mm) and theta_deg (degrees, as the tool takes it).
+Every stage returns a new PathSet whose .stats dict holds the library's figures.
+"""
+
+import ctypes
+import math
+
+from . import _lib as L
+from ._lib import lib
+from .core import (Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _hold, _Owner,
+                   _Progress, _todict)
+
+_DIRS = {"u": 0, "v": 1, "w": 2, 0: 0, 1: 1, 2: 2}
+
+
+def _dir(d):
+    if d not in _DIRS:
+        _fail("dir must be u, v or w, got %r" % (d,))
+    return _DIRS[d]
+
+
+def _run(fn, out, progress=None, inputs=()):
+    """Call a stage that appends to @out, holding its @inputs; free @out on failure."""
+    try:
+        with _hold(*inputs):
+            fn()
+        if progress is not None:
+            progress.done()
+    except BaseException:
+        out.close()
+        raise
+    return out
+
+
+def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
+    """Paper 1 §4.1 (`ampath cover`): paths covering @trivariate within @eps mm.
+    Options: dir (u|v|w), min_depth, measure (arclen|iso), radius, chord_tol, cells, max_depth."""
+    o = L.amp_cover_opts()
+    lib.amp_cover_opts_default(ctypes.byref(o))
+    o.eps = eps
+    o.dir = _dir(dir)
+    if measure not in ("arclen", "iso"):
+        _fail("measure must be arclen or iso")
+    o.measure = 0 if measure == "arclen" else 1
+    _apply(o, opts, "cover", skip=("eps", "dir", "measure"))
+    pr = _Progress(progress)
+    o.progress = pr.c
+    out, st, err = PathSet(), L.amp_cover_stats(), _err()
+
+    def go():
+        _check(lib.amp_cover_trivariate(trivariate._ref, ctypes.byref(o), out._ref, ctypes.byref(st),
+                                        ctypes.byref(err)), err)
+        out.stats = _todict(st)
+    return _run(go, out, pr, (trivariate,))
+
+
+def coverage_gap(trivariate, paths, samples=20000, seed=1):
+    """Independent coverage measurement (amp_cover_measure_gap) as a dict."""
+    g, err = L.amp_cover_gap(), _err()
+    with _hold(trivariate, paths):
+        _check(lib.amp_cover_measure_gap(trivariate._ref, paths._ref, samples, seed, ctypes.byref(g),
+                                         ctypes.byref(err)), err)
+    d = _todict(g)
+    d["over_coverage"] = g.deposited / g.volume if g.volume > 0 else 0.0
+    return d
+
+
+def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
+    """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
+    "box" or a Trivariate (curves along @dir). Options: step, min_len, radius, shells (amp_field_opts)."""
+    f, o, st, err = L.amp_field(), L.amp_field_opts(), L.amp_field_stats(), _err()
+    if isinstance(field, Trivariate):
+        _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
+    else:
+        _check(lib.amp_field_builtin(ctypes.byref(f), _b(field), lib.amp_mesh_bbox(mesh._ref), ctypes.byref(err)),
+               err)
+    lib.amp_field_opts_default(ctypes.byref(o))
+    o.spacing = spacing
+    if pattern not in ("grid", "hex"):
+        _fail("pattern must be grid or hex")
+    o.pattern = 0 if pattern == "grid" else 1
+    _apply(o, opts, "field", skip=("spacing", "pattern", "within", "without", "nwithout"))
+    out = PathSet()
+
+    def go():
+        _check(lib.amp_field_cover(ctypes.byref(f), mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
+                                   ctypes.byref(err)), err)
+        out.stats = _todict(st)
+    return _run(go, out, None, (mesh,))
+
+
+def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts):
+    """Paper 1 §5.1 (`ampath order`): a gouge-free print order (Algorithm 2; improve=False: plain greedy).
+    Options: lookahead, merge_window (amp_order_opts)."""
+    o = L.amp_order_opts()
+    lib.amp_order_opts_default(ctypes.byref(o))
+    o.head = _head(z_offs, theta_deg)
+    o.improve = 1 if improve else 0
+    _apply(o, opts, "order", skip=("head", "improve"))
+    pr = _Progress(progress)
+    o.progress = pr.c
+    out, st, err = PathSet(), L.amp_order_stats(), _err()
+
+    def go():
+        _check(lib.amp_order(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
+        out.stats = _todict(st)
+    return _run(go, out, pr, (paths,))
+
+
+def mdr(paths, nominal=0.5, progress=None, **opts):
+    """Paper 1 §5.2 (`ampath mdr`): deposition radius per vertex. Options: r_min, r_max, fragment."""
+    o = L.amp_mdr_opts()
+    lib.amp_mdr_opts_default(ctypes.byref(o), nominal)
+    _apply(o, opts, "mdr", skip=("nominal",))
+    pr = _Progress(progress)
+    o.progress = pr.c
+    out, st, err = PathSet(), L.amp_mdr_stats(), _err()
+
+    def go():
+        _check(lib.amp_mdr(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
+        out.stats = _todict(st)
+    return _run(go, out, pr, (paths,))
+
+
+def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, **opts):
+    """Paper 1 §5.3 (`ampath support`): support under @mesh (a Mesh, or a Trivariate whose boundary is
+    tessellated as the tool does), interleaved in print order. Options: spacing, layer_height, radius,
+    min_gap (amp_support_opts)."""
+    if isinstance(mesh, Trivariate):
+        with Mesh.from_trivariate(mesh) as m:
+            return support(paths, m, z_offs, theta_deg, progress, **opts)
+    o = L.amp_support_opts()
+    lib.amp_support_opts_default(ctypes.byref(o))
+    o.head = _head(z_offs, theta_deg)
+    _apply(o, opts, "support", skip=("head",))
+    pr = _Progress(progress)
+    o.progress = pr.c
+    out, st, err = PathSet(), L.amp_support_stats(), _err()
+
+    def go():
+        _check(lib.amp_support(paths._ref, mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
+                               ctypes.byref(err)), err)
+        out.stats = _todict(st)
+    return _run(go, out, pr, (paths, mesh))
+
+
+# ---------------------------------------------------------------- slicing
+
+
+class Slices(_Owner):
+    """The layers of a sliced mesh (amp_slices), owned; .layers lists (z_cut, z_print, rings) per layer with
+    rings as lists of (x, y) and a hole flag."""
+
+    def __init__(self, mesh, layer, first_layer=0.0):
+        super().__init__()
+        self._sl = L.amp_slices()
+        lib.amp_slices_init(ctypes.byref(self._sl), None)
+        if not (layer > 0 and math.isfinite(layer)):
+            self.close()
+            _fail("layer must be a positive height in mm")
+        self.layer = layer
+        # the slicer chains segments by their direction: the orientation must agree (as the tool does)
+        self.flipped = mesh.orient()
+        o, err = L.amp_slice_opts(layer, first_layer), _err()
+        with _hold(mesh):
+            st = lib.amp_slice_mesh(mesh._ref, ctypes.byref(o), ctypes.byref(self._sl), ctypes.byref(err))
+        if st:
+            self.close()
+        _check(st, err)
+
+    def _release(self):
+        lib.amp_slices_free(ctypes.byref(self._sl))
+
+    def __len__(self):
+        self._live()
+        return self._sl.nlayers
+
+    @property
+    def open_chains(self):
+        return self._sl.open_chains
+
+    def _rings(self, i):
+        self._live()
+        P = self._sl.layers[i].polys
+        for r in range(P.nrings):
+            ring = P.rings[r]
+            yield [(P.pts[k].x, P.pts[k].y) for k in range(ring.first, ring.first + ring.n)], bool(ring.hole)
+
+    @property
+    def layers(self):
+        return [{"z_cut": self._sl.layers[i].z_cut, "z_print": self._sl.layers[i].z_print,
+                 "rings": [{"points": pts, "hole": hole} for pts, hole in self._rings(i)],
+                 "area": lib.amp_polyset_area(ctypes.byref(self._sl.layers[i].polys))}
+                for i in range(self._sl.nlayers)]
+
+    def polygons(self, radius=0.5):
+        """`ampath slice --polygons`: one closed path per ring (last vertex repeats the first) at the cutting
+        height, radius @radius on every vertex."""
+        ps = PathSet()
+        for i in range(self._sl.nlayers):
+            z = self._sl.layers[i].z_cut
+            for pts, _hole in self._rings(i):
+                ps.add([(x, y, z) for x, y in pts + pts[:1]], radius=radius)
+        return ps
+
+    def continuous(self, radius=0.5, grid="square", **opts):
+        """`ampath slice --continuous` (paper 2): per island perimeters and one stroke over the Euler
+        lattice. Options: cell, offset, perimeters, support_stretches, pseudo_edges (amp_contpath_opts)."""
+        o = L.amp_contpath_opts()
+        lib.amp_contpath_opts_default(ctypes.byref(o), radius)
+        grids = {"square": 0, "tri": 1, "hex": 2}
+        if grid not in grids:
+            _fail("grid must be square, tri or hex")
+        o.grid = grids[grid]
+        _apply(o, opts, "continuous", skip=("radius", "grid"))
+        out, st, err = PathSet(), L.amp_contpath_stats(), _err()
+
+        def go():
+            self._live()
+            _check(lib.amp_contpath_layers(ctypes.byref(self._sl), ctypes.byref(o), out._ref, ctypes.byref(st),
+                                           ctypes.byref(err)), err)
+            out.stats = _todict(st)
+        return _run(go, out, None, (self,))
+
+
+def slice(mesh, layer, first_layer=0.0, continuous=False, radius=0.5, **opts):
+    """`ampath slice MESH --layer H (--polygons|--continuous)`: a PathSet of the layers."""
+    with Slices(mesh, layer, first_layer) as sl:
+        return sl.continuous(radius, **opts) if continuous else sl.polygons(radius)
+
+
+# ---------------------------------------------------------------- check
+
+
+def _planar(path):
+    pts = path.points
+    return len(pts) > 0 and all(abs(p[2] - pts[0][2]) <= 1e-9 for p in pts)
+
+
+def check(paths, trivariate=None, z_offs=0.5, theta_deg=72.0, eps=None, samples=20000, seed=1):
+    """Independent verification as `ampath check` does it, figures as a dict: "coverage" (with a
+    trivariate), "gouge" (object paths), "strokes" (planar paths), each with "ran" and "ok", and "ok"."""
+    with _hold(paths, trivariate):
+        return _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed)
+
+
+def _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed):
+    res = {}
+    h = _head(z_offs, theta_deg)
+    if trivariate is not None:
+        if eps is None:
+            eps = max((v[3] for p in paths for v in p.points), default=0.0)
+        g = coverage_gap(trivariate, paths, samples, seed)
+        g.update(ran=True, ok=g["gap"] <= eps, eps=eps)
+        res["coverage"] = g
+    else:
+        res["coverage"] = {"ran": False, "reason": "no model"}
+    if any(p.role == "object" for p in paths):
+        v, err = L.amp_gouge_violation(), _err()
+        st = lib.amp_gouge_check(paths._ref, ctypes.byref(h), 0, 1e-6, ctypes.byref(v), ctypes.byref(err))
+        if st not in (0, -10):
+            _check(st, err)
+        res["gouge"] = {"ran": True, "ok": st == 0}
+        if st:
+            res["gouge"]["violation"] = _todict(v)
+            res["gouge"]["message"] = err.msg.decode()
+    else:
+        res["gouge"] = {"ran": False, "reason": "no object paths"}
+    planar = [i for i, p in enumerate(paths) if _planar(p)]
+    if planar:
+        tot = dict(paths=len(planar), segments=0, pseudo=0, crossings=0, repeated_edges=0, failed=0)
+        for i in planar:
+            rep, err = L.amp_stroke_report(), _err()
+            st = lib.amp_pathset_stroke_check(paths._ref, i, None, 1e-6, ctypes.byref(rep), ctypes.byref(err))
+            if st == -2:
+                _check(st, err)
+            tot["failed"] += st != 0
+            for k in ("segments", "pseudo", "crossings", "repeated_edges"):
+                tot[k] += getattr(rep, k)
+        tot.update(ran=True, ok=tot["failed"] == 0)
+        res["strokes"] = tot
+    else:
+        res["strokes"] = {"ran": False, "reason": "no planar paths"}
+    res["ok"] = all(s.get("ok", True) for s in res.values())
+    return res
+
+
+# ---------------------------------------------------------------- printers and G-code
+
+
+def printer_names():
+    return [lib.amp_printer_builtin_name(i).decode() for i in range(lib.amp_printer_builtin_count())]
+
+
+class Printer:
+    """A printer profile (amp_printer): a built-in name or a PrusaSlicer/SuperSlicer/OrcaSlicer `.ini`."""
+
+    def __init__(self, spec="generic"):
+        self._p, err = L.amp_printer(), _err()
+        _check(lib.amp_printer_load(ctypes.byref(self._p), _b(spec), ctypes.byref(err)), err)
+
+    def __getattr__(self, name):
+        if name.startswith("_"):
+            raise AttributeError(name)
+        fields = {n for n, _ in L.amp_printer._fields_}
+        if name not in fields:
+            raise AttributeError(name)
+        v = getattr(self._p, name)
+        return v.decode() if isinstance(v, bytes) else v
+
+    def bead_width(self):
+        return lib.amp_printer_bead_width(ctypes.byref(self._p))
+
+    def as_dict(self):
+        return {n: getattr(self, n) for n, _ in L.amp_printer._fields_ if not n.endswith("_out")}
+
+    def __repr__(self):
+        return "Printer(%r)" % self.name
+
+
+class GCode:
+    """A G-code job: .text (str, None when written to a file), .stats (dict of amp_gcode_stats), .printer."""
+
+    def __init__(self, text, stats, printer):
+        self.text, self.stats, self.printer = text, stats, printer
+
+    def __str__(self):
+        return self.text or ""
+
+
+def _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts):
+    pr = printer if isinstance(printer, Printer) else Printer(printer)
+    o, err = L.amp_gcode_opts(), _err()
+    _check(lib.amp_printer_gcode_opts(ctypes.byref(pr._p), ctypes.byref(o), ctypes.byref(err)), err)
+    if flavor is not None:
+        if flavor not in ("marlin", "klipper"):
+            _fail("flavor must be marlin or klipper, got '%s'" % flavor)
+        o.flavor = 1 if flavor == "klipper" else 0
+        o.relative_e = o.flavor  # SPEC 5: the flavour's E mode unless asked
+    if place is None or place in ("center", "centre"):
+        o.place = 0
+    elif place == "origin":
+        o.place = 1
+    else:
+        try:
+            o.place_x, o.place_y = (float(c) for c in place)
+        except (TypeError, ValueError):
+            _fail("place must be 'center', 'origin' or (x, y) in mm, got %r" % (place,))
+        o.place = 2
+    keep = [pr]
+    for name, text in (("start_gcode", start_gcode), ("end_gcode", end_gcode)):
+        if text is not None:
+            b = text.encode()
+            keep.append(b)  # the writer reads the text during the call: keep the bytes alive
+            setattr(o, name, b)
+    _apply(o, opts, "gcode", skip=("profile", "start_gcode", "end_gcode", "place", "place_x", "place_y"))
+    return o, pr, keep
+
+
+def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_gcode=None, end_gcode=None,
+          **opts):
+    """`ampath gcode` (SPEC §5): MDR-modulated G-code for @printer (a Printer, a built-in name or a slicer
+    `.ini`), placed on its bed (@place: "center", "origin" or (x, y)). Other options are fields of
+    amp_gcode_opts (print_feed, retract_length, z_hop, fan_speed, arcs, ...) overriding the profile's.
+    With @output the file is written safely (replaced only after a complete write) and .text is None."""
+    o, pr, keep = _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts)
+    with _hold(paths):
+        return _gcode_held(paths, output, o, pr, keep)
+
+
+def _gcode_held(paths, output, o, pr, keep):
+    st, err = L.amp_gcode_stats(), _err()
+    if output is None:
+        from .core import _to_buf
+        data = _to_buf(lambda sink, buf, e: lib.amp_gcode_write(paths._ref, ctypes.byref(o), sink, buf,
+                                                               ctypes.byref(st), e))
+        text = data.decode()
+    else:
+        f = L.amp_out()
+        _check(lib.amp_out_open(ctypes.byref(f), _b(output), ctypes.byref(err)), err)
+        s = lib.amp_gcode_write(paths._ref, ctypes.byref(o), L.OUT_SINK, ctypes.cast(ctypes.byref(f),
+                                ctypes.c_void_p), ctypes.byref(st), ctypes.byref(err))
+        if s != 0:
+            if f.werr:
+                import os
+                err.msg = ("%s: %s" % (f.target.decode(), os.strerror(f.werr))).encode()[:199]
+                s = -5
+            lib.amp_out_abort(ctypes.byref(f))
+            _check(s, err)
+        _check(lib.amp_out_commit(ctypes.byref(f), ctypes.byref(err)), err)
+        text = None
+    del keep
+    return GCode(text, _todict(st), pr)
+
+
+__all__ = ["cover", "coverage_gap", "field", "order", "mdr", "support", "Slices", "slice", "check",
+           "printer_names", "Printer", "GCode", "gcode", "Error"]

@@ -1,0 +1,44 @@
+"""Pictures of path sets (SPEC §4 `ampath preview`), drawn by the library's renderer (ampath/preview.h):
+the same bytes as the tool."""
+
+import ctypes
+import os
+
+from . import _lib as L
+from ._lib import lib
+from .core import _check, _err, _fail, _hold, _to_buf, _todict
+
+
+def preview(paths, format="png", width=1600, output=None, stats=None):
+    """A PNG or SVG picture of @paths (isometric and top views, tubes scaled by the deposition radius,
+    coloured by print order). Returns the bytes; with @output the file is also written (replaced safely),
+    and the format follows its extension when it ends in .png or .svg. A dict passed as @stats receives
+    the figures (width, height, paths, support, vertices, drawn, bytes)."""
+    if output is not None:
+        ext = os.path.splitext(str(output))[1].lower()
+        if ext in (".png", ".svg"):
+            format = ext[1:]
+    if format not in ("png", "svg"):
+        _fail("format must be 'png' or 'svg'")
+    if "amp_preview_png" in L.MISSING:
+        _fail("%s has no preview renderer (ampath/preview.h): a newer libampath is needed" % L.LIBRARY_PATH, -9)
+    fn = lib.amp_preview_png if format == "png" else lib.amp_preview_svg
+    st = L.amp_preview_stats()
+    with _hold(paths):
+        data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))
+    if output is not None:
+        f, err = L.amp_out(), _err()
+        _check(lib.amp_out_open(ctypes.byref(f), os.fsencode(output), ctypes.byref(err)), err)
+        if lib.amp_out_sink(ctypes.byref(f), data, len(data)) != 0:
+            lib.amp_out_abort(ctypes.byref(f))
+            _check(-5, _msg(err, "%s: %s" % (f.target.decode(), os.strerror(f.werr))))
+        _check(lib.amp_out_commit(ctypes.byref(f), ctypes.byref(err)), err)
+    if stats is not None:
+        stats.update(_todict(st))
+    return data
+
+
+def _msg(err, text):
+    err.msg = text.encode()[:199]
+    return err
+

@@ -1,0 +1,163 @@
+"""ampath.BridgeClient against the real daemon (bridge/ampath-bridge --daemon) and the virtual printer
+(tools/ampath-vprinter), started as tests/test_daemon.c starts them. The job is G-code made by Python."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+import unittest
+
+from amptest import BRIDGE, HERE, VPRINTER, TmpCase, ampath
+
+EXAMPLE = os.path.join(HERE, "..", "examples", "host_plugin.py")
+
+
+def box_stl(path, sx=12.0, sy=8.0, sz=1.2):
+    """An ASCII STL of a closed box on the plate (two outward triangles per face)."""
+    v = [(x * sx, y * sy, z * sz) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    with open(path, "w") as f:
+        f.write("solid box\n")
+        for a, b, c, d in quads:
+            for tri in ((a, b, c), (a, c, d)):
+                f.write("facet normal 0 0 0\nouter loop\n")
+                for k in tri:
+                    f.write("vertex %g %g %g\n" % v[k])
+                f.write("endloop\nendfacet\n")
+        f.write("endsolid box\n")
+
+FAST = ["--timeout", "0.3", "--settle-ms", "5", "--boot-wait", "0.3", "--baud", "1000000"]
+DEADLINE = 120.0  # generous: the machine may be loaded; nothing here measures time
+
+
+def wait_for(cond, what):
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < DEADLINE:
+        v = cond()
+        if v:
+            return v
+        time.sleep(0.02)
+    raise AssertionError("timed out waiting for " + what)
+
+
+@unittest.skipUnless(os.access(BRIDGE, os.X_OK) and os.access(VPRINTER, os.X_OK), "bridge not built")
+class Bridge(TmpCase):
+    def setUp(self):
+        super().setUp()
+        self.link, self.log, self.sock = self.p("printer"), self.p("printer.log"), self.p("ctl.sock")
+        self.vp = subprocess.Popen([VPRINTER, "--link", self.link, "--log", self.log] + self.vp_opts(),
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        wait_for(lambda: os.path.exists(self.link), "the virtual printer's link")
+        self.err = open(self.p("daemon.err"), "w+")
+        self.daemon = subprocess.Popen([BRIDGE, self.link, "--daemon", "--socket", self.sock] + FAST,
+                                       stdout=subprocess.DEVNULL, stderr=self.err)
+        # up when it says so on stderr (as tests/test_daemon.c waits)
+        wait_for(lambda: self.daemon.poll() is not None or "control socket " in self.daemon_err(), "the daemon")
+        self.assertIsNone(self.daemon.poll(), self.daemon_err())
+
+    def vp_opts(self):
+        # the pause/cancel job takes the virtual printer about 30 s of modelled motion (2 mm moves at 20 mm/s):
+        # it cannot end between our submit and our pause however slow this machine is, and a cancel
+        # waits only for the few lines in flight
+        return ["--speed", "20"] if "pause" in self._testMethodName else []
+
+    def daemon_err(self):
+        self.err.seek(0)
+        return self.err.read()
+
+    def tearDown(self):
+        for proc in (self.daemon, self.vp):
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+                try:
+                    proc.wait(timeout=DEADLINE)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+        self.err.close()
+        super().tearDown()
+
+    def job(self, n=40, length=20):
+        with ampath.PathSet() as ps:
+            for k in range(n):
+                y, z = 3 * k % 30, 0.2 + 0.2 * (k // 10)
+                ps.add([(0, y, z), (length, y, z)], radius=0.25, h=0.2)
+            path = self.p("job.gcode")
+            ampath.gcode(ps, path, hotend_temp=0, bed_temp=0, first_layer_hotend_temp=0, first_layer_bed_temp=0)
+        return path
+
+    def executed(self):
+        with open(self.log) as f:
+            return [l for l in f if not l.startswith("#") and "M110" not in l and "M115" not in l]
+
+    def follow(self, b):
+        for ev in b.events(timeout=DEADLINE):
+            if ev["event"] == "end":
+                return ev
+        self.fail("no end event")
+
+    def test_submit_and_follow_a_job_to_its_end(self):
+        job = self.job()
+        with ampath.BridgeClient(self.sock) as b:
+            self.assertEqual(b.status()["state"], "idle")
+            b.subscribe()
+            reply = b.submit(job)
+            self.assertTrue(reply["ok"])
+            kinds = set()
+            for ev in b.events(timeout=DEADLINE):
+                kinds.add(ev["event"])
+                if ev["event"] == "end":
+                    end = ev
+                    break
+            self.assertEqual(end["state"], "done")
+            self.assertIn("state", kinds)
+            st = b.status()
+            self.assertEqual(st["acked"], st["total"])
+            self.assertEqual(st["errors"], 0)
+        self.assertEqual(len(self.executed()), st["total"])
+
+    def test_the_example_host_plugin_slices_an_upload_and_prints_it(self):
+        stl = self.p("upload.stl")
+        box_stl(stl)
+        r = subprocess.run([sys.executable, EXAMPLE, stl, "--printer", "ender3", "--bridge", self.sock, "--follow"],
+                           capture_output=True, text=True, timeout=DEADLINE)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        figures = json.loads(r.stdout)
+        self.assertEqual(figures["bridge"], "done")
+        self.assertEqual(figures["printer"], "ender3")
+        self.assertEqual(figures["gcode"], self.p("upload.gcode"))
+        self.assertGreater(figures["strokes"], 0)
+        with open(figures["gcode"]) as f:
+            moves = sum(1 for l in f if l.startswith(("G0 ", "G1 ")))
+        done = sum(1 for l in self.executed() if " G0 " in l or " G1 " in l)
+        self.assertEqual(done, moves)
+
+    def test_refusals_raise_bridge_error_with_the_reply(self):
+        with ampath.BridgeClient(self.sock) as b:
+            with self.assertRaises(ampath.BridgeError) as cm:
+                b.submit(self.p("no-such-job.gcode"))
+            self.assertFalse(cm.exception.reply["ok"])
+            self.assertIn("no-such-job", str(cm.exception))
+            self.assertEqual(b.status()["state"], "idle")  # the connection still works
+        with self.assertRaises(ampath.BridgeError):
+            ampath.BridgeClient(self.p("no-such.sock"))
+
+    def test_pause_resume_and_cancel(self):
+        job = self.job(150, length=2)
+        with ampath.BridgeClient(self.sock) as b:
+            b.subscribe()
+            b.submit(job)
+            b.pause()
+            wait_for(lambda: b.status()["state"] == "paused", "paused")
+            b.resume()
+            wait_for(lambda: b.status()["state"] != "paused", "resumed")
+            b.cancel()
+            end = self.follow(b)
+            self.assertEqual(end["state"], "cancelled")
+            self.assertLess(end["acked"], end["total"])
+
+
+if __name__ == "__main__":
+    unittest.main()
