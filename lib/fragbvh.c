@@ -45,6 +45,7 @@ void amp_fbvh_free(amp_fbvh *b)
     if (!b)
         return;
     amp_free(b->alloc, b->node);
+    amp_free(b->alloc, b->act);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
     memset(b, 0, sizeof *b);
@@ -62,9 +63,10 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         return AMP_OK;
     keys = amp_calloc(a, n, sizeof *keys);
     b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
+    b->act = amp_calloc(a, 2 * n + 1, sizeof *b->act);
     b->order = amp_calloc(a, n, sizeof *b->order);
     b->leaf = amp_calloc(a, n, sizeof *b->leaf);
-    if (!keys || !b->node || !b->order || !b->leaf) {
+    if (!keys || !b->node || !b->act || !b->order || !b->leaf) {
         amp_free(a, keys);
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
@@ -122,26 +124,61 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             nd->box = amp_box3_union(b->node[nd->left].box, b->node[nd->right].box);
         }
         nd->minz = nd->box.min.z;
+        b->act[i].x0 = nd->box.min.x;
+        b->act[i].y0 = nd->box.min.y;
+        b->act[i].x1 = nd->box.max.x;
+        b->act[i].y1 = nd->box.max.y;
+        b->act[i].minz = nd->minz;
+        b->act[i].left = nd->left;
+        b->act[i].right = nd->right;
+        b->act[i].lo = nd->lo;
+        b->act[i].hi = nd->hi;
     }
     return AMP_OK;
 }
 
+static double dmin(double a, double b) { return a < b ? a : b; }
+static double dmax(double a, double b) { return a > b ? a : b; }
+
+/* The unprinted bounds of leaf @p id from its fragments. */
+static void act_leaf(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t id)
+{
+    amp_fbvh_act *a = &b->act[id];
+    uint32_t q;
+    a->x0 = a->y0 = a->minz = HUGE_VAL;
+    a->x1 = a->y1 = -HUGE_VAL;
+    for (q = a->lo; q < a->hi; q++) {
+        const amp_box3 *bx = &fs->frag[b->order[q]].box;
+        if (done[b->order[q]])
+            continue;
+        a->x0 = dmin(a->x0, bx->min.x);
+        a->y0 = dmin(a->y0, bx->min.y);
+        a->x1 = dmax(a->x1, bx->max.x);
+        a->y1 = dmax(a->y1, bx->max.y);
+        a->minz = dmin(a->minz, bx->min.z);
+    }
+}
+
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
 {
-    uint32_t id = b->leaf[f], q;
-    amp_fbvh_node *nd = &b->node[id];
-    double m = HUGE_VAL;
-    for (q = nd->lo; q < nd->hi; q++)
-        if (!done[b->order[q]])
-            m = fmin(m, fs->frag[b->order[q]].box.min.z);
-    nd->minz = m;
-    while (nd->parent != AMP_FBVH_NONE) {
-        amp_fbvh_node *p = &b->node[nd->parent];
-        m = fmin(b->node[p->left].minz, b->node[p->right].minz);
-        if (m == p->minz)
+    uint32_t id = b->leaf[f];
+    act_leaf(b, fs, done, id);
+    b->node[id].minz = b->act[id].minz;
+    /* the printed regions shrink out of the boxes: the queries below prune on what is still unprinted */
+    while (b->node[id].parent != AMP_FBVH_NONE) {
+        uint32_t p = b->node[id].parent;
+        const amp_fbvh_act *l = &b->act[b->act[p].left], *r = &b->act[b->act[p].right];
+        amp_fbvh_act *a = &b->act[p];
+        double x0 = dmin(l->x0, r->x0), y0 = dmin(l->y0, r->y0), x1 = dmax(l->x1, r->x1), y1 = dmax(l->y1, r->y1);
+        double mz = dmin(l->minz, r->minz);
+        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz)
             break;
-        p->minz = m;
-        nd = p;
+        a->x0 = x0;
+        a->y0 = y0;
+        a->x1 = x1;
+        a->y1 = y1;
+        a->minz = b->node[p].minz = mz;
+        id = p;
     }
 }
 
@@ -193,31 +230,33 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     return found;
 }
 
-/* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins. */
+/* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
+ * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. */
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                   const unsigned char *done, uint32_t root, uint32_t skip)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+    double fx0 = fr->box.min.x, fy0 = fr->box.min.y, fx1 = fr->box.max.x, fy1 = fr->box.max.y;
     stack[top++] = root;
     while (top) {
         uint32_t id = stack[--top];
-        const amp_fbvh_node *nd = &b->node[id];
+        const amp_fbvh_act *nd = &b->act[id];
         double room = reach - nd->minz, gx, gy, ex, ey;
         /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
         if (room <= 0.0 || id == skip)
             continue;
-        gx = nd->box.min.x - fr->box.max.x;
-        ex = fr->box.min.x - nd->box.max.x;
-        gy = nd->box.min.y - fr->box.max.y;
-        ey = fr->box.min.y - nd->box.max.y;
+        gx = nd->x0 - fx1;
+        ex = fx0 - nd->x1;
+        gy = nd->y0 - fy1;
+        ey = fy0 - nd->y1;
         gx = gx > ex ? gx : ex;
         gy = gy > ey ? gy : ey;
         gx = gx > 0.0 ? gx : 0.0;
         gy = gy > 0.0 ? gy : 0.0;
-        if (k * k * (gx * gx + gy * gy) >= room * room)
+        if (k2 * (gx * gx + gy * gy) >= room * room)
             continue;
         if (nd->left == 0) {
             uint32_t q;
@@ -228,7 +267,7 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
             }
         } else if (top + 2 <= STACK_MAX) {
             /* the lower child first: blockers lie below */
-            const amp_fbvh_node *l = &b->node[nd->left], *r = &b->node[nd->right];
+            const amp_fbvh_act *l = &b->act[nd->left], *r = &b->act[nd->right];
             if (l->minz < r->minz) {
                 stack[top++] = nd->right;
                 stack[top++] = nd->left;

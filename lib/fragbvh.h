@@ -25,9 +25,17 @@ typedef struct amp_fbvh_node {
     uint32_t parent;
 } amp_fbvh_node;
 
+/* What Algorithm 2's blocker query reads of a node, in one compact array: the xy box and lowest z of the
+ * fragments below it that are still unprinted (empty when all are printed), its children and its range. */
+typedef struct amp_fbvh_act {
+    double x0, y0, x1, y1, minz;
+    uint32_t left, right, lo, hi;
+} amp_fbvh_act;
+
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
+    amp_fbvh_act *act; /* per node, refreshed by amp_fbvh_deactivate */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
@@ -36,7 +44,7 @@ typedef struct amp_fbvh {
 amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
 void amp_fbvh_free(amp_fbvh *b);
 
-/* Fragment f is done (done[f] != 0): refresh the lowest-z bounds on its way to the root. */
+/* Fragment f is done (done[f] != 0): refresh the unprinted bounds (xy box, lowest z) on its way to the root. */
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f);
 
 /* Some fragment g != f not done (done[g] == 0) below f (Def. 5.1), preferring high ones; AMP_FBVH_NONE if none.
