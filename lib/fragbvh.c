@@ -230,34 +230,40 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     return found;
 }
 
+/* How deep a node's unprinted fragments may reach into the cone under fragment box @p fb (room minus the
+ * cone's run over the xy gap, mm); <= 0: nothing under it can be below f. */
+static double act_slack(const amp_fbvh_act *nd, double reach, double k, const amp_box3 *fb)
+{
+    double room = reach - nd->minz, gx, gy, ex, ey;
+    if (room <= 0.0)
+        return room;
+    gx = nd->x0 - fb->max.x;
+    ex = fb->min.x - nd->x1;
+    gy = nd->y0 - fb->max.y;
+    ey = fb->min.y - nd->y1;
+    gx = gx > ex ? gx : ex;
+    gy = gy > ey ? gy : ey;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    return room - k * sqrt(gx * gx + gy * gy);
+}
+
 /* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
- * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. */
+ * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. Nodes
+ * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
+ * most often. */
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                   const unsigned char *done, uint32_t root, uint32_t skip)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
-    double fx0 = fr->box.min.x, fy0 = fr->box.min.y, fx1 = fr->box.max.x, fy1 = fr->box.max.y;
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
+    if (root == skip || act_slack(&b->act[root], reach, k, &fr->box) <= 0.0)
+        return AMP_FBVH_NONE;
     stack[top++] = root;
     while (top) {
-        uint32_t id = stack[--top];
-        const amp_fbvh_act *nd = &b->act[id];
-        double room = reach - nd->minz, gx, gy, ex, ey;
-        /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
-        if (room <= 0.0 || id == skip)
-            continue;
-        gx = nd->x0 - fx1;
-        ex = fx0 - nd->x1;
-        gy = nd->y0 - fy1;
-        ey = fy0 - nd->y1;
-        gx = gx > ex ? gx : ex;
-        gy = gy > ey ? gy : ey;
-        gx = gx > 0.0 ? gx : 0.0;
-        gy = gy > 0.0 ? gy : 0.0;
-        if (k2 * (gx * gx + gy * gy) >= room * room)
-            continue;
+        const amp_fbvh_act *nd = &b->act[stack[--top]];
         if (nd->left == 0) {
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
@@ -266,13 +272,14 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            /* the lower child first: blockers lie below */
-            const amp_fbvh_act *l = &b->act[nd->left], *r = &b->act[nd->right];
-            if (l->minz < r->minz) {
-                stack[top++] = nd->right;
+            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left], reach, k, &fr->box);
+            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right], reach, k, &fr->box);
+            if (sl > 0.0 && sr > 0.0) {
+                stack[top++] = sl > sr ? nd->right : nd->left;
+                stack[top++] = sl > sr ? nd->left : nd->right;
+            } else if (sl > 0.0) {
                 stack[top++] = nd->left;
-            } else {
-                stack[top++] = nd->left;
+            } else if (sr > 0.0) {
                 stack[top++] = nd->right;
             }
         }
