@@ -46,6 +46,7 @@ void amp_fbvh_free(amp_fbvh *b)
         return;
     amp_free(b->alloc, b->node);
     amp_free(b->alloc, b->act);
+    amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
     memset(b, 0, sizeof *b);
@@ -64,9 +65,10 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
     keys = amp_calloc(a, n, sizeof *keys);
     b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
     b->act = amp_calloc(a, 2 * n + 1, sizeof *b->act);
+    b->fbox = amp_calloc(a, n, sizeof *b->fbox);
     b->order = amp_calloc(a, n, sizeof *b->order);
     b->leaf = amp_calloc(a, n, sizeof *b->leaf);
-    if (!keys || !b->node || !b->act || !b->order || !b->leaf) {
+    if (!keys || !b->node || !b->act || !b->fbox || !b->order || !b->leaf) {
         amp_free(a, keys);
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
@@ -80,8 +82,15 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         keys[i].id = (uint32_t)i;
     }
     qsort(keys, n, sizeof *keys, mkey_cmp);
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
+        const amp_box3 *bx = &fs->frag[keys[i].id].box;
         b->order[i] = keys[i].id;
+        b->fbox[i].x0 = bx->min.x;
+        b->fbox[i].y0 = bx->min.y;
+        b->fbox[i].x1 = bx->max.x;
+        b->fbox[i].y1 = bx->max.y;
+        b->fbox[i].minz = bx->min.z;
+    }
     amp_free(a, keys);
 
     /* split ranges of the Morton order at their middle: depth is log2(n / LEAF_SIZE) */
@@ -268,7 +277,10 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if (g != f && !done[g] && amp_fragment_below_k(fs, zo, k, g, f))
+                /* the box bound from the leaf-ordered copy first: most candidates end here, without touching
+                 * the fragment itself */
+                if (g != f && !done[g] && act_slack(&b->fbox[q], reach, k, &fr->box) > 0.0 &&
+                    amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {

@@ -36,6 +36,7 @@ typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
     amp_fbvh_act *act; /* per node, refreshed by amp_fbvh_deactivate */
+    amp_fbvh_act *fbox; /* per fragment in leaf order (order[q]): its xy box and lowest z (children unused) */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
