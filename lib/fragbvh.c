@@ -239,13 +239,12 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     return found;
 }
 
-/* How deep a node's unprinted fragments may reach into the cone under fragment box @p fb (room minus the
- * cone's run over the xy gap, mm); <= 0: nothing under it can be below f. */
-static double act_slack(const amp_fbvh_act *nd, double reach, double k, const amp_box3 *fb)
+/* How deep a node's unprinted fragments may reach into the cone under fragment box @p fb: the room under f's
+ * reach and the xy gap, squared; nothing under the node can be below f unless room > 0 and k^2 gap^2 < room^2. */
+static inline double act_reach2(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb, double *room)
 {
-    double room = reach - nd->minz, gx, gy, ex, ey;
-    if (room <= 0.0)
-        return room;
+    double gx, gy, ex, ey;
+    *room = reach - nd->minz;
     gx = nd->x0 - fb->max.x;
     ex = fb->min.x - nd->x1;
     gy = nd->y0 - fb->max.y;
@@ -254,7 +253,20 @@ static double act_slack(const amp_fbvh_act *nd, double reach, double k, const am
     gy = gy > ey ? gy : ey;
     gx = gx > 0.0 ? gx : 0.0;
     gy = gy > 0.0 ? gy : 0.0;
-    return room - k * sqrt(gx * gx + gy * gy);
+    return k2 * (gx * gx + gy * gy);
+}
+
+static inline int act_pass(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb)
+{
+    double room, g2 = act_reach2(nd, reach, k2, fb, &room);
+    return room > 0.0 && g2 < room * room;
+}
+
+/* room minus the cone's run over the gap (mm), or -1 when the node cannot hold a fragment below f */
+static inline double act_slack(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb)
+{
+    double room, g2 = act_reach2(nd, reach, k2, fb, &room);
+    return room > 0.0 && g2 < room * room ? room - sqrt(g2) : -1.0;
 }
 
 /* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
@@ -267,8 +279,8 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
-    if (root == skip || act_slack(&b->act[root], reach, k, &fr->box) <= 0.0)
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+    if (root == skip || !act_pass(&b->act[root], reach, k2, &fr->box))
         return AMP_FBVH_NONE;
     stack[top++] = root;
     while (top) {
@@ -279,13 +291,13 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                 uint32_t g = b->order[q];
                 /* the box bound from the leaf-ordered copy first: most candidates end here, without touching
                  * the fragment itself */
-                if (g != f && !done[g] && act_slack(&b->fbox[q], reach, k, &fr->box) > 0.0 &&
+                if (g != f && !done[g] && act_pass(&b->fbox[q], reach, k2, &fr->box) &&
                     amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left], reach, k, &fr->box);
-            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right], reach, k, &fr->box);
+            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left], reach, k2, &fr->box);
+            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right], reach, k2, &fr->box);
             if (sl > 0.0 && sr > 0.0) {
                 stack[top++] = sl > sr ? nd->right : nd->left;
                 stack[top++] = sl > sr ? nd->left : nd->right;
