@@ -64,11 +64,10 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         return AMP_OK;
     keys = amp_calloc(a, n, sizeof *keys);
     b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
-    b->act = amp_calloc(a, 2 * n + 1, sizeof *b->act);
     b->fbox = amp_calloc(a, n, sizeof *b->fbox);
     b->order = amp_calloc(a, n, sizeof *b->order);
     b->leaf = amp_calloc(a, n, sizeof *b->leaf);
-    if (!keys || !b->node || !b->act || !b->fbox || !b->order || !b->leaf) {
+    if (!keys || !b->node || !b->fbox || !b->order || !b->leaf) {
         amp_free(a, keys);
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
@@ -121,6 +120,17 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             stack[top++] = r;
         }
     }
+    /* the tree has about n / 2 nodes of the 2 n + 1 reserved: return the rest (a failed shrink keeps the block) */
+    {
+        amp_fbvh_node *shrunk = amp_realloc_array(a, b->node, b->nnodes, sizeof *b->node);
+        if (shrunk)
+            b->node = shrunk;
+    }
+    b->act = amp_calloc(a, b->nnodes, sizeof *b->act);
+    if (!b->act) {
+        amp_fbvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
+    }
     /* children always follow their parent: fill boxes backwards */
     for (i = b->nnodes; i-- > 0;) {
         amp_fbvh_node *nd = &b->node[i];
@@ -133,11 +143,11 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             nd->box = amp_box3_union(b->node[nd->left].box, b->node[nd->right].box);
         }
         nd->minz = nd->box.min.z;
-        b->act[i].x0 = nd->box.min.x;
-        b->act[i].y0 = nd->box.min.y;
-        b->act[i].x1 = nd->box.max.x;
-        b->act[i].y1 = nd->box.max.y;
-        b->act[i].minz = nd->minz;
+        b->act[i].bx.x0 = nd->box.min.x;
+        b->act[i].bx.y0 = nd->box.min.y;
+        b->act[i].bx.x1 = nd->box.max.x;
+        b->act[i].bx.y1 = nd->box.max.y;
+        b->act[i].bx.minz = nd->minz;
         b->act[i].left = nd->left;
         b->act[i].right = nd->right;
         b->act[i].lo = nd->lo;
@@ -150,34 +160,35 @@ static double dmin(double a, double b) { return a < b ? a : b; }
 static double dmax(double a, double b) { return a > b ? a : b; }
 
 /* The unprinted bounds of leaf @p id from its fragments. */
-static void act_leaf(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t id)
+static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
 {
-    amp_fbvh_act *a = &b->act[id];
+    amp_fbvh_box5 *a = &b->act[id].bx;
     uint32_t q;
     a->x0 = a->y0 = a->minz = HUGE_VAL;
     a->x1 = a->y1 = -HUGE_VAL;
-    for (q = a->lo; q < a->hi; q++) {
-        const amp_box3 *bx = &fs->frag[b->order[q]].box;
+    for (q = b->act[id].lo; q < b->act[id].hi; q++) {
+        const amp_fbvh_box5 *fb = &b->fbox[q];
         if (done[b->order[q]])
             continue;
-        a->x0 = dmin(a->x0, bx->min.x);
-        a->y0 = dmin(a->y0, bx->min.y);
-        a->x1 = dmax(a->x1, bx->max.x);
-        a->y1 = dmax(a->y1, bx->max.y);
-        a->minz = dmin(a->minz, bx->min.z);
+        a->x0 = dmin(a->x0, fb->x0);
+        a->y0 = dmin(a->y0, fb->y0);
+        a->x1 = dmax(a->x1, fb->x1);
+        a->y1 = dmax(a->y1, fb->y1);
+        a->minz = dmin(a->minz, fb->minz);
     }
 }
 
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
 {
     uint32_t id = b->leaf[f];
-    act_leaf(b, fs, done, id);
-    b->node[id].minz = b->act[id].minz;
+    (void)fs;
+    act_leaf(b, done, id);
+    b->node[id].minz = b->act[id].bx.minz;
     /* the printed regions shrink out of the boxes: the queries below prune on what is still unprinted */
     while (b->node[id].parent != AMP_FBVH_NONE) {
         uint32_t p = b->node[id].parent;
-        const amp_fbvh_act *l = &b->act[b->act[p].left], *r = &b->act[b->act[p].right];
-        amp_fbvh_act *a = &b->act[p];
+        const amp_fbvh_box5 *l = &b->act[b->act[p].left].bx, *r = &b->act[b->act[p].right].bx;
+        amp_fbvh_box5 *a = &b->act[p].bx;
         double x0 = dmin(l->x0, r->x0), y0 = dmin(l->y0, r->y0), x1 = dmax(l->x1, r->x1), y1 = dmax(l->y1, r->y1);
         double mz = dmin(l->minz, r->minz);
         if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz)
@@ -241,7 +252,7 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 
 /* How deep a node's unprinted fragments may reach into the cone under fragment box @p fb: the room under f's
  * reach and the xy gap, squared; nothing under the node can be below f unless room > 0 and k^2 gap^2 < room^2. */
-static inline double act_reach2(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb, double *room)
+static inline double act_reach2(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb, double *room)
 {
     double gx, gy, ex, ey;
     *room = reach - nd->minz;
@@ -256,14 +267,14 @@ static inline double act_reach2(const amp_fbvh_act *nd, double reach, double k2,
     return k2 * (gx * gx + gy * gy);
 }
 
-static inline int act_pass(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb)
+static inline int act_pass(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb)
 {
     double room, g2 = act_reach2(nd, reach, k2, fb, &room);
     return room > 0.0 && g2 < room * room;
 }
 
 /* room minus the cone's run over the gap (mm), or -1 when the node cannot hold a fragment below f */
-static inline double act_slack(const amp_fbvh_act *nd, double reach, double k2, const amp_box3 *fb)
+static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb)
 {
     double room, g2 = act_reach2(nd, reach, k2, fb, &room);
     return room > 0.0 && g2 < room * room ? room - sqrt(g2) : -1.0;
@@ -280,7 +291,7 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
     double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
-    if (root == skip || !act_pass(&b->act[root], reach, k2, &fr->box))
+    if (root == skip || !act_pass(&b->act[root].bx, reach, k2, &fr->box))
         return AMP_FBVH_NONE;
     stack[top++] = root;
     while (top) {
@@ -296,8 +307,8 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left], reach, k2, &fr->box);
-            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right], reach, k2, &fr->box);
+            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left].bx, reach, k2, &fr->box);
+            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right].bx, reach, k2, &fr->box);
             if (sl > 0.0 && sr > 0.0) {
                 stack[top++] = sl > sr ? nd->right : nd->left;
                 stack[top++] = sl > sr ? nd->left : nd->right;

@@ -25,18 +25,23 @@ typedef struct amp_fbvh_node {
     uint32_t parent;
 } amp_fbvh_node;
 
+/* An xy box and a lowest z: what the blocker query's bound reads (minz +inf: empty). */
+typedef struct amp_fbvh_box5 {
+    double x0, y0, x1, y1, minz;
+} amp_fbvh_box5;
+
 /* What Algorithm 2's blocker query reads of a node, in one compact array: the xy box and lowest z of the
  * fragments below it that are still unprinted (empty when all are printed), its children and its range. */
 typedef struct amp_fbvh_act {
-    double x0, y0, x1, y1, minz;
+    amp_fbvh_box5 bx;
     uint32_t left, right, lo, hi;
 } amp_fbvh_act;
 
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
-    amp_fbvh_act *act; /* per node, refreshed by amp_fbvh_deactivate */
-    amp_fbvh_act *fbox; /* per fragment in leaf order (order[q]): its xy box and lowest z (children unused) */
+    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate */
+    amp_fbvh_box5 *fbox;  /* per fragment in leaf order (order[q]): its xy box and lowest z */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
