@@ -285,7 +285,7 @@ static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2,
  * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
  * most often. */
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                  const unsigned char *done, uint32_t root, uint32_t skip)
+                                  const unsigned char *done, uint32_t root, uint32_t skip, uint32_t clear)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
@@ -307,8 +307,9 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            double sl = nd->left == skip ? 0.0 : act_slack(&b->act[nd->left].bx, reach, k2, &fr->box);
-            double sr = nd->right == skip ? 0.0 : act_slack(&b->act[nd->right].bx, reach, k2, &fr->box);
+            uint32_t l = nd->left, r = nd->right;
+            double sl = l == skip || l == clear ? 0.0 : act_slack(&b->act[l].bx, reach, k2, &fr->box);
+            double sr = r == skip || r == clear ? 0.0 : act_slack(&b->act[r].bx, reach, k2, &fr->box);
             if (sl > 0.0 && sr > 0.0) {
                 stack[top++] = sl > sr ? nd->right : nd->left;
                 stack[top++] = sl > sr ? nd->left : nd->right;
@@ -322,18 +323,31 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
     return AMP_FBVH_NONE;
 }
 
-uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                 const unsigned char *done, uint32_t near)
+static uint32_t range_of(const amp_fbvh *b, uint32_t id)
 {
-    uint32_t id, prev = AMP_FBVH_NONE;
+    return id == AMP_FBVH_NONE ? 0 : b->act[id].hi - b->act[id].lo;
+}
+
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                 const unsigned char *done, uint32_t near, uint32_t *clear)
+{
+    uint32_t id, prev = AMP_FBVH_NONE, cl = clear ? *clear : AMP_FBVH_NONE;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
     for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
-        uint32_t g = subtree_any_below(b, fs, zo, k, f, done, id, prev);
-        if (g != AMP_FBVH_NONE)
+        uint32_t g;
+        if (id == cl)
+            continue; /* proven clear by an earlier query of f */
+        g = subtree_any_below(b, fs, zo, k, f, done, id, prev, cl);
+        if (g != AMP_FBVH_NONE) {
+            /* every level below this one held no blocker of f: printing only ever removes blockers, so that
+             * subtree stays clear for f's later queries (the larger of the two clear subtrees is kept) */
+            if (clear && range_of(b, prev) > range_of(b, cl))
+                *clear = prev;
             return g;
+        }
     }
     return AMP_FBVH_NONE;
 }

@@ -62,9 +62,11 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 /* Some fragment g != f not done below f (head: tip height zo, k = cot(theta)), AMP_FBVH_NONE if none;
  * searched outwards from the leaf of @p near (f itself when AMP_FBVH_NONE), so a blocker close to @p near is
  * found first. Any blocker will do: this is the cheap form of amp_fbvh_find_below for Algorithm 2's waiting
- * lists. */
+ * lists. @p clear (NULL: not used) is f's slot for a subtree known to hold no blocker of f (AMP_FBVH_NONE at
+ * first): it is skipped, and a larger subtree proven clear by this search is stored there. A subtree stays
+ * clear only while marks in @p done are never taken back: pass NULL for tentative marks (look-ahead). */
 uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                 const unsigned char *done, uint32_t near);
+                                 const unsigned char *done, uint32_t near, uint32_t *clear);
 
 /* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
  * Returns the number of fragments reported. */

@@ -235,8 +235,9 @@ START_TEST(fragment_below_equals_the_largest_segment_clearance)
                 continue;
             for (i = 0; i + 1 < amp_fragment_npoints(fa); i++)
                 for (j = 0; j + 1 < amp_fragment_npoints(fb); j++) {
-                    double c = amp_cone_clearance(&h, amp_fragment_point(&fs, fa, i), amp_fragment_point(&fs, fa, i + 1),
-                                                  amp_fragment_point(&fs, fb, j), amp_fragment_point(&fs, fb, j + 1));
+                    double c =
+                        amp_cone_clearance(&h, amp_fragment_point(&fs, fa, i), amp_fragment_point(&fs, fa, i + 1),
+                                           amp_fragment_point(&fs, fb, j), amp_fragment_point(&fs, fb, j + 1));
                     best = c > best ? c : best;
                 }
             ck_assert_msg(amp_fragment_below(&fs, &h, a, b) == (best > AMP_CONE_TOL),
