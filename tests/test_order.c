@@ -6,6 +6,10 @@
 #include "runtool.h"
 #include "testutil.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #define PI 3.14159265358979323846
 
 static unsigned long long rng_state = 88172645463325252ULL;
@@ -404,6 +408,46 @@ START_TEST(improvements_reduce_subdivisions_of_plain_greedy)
 }
 END_TEST
 
+/* Issue 18: the initial blocker queries run on OpenMP threads, and each fragment keeps the subtree its own
+ * queries proved clear; the ordered paths must not depend on the thread count (vertex for vertex). */
+START_TEST(ordering_is_identical_on_one_and_two_threads)
+{
+    amp_pathset ps, one, two;
+    amp_order_opts o;
+    amp_order_stats s1, s2;
+    amp_error err;
+    size_t i;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&one, NULL);
+    amp_pathset_init(&two, NULL);
+    helix_covering(&ps, 1.5, 6, 3, 1.5, 240);
+    amp_order_opts_default(&o);
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    ck_assert_int_eq(amp_order(&ps, &o, &one, &s1, &err), AMP_OK);
+#ifdef _OPENMP
+    omp_set_num_threads(2);
+#endif
+    ck_assert_int_eq(amp_order(&ps, &o, &two, &s2, &err), AMP_OK);
+    ck_assert_uint_gt(s1.subdivisions, 0); /* the fixture needs cuts: the order is not trivial */
+    ck_assert_uint_eq(s1.subdivisions, s2.subdivisions);
+    ck_assert_uint_eq(s1.queries, s2.queries);
+    ck_assert_uint_eq(one.npaths, two.npaths);
+    ck_assert_uint_eq(one.nverts, two.nverts);
+    for (i = 0; i < one.npaths; i++) {
+        ck_assert_uint_eq(one.paths[i].n, two.paths[i].n);
+        ck_assert_uint_eq(one.paths[i].first, two.paths[i].first);
+    }
+    for (i = 0; i < one.nverts; i++)
+        ck_assert_msg(memcmp(&one.verts[i], &two.verts[i], sizeof one.verts[i]) == 0, "vertex %lu differs",
+                      (unsigned long)i);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&one);
+    amp_pathset_free(&two);
+}
+END_TEST
+
 /* Straight-line travel between consecutive paths: end of one to the start of the next. */
 static double travel_between(const amp_pathset *ps)
 {
@@ -673,6 +717,7 @@ static Suite *order_suite(void)
     tcase_add_test(tc, twisted_bridge_needs_no_subdivision_at_45_degrees);
     tcase_add_test(tc, improvements_reduce_subdivisions_of_plain_greedy);
     tcase_add_test(tc, nearest_choice_shortens_travel_on_helix_covering);
+    tcase_add_test(tc, ordering_is_identical_on_one_and_two_threads);
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
     tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);
     tcase_add_test(tc, checker_finds_a_steep_descent_and_accepts_a_climb);
