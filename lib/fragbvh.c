@@ -45,6 +45,8 @@ void amp_fbvh_free(amp_fbvh *b)
     if (!b)
         return;
     amp_free(b->alloc, b->node);
+    amp_free(b->alloc, b->act);
+    amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
     memset(b, 0, sizeof *b);
@@ -62,9 +64,10 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         return AMP_OK;
     keys = amp_calloc(a, n, sizeof *keys);
     b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
+    b->fbox = amp_calloc(a, n, sizeof *b->fbox);
     b->order = amp_calloc(a, n, sizeof *b->order);
     b->leaf = amp_calloc(a, n, sizeof *b->leaf);
-    if (!keys || !b->node || !b->order || !b->leaf) {
+    if (!keys || !b->node || !b->fbox || !b->order || !b->leaf) {
         amp_free(a, keys);
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
@@ -78,8 +81,15 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         keys[i].id = (uint32_t)i;
     }
     qsort(keys, n, sizeof *keys, mkey_cmp);
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
+        const amp_box3 *bx = &fs->frag[keys[i].id].box;
         b->order[i] = keys[i].id;
+        b->fbox[i].x0 = bx->min.x;
+        b->fbox[i].y0 = bx->min.y;
+        b->fbox[i].x1 = bx->max.x;
+        b->fbox[i].y1 = bx->max.y;
+        b->fbox[i].minz = bx->min.z;
+    }
     amp_free(a, keys);
 
     /* split ranges of the Morton order at their middle: depth is log2(n / LEAF_SIZE) */
@@ -110,6 +120,17 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             stack[top++] = r;
         }
     }
+    /* the tree has about n / 2 nodes of the 2 n + 1 reserved: return the rest (a failed shrink keeps the block) */
+    {
+        amp_fbvh_node *shrunk = amp_realloc_array(a, b->node, b->nnodes, sizeof *b->node);
+        if (shrunk)
+            b->node = shrunk;
+    }
+    b->act = amp_calloc(a, b->nnodes, sizeof *b->act);
+    if (!b->act) {
+        amp_fbvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
+    }
     /* children always follow their parent: fill boxes backwards */
     for (i = b->nnodes; i-- > 0;) {
         amp_fbvh_node *nd = &b->node[i];
@@ -122,26 +143,62 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             nd->box = amp_box3_union(b->node[nd->left].box, b->node[nd->right].box);
         }
         nd->minz = nd->box.min.z;
+        b->act[i].bx.x0 = nd->box.min.x;
+        b->act[i].bx.y0 = nd->box.min.y;
+        b->act[i].bx.x1 = nd->box.max.x;
+        b->act[i].bx.y1 = nd->box.max.y;
+        b->act[i].bx.minz = nd->minz;
+        b->act[i].left = nd->left;
+        b->act[i].right = nd->right;
+        b->act[i].lo = nd->lo;
+        b->act[i].hi = nd->hi;
     }
     return AMP_OK;
 }
 
+static double dmin(double a, double b) { return a < b ? a : b; }
+static double dmax(double a, double b) { return a > b ? a : b; }
+
+/* The unprinted bounds of leaf @p id from its fragments. */
+static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
+{
+    amp_fbvh_box5 *a = &b->act[id].bx;
+    uint32_t q;
+    a->x0 = a->y0 = a->minz = HUGE_VAL;
+    a->x1 = a->y1 = -HUGE_VAL;
+    for (q = b->act[id].lo; q < b->act[id].hi; q++) {
+        const amp_fbvh_box5 *fb = &b->fbox[q];
+        if (done[b->order[q]])
+            continue;
+        a->x0 = dmin(a->x0, fb->x0);
+        a->y0 = dmin(a->y0, fb->y0);
+        a->x1 = dmax(a->x1, fb->x1);
+        a->y1 = dmax(a->y1, fb->y1);
+        a->minz = dmin(a->minz, fb->minz);
+    }
+}
+
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
 {
-    uint32_t id = b->leaf[f], q;
-    amp_fbvh_node *nd = &b->node[id];
-    double m = HUGE_VAL;
-    for (q = nd->lo; q < nd->hi; q++)
-        if (!done[b->order[q]])
-            m = fmin(m, fs->frag[b->order[q]].box.min.z);
-    nd->minz = m;
-    while (nd->parent != AMP_FBVH_NONE) {
-        amp_fbvh_node *p = &b->node[nd->parent];
-        m = fmin(b->node[p->left].minz, b->node[p->right].minz);
-        if (m == p->minz)
+    uint32_t id = b->leaf[f];
+    (void)fs;
+    act_leaf(b, done, id);
+    b->node[id].minz = b->act[id].bx.minz;
+    /* the printed regions shrink out of the boxes: the queries below prune on what is still unprinted */
+    while (b->node[id].parent != AMP_FBVH_NONE) {
+        uint32_t p = b->node[id].parent;
+        const amp_fbvh_box5 *l = &b->act[b->act[p].left].bx, *r = &b->act[b->act[p].right].bx;
+        amp_fbvh_box5 *a = &b->act[p].bx;
+        double x0 = dmin(l->x0, r->x0), y0 = dmin(l->y0, r->y0), x1 = dmax(l->x1, r->x1), y1 = dmax(l->y1, r->y1);
+        double mz = dmin(l->minz, r->minz);
+        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz)
             break;
-        p->minz = m;
-        nd = p;
+        a->x0 = x0;
+        a->y0 = y0;
+        a->x1 = x1;
+        a->y1 = y1;
+        a->minz = b->node[p].minz = mz;
+        id = p;
     }
 }
 
@@ -193,47 +250,72 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
     return found;
 }
 
-/* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins. */
+/* How deep a node's unprinted fragments may reach into the cone under fragment box @p fb: the room under f's
+ * reach and the xy gap, squared; nothing under the node can be below f unless room > 0 and k^2 gap^2 < room^2. */
+static inline double act_reach2(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb, double *room)
+{
+    double gx, gy, ex, ey;
+    *room = reach - nd->minz;
+    gx = nd->x0 - fb->max.x;
+    ex = fb->min.x - nd->x1;
+    gy = nd->y0 - fb->max.y;
+    ey = fb->min.y - nd->y1;
+    gx = gx > ex ? gx : ex;
+    gy = gy > ey ? gy : ey;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    return k2 * (gx * gx + gy * gy);
+}
+
+static inline int act_pass(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb)
+{
+    double room, g2 = act_reach2(nd, reach, k2, fb, &room);
+    return room > 0.0 && g2 < room * room;
+}
+
+/* room minus the cone's run over the gap (mm), or -1 when the node cannot hold a fragment below f */
+static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb)
+{
+    double room, g2 = act_reach2(nd, reach, k2, fb, &room);
+    return room > 0.0 && g2 < room * room ? room - sqrt(g2) : -1.0;
+}
+
+/* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
+ * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. Nodes
+ * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
+ * most often. */
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                  const unsigned char *done, uint32_t root, uint32_t skip)
+                                  const unsigned char *done, uint32_t root, uint32_t skip, uint32_t clear)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - zo - AMP_CONE_TOL;
+    double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+    if (root == skip || !act_pass(&b->act[root].bx, reach, k2, &fr->box))
+        return AMP_FBVH_NONE;
     stack[top++] = root;
     while (top) {
-        uint32_t id = stack[--top];
-        const amp_fbvh_node *nd = &b->node[id];
-        double room = reach - nd->minz, gx, gy, ex, ey;
-        /* a fragment g below f needs a point lower than f's top by z_offs plus the cone's run over the xy gap */
-        if (room <= 0.0 || id == skip)
-            continue;
-        gx = nd->box.min.x - fr->box.max.x;
-        ex = fr->box.min.x - nd->box.max.x;
-        gy = nd->box.min.y - fr->box.max.y;
-        ey = fr->box.min.y - nd->box.max.y;
-        gx = gx > ex ? gx : ex;
-        gy = gy > ey ? gy : ey;
-        gx = gx > 0.0 ? gx : 0.0;
-        gy = gy > 0.0 ? gy : 0.0;
-        if (k * k * (gx * gx + gy * gy) >= room * room)
-            continue;
+        const amp_fbvh_act *nd = &b->act[stack[--top]];
         if (nd->left == 0) {
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if (g != f && !done[g] && amp_fragment_below_k(fs, zo, k, g, f))
+                /* the box bound from the leaf-ordered copy first: most candidates end here, without touching
+                 * the fragment itself */
+                if (g != f && !done[g] && act_pass(&b->fbox[q], reach, k2, &fr->box) &&
+                    amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            /* the lower child first: blockers lie below */
-            const amp_fbvh_node *l = &b->node[nd->left], *r = &b->node[nd->right];
-            if (l->minz < r->minz) {
-                stack[top++] = nd->right;
+            uint32_t l = nd->left, r = nd->right;
+            double sl = l == skip || l == clear ? 0.0 : act_slack(&b->act[l].bx, reach, k2, &fr->box);
+            double sr = r == skip || r == clear ? 0.0 : act_slack(&b->act[r].bx, reach, k2, &fr->box);
+            if (sl > 0.0 && sr > 0.0) {
+                stack[top++] = sl > sr ? nd->right : nd->left;
+                stack[top++] = sl > sr ? nd->left : nd->right;
+            } else if (sl > 0.0) {
                 stack[top++] = nd->left;
-            } else {
-                stack[top++] = nd->left;
+            } else if (sr > 0.0) {
                 stack[top++] = nd->right;
             }
         }
@@ -241,18 +323,31 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
     return AMP_FBVH_NONE;
 }
 
-uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                 const unsigned char *done, uint32_t near)
+static uint32_t range_of(const amp_fbvh *b, uint32_t id)
 {
-    uint32_t id, prev = AMP_FBVH_NONE;
+    return id == AMP_FBVH_NONE ? 0 : b->act[id].hi - b->act[id].lo;
+}
+
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                 const unsigned char *done, uint32_t near, uint32_t *clear)
+{
+    uint32_t id, prev = AMP_FBVH_NONE, cl = clear ? *clear : AMP_FBVH_NONE;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
     for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
-        uint32_t g = subtree_any_below(b, fs, zo, k, f, done, id, prev);
-        if (g != AMP_FBVH_NONE)
+        uint32_t g;
+        if (id == cl)
+            continue; /* proven clear by an earlier query of f */
+        g = subtree_any_below(b, fs, zo, k, f, done, id, prev, cl);
+        if (g != AMP_FBVH_NONE) {
+            /* every level below this one held no blocker of f: printing only ever removes blockers, so that
+             * subtree stays clear for f's later queries (the larger of the two clear subtrees is kept) */
+            if (clear && range_of(b, prev) > range_of(b, cl))
+                *clear = prev;
             return g;
+        }
     }
     return AMP_FBVH_NONE;
 }

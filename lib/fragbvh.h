@@ -25,9 +25,23 @@ typedef struct amp_fbvh_node {
     uint32_t parent;
 } amp_fbvh_node;
 
+/* An xy box and a lowest z: what the blocker query's bound reads (minz +inf: empty). */
+typedef struct amp_fbvh_box5 {
+    double x0, y0, x1, y1, minz;
+} amp_fbvh_box5;
+
+/* What Algorithm 2's blocker query reads of a node, in one compact array: the xy box and lowest z of the
+ * fragments below it that are still unprinted (empty when all are printed), its children and its range. */
+typedef struct amp_fbvh_act {
+    amp_fbvh_box5 bx;
+    uint32_t left, right, lo, hi;
+} amp_fbvh_act;
+
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
+    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate */
+    amp_fbvh_box5 *fbox;  /* per fragment in leaf order (order[q]): its xy box and lowest z */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
@@ -36,7 +50,7 @@ typedef struct amp_fbvh {
 amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
 void amp_fbvh_free(amp_fbvh *b);
 
-/* Fragment f is done (done[f] != 0): refresh the lowest-z bounds on its way to the root. */
+/* Fragment f is done (done[f] != 0): refresh the unprinted bounds (xy box, lowest z) on its way to the root. */
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f);
 
 /* Some fragment g != f not done (done[g] == 0) below f (Def. 5.1), preferring high ones; AMP_FBVH_NONE if none.
@@ -48,9 +62,11 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 /* Some fragment g != f not done below f (head: tip height zo, k = cot(theta)), AMP_FBVH_NONE if none;
  * searched outwards from the leaf of @p near (f itself when AMP_FBVH_NONE), so a blocker close to @p near is
  * found first. Any blocker will do: this is the cheap form of amp_fbvh_find_below for Algorithm 2's waiting
- * lists. */
+ * lists. @p clear (NULL: not used) is f's slot for a subtree known to hold no blocker of f (AMP_FBVH_NONE at
+ * first): it is skipped, and a larger subtree proven clear by this search is stored there. A subtree stays
+ * clear only while marks in @p done are never taken back: pass NULL for tentative marks (look-ahead). */
 uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                 const unsigned char *done, uint32_t near);
+                                 const unsigned char *done, uint32_t near, uint32_t *clear);
 
 /* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
  * Returns the number of fragments reported. */

@@ -111,11 +111,34 @@ static double self_clearance(const gctx *c, const gseg *t)
     return (a.z - b.z) - c->k * len_xy(b.x - a.x, b.y - a.y) - c->zo;
 }
 
+/* (ternaries, not fmax: this runs for every pyramid cell the grid method visits) */
 static double box_gap_xy(amp_box3 a, amp_box3 b)
 {
-    double dx = fmax(0.0, fmax(a.min.x - b.max.x, b.min.x - a.max.x));
-    double dy = fmax(0.0, fmax(a.min.y - b.max.y, b.min.y - a.max.y));
+    double dx = a.min.x - b.max.x, ex = b.min.x - a.max.x, dy = a.min.y - b.max.y, ey = b.min.y - a.max.y;
+    dx = dx > ex ? dx : ex;
+    dy = dy > ey ? dy : ey;
+    dx = dx > 0.0 ? dx : 0.0;
+    dy = dy > 0.0 ? dy : 0.0;
     return len_xy(dx, dy);
+}
+
+/*
+ * Upper bound of pair_clearance: the clearance c(u, v) = q(u).z - p(v).z - zo - k |q(u).xy - p(v).xy| is
+ * concave on the unit square, so it lies under its tangent plane at the centre, whose largest value on the
+ * square is at a corner. It spares the golden-section search for the pairs that are clearly apart.
+ */
+static double pair_bound(const gctx *c, const gseg *s, const gseg *t)
+{
+    amp_vec3 s0 = c->ps->verts[s->a].p, s1 = c->ps->verts[s->b].p;
+    amp_vec3 t0 = c->ps->verts[t->a].p, t1 = c->ps->verts[t->b].p;
+    double wx = 0.5 * (s0.x + s1.x - t0.x - t1.x), wy = 0.5 * (s0.y + s1.y - t0.y - t1.y), w = len_xy(wx, wy);
+    double du, dv;
+    if (!(w > 0.0))
+        return HUGE_VAL;
+    /* w = q.xy - p.xy moves by +ds.xy with u and by -dt.xy with v */
+    du = (s1.z - s0.z) - c->k * (wx * (s1.x - s0.x) + wy * (s1.y - s0.y)) / w;
+    dv = -(t1.z - t0.z) + c->k * (wx * (t1.x - t0.x) + wy * (t1.y - t0.y)) / w;
+    return 0.5 * (s0.z + s1.z - t0.z - t1.z) - c->zo - c->k * w + 0.5 * (fabs(du) + fabs(dv));
 }
 
 /* Distance in the plane from point p to segment [a, b]. */
@@ -158,6 +181,9 @@ static int test_pair(const gctx *c, size_t si, size_t ti, amp_gouge_violation *v
         if (s->box.max.z - t->box.min.z - c->zo -
                 c->k * seg_seg_xy(c->ps->verts[s->a].p, c->ps->verts[s->b].p, c->ps->verts[t->a].p,
                                   c->ps->verts[t->b].p) <= c->tol)
+            return 0;
+        /* (1e-9 mm is far above the bound's rounding at millimetre coordinates) */
+        if (pair_bound(c, s, t) <= c->tol - 1e-9)
             return 0;
         d = pair_clearance(c, s, t, &q, &p);
     }
@@ -257,11 +283,22 @@ static size_t check_grid(const gctx *c, amp_gouge_violation *out, amp_error *err
         stk[top++] = 0;
         while (top) {
             size_t y = stk[--top], x = stk[--top], l = stk[--top], side = P >> l;
-            double sz = (double)((size_t)1 << l);
-            amp_box3 r;
-            r.min = amp_v3(all.min.x + (double)x * cw * sz, all.min.y + (double)y * ch * sz, 0);
-            r.max = amp_v3(r.min.x + cw * sz, r.min.y + ch * sz, 0);
-            if (maxz[off[l] + y * side + x] - t->box.min.z - c->zo - c->k * box_gap_xy(r, t->box) <= c->tol)
+            double sz = (double)((size_t)1 << l), room = maxz[off[l] + y * side + x] - t->box.min.z - c->zo - c->tol;
+            double rx0, ry0, gx, gy, ex, ey;
+            /* the cell's highest earlier point against the cone over t's box, squared (no root per cell) */
+            if (room <= 0.0)
+                continue;
+            rx0 = all.min.x + (double)x * cw * sz;
+            ry0 = all.min.y + (double)y * ch * sz;
+            gx = rx0 - t->box.max.x;
+            ex = t->box.min.x - (rx0 + cw * sz);
+            gy = ry0 - t->box.max.y;
+            ey = t->box.min.y - (ry0 + ch * sz);
+            gx = gx > ex ? gx : ex;
+            gy = gy > ey ? gy : ey;
+            gx = gx > 0.0 ? gx : 0.0;
+            gy = gy > 0.0 ? gy : 0.0;
+            if (c->k * c->k * (gx * gx + gy * gy) >= room * room)
                 continue;
             if (l == 0) {
                 uint32_t e;

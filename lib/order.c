@@ -170,6 +170,7 @@ typedef struct orderer {
     unsigned char *ready; /* nothing unprinted below: member of the set B of Alg. 2, line 4 */
     uint32_t *whead, *wnext, *rs, *re;
     uint32_t *waits; /* the blocker an unprinted, unready fragment waits on */
+    uint32_t *clear; /* per fragment, a subtree of the hierarchy its earlier queries proved free of blockers */
     uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
     double *rz;
     runent *heap;
@@ -477,7 +478,8 @@ static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
     }
     for (q = 0; q < (long)nb; q++)
         o->found[q] =
-            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, o->batch[q], o->done, o->waits[o->batch[q]]);
+            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, o->batch[q], o->done, o->waits[o->batch[q]],
+                                    &o->clear[o->batch[q]]);
     o->st.queries += nb;
     for (k = 0; k < nb && st == AMP_OK; k++) {
         uint32_t w = o->batch[k], g = o->found[k];
@@ -558,7 +560,7 @@ static uint32_t simulate(orderer *o, uint32_t s, uint32_t e, int dir)
             break;
         if (!o->ready[x]) {
             o->st.queries++;
-            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, x, o->done, o->waits[x]) != NONE)
+            if (amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, x, o->done, o->waits[x], NULL) != NONE)
                 break;
         }
         o->done[x] = 2;
@@ -918,7 +920,8 @@ static amp_status initial_set(orderer *o)
     amp_status st = AMP_OK;
 #pragma omp parallel for schedule(dynamic, 256)
     for (f = 0; f < (long)n; f++)
-        o->found[f] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, (uint32_t)f, o->done, NONE);
+        o->found[f] =
+            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, (uint32_t)f, o->done, NONE, &o->clear[f]);
     o->st.queries += n;
     for (i = 0; i < n && st == AMP_OK; i++) {
         uint32_t g = o->found[i];
@@ -944,6 +947,7 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->re);
     amp_free(o->a, o->rz);
     amp_free(o->a, o->waits);
+    amp_free(o->a, o->clear);
     amp_free(o->a, o->batch);
     amp_free(o->a, o->found);
     amp_free(o->a, o->heap);
@@ -993,14 +997,16 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
     o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
     o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
+    o.clear = amp_calloc(o.a, n + 1, sizeof *o.clear);
     o.batch = amp_calloc(o.a, n + 1, sizeof *o.batch);
     o.found = amp_calloc(o.a, n + 1, sizeof *o.found);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.batch || !o.found) {
+    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.clear || !o.batch ||
+        !o.found) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
         goto done;
     }
     for (i = 0; i < n; i++)
-        o.whead[i] = o.wnext[i] = NONE;
+        o.whead[i] = o.wnext[i] = o.clear[i] = NONE;
     if (opts->improve && opts->nearest && n > 0)
         st = rgrid_init(&o);
     if (st == AMP_OK)

@@ -6,6 +6,10 @@
 #include "runtool.h"
 #include "testutil.h"
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #define PI 3.14159265358979323846
 
 static unsigned long long rng_state = 88172645463325252ULL;
@@ -206,6 +210,54 @@ START_TEST(below_graph_from_hierarchy_equals_all_pairs)
 }
 END_TEST
 
+/* The exact below test skips the closed forms where a tangent-plane bound settles the pair (issue 18): on
+ * fragments made to sit near the cone's edge, it must answer exactly as the largest closed-form clearance of
+ * their segment pairs. */
+START_TEST(fragment_below_equals_the_largest_segment_clearance)
+{
+    amp_pathset ps;
+    amp_fragments fs;
+    amp_error err;
+    amp_head h = head(0.5, 72);
+    size_t a, b, i, j, yes = 0, near_edge = 0;
+    amp_pathset_init(&ps, NULL);
+    /* short wiggly curves on a few levels about z_offs apart: many pairs are just inside or outside the cone */
+    for (a = 0; a < 40; a++) {
+        amp_vec3 p = amp_v3(4 * (rnd() - 0.5), 4 * (rnd() - 0.5), 0.5 * (double)(a % 4) + 0.2 * rnd());
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err), AMP_OK);
+        for (b = 0; b < 6; b++) {
+            ck_assert_int_eq(amp_pathset_push(&ps, p, 0.3, &err), AMP_OK);
+            p = amp_v3_add(p, amp_v3(0.6 * (rnd() - 0.5), 0.6 * (rnd() - 0.5), 0.3 * (rnd() - 0.5)));
+        }
+    }
+    ck_assert_int_eq(amp_fragments_build(&fs, &ps, h.z_offs, NULL, &err), AMP_OK);
+    for (a = 0; a < fs.n; a++)
+        for (b = 0; b < fs.n; b++) {
+            const amp_fragment *fa = &fs.frag[a], *fb = &fs.frag[b];
+            double best = -HUGE_VAL;
+            if (a == b)
+                continue;
+            for (i = 0; i + 1 < amp_fragment_npoints(fa); i++)
+                for (j = 0; j + 1 < amp_fragment_npoints(fb); j++) {
+                    double c =
+                        amp_cone_clearance(&h, amp_fragment_point(&fs, fa, i), amp_fragment_point(&fs, fa, i + 1),
+                                           amp_fragment_point(&fs, fb, j), amp_fragment_point(&fs, fb, j + 1));
+                    best = c > best ? c : best;
+                }
+            ck_assert_msg(amp_fragment_below(&fs, &h, a, b) == (best > AMP_CONE_TOL),
+                          "fragments %lu, %lu: below %d, largest clearance %.12g", (unsigned long)a, (unsigned long)b,
+                          amp_fragment_below(&fs, &h, a, b), best);
+            yes += best > AMP_CONE_TOL;
+            near_edge += fabs(best) < 0.05;
+        }
+    /* the fixture has both answers and pairs close to the edge, where a loose bound would show */
+    ck_assert_uint_gt(yes, 100);
+    ck_assert_uint_gt(near_edge, 100);
+    amp_fragments_free(&fs);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 /* ---- Algorithm 2 ---- */
 
 static amp_vec3 fig8_red(double t, const double *prm)
@@ -356,6 +408,46 @@ START_TEST(improvements_reduce_subdivisions_of_plain_greedy)
 }
 END_TEST
 
+/* Issue 18: the initial blocker queries run on OpenMP threads, and each fragment keeps the subtree its own
+ * queries proved clear; the ordered paths must not depend on the thread count (vertex for vertex). */
+START_TEST(ordering_is_identical_on_one_and_two_threads)
+{
+    amp_pathset ps, one, two;
+    amp_order_opts o;
+    amp_order_stats s1, s2;
+    amp_error err;
+    size_t i;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&one, NULL);
+    amp_pathset_init(&two, NULL);
+    helix_covering(&ps, 1.5, 6, 3, 1.5, 240);
+    amp_order_opts_default(&o);
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    ck_assert_int_eq(amp_order(&ps, &o, &one, &s1, &err), AMP_OK);
+#ifdef _OPENMP
+    omp_set_num_threads(2);
+#endif
+    ck_assert_int_eq(amp_order(&ps, &o, &two, &s2, &err), AMP_OK);
+    ck_assert_uint_gt(s1.subdivisions, 0); /* the fixture needs cuts: the order is not trivial */
+    ck_assert_uint_eq(s1.subdivisions, s2.subdivisions);
+    ck_assert_uint_eq(s1.queries, s2.queries);
+    ck_assert_uint_eq(one.npaths, two.npaths);
+    ck_assert_uint_eq(one.nverts, two.nverts);
+    for (i = 0; i < one.npaths; i++) {
+        ck_assert_uint_eq(one.paths[i].n, two.paths[i].n);
+        ck_assert_uint_eq(one.paths[i].first, two.paths[i].first);
+    }
+    for (i = 0; i < one.nverts; i++)
+        ck_assert_msg(memcmp(&one.verts[i], &two.verts[i], sizeof one.verts[i]) == 0, "vertex %lu differs",
+                      (unsigned long)i);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&one);
+    amp_pathset_free(&two);
+}
+END_TEST
+
 /* Straight-line travel between consecutive paths: end of one to the start of the next. */
 static double travel_between(const amp_pathset *ps)
 {
@@ -450,6 +542,43 @@ START_TEST(pairwise_and_grid_checkers_agree_on_random_inputs)
     }
     ck_assert_int_gt(fails, 5);
     ck_assert_int_lt(fails, 60);
+}
+END_TEST
+
+/* The gouge checker skips the golden-section search where a tangent-plane bound settles the pair (issue 18):
+ * on two one-segment paths it must still fail exactly when the orderer's closed-form clearance of the later
+ * segment's head over the earlier segment exceeds the tolerance (pairs within 1e-6 mm of it are not judged). */
+START_TEST(gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge)
+{
+    int trial, fails = 0, passes = 0;
+    for (trial = 0; trial < 3000; trial++) {
+        amp_pathset ps;
+        amp_head h = head(0.5, 30 + 50 * rnd());
+        amp_vec3 e0 = amp_v3(2 * (rnd() - 0.5), 2 * (rnd() - 0.5), 0.5 + 0.4 * rnd());
+        amp_vec3 e1 = amp_v3_add(e0, amp_v3(0.4 * (rnd() - 0.5), 0.4 * (rnd() - 0.5), 0.4 * (rnd() - 0.5)));
+        amp_vec3 l0 = amp_v3(2 * (rnd() - 0.5), 2 * (rnd() - 0.5), 0.4 * rnd());
+        amp_vec3 l1 = amp_v3_add(l0, amp_v3(0.4 * (rnd() - 0.5), 0.4 * (rnd() - 0.5), 0.4 * (rnd() - 0.5)));
+        double c = amp_cone_clearance(&h, l0, l1, e0, e1);
+        amp_status st;
+        if (fabs(c - AMP_GOUGE_TOL) < 1e-6)
+            continue;
+        amp_pathset_init(&ps, NULL);
+        /* segments shorter than z_offs cannot gouge themselves */
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, e0, 0.5, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, e1, 0.5, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, l0, 0.5, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, l1, 0.5, NULL), AMP_OK);
+        st = amp_gouge_check(&ps, &h, trial % 2 ? AMP_GOUGE_GRID : AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, NULL);
+        ck_assert_msg((st == AMP_ERR_CHECK) == (c > AMP_GOUGE_TOL), "trial %d: status %d, clearance %.9g", trial,
+                      (int)st, c);
+        fails += st == AMP_ERR_CHECK;
+        passes += st == AMP_OK;
+        amp_pathset_free(&ps);
+    }
+    ck_assert_int_gt(fails, 100);
+    ck_assert_int_gt(passes, 100);
 }
 END_TEST
 
@@ -582,12 +711,15 @@ static Suite *order_suite(void)
     tcase_add_test(tc, cone_clearance_is_the_exact_maximum_of_sampled_pairs);
     tcase_add_test(tc, fragments_are_shorter_than_z_offs_and_tile_each_path);
     tcase_add_test(tc, below_graph_from_hierarchy_equals_all_pairs);
+    tcase_add_test(tc, fragment_below_equals_the_largest_segment_clearance);
     tcase_add_test(tc, crossing_curves_of_fig8_are_split_into_blue_red_green);
     tcase_add_test(tc, helix_covering_orders_without_gouges_and_reversed_order_fails);
     tcase_add_test(tc, twisted_bridge_needs_no_subdivision_at_45_degrees);
     tcase_add_test(tc, improvements_reduce_subdivisions_of_plain_greedy);
     tcase_add_test(tc, nearest_choice_shortens_travel_on_helix_covering);
+    tcase_add_test(tc, ordering_is_identical_on_one_and_two_threads);
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
+    tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);
     tcase_add_test(tc, checker_finds_a_steep_descent_and_accepts_a_climb);
     tcase_add_test(tc, bad_head_geometry_is_rejected_with_a_clear_error);
     tcase_add_test(tc, ordering_survives_out_of_memory);
