@@ -190,7 +190,7 @@ class amp_slice_opts(Structure):
 
 
 class amp_layer(Structure):
-    _fields_ = [("z_cut", c_double), ("z_print", c_double), ("polys", amp_polyset)]
+    _fields_ = [("z_cut", c_double), ("z_print", c_double), ("polys", amp_polyset), ("open_chains", c_size_t)]
 
 
 class amp_slices(Structure):
@@ -200,14 +200,20 @@ class amp_slices(Structure):
 
 class amp_contpath_opts(Structure):
     _fields_ = [("radius", c_double), ("cell", c_double), ("grid", c_int), ("offset", c_double),
-                ("perimeters", c_int), ("support_stretches", c_int), ("pseudo_edges", c_int)]
+                ("perimeters", c_int), ("support_stretches", c_int), ("support_corners", c_int),
+                ("pseudo_edges", c_int), ("tour", c_int), ("skin_bottom", c_double), ("skin_top", c_double),
+                ("skin_cell", c_double), ("join", c_int)]
 
 
 class amp_contpath_stats(Structure):
-    _fields_ = ([(n, c_size_t) for n in ("layers", "islands", "strokes", "multi_stroke", "perimeter_loops",
-                                         "support_paths", "travel_moves", "free_ends", "odd_vertices", "joins")]
+    _fields_ = ([(n, c_size_t) for n in ("layers", "empty_layers", "islands", "thin_islands", "dropped_islands",
+                                         "island_strokes", "specks", "regions", "skin_regions", "strokes",
+                                         "multi_stroke", "perimeter_loops", "support_paths", "travel_moves",
+                                         "free_ends", "odd_vertices", "cycles", "tree_levels", "tour_fallbacks",
+                                         "joins")]
                 + [(n, c_double) for n in ("printed_length", "infill_length", "pseudo_length", "travel_length",
-                                           "support_length", "unprinted_length")])
+                                           "support_length", "unprinted_length")]
+                + [(n, c_size_t) for n in ("support_corners", "corners_left_out")])
 
 
 class amp_stroke_report(Structure):
@@ -369,10 +375,12 @@ _PROTOS = {
     "amp_slices_free": (None, [P(amp_slices)]),
     "amp_slice_mesh": (c_int, [P(amp_mesh), P(amp_slice_opts), P(amp_slices), E]),
     "amp_polyset_area": (c_double, [P(amp_polyset)]),
+    "amp_slices_overhang": (c_double, [P(amp_slices), c_size_t, c_double]),
     "amp_contpath_opts_default": (None, [P(amp_contpath_opts), c_double]),
     "amp_contpath_layers": (c_int, [P(amp_slices), P(amp_contpath_opts), P(amp_pathset), P(amp_contpath_stats),
                                     E]),
-    "amp_pathset_stroke_check": (c_int, [P(amp_pathset), c_size_t, c_void_p, c_double, P(amp_stroke_report), E]),
+    "amp_pathset_stroke_check": (c_int, [P(amp_pathset), c_size_t, P(amp_polyset), c_double, P(amp_stroke_report),
+                                         E]),
     "amp_gouge_check": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),
     "amp_preview_png": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
     "amp_preview_svg": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
@@ -404,3 +412,62 @@ for _name, (_res, _args) in _PROTOS.items():
 # sinks of the library itself, passed as plain function pointers (no Python call per write)
 BUF_SINK = ctypes.cast(lib.amp_buf_sink, c_void_p)
 OUT_SINK = ctypes.cast(lib.amp_out_sink, c_void_p)
+
+# ---------------------------------------------------------------- guarding against a stale mirror
+#
+# A mirror smaller than the C struct lets the library write past the Python object: heap corruption, a
+# segfault later. Structs the library writes into are therefore allocated with GUARD spare bytes holding a
+# pattern (new()); intact() says whether a call wrote into them. And at import, every *_opts_default
+# function fills an oversized buffer: a write past the mirror's size means a stale _lib.py, refused with
+# ImportError before any call (python/tests/test_layout.py names the field; run.py runs it first).
+
+GUARD = 256
+_PATTERN = 0xA5
+
+
+class StaleMirror(ImportError):
+    """The loaded libampath's structs are larger than the ctypes mirrors of this package."""
+
+
+def new(cls):
+    """An instance of mirror @cls followed by GUARD pattern bytes (kept alive with it)."""
+    n = ctypes.sizeof(cls)
+    buf = (c_char * (n + GUARD)).from_buffer(bytearray(b"\0" * n + bytes([_PATTERN]) * GUARD))
+    obj = cls.from_buffer(buf)
+    obj._guard = buf
+    return obj
+
+
+def intact(obj):
+    """False when a library call wrote past the mirror @obj (made by new())."""
+    buf = getattr(obj, "_guard", None)
+    if buf is None:
+        return True
+    n = ctypes.sizeof(type(obj))
+    return all(b == _PATTERN for b in bytes(buf)[n:])
+
+
+def stale(cls, fn):
+    return StaleMirror("%s: %s wrote past the %d bytes of the ctypes mirror of %s: python/ampath/_lib.py does "
+                       "not match this library's headers (python/tests/test_layout.py names the fields to fix)"
+                       % (LIBRARY_PATH, fn, ctypes.sizeof(cls), cls.__name__))
+
+
+DEFAULTS = ((amp_cover_opts, "amp_cover_opts_default", ()), (amp_order_opts, "amp_order_opts_default", ()),
+            (amp_mdr_opts, "amp_mdr_opts_default", (0.5,)), (amp_support_opts, "amp_support_opts_default", ()),
+            (amp_field_opts, "amp_field_opts_default", ()),
+            (amp_contpath_opts, "amp_contpath_opts_default", (0.225,)),
+            (amp_gcode_opts, "amp_gcode_opts_default", (0,)))
+
+
+def probe_default(cls, fn, args=(), c_struct=None):
+    """Call @fn (an *_opts_default) on a guarded @cls; StaleMirror if it writes past @cls. @c_struct: the
+    mirror its prototype takes (default @cls; a test passes an outdated @cls)."""
+    o = new(cls)
+    getattr(lib, fn)(ctypes.cast(ctypes.pointer(o), POINTER(c_struct or cls)), *args)
+    if not intact(o):
+        raise stale(cls, fn)
+
+
+for _cls, _fn, _args in DEFAULTS:
+    probe_default(_cls, _fn, _args)

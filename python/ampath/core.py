@@ -65,6 +65,8 @@ def _b(s):
 
 def _todict(st):
     """A ctypes struct of figures as a dict (vectors as tuples, boxes as {"min", "max"})."""
+    if not L.intact(st):
+        raise L.stale(type(st), "a call filling it")
     out = {}
     for name, _ in st._fields_:
         v = getattr(st, name)
@@ -501,7 +503,7 @@ class Mesh(_Owner):
     @classmethod
     def load(cls, filename):
         """Read an STL file (binary or ASCII); .stl_stats says what the reader saw."""
-        m, err, ss = cls(), _err(), L.amp_stl_stats()
+        m, err, ss = cls(), _err(), L.new(L.amp_stl_stats)
         st = lib.amp_mesh_read_stl_file_ex(m._ref, _b(filename), ctypes.byref(ss), ctypes.byref(err))
         if st:
             m.close()
@@ -511,7 +513,7 @@ class Mesh(_Owner):
 
     @classmethod
     def from_stl_bytes(cls, data):
-        m, err, ss = cls(), _err(), L.amp_stl_stats()
+        m, err, ss = cls(), _err(), L.new(L.amp_stl_stats)
         data = bytes(data)
         st = lib.amp_mesh_read_stl_ex(m._ref, data, len(data), ctypes.byref(ss), ctypes.byref(err))
         if st:

@@ -9,6 +9,7 @@ Every stage returns a new PathSet whose .stats dict holds the library's figures.
 
 import ctypes
 import math
+import warnings
 
 from . import _lib as L
 from ._lib import lib
@@ -50,7 +51,7 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
     _apply(o, opts, "cover", skip=("eps", "dir", "measure"))
     pr = _Progress(progress)
     o.progress = pr.c
-    out, st, err = PathSet(), L.amp_cover_stats(), _err()
+    out, st, err = PathSet(), L.new(L.amp_cover_stats), _err()
 
     def go():
         _check(lib.amp_cover_trivariate(trivariate._ref, ctypes.byref(o), out._ref, ctypes.byref(st),
@@ -61,7 +62,7 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
 
 def coverage_gap(trivariate, paths, samples=20000, seed=1):
     """Independent coverage measurement (amp_cover_measure_gap) as a dict."""
-    g, err = L.amp_cover_gap(), _err()
+    g, err = L.new(L.amp_cover_gap), _err()
     with _hold(trivariate, paths):
         _check(lib.amp_cover_measure_gap(trivariate._ref, paths._ref, samples, seed, ctypes.byref(g),
                                          ctypes.byref(err)), err)
@@ -73,7 +74,7 @@ def coverage_gap(trivariate, paths, samples=20000, seed=1):
 def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
     """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
     "box" or a Trivariate (curves along @dir). Options: step, min_len, radius, shells (amp_field_opts)."""
-    f, o, st, err = L.amp_field(), L.amp_field_opts(), L.amp_field_stats(), _err()
+    f, o, st, err = L.amp_field(), L.amp_field_opts(), L.new(L.amp_field_stats), _err()
     if isinstance(field, Trivariate):
         _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
     else:
@@ -104,7 +105,7 @@ def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts
     _apply(o, opts, "order", skip=("head", "improve"))
     pr = _Progress(progress)
     o.progress = pr.c
-    out, st, err = PathSet(), L.amp_order_stats(), _err()
+    out, st, err = PathSet(), L.new(L.amp_order_stats), _err()
 
     def go():
         _check(lib.amp_order(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
@@ -119,7 +120,7 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
     _apply(o, opts, "mdr", skip=("nominal",))
     pr = _Progress(progress)
     o.progress = pr.c
-    out, st, err = PathSet(), L.amp_mdr_stats(), _err()
+    out, st, err = PathSet(), L.new(L.amp_mdr_stats), _err()
 
     def go():
         _check(lib.amp_mdr(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
@@ -140,7 +141,7 @@ def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, **opts):
     _apply(o, opts, "support", skip=("head",))
     pr = _Progress(progress)
     o.progress = pr.c
-    out, st, err = PathSet(), L.amp_support_stats(), _err()
+    out, st, err = PathSet(), L.new(L.amp_support_stats), _err()
 
     def go():
         _check(lib.amp_support(paths._ref, mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
@@ -208,30 +209,166 @@ class Slices(_Owner):
                 ps.add([(x, y, z) for x, y in pts + pts[:1]], radius=radius)
         return ps
 
-    def continuous(self, radius=0.5, grid="square", **opts):
-        """`ampath slice --continuous` (paper 2): per island perimeters and one stroke over the Euler
-        lattice. Options: cell, offset, perimeters, support_stretches, pseudo_edges (amp_contpath_opts)."""
-        o = L.amp_contpath_opts()
-        lib.amp_contpath_opts_default(ctypes.byref(o), radius)
-        grids = {"square": 0, "tri": 1, "hex": 2}
-        if grid not in grids:
-            _fail("grid must be square, tri or hex")
-        o.grid = grids[grid]
-        _apply(o, opts, "continuous", skip=("radius", "grid"))
-        out, st, err = PathSet(), L.amp_contpath_stats(), _err()
+    def continuous(self, radius=None, grid="square", nozzle=None, printer=None, infill=None, tour="cycle-tree",
+                   eps_c=1.0, **opts):
+        """`ampath slice --continuous` (paper 2): per island the perimeter loops and one stroke over the Euler
+        lattice, spliced into one closed stroke; every path is then checked (crossings, edges printed twice,
+        points outside its layer) and a failure raises Error (AMP_ERR_CHECK), as the tool exits 1.
+        The bead: @radius (default 0.225 mm), else 1.125 x @nozzle wide, else 1.125 x the nozzle of
+        @printer (a Printer, built-in name or slicer .ini). @infill: sparse density in % (sets the cell as
+        the tool's --infill), @tour: "cycle-tree" or "merge", @eps_c: overhang warning threshold (section
+        2.1, in r; a RuntimeWarning as the tool's stderr warning). Other options are the fields of
+        amp_contpath_opts: cell, offset, perimeters, support_stretches, support_corners, pseudo_edges,
+        skin_bottom, skin_top, skin_cell, join. .stats adds the tool's --json figures (extrusion_starts,
+        crossings, repeated_edges, outside, failed_paths, overhang_mm, overhang_pairs, max_overhang_mm)."""
+        o = _contpath_opts(_bead_radius(radius, nozzle, printer), grid, infill, tour, eps_c, opts)
+        out, st, err = PathSet(), L.new(L.amp_contpath_stats), _err()
 
         def go():
             self._live()
             _check(lib.amp_contpath_layers(ctypes.byref(self._sl), ctypes.byref(o), out._ref, ctypes.byref(st),
                                            ctypes.byref(err)), err)
             out.stats = _todict(st)
+            out.stats.update(self._overhangs(eps_c, o.radius))
+            out.stats.update(self._check_strokes(out))
         return _run(go, out, None, (self,))
 
+    def _overhangs(self, eps_c, r):
+        """§2.1 per layer pair, as the tool: sampled every 4 r; the pairs beyond eps_c r warned about."""
+        n = self._sl.nlayers
+        per = [lib.amp_slices_overhang(ctypes.byref(self._sl), i, 4 * r) for i in range(n - 1)]
+        over = sum(1 for v in per if v > eps_c * r)
+        worst, at = 0.0, 0
+        for i, v in enumerate(per):
+            if v > worst:
+                worst, at = v, i + 1
+        if over:
+            warnings.warn("%d layer pairs are not eps-continuous (overhang > %g r = %g mm; worst %.3g mm under layer "
+                          "%d at z %.4g): the layer above may sag" % (over, eps_c, eps_c * r, worst, at,
+                                                                      self._sl.layers[at].z_print),
+                          RuntimeWarning, stacklevel=5)
+        return {"eps_c": eps_c, "overhang_pairs": over, "max_overhang_mm": worst if worst < math.inf else -1,
+                "overhang_mm": [v if v < math.inf else -1 for v in per],
+                "open_chain_layers": [i for i in range(n) if self._sl.layers[i].open_chains]}
 
-def slice(mesh, layer, first_layer=0.0, continuous=False, radius=0.5, **opts):
-    """`ampath slice MESH --layer H (--polygons|--continuous)`: a PathSet of the layers."""
+    def _region(self, z):
+        for i in range(self._sl.nlayers):
+            if abs(self._sl.layers[i].z_print - z) < 1e-9:
+                return ctypes.pointer(self._sl.layers[i].polys)
+        return None
+
+    def _check_strokes(self, ps):
+        """The tool's check of every path against its layer (tol 1e-6 mm); Error AMP_ERR_CHECK on a failure."""
+        tot = dict(crossings=0, repeated_edges=0, outside=0, failed_paths=0)
+        first = None
+        for i in range(ps._ps.npaths):
+            path = ps._ps.paths[i]
+            reg = self._region(ps._ps.verts[path.first].p.z) if path.n else None
+            rep, err = L.new(L.amp_stroke_report), _err()
+            st = lib.amp_pathset_stroke_check(ps._ref, i, reg, 1e-6, ctypes.byref(rep), ctypes.byref(err))
+            if not L.intact(rep):
+                raise L.stale(L.amp_stroke_report, "amp_pathset_stroke_check")
+            if st == -2:  # AMP_ERR_NOMEM
+                _check(st, err)
+            if st != 0:
+                tot["failed_paths"] += 1
+                if first is None:
+                    first = "path %d fails its check: %s" % (i, err.msg.decode("utf-8", "replace"))
+            for k in ("crossings", "repeated_edges", "outside"):
+                tot[k] += getattr(rep, k)
+        tot["extrusion_starts"] = _count_starts(ps)
+        if tot["failed_paths"]:
+            _fail("%s; %d paths fail the stroke check (%d crossings, %d edges printed twice, %d points outside "
+                  "their layer): a bug, please report it" % (first, tot["failed_paths"], tot["crossings"],
+                                                             tot["repeated_edges"], tot["outside"]), _ERR_CHECK)
+        return tot
+
+
+_ERR_CHECK = -10  # AMP_ERR_CHECK
+_GRIDS = {"square": 0, "tri": 1, "hex": 2}
+_TOURS = {"cycle-tree": 0, "merge": 1}
+
+
+def _finite_pos(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and v > 0 and math.isfinite(v)
+
+
+def _bead_radius(radius, nozzle, printer):
+    """The tool's bead: --radius, else --nozzle, else the --printer's nozzle (1.125 x wide), else 0.225 mm."""
+    if radius is None and nozzle is None and printer is not None:
+        pr = printer if isinstance(printer, Printer) else Printer(printer)
+        nozzle = pr._p.nozzle_diameter
+    if radius is None and nozzle is not None:
+        if not _finite_pos(nozzle):
+            _fail("nozzle must be positive")
+        radius = 0.5 * 1.125 * nozzle  # a bead 1.125 x the nozzle wide, as slicers extrude
+    if radius is None:
+        radius = 0.225
+    if not _finite_pos(radius):
+        _fail("radius must be positive")
+    return radius
+
+
+def _contpath_opts(radius, grid, infill, tour, eps_c, opts):
+    """amp_contpath_opts as cmd_slice.c fills them, with its checks and messages."""
+    o = L.amp_contpath_opts()
+    lib.amp_contpath_opts_default(ctypes.byref(o), radius)
+    if grid not in _GRIDS:
+        _fail("grid must be square, tri or hex, not '%s'" % (grid,))
+    o.grid = _GRIDS[grid]
+    for k in ("cell", "offset"):
+        if k in opts and not _finite_pos(opts[k]):
+            _fail("cell and offset must be positive")
+    for k in ("skin_bottom", "skin_top"):
+        if k in opts and not (isinstance(opts[k], (int, float)) and opts[k] >= 0 and math.isfinite(opts[k])):
+            _fail("skin_bottom and skin_top must be thicknesses >= 0 mm")
+    if not (isinstance(eps_c, (int, float)) and 0 < eps_c <= 1):
+        _fail("eps_c must be in (0, 1]")
+    _apply(o, opts, "continuous", skip=("radius", "grid", "tour"))
+    if infill is not None and "cell" in opts and infill > 0:
+        _fail("cell and infill exclude each other")
+    if infill is not None and infill != 0:
+        if not (isinstance(infill, (int, float)) and 0 < infill <= 100):
+            _fail("infill must be a density in % (0 < P <= 100)")
+        # every line of a square lattice of cell S carries two beads (a band 4r wide): x = 4r / S of the
+        # area lies under the bands of one direction, 2x - x^2 under both; solved for the density
+        o.cell = 4 * radius / (1 - math.sqrt(1 - infill / 100))
+    if tour not in _TOURS:
+        _fail("tour must be cycle-tree or merge, not '%s'" % (tour,))
+    o.tour = _TOURS[tour]
+    return o
+
+
+def _count_starts(ps):
+    """Extrusion starts as a G-code reader counts them (the tool's count_starts)."""
+    starts = 0
+    for i in range(ps._ps.npaths):
+        path = ps._ps.paths[i]
+        v = ps._ps.verts
+        printing = False
+        for k in range(path.first, path.first + path.n - 1):
+            a, b = v[k], v[k + 1]
+            dx, dy, dz = a.p.x - b.p.x, a.p.y - b.p.y, a.p.z - b.p.z
+            moves = dx * dx + dy * dy + dz * dz > 0
+            pr = (a.r > 0 or b.r > 0) and moves
+            if pr and not printing:
+                starts += 1
+            if pr:
+                printing = True
+            elif moves:
+                printing = False
+    return starts
+
+
+def slice(mesh, layer, first_layer=0.0, continuous=False, radius=None, nozzle=None, printer=None, **opts):
+    """`ampath slice MESH --layer H (--polygons|--continuous)`: a PathSet of the layers. The radius of the
+    polygons and the bead of the strokes: @radius, else 1.125 x @nozzle / 2, else from @printer's nozzle,
+    else 0.225 mm (as the tool). Other options: those of Slices.continuous."""
+    r = _bead_radius(radius, nozzle, printer)
+    if not continuous and opts:
+        raise TypeError("slice: options %s need continuous=True" % ", ".join(sorted(opts)))
     with Slices(mesh, layer, first_layer) as sl:
-        return sl.continuous(radius, **opts) if continuous else sl.polygons(radius)
+        return sl.continuous(r, **opts) if continuous else sl.polygons(r)
 
 
 # ---------------------------------------------------------------- check
@@ -261,7 +398,7 @@ def _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed):
     else:
         res["coverage"] = {"ran": False, "reason": "no model"}
     if any(p.role == "object" for p in paths):
-        v, err = L.amp_gouge_violation(), _err()
+        v, err = L.new(L.amp_gouge_violation), _err()
         st = lib.amp_gouge_check(paths._ref, ctypes.byref(h), 0, 1e-6, ctypes.byref(v), ctypes.byref(err))
         if st not in (0, -10):
             _check(st, err)
@@ -275,7 +412,7 @@ def _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed):
     if planar:
         tot = dict(paths=len(planar), segments=0, pseudo=0, crossings=0, repeated_edges=0, failed=0)
         for i in planar:
-            rep, err = L.amp_stroke_report(), _err()
+            rep, err = L.new(L.amp_stroke_report), _err()
             st = lib.amp_pathset_stroke_check(paths._ref, i, None, 1e-6, ctypes.byref(rep), ctypes.byref(err))
             if st == -2:
                 _check(st, err)
@@ -374,7 +511,7 @@ def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_
 
 
 def _gcode_held(paths, output, o, pr, keep):
-    st, err = L.amp_gcode_stats(), _err()
+    st, err = L.new(L.amp_gcode_stats), _err()
     if output is None:
         from .core import _to_buf
         data = _to_buf(lambda sink, buf, e: lib.amp_gcode_write(paths._ref, ctypes.byref(o), sink, buf,

@@ -23,7 +23,7 @@ def preview(paths, format="png", width=1600, output=None, stats=None):
     if "amp_preview_png" in L.MISSING:
         _fail("%s has no preview renderer (ampath/preview.h): a newer libampath is needed" % L.LIBRARY_PATH, -9)
     fn = lib.amp_preview_png if format == "png" else lib.amp_preview_svg
-    st = L.amp_preview_stats()
+    st = L.new(L.amp_preview_stats)
     with _hold(paths):
         data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))
     if output is not None:

@@ -1,9 +1,11 @@
 """The demo helix pipeline and a continuous slice through Python, compared byte for byte with the
 `ampath` tool of the same tree (tools/demo.sh's options). Nothing here is stored: both sides run now."""
 
+import json
 import shlex
 import subprocess
 import unittest
+import warnings
 
 from amptest import TOOL, TmpCase, ampath, read, strip_comments, tool
 
@@ -82,6 +84,90 @@ class ContinuousSlice(TmpCase):
         self.assertNotEqual(moved.text.encode(), read(self.p("cont.gcode")))
         self.assertSameBytes(job.text.encode(), read(self.p("cont.gcode")), "continuous G-code")
         self.assertEqual(job.printer.name, "ender3")
+
+
+# (tool options, the same as Python keyword arguments): every option of `slice --continuous`
+OPTION_SETS = [
+    (("--printer", "{ini}", "--infill", 30, "--tour", "merge", "--bottom", 0, "--top", 1.2, "--no-corners",
+      "--pseudo", "--eps-c", 0.5, "--grid", "tri"),
+     dict(printer="{ini}", infill=30, tour="merge", skin_bottom=0, skin_top=1.2, support_corners=0, pseudo_edges=1,
+          eps_c=0.5, grid="tri")),
+    (("--printer", "{ini}", "--radius", 0.3, "--cell", 3, "--offset", 0.25, "--support-stretches", "--grid", "hex"),
+     dict(printer="{ini}", radius=0.3, cell=3, offset=0.25, support_stretches=1, grid="hex")),
+    (("--nozzle", 0.6, "--no-join"), dict(nozzle=0.6, join=False)),
+    (("--no-perimeter",), dict(perimeters=0)),
+]
+# --json figures and the Python .stats key they are
+JSON_KEYS = {"islands": "islands", "island_strokes": "island_strokes", "regions": "regions",
+             "skin_regions": "skin_regions", "support_corners": "support_corners", "extrusion_starts":
+             "extrusion_starts", "crossings": "crossings", "repeated_edges": "repeated_edges", "outside": "outside",
+             "failed_paths": "failed_paths", "overhang_pairs": "overhang_pairs", "eps_c": "eps_c"}
+
+
+class ContinuousOptions(TmpCase):
+    def test_every_option_does_what_the_tool_does(self):
+        """Each option set through the tool and through Python: the same bytes and figures when the tool's
+        check of every path passes, the same Error (AMP_ERR_CHECK, the tool's first message) when it exits 1."""
+        tool("model", "helix", "-o", self.p("helix.stl"))
+        ini = self.p("p06.ini")
+        with open(ini, "w") as f:
+            f.write("# a PrusaSlicer printer with a 0.6 mm nozzle\nnozzle_diameter = 0.6,0.6\n"
+                    "bed_shape = 0x0,250x0,250x210,0x210\n")
+        outputs = []
+        with ampath.Mesh.load(self.p("helix.stl")) as mesh, ampath.Slices(mesh, 0.3) as sl:
+            for k, (args, kw) in enumerate(OPTION_SETS):
+                args = [ini if a == "{ini}" else a for a in args]
+                kw = {n: ini if v == "{ini}" else v for n, v in kw.items()}
+                amp = self.p("o%d.amp" % k)
+                r = tool("slice", self.p("helix.stl"), "--layer", 0.3, "--continuous", "--json", "-o", amp, *args,
+                         ok=False)
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    if r.returncode != 0:
+                        first = [l for l in r.stderr.splitlines() if "fails its check" in l][0]
+                        with self.assertRaises(ampath.Error) as cm:
+                            sl.continuous(**kw)
+                        self.assertEqual(cm.exception.name, "AMP_ERR_CHECK")
+                        self.assertIn(first[len("ampath slice: "):], cm.exception.message)
+                        continue
+                    with sl.continuous(**kw) as ps:
+                        data = strip_comments(ps.to_amp())
+                        stats = ps.stats
+                self.assertSameBytes(data, strip_comments(read(amp)),
+                                     "slice --continuous %s" % " ".join(map(str, args)))
+                figures = json.loads(r.stdout)
+                for j, py in JSON_KEYS.items():
+                    self.assertEqual(stats[py], figures[j], "%s with %s" % (j, args))
+                self.assertEqual(len(stats["overhang_mm"]), len(figures["overhang_mm"]))
+                for a, b in zip(stats["overhang_mm"], figures["overhang_mm"]):
+                    self.assertAlmostEqual(a, b, 8)
+                # the tool's stderr warning about overhangs is a RuntimeWarning
+                self.assertEqual(any("eps-continuous" in str(w.message) for w in caught),
+                                 figures["overhang_pairs"] > 0)
+                outputs.append(data)
+        self.assertGreaterEqual(len(outputs), 2)
+        self.assertEqual(len(set(outputs)), len(outputs))  # the option sets make different paths
+
+    def test_the_printer_sets_the_bead_of_strokes_and_polygons(self):
+        tool("model", "helix", "-o", self.p("helix.stl"))
+        ini = self.p("p06.ini")
+        with open(ini, "w") as f:
+            f.write("nozzle_diameter = 0.6\n")
+        tool("slice", self.p("helix.stl"), "--layer", 0.3, "--polygons", "--printer", ini, "-o", self.p("poly.amp"))
+        with ampath.Mesh.load(self.p("helix.stl")) as mesh:
+            with ampath.slice(mesh, 0.3, printer=ini) as poly:
+                self.assertSameBytes(strip_comments(poly.to_amp()), strip_comments(read(self.p("poly.amp"))),
+                                     "polygons with --printer")
+                self.assertAlmostEqual(poly[0].points[0][3], 0.3375)  # 1.125 x 0.6 mm wide
+            with ampath.slice(mesh, 0.3, continuous=True, nozzle=0.8, radius=0.25) as ps:
+                self.assertEqual(max(v[3] for v in ps[0].points), 0.25)  # the radius wins, as --radius
+            for bad in (dict(infill=30, cell=3), dict(infill=150), dict(tour="euler"), dict(grid="strips"),
+                        dict(skin_top=-1), dict(eps_c=2), dict(nozzle=0), dict(cell=0)):
+                with self.assertRaises(ampath.Error, msg=str(bad)) as cm:
+                    ampath.slice(mesh, 0.3, continuous=True, **bad).close()
+                self.assertEqual(cm.exception.name, "AMP_ERR_ARG")
+            with self.assertRaises(TypeError):
+                ampath.slice(mesh, 0.3, continuous=True, no_such_option=1)
 
 
 if __name__ == "__main__":
