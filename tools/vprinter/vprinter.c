@@ -559,8 +559,19 @@ static void on_bytes(vp *v, const char *b, ssize_t n, double now)
            in one line, so no host could pass a model with more (see docs/bridge.md, "Limits"). */
         /* The '*' is spared too: a line cut by Marlin's RX flush whose '*' is lost runs as an unnumbered
            command, a hole in the protocol no host can close (docs/bridge.md, "Limits"). */
+        /* Likewise no flip turns a byte into one that hides the '*' from Marlin: NUL ends the C string it
+           searches, ';' starts a comment, CR/LF end the line. On a whole numbered line that is only another
+           checksum error, but on a cut tail it is the same hole as a lost '*' (found as a move run twice
+           with line number 0 in the executed log: a blank flipped to NUL in a tail cut by an RX flush). */
         if (v->corrupt_in > 0 && !v->in_hit && c != '*' && rnd01(v) < v->corrupt_in) {
-            c ^= (char)(1 << (int)(rnd01(v) * 7));
+            int bit = (int)(rnd01(v) * 7), k;
+            for (k = 0; k < 7; k++) {
+                char t = (char)(c ^ (1 << ((bit + k) % 7)));
+                if (t != '\0' && t != ';' && t != '\n' && t != '\r') {
+                    c = t;
+                    break;
+                }
+            }
             v->in_hit = 1;
         }
         if (b[i] == '\n')
