@@ -26,12 +26,17 @@ static const char usage[] =
     "  --window W           pingpong | N lines in flight | advanced (ADVANCED_OK) (default 4; klipper 16)\n"
     "  --bufsize N          printer command queue, Marlin BUFSIZE (default 4)\n"
     "  --rx-bytes N         printer serial RX buffer in bytes (default 128)\n"
-    "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: it does, as Marlin)\n"
+    "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: learned at the handshake)\n"
+    "  --resend-ok          the firmware sends an ok after 'Resend:' (no learning either)\n"
+    "  --ready-timeout S    wait at most S seconds for the printer to become ready (default 60)\n"
+    "  --on-error E         stop (default): a firmware error (Klipper '!!', Marlin 'Error:' outside the\n"
+    "                       resend protocol) stops the job, exit 1; continue: report and count it, go on\n"
     "  --timeout S          silence (no ok, busy or temperature) before a probe, seconds (default 10)\n"
 "  --settle-ms MS       after a resend request, wait MS (plus the wire time of the lines sent ahead)\n"
     "                       for the echoes of the same request before sending again (default 30)\n"
     "  --boot-wait S        wait for the 'start' banner before the handshake, seconds (default 3)\n"
-    "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60)\n"
+    "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60);\n"
+    "                       the printer then says which line it expects, so nothing runs twice\n"
     "  --resume-from LINE   start the job at file line LINE after a safe restart (lift, home X Y,\n"
     "                       re-heat, return); use the line the bridge reported when it stopped\n"
     "  --log FILE           protocol log (every line sent and received, events)\n"
@@ -41,7 +46,8 @@ static const char usage[] =
     "                       /tmp/ampath-bridge-UID.sock), created with mode 0600\n"
     "Control socket: one command per line, one reply line ('ok ...' or 'error ...'):\n"
     "  submit PATH [LINE] | status | pause | resume | cancel | estop | quit\n"
-    "Exit status: 0 job done, 1 job stopped (reset, shutdown, interrupted, device lost), 2 bad usage or input.\n";
+    "Exit status: 0 job done, 1 job stopped (printer error, reset, shutdown, not ready, interrupted, device\n"
+    "lost), 2 bad usage or input.\n";
 
 static volatile sig_atomic_t sig_count;
 static void on_signal(int sig)
@@ -60,13 +66,7 @@ static int fail(const char *fmt, const char *a)
 
 static void report(br_session *s)
 {
-    printf("sent %ld commands (moves and others), acknowledged %ld\n", s->sent_moves, s->acked_moves);
-    if (s->stop != BR_DONE) {
-        printf("stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
-               br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,
-               s->first_unacked_job_line);
-    }
-    fflush(stdout);
+    br_session_report(s, stdout);
 }
 
 /* ---- daemon ---- */
@@ -271,6 +271,23 @@ int main(int argc, char **argv)
             quiet = 1;
         } else if (strcmp(a, "--no-resend-ok") == 0) {
             cfg.resend_ok = 0;
+            cfg.learn = 0;
+        } else if (strcmp(a, "--resend-ok") == 0) {
+            cfg.resend_ok = 1;
+            cfg.learn = 0;
+        } else if (strcmp(a, "--ready-timeout") == 0) {
+            NEEDVAL;
+            if (!parse_num(val, &d) || d <= 0 || d > 86400)
+                return fail("bad --ready-timeout %s", val);
+            cfg.ready_ms = (unsigned long)(d * 1000);
+        } else if (strcmp(a, "--on-error") == 0) {
+            NEEDVAL;
+            if (strcmp(val, "stop") == 0)
+                cfg.on_error_continue = 0;
+            else if (strcmp(val, "continue") == 0)
+                cfg.on_error_continue = 1;
+            else
+                return fail("bad --on-error %s (stop or continue)", val);
         } else if (strcmp(a, "--baud") == 0) {
             NEEDVAL;
             if (!parse_num(val, &d) || d < 50 || d > 4000000)
@@ -398,7 +415,7 @@ int main(int argc, char **argv)
             br_session_request_stop(s, BR_INTERRUPTED);
             t_stop = br_now();
         }
-        if (s->stopping && s->stop == BR_RUNNING &&
+        if (s->stopping && s->stop == BR_RUNNING && sig_count > 0 &&
             (sig_count > 1 || br_now() - t_stop > 2.0 * (double)cfg.timeout_ms / 1000.0 + 1.0)) {
             s->stop = BR_INTERRUPTED;
             snprintf(s->stop_text, sizeof s->stop_text, "lines in flight not all acknowledged");

@@ -80,6 +80,7 @@ static void start_marlin(amp_proto *p, rec *r, amp_proto_window mode, int window
     o.window = window;
     o.timeout_ms = 1000;
     o.guard_nl = 0; /* exact framing compared below; the guard newline has its own test */
+    o.learn = 0;    /* the dialect is given here; learning has its own test */
     o.on_event = on_ev;
     o.user = r;
     memset(r, 0, sizeof *r);
@@ -98,6 +99,9 @@ static void start_klipper(amp_proto *p, rec *r)
     o.on_event = on_ev;
     o.user = r;
     ck_assert_int_eq(amp_proto_init(p, &o, 0, NULL), AMP_OK);
+    ck_assert_str_eq(tx(p, 0), "STATUS\n");
+    feed1(p, "// Klipper state: Ready\nok\n", 0);
+    ck_assert_int_eq(p->state, AMP_PROTO_RUNNING);
 }
 
 static void submit_moves(amp_proto *p, int n)
@@ -195,6 +199,7 @@ START_TEST(handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it)
     amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
     o.boot_ms = 2000;
     o.guard_nl = 0;
+    o.learn = 0;
     o.on_event = on_ev;
     o.user = &r;
     ck_assert_int_eq(amp_proto_init(&p, &o, 5000, NULL), AMP_OK);
@@ -483,7 +488,7 @@ START_TEST(klipper_has_no_numbers_acks_errors_and_stops_on_shutdown)
     ck_assert_str_eq(tx(&p, 1), ""); /* window 16 < Klipper's 20 pending lines */
     feed1(&p, "// probe: open\n!! Move out of range: 0.5 0 0 [0.000]\nok\nok\n", 2);
     ck_assert_int_eq(p.acked, 2);
-    ck_assert_int_eq(count(&r, AMP_EV_ERROR), 1);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 1);
     /* M112 jumps the queue */
     ck_assert_int_eq(amp_proto_submit(&p, "M112", 4, NULL, NULL), AMP_OK);
     ck_assert_str_eq(tx(&p, 3), "M112\n");
@@ -598,6 +603,212 @@ START_TEST(noisy_link_delivers_every_line_exactly_once_in_order)
 }
 END_TEST
 
+
+/* Marlin handshake with learning; @p reply_ok: the firmware sends ok after Resend:; @p adv: ADVANCED_OK. */
+static void learn_dialect(int reply_ok, int adv, int want_resend_ok)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    o.resend_ok = !want_resend_ok; /* the configured value is the wrong one: only learning can set it right */
+    o.mode = AMP_PROTO_ADVANCED;
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    ck_assert_str_eq(tx(&p, 1), "N0 M110 N0*125\n");
+    feed1(&p, adv ? "ok N0 P15 B3\n" : "ok\n", 2);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_int_eq(num(tx(&p, 3)), 2); /* provoked: 1 is expected */
+    ck_assert(!amp_proto_can_submit(&p));
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\n", 4);
+    if (reply_ok)
+        feed1(&p, adv ? "ok N0 P15 B3\n" : "ok\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    feed1(&p, "ok T:21.0 /0.0 B:20.0 /0.0 @:0 B@:0\n", 6);
+    ck_assert_int_eq(count(&r, AMP_EV_LEARNED), 1);
+    ck_assert_int_eq(p.o.resend_ok, want_resend_ok);
+    ck_assert_int_eq(p.o.mode, adv ? AMP_PROTO_ADVANCED : AMP_PROTO_FIXED);
+    ck_assert_str_eq(tx(&p, 7), "N0 M110 N0*125\n"); /* the numbering starts again at 1 for the job */
+    feed1(&p, "ok\n", 8);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(count(&r, AMP_EV_READY), 1);
+}
+
+START_TEST(handshake_learns_whether_ok_follows_resend_and_advanced_ok)
+{
+    learn_dialect(1, 0, 1); /* Marlin 2.1 */
+    learn_dialect(0, 0, 0); /* Prusa: Resend without ok */
+    learn_dialect(1, 1, 1); /* ADVANCED_OK */
+    learn_dialect(0, 1, 0);
+}
+END_TEST
+
+START_TEST(garbled_reply_during_learning_asks_again_instead_of_guessing)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    tx(&p, 1);
+    feed1(&p, "ok\n", 2);
+    ck_assert_int_eq(num(tx(&p, 3)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\n0k7\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 6);
+    /* "0k7" might have been the ok: no decision, the provoked resend again */
+    ck_assert_int_eq(num(tx(&p, 7)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 1\nResend: 2\nok\n", 8);
+    ck_assert_int_eq(num(tx(&p, 9)), 1);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 1\nResend: 2\nok\n", 8);
+    /* M105 line 1 again after its own resend; then the answer */
+    ck_assert_int_eq(num(tx(&p, 9)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 10);
+    ck_assert_int_eq(p.o.resend_ok, 1);
+    ck_assert_str_eq(tx(&p, 11), "N0 M110 N0*125\n");
+    feed1(&p, "ok\n", 12);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+}
+END_TEST
+
+START_TEST(klipper_not_ready_sends_nothing_of_the_job_until_ready)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    long ln;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_proto_submit(&p, "G28", 3, &ln, NULL), AMP_ERR_STATE);
+    ck_assert_str_eq(tx(&p, 0), "STATUS\n");
+    feed1(&p, "!! Printer is not ready\n!! Klipper state: Not ready\nok\n", 10);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_int_eq(count(&r, AMP_EV_WAITING), 2);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0); /* not an error of the job */
+    ck_assert_str_eq(tx(&p, 500), "");               /* asks again after ready_poll_ms */
+    ck_assert_int_eq(amp_proto_wait_ms(&p, 500), 510);
+    ck_assert_str_eq(tx(&p, 1010), "STATUS\n");
+    feed1(&p, "// Klipper state: Ready\nok\n", 1020);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(count(&r, AMP_EV_READY), 1);
+    ck_assert_int_eq(amp_proto_submit(&p, "G28", 3, &ln, NULL), AMP_OK);
+    ck_assert_int_eq(ln, 1);
+}
+END_TEST
+
+START_TEST(never_ready_gives_up_after_ready_ms)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    unsigned long t;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.ready_ms = 5000;
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    for (t = 0; t < 6000 && p.state != AMP_PROTO_STOPPED; t += 100)
+        if (*tx(&p, t))
+            feed1(&p, "!! Printer is not ready\nok\n", t);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_NOTREADY), 1);
+    ck_assert_int_ge((long)t, 5000);
+}
+END_TEST
+
+START_TEST(firmware_errors_are_attributed_to_the_line_in_flight)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_klipper(&p, &r);
+    submit_moves(&p, 5);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "ok\n!! Move out of range: 1.5 2 0 [0.000]\nok\n// Unknown command:\"FOO\"\nok\n", 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_FWERROR; i++)
+        ;
+    ck_assert_int_lt(i, r.n);
+    ck_assert_int_eq(r.line[i], 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_WARNING; i++)
+        ;
+    ck_assert_int_eq(r.line[i], 3);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING); /* the host decides */
+    feed1(&p, "// action:cancel\n", 3);
+    ck_assert_int_eq(count(&r, AMP_EV_ACTION), 1);
+    {
+        char text[64];
+        ck_assert(amp_proto_line_text(&p, 2, text, sizeof text));
+        ck_assert_str_eq(text, "G1 X1.5 Y2 E0.01");
+    }
+    /* Marlin: protocol errors (even garbled) are not firmware errors; a thermal error is, a halt stops */
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 4);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "Error:checksum mis}atch, Last Line: 0\nResend: 1\nok\nError:Line Numbr is not Last Line Number+1, Last Lxne: 0\n"
+              "Error:No Line\r Number with checksum, Last Line: 0\nError:\n", 2); /* cut by bytes garbled into line ends */
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
+    {
+        char text[64];
+        ck_assert(amp_proto_line_text(&p, 3, text, sizeof text));
+        ck_assert_str_eq(text, "G1 X2.5 Y4 E0.02");
+    }
+    while (*tx(&p, 200))
+        ;
+    feed1(&p, "ok\nError:Thermal Runaway, system stopped! Heater_ID: 0\nError:Printer halted. kill() called!\n", 300);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_FWERROR; i++)
+        ;
+    ck_assert_int_eq(r.line[i], 2);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_SHUTDOWN), 1);
+}
+END_TEST
+
+START_TEST(garbled_resend_number_is_taken_from_last_line)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "ok\nError:checksum mismatch, Last Line: 1\nResend: 2x\nok\n", 2);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
+    ck_assert_int_eq(num(tx(&p, 100)), 2);
+}
+END_TEST
+
+START_TEST(oks_merged_or_garbled_by_a_corrupted_byte_still_count)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 8);
+    while (*tx(&p, 1))
+        ;
+    /* a newline garbled into a control byte merges two oks; an ok with one garbled byte */
+    feed1(&p, "ok\x0bok\noc\n", 2);
+    ck_assert_int_eq(p.acked, 3);
+    while (*tx(&p, 3))
+        ;
+    /* but a control byte inside a number keeps it unparseable: no rewind to line 2 from "Resend: 2\x17" */
+    feed1(&p, "Resend: 2\x17\n", 4);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 0);
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -622,6 +833,13 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, klipper_shutdown_reports_the_last_acknowledged_line);
     AMP_ADD_TEST(tc, init_rejects_bad_options);
     AMP_ADD_TEST(tc, noisy_link_delivers_every_line_exactly_once_in_order);
+    AMP_ADD_TEST(tc, handshake_learns_whether_ok_follows_resend_and_advanced_ok);
+    AMP_ADD_TEST(tc, garbled_reply_during_learning_asks_again_instead_of_guessing);
+    AMP_ADD_TEST(tc, klipper_not_ready_sends_nothing_of_the_job_until_ready);
+    AMP_ADD_TEST(tc, never_ready_gives_up_after_ready_ms);
+    AMP_ADD_TEST(tc, firmware_errors_are_attributed_to_the_line_in_flight);
+    AMP_ADD_TEST(tc, garbled_resend_number_is_taken_from_last_line);
+    AMP_ADD_TEST(tc, oks_merged_or_garbled_by_a_corrupted_byte_still_count);
     suite_add_tcase(s, tc);
     return s;
 }

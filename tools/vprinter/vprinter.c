@@ -37,7 +37,9 @@ static const char usage[] =
     "  --log FILE           record every executed command as '<line> <command>'\n"
     "  --flavor F           marlin (default) | klipper\n"
     "  --dialect D          Marlin resend reply: 2.1 (Resend + ok, default) | 2.0 (Resend + ok_to_send,\n"
-    "                       with ADVANCED_OK fields) | bare (Resend without ok) | rs (rs N, no ok)\n"
+    "                       with ADVANCED_OK fields) | prusa or bare (Resend without ok) | rs (rs N, no ok)\n"
+    "  --bed X,Y,Z          bed volume in mm (default 220,220,250): Klipper answers '!! Move out of range'\n"
+    "                       outside it; Marlin clamps (software endstops) and the log marks '# out of bed'\n"
     "  --bufsize N          command queue slots (default 4)\n"
     "  --rx-bytes N         serial RX buffer bytes; overflowing bytes are lost (default 128)\n"
     "  --advanced-ok        answer 'ok N<n> P<p> B<b>' (B one low, as Marlin)\n"
@@ -59,7 +61,12 @@ static const char usage[] =
     "  --reset-after K      reset after executing K commands (repeatable: counts restart)\n"
     "  --hangup-after K --hangup-secs S   close the pty after K commands, reopen after S s\n"
     "  --error-at K         Klipper: the K-th received line fails ('!! ...' then ok)\n"
-    "  --shutdown-after K   Klipper: shut down after K executed commands\n";
+    "  --shutdown-after K   Klipper: shut down after K executed commands\n"
+    "  --ready-after-ms MS  Klipper: '!! Printer is not ready' (+ ok) to everything but STATUS for MS ms\n"
+    "  --halt-after K       Marlin: thermal runaway and 'Error:Printer halted. kill() called!' after K commands\n"
+    "  --action-at K --action NAME   '// action:NAME' (default cancel) after the K-th executed command\n"
+    "Klipper mode refuses moves before G28 ('!! Must home axis first') and answers unknown commands with\n"
+    "'// Unknown command'; Marlin mode answers 'echo:Unknown command' (+ ok). Neither logs those as executed.\n";
 
 typedef struct plan_move {
     double dur;
@@ -74,7 +81,11 @@ typedef struct vp {
     double corrupt_in, corrupt_out, drop_in, drop_out;
     long corrupt_line[LIST_MAX], lose_line[LIST_MAX], lose_ok[LIST_MAX], reset_after[LIST_MAX];
     int n_corrupt_line, n_lose_line, n_lose_ok, n_reset_after;
-    long busy_at, hangup_after, error_at, shutdown_after;
+    long busy_at, hangup_after, error_at, shutdown_after, halt_after, action_at;
+    const char *action;
+    double bed[3], ready_at;
+    int homed;
+    long out_of_bed;
     unsigned long long rng;
     /* link */
     int mfd, sfd;
@@ -261,6 +272,37 @@ static int is_cmd(const char *c, const char *name)
     return strncmp(c, name, n) == 0 && (c[n] == '\0' || c[n] == ' ');
 }
 
+/* Commands the modelled firmwares accept (the rest get their unknown-command answer). */
+static const char *const marlin_cmds[] = {"G0", "G1", "G2", "G3", "G4", "G10", "G11", "G28", "G29", "G90", "G91",
+    "G92", "M17", "M18", "M73", "M82", "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114",
+    "M115", "M117", "M140", "M190", "M201", "M203", "M204", "M205", "M220", "M221", "M400", "M500", "M501",
+    "M503", "M900", "T0", NULL};
+static const char *const klipper_cmds[] = {"G0", "G1", "G4", "G28", "G90", "G91", "G92", "M18", "M73", "M82",
+    "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114", "M115", "M117", "M140", "M190", "M204",
+    "M220", "M221", "M400", "SET_VELOCITY_LIMIT", "SET_PRESSURE_ADVANCE", "TURN_OFF_HEATERS", "STATUS", NULL};
+
+static int known(const char *const *list, const char *cmd)
+{
+    size_t n = strcspn(cmd, " ");
+    int i;
+    for (i = 0; list[i]; i++)
+        if (strlen(list[i]) == n && strncmp(list[i], cmd, n) == 0)
+            return 1;
+    return 0;
+}
+
+/* Target of a G0/G1 in bed coordinates (absolute or relative, as the printer would compute it). */
+static void move_target(const vp *v, const char *cmd, double t[3]);
+
+static int outside_bed(const vp *v, const double t[3])
+{
+    int i;
+    for (i = 0; i < 3; i++)
+        if (t[i] < -1e-9 || t[i] > v->bed[i] + 1e-9)
+            return 1;
+    return 0;
+}
+
 static void send_ok(vp *v)
 {
     if (in_list(v->lose_ok, v->n_lose_ok, v->executed))
@@ -298,8 +340,9 @@ static int execute(vp *v, const char *cmd, long n, double now)
             v->next_keepalive = now + v->busy_interval;
         }
     }
-    if (!v->klipper && !((cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'T') && cmd[1] >= '0' && cmd[1] <= '9')) {
-        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush): echo, no-op, ok */
+    if (!v->klipper && !known(marlin_cmds, cmd)) {
+        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush, or SET_VELOCITY_LIMIT): echo,
+           no-op, ok */
         say(v, "echo:Unknown command: \"%s\"\n", cmd);
         send_ok(v);
         v->exec_has = 0;
@@ -319,10 +362,15 @@ static int execute(vp *v, const char *cmd, long n, double now)
     if (now < v->exec_ready_at)
         return 0;
     if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
-        double nx, ny, nz, d;
+        double nx, ny, nz, d, t[3];
         planner_drain(v, now);
         if (v->plan_count >= v->planner)
             return 0; /* Marlin blocks in the handler until the planner has room */
+        move_target(v, cmd, t);
+        if (outside_bed(v, t)) {
+            v->out_of_bed++; /* Marlin's software endstops clamp the move without a word */
+            logf_line(v, "# out of bed: %ld %s\n", n, cmd);
+        }
         v->f = num_arg(cmd, 'F', v->f, NULL);
         nx = num_arg(cmd, 'X', v->rel ? 0 : v->x, &seen);
         ny = num_arg(cmd, 'Y', v->rel ? 0 : v->y, &seen);
@@ -345,6 +393,13 @@ static int execute(vp *v, const char *cmd, long n, double now)
         planner_drain(v, now);
         if (v->plan_count > 0)
             return 0;
+    } else if (is_cmd(cmd, "G28")) {
+        v->homed = 1;
+        v->x = v->y = v->z = 0;
+    } else if (is_cmd(cmd, "G92")) {
+        v->x = num_arg(cmd, 'X', v->x, NULL);
+        v->y = num_arg(cmd, 'Y', v->y, NULL);
+        v->z = num_arg(cmd, 'Z', v->z, NULL);
     } else if (is_cmd(cmd, "G90")) {
         v->rel = 0;
     } else if (is_cmd(cmd, "G91")) {
@@ -490,22 +545,63 @@ static void klipper_shutdown(vp *v, const char *why)
     logf_line(v, "# shutdown\n");
 }
 
-static int klipper_known(const char *c)
+static void move_target(const vp *v, const char *cmd, double t[3])
 {
-    return (c[0] == 'G' || c[0] == 'M' || c[0] == 'T') && c[1] >= '0' && c[1] <= '9';
+    t[0] = num_arg(cmd, 'X', v->rel ? 0 : v->x, NULL);
+    t[1] = num_arg(cmd, 'Y', v->rel ? 0 : v->y, NULL);
+    t[2] = num_arg(cmd, 'Z', v->rel ? 0 : v->z, NULL);
+    if (v->rel) {
+        t[0] += v->x;
+        t[1] += v->y;
+        t[2] += v->z;
+    }
+}
+
+/* Klipper's answer to a command it does not run: 1 when answered (with its ok). */
+static int klipper_refuse(vp *v, const char *cmd, double now)
+{
+    double t[3];
+    if (now < v->ready_at && !is_cmd(cmd, "M115") && !is_cmd(cmd, "M110")) {
+        /* Klipper runs only a few commands (STATUS, M115, M110, M112, RESTART...) before it is ready */
+        say(v, "!! Printer is not ready\nok\n");
+        return 1;
+    }
+    if (!known(klipper_cmds, cmd)) {
+        say(v, "// Unknown command:\"%.*s\"\nok\n", (int)strcspn(cmd, " "), cmd);
+        return 1;
+    }
+    if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
+        move_target(v, cmd, t);
+        if (!v->homed && (strchr(cmd, 'X') || strchr(cmd, 'Y') || strchr(cmd, 'Z'))) {
+            say(v, "!! Must home axis first: %.3f %.3f %.3f [%.3f]\nok\n", t[0], t[1], t[2], v->e);
+            return 1;
+        }
+        if (outside_bed(v, t)) {
+            say(v, "!! Move out of range: %.3f %.3f %.3f [%.3f]\nok\n", t[0], t[1], t[2], v->e);
+            return 1;
+        }
+    }
+    return 0;
 }
 
 static void klipper_exec(vp *v, double now)
 {
     char *cmd = v->q[v->qhead];
     long n = v->qn[v->qhead];
-    if (v->klipper_shutdown) {
-        say(v, "!! Printer is not ready\nok\n");
-    } else if ((v->error_at > 0 && n == v->error_at) || !klipper_known(cmd)) {
-        if (!klipper_known(cmd))
-            say(v, "!! Unknown command:\"%.*s\"\nok\n", (int)strcspn(cmd, " "), cmd);
+    if (is_cmd(cmd, "STATUS")) {
+        /* answered in every state, never logged as executed */
+        if (v->klipper_shutdown)
+            say(v, "!! Shutdown\n!! Klipper state: Shutdown\nok\n");
+        else if (now < v->ready_at)
+            say(v, "!! Printer is not ready\n!! Klipper state: Not ready\nok\n");
         else
-            say(v, "!! Move out of range: %s\nok\n", cmd);
+            say(v, "// Klipper state: Ready\nok\n");
+    } else if (v->klipper_shutdown) {
+        say(v, "!! Printer is not ready\nok\n");
+    } else if (v->error_at > 0 && n == v->error_at) {
+        say(v, "!! Move out of range: %s\nok\n", cmd);
+    } else if (klipper_refuse(v, cmd, now)) {
+        /* answered */
     } else {
         if (!execute(v, cmd, n, now))
             return;
@@ -639,6 +735,20 @@ static void step(vp *v, double now)
             }
             return;
         }
+        if (v->action_at > 0 && v->executed == v->action_at) {
+            v->action_at = 0;
+            say(v, "// action:%s\n", v->action);
+        }
+        if (!v->klipper && v->halt_after > 0 && v->executed == v->halt_after) {
+            /* a heater fault while printing: Marlin reports it and kill()s, answering nothing more */
+            say(v, "Error:Thermal Runaway, system stopped! Heater_ID: 0\nError:Printer halted. kill() called!\n");
+            logf_line(v, "# halted\n");
+            v->qcount = 0;
+            v->exec_has = 0;
+            v->rxlen = 0;
+            v->booting = 2;
+            return;
+        }
         if (v->hangup_after > 0 && v->executed == v->hangup_after && !v->hung) {
             v->hung = 1;
             v->reopen_at = now + v->hangup_secs;
@@ -722,6 +832,9 @@ int main(int argc, char **argv)
     v->busy_interval = 2;
     v->rng = 1;
     v->mfd = v->sfd = -1;
+    v->bed[0] = v->bed[1] = 220;
+    v->bed[2] = 250;
+    v->action = "cancel";
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
 #define OPT(name) (strcmp(a, name) == 0 && val && (i++, 1))
@@ -744,7 +857,7 @@ int main(int argc, char **argv)
                 v->dialect = 21;
             else if (strcmp(val, "2.0") == 0)
                 v->dialect = 20;
-            else if (strcmp(val, "bare") == 0)
+            else if (strcmp(val, "bare") == 0 || strcmp(val, "prusa") == 0)
                 v->dialect = 1;
             else if (strcmp(val, "rs") == 0)
                 v->dialect = 2;
@@ -804,6 +917,19 @@ int main(int argc, char **argv)
             v->error_at = atol(val);
         else if (OPT("--shutdown-after"))
             v->shutdown_after = atol(val);
+        else if (OPT("--ready-after-ms"))
+            v->ready_at = atof(val) / 1000.0;
+        else if (OPT("--halt-after"))
+            v->halt_after = atol(val);
+        else if (OPT("--action-at"))
+            v->action_at = atol(val);
+        else if (OPT("--action"))
+            v->action = val;
+        else if (OPT("--bed")) {
+            if (sscanf(val, "%lf,%lf,%lf", &v->bed[0], &v->bed[1], &v->bed[2]) != 3 || v->bed[0] <= 0 ||
+                v->bed[1] <= 0 || v->bed[2] <= 0)
+                goto bad;
+        }
         else {
         bad:
             fprintf(stderr, "ampath-vprinter: bad option or value: %s\n%s", a, usage);
@@ -834,6 +960,7 @@ int main(int argc, char **argv)
     fflush(stdout);
     last = now_s();
     v->last_activity = last;
+    v->ready_at += last; /* --ready-after-ms counts from the start */
     if (v->klipper) {
         v->booting = 0;
     } else {
@@ -905,8 +1032,8 @@ int main(int argc, char **argv)
             }
         }
     }
-    fprintf(stderr, "ampath-vprinter: received %ld lines, executed %ld commands, %ld RX overruns\n", v->received,
-            v->executed, v->overruns);
+    fprintf(stderr, "ampath-vprinter: received %ld lines, executed %ld commands, %ld RX overruns, %ld moves out of bed\n",
+            v->received, v->executed, v->overruns, v->out_of_bed);
     close_pty(v);
     if (v->logf)
         fclose(v->logf);
