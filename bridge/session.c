@@ -38,7 +38,7 @@ void br_cfg_default(br_cfg *c)
     c->resend_ok = 1;
     c->timeout_ms = 10000;
     c->boot_ms = 3000;
-    c->settle_ms = 30;
+    c->settle_ms = 10;
     c->reconnect_s = 60;
     c->ready_ms = 60000;
     c->learn = 1;

@@ -47,7 +47,7 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
     o->resend_ok = 1;
     o->boot_ms = 3000;
     o->timeout_ms = 10000;
-    o->settle_ms = 30;
+    o->settle_ms = 10;
     o->guard_nl = flavor == AMP_PROTO_MARLIN;
     o->byte_us = 0;
     o->ready_ms = 60000;
@@ -255,6 +255,7 @@ void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
     /* stale error replies of a burst may have been lost with the link: do not wait for them */
     p->rewind_n = -1;
     p->settling = 0;
+    p->echo_budget = 0;
 }
 
 static int has_temp(const char *s);
@@ -329,6 +330,7 @@ static void ack_one(amp_proto *p)
         if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
             p->rewind_n = -1; /* the re-sent line went through: the burst is over */
             p->settling = 0;
+            p->echo_budget = 0;
         }
         emit(p, AMP_EV_ACK, p->acked, p->rx);
     } else {
@@ -485,6 +487,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         }
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         if (m < p->send_n) {
             p->n_rewinds++;
             emit(p, AMP_EV_RESEND, m, p->rx);
@@ -492,12 +495,20 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         p->send_n = m;
         return;
     }
-    if (p->rewind_n == m && p->settling) {
+    if (p->rewind_n == m && (p->settling || p->echo_budget > 0)) {
         /* After an error Marlin drops its receive buffer, so each line sent ahead provokes another
-           request for the same line (or cut tails of lines do): rewind once per burst, not once per
-           error, and keep quiet while the echoes arrive. */
-        if (now + p->o.settle_ms - p->settle_until < (1UL << 30))
-            p->settle_until = now + p->o.settle_ms;
+           request for the same line (or its cut tail does, once): rewind once per burst, not once per
+           error, and keep quiet while the echoes arrive. Each line that was sent after m when we rewound
+           can echo at most once, whenever its echo comes: counting them, not the clock, tells an old
+           burst's echo from a new request (a loaded host once read slow echoes as new requests, rewound
+           on each, and the re-sent lines were cut by the next flush: a livelock). */
+        unsigned long ext = now + p->o.settle_ms + 2 * p->err_lat;
+        if (p->echo_budget > 0)
+            p->echo_budget--;
+        if (p->settling && ext - p->settle_until < (1UL << 30))
+            p->settle_until = ext;
+        if (p->echo_budget == 0)
+            p->settling = 0; /* every line sent ahead has answered: the burst is over, re-send now */
         p->n_dups++;
         emit(p, AMP_EV_RESEND_DUP, m, p->rx);
         return;
@@ -508,13 +519,24 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         p->send_n = m;
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         return;
     }
     for (k = m; k <= p->top_sent && k < p->send_n; k++)
         stale_bytes += p->ring[k & RING_MASK].len;
+    if (p->ring[m & RING_MASK].n == m && m <= p->top_sent) {
+        /* how long the printer took to answer line m: the scale on which the echoes arrive */
+        unsigned long lat = now - p->ring[m & RING_MASK].t_sent;
+        if (lat > p->o.timeout_ms / 4)
+            lat = p->o.timeout_ms / 4;
+        p->err_lat = p->err_lat ? (3 * p->err_lat + lat) / 4 : lat;
+    }
+    p->echo_budget = p->send_n - 1 - m; /* lines sent after m: each echoes at most once */
+    if (p->echo_budget < 0)
+        p->echo_budget = 0;
     p->rewind_n = m;
     p->settling = 1;
-    p->settle_until = now + p->o.settle_ms + stale_bytes * p->o.byte_us / 1000UL;
+    p->settle_until = now + p->o.settle_ms + 2 * p->err_lat + stale_bytes * p->o.byte_us / 1000UL;
     p->send_n = m;
     p->n_rewinds++;
     emit(p, AMP_EV_RESEND, m, p->rx);
@@ -968,6 +990,7 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         p->skip_ok = 0;
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         emit(p, AMP_EV_TIMEOUT, p->send_n - 1, "no reply, probing");
         s = &p->ring[(p->send_n - 1) & RING_MASK];
         p->n_resent++;
@@ -998,6 +1021,7 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         p->n_sent++;
     if (p->send_n > p->top_sent)
         p->top_sent = p->send_n;
+    s->t_sent = now;
     if (p->send_n - 1 == p->acked)
         p->last_rx = now; /* the reply clock starts with the first line in flight */
     p->send_n++;

@@ -544,9 +544,8 @@ static int run_resuming(const vpr *v, const char *job, int *runs, char **outp)
     *runs = 0;
     do {
         const char *p;
-        /* the default settle time: a shorter one lets a loaded machine mistake the echo of an old error
-           burst for a new request, and an ok then looks stale (docs/bridge.md, "Limits") */
-        snprintf(opts, sizeof opts, "--timeout 0.1 --settle-ms 30 --boot-wait 0.2 --baud 1000000 --resume-from %ld", resume);
+        /* the default settle time; the result does not depend on it (settle_time_sweep_...) */
+        snprintf(opts, sizeof opts, "--timeout 0.1 --boot-wait 0.2 --baud 1000000 --resume-from %ld", resume);
         rc = bridge_run(v, job, opts, &out);
         p = strstr(out, "resume with --resume-from ");
         if (rc == 1) {

@@ -258,13 +258,14 @@ static void one_rewind_case(const char *err1, const char *err_stale, int resend_
     ck_assert_int_eq(p.n_rewinds, 1);
     /* quiet while the echoes of the lines sent ahead arrive (each extends the settling time) */
     ck_assert_str_eq(tx(&p, 110), "");
+    /* settle_ms 10 + twice the 10 ms the printer took to answer line 1 */
     ck_assert_int_eq(amp_proto_wait_ms(&p, 110), 30);
     feed1(&p, err_stale, 125); /* for line 2 */
     ck_assert_str_eq(tx(&p, 141), "");
     feed1(&p, err_stale, 150); /* for line 3 */
-    feed1(&p, err_stale, 151); /* for line 4 */
-    ck_assert_str_eq(tx(&p, 180), "");
-    ck_assert_int_eq(num(tx(&p, 181)), 1);
+    ck_assert_str_eq(tx(&p, 151), "");
+    feed1(&p, err_stale, 151); /* for line 4: every line sent ahead has answered, no need to wait longer */
+    ck_assert_int_eq(num(tx(&p, 151)), 1);
     ck_assert_int_eq(num(tx(&p, 181)), 2);
     ck_assert_int_eq(num(tx(&p, 181)), 3);
     ck_assert_int_eq(num(tx(&p, 181)), 4);
@@ -809,6 +810,34 @@ START_TEST(oks_merged_or_garbled_by_a_corrupted_byte_still_count)
 }
 END_TEST
 
+START_TEST(late_echoes_after_the_settling_time_are_still_echoes)
+{
+    /* a loaded host: the echoes of the lines sent ahead come after the settling time ran out and the
+       re-send began; they are still the old burst's (each line sent ahead echoes once), not new requests */
+    amp_proto p;
+    rec r;
+    int i;
+    const char *stale = "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok\n";
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 8);
+    for (i = 1; i <= 4; i++)
+        ck_assert_int_eq(num(tx(&p, 100)), i);
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 110);
+    ck_assert_str_eq(tx(&p, 120), "");
+    ck_assert_int_eq(num(tx(&p, 400)), 1); /* the settling time ran out: re-send */
+    ck_assert_int_eq(num(tx(&p, 400)), 2);
+    feed1(&p, stale, 420);
+    feed1(&p, stale, 440);
+    feed1(&p, stale, 460);
+    ck_assert_int_eq(p.n_rewinds, 1);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND_DUP), 3);
+    /* the budget is spent: a further request for line 1 is a new failure of the re-sent line */
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 480);
+    ck_assert_int_eq(p.n_rewinds, 2);
+    ck_assert_int_eq(p.echo_budget, 1); /* line 2 went out after the re-sent line 1 */
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -840,6 +869,7 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, firmware_errors_are_attributed_to_the_line_in_flight);
     AMP_ADD_TEST(tc, garbled_resend_number_is_taken_from_last_line);
     AMP_ADD_TEST(tc, oks_merged_or_garbled_by_a_corrupted_byte_still_count);
+    AMP_ADD_TEST(tc, late_echoes_after_the_settling_time_are_still_echoes);
     suite_add_tcase(s, tc);
     return s;
 }

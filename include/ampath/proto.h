@@ -13,10 +13,13 @@
  * connection starts with `N0 M110 N0` once the boot banner `start` was seen
  * or did not come. Replies understood: `ok` (plain or ADVANCED_OK
  * `ok N<n> P<p> B<b>`), `Resend: <n>` / `rs <n>` (rewind ONCE per error
- * burst: after a rewind the engine stays silent for a settling time in which
- * the requests provoked by the lines sent ahead arrive and are dropped; each
- * such echo extends it; sending during the burst would only have the printer
- * flush the re-sent lines again), `Error:...`, `echo:busy: processing` (keep-alive), `wait`,
+ * burst: each line that was sent after <n> provokes at most one more request
+ * for <n> (an echo) and those are counted and dropped, whenever they come;
+ * the engine stays silent until all have come or a settling time ran out;
+ * sending during the burst would only have the printer flush the re-sent
+ * lines again), `Error:...` (`Last Line: L` names the line of a garbled
+ * `Resend:`), `ok T:` (M105's answer acknowledges every line up to that M105:
+ * lost oks repaired), `echo:busy: processing` (keep-alive), `wait`,
  * ` T:` temperature reports, `start` (the printer reset: the engine stops and
  * reports the last acknowledged line; it never continues blindly).
  * Klipper flavor: no numbers or checksums, one `ok` per line (also after
@@ -131,8 +134,10 @@ typedef struct amp_proto_opts {
     int resend_ok;              /**< non-zero: an `ok` follows every `Resend:` and is no acknowledgement (Marlin, default 1) */
     unsigned long boot_ms;      /**< wait this long for `start` before the handshake (default 3000) */
     unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
-    unsigned long settle_ms;    /**< after a rewind, wait this long (plus the stale bytes' wire time) for the
-                                     requests the lines sent ahead provoke, before sending again (default 30) */
+    unsigned long settle_ms;    /**< after a rewind, wait at most this long (plus the stale bytes' wire time and
+                                     twice the printer's reply time) for the requests the lines sent ahead provoke,
+                                     before sending again; the wait ends early when every line sent ahead has
+                                     echoed, and an echo that comes later is still counted as one (default 10) */
     int guard_nl;               /**< Marlin: end each line with a second newline (default 1). A corrupted newline
                                      would merge two lines into one that passes the XOR check with odds
                                      1/256; the spare newline keeps them apart (Marlin skips empty lines) */
@@ -148,6 +153,7 @@ typedef struct amp_proto_opts {
 typedef struct amp_proto_slot {
     long n;                             /**< its line number */
     unsigned char len;                  /**< framed bytes including the newline */
+    unsigned long t_sent;               /**< when it was last transmitted (ms) */
     char text[AMP_PROTO_LINE_MAX + 8];  /**< framed line */
 } amp_proto_slot;
 
@@ -162,6 +168,8 @@ typedef struct amp_proto {
     long sync_n;     /**< number used by the pending M110, -1 if none */
     long rewind_n;   /**< target of the current error burst, -1 outside a burst */
     int settling;    /**< in a burst: requests for rewind_n are echoes of lines sent ahead */
+    long echo_budget; /**< echoes still owed by the lines that were sent after rewind_n */
+    unsigned long err_lat; /**< smoothed time from sending a line to the printer's error for it (ms) */
     unsigned long settle_until; /**< end of the settling time */
     int skip_ok;     /**< an ok owed to a Resend is expected */
     int probing;     /**< a probe is out after a timeout */

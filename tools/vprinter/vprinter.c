@@ -498,6 +498,8 @@ static void marlin_line(vp *v, char *s, int over)
     }
     return;
 resend:
+    if (getenv("AMP_VPRINTER_TRACE"))
+        logf_line(v, "# rejected (last %ld): %s\n", v->last_n, s);
     v->rxlen = 0; /* Marlin flushes its RX buffer with the resend request */
     v->linelen = 0;
     if (v->dialect == 2)
