@@ -498,10 +498,21 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
 
 void br_session_status(const br_session *s, char *buf, size_t cap)
 {
-    const char *st = s->stop != BR_RUNNING ? "stopped" : !s->have_job ? "idle" : s->paused ? "paused" : "printing";
-    snprintf(buf, cap, "state=%s job=%s acked=%ld total=%ld sent=%ld last_acked_line=%ld resume_from=%ld stop=%s",
+    int err = s->stop == BR_PRINTER_ERROR || s->stop == BR_PRINTER_ACTION || s->stop == BR_NOT_READY ||
+              (s->stop == BR_SHUTDOWN && s->n_fwerrors > 0); /* a halt the printer reported, not our estop */
+    const char *st = err                     ? "error"
+                     : s->stop != BR_RUNNING ? "stopped"
+                     : !s->have_job          ? "idle"
+                     : s->p.state != AMP_PROTO_RUNNING ? "waiting"
+                     : s->paused             ? "paused"
+                                             : "printing";
+    /* the printer's words last: they contain blanks */
+    snprintf(buf, cap,
+             "state=%s job=%s acked=%ld total=%ld sent=%ld last_acked_line=%ld resume_from=%ld stop=%s errors=%ld "
+             "warnings=%ld error_line=%ld message=%s",
              st, s->have_job ? s->job.path : "-", s->acked_moves, s->have_job ? s->job.total : 0, s->sent_moves,
-             s->last_acked_job_line, s->first_unacked_job_line, s->stop ? br_stop_name(s->stop) : "-");
+             s->last_acked_job_line, s->first_unacked_job_line, s->stop ? br_stop_name(s->stop) : "-", s->n_fwerrors,
+             s->n_warnings, s->err_jobline, s->err_text[0] ? s->err_text : s->waiting[0] ? s->waiting : "-");
 }
 
 void br_session_report(const br_session *s, FILE *f)

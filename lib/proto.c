@@ -569,8 +569,8 @@ static int protocol_error(const char *s)
     for (i = 0; i < sizeof msgs / sizeof msgs[0]; i++) {
         size_t m = strlen(msgs[i]), k = n < m ? n : m;
         /* whole, or cut short by a byte garbled into a line end: compare what there is, allowing one
-           wrong byte in eight */
-        if (fuzzy(s, msgs[i]) + (int)(k / 8) + (k < m ? 0 : 2) >= (int)k)
+           wrong byte in eight and one more (a cut line may be garbled too: "No L)ne") */
+        if (fuzzy(s, msgs[i]) + (int)(k / 8) + (k < m ? (k >= 4) : 2) >= (int)k)
             return 1;
     }
     return 0;
@@ -588,6 +588,23 @@ static void fw_error(amp_proto *p, const char *s)
     emit(p, AMP_EV_FWERROR, p->state == AMP_PROTO_RUNNING ? head_line(p) : 0, s);
 }
 
+/* An `Error:` neither recognisably of the resend protocol nor a halt waits for the next line: Marlin
+   follows a protocol error at once with `Resend:`/`rs`, a firmware error never (on a noisy link a protocol
+   error can be garbled beyond recognition, and must not stop the job). */
+static void settle_pending_error(amp_proto *p, int next_is_resend)
+{
+    if (!p->pend_err)
+        return;
+    p->pend_err = 0;
+    if (next_is_resend) {
+        p->n_garbage++;
+        emit(p, AMP_EV_ERROR, 0, p->pend_text);
+        return;
+    }
+    p->n_fwerrors++;
+    emit(p, AMP_EV_FWERROR, p->pend_line, p->pend_text);
+}
+
 /* `// action:cancel`, `//action:pause`, ... (OctoPrint's action commands, sent by Marlin's host actions). */
 static int action(amp_proto *p, const char *s)
 {
@@ -601,6 +618,7 @@ static int action(amp_proto *p, const char *s)
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
+    settle_pending_error(p, starts(s, "Resend") || starts(s, "resend") || starts(s, "rs ") || fuzzy(s, "Resend:") >= 5);
     if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
         on_ok(p, now);
         if (has_temp(s))
@@ -610,8 +628,10 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
     if (starts(s, "Resend:") || starts(s, "resend:")) {
         if (parse_long(s + 7, &m))
             on_resend(p, m, 1, now);
-        else if (p->last_line >= 0)
-            on_resend(p, p->last_line + 1, 1, now); /* the number is garbled; the error before it named the line */
+        else if (p->last_line >= 1 && p->last_line + 1 <= p->top_sent &&
+                 p->ring[(p->last_line + 1) & RING_MASK].n == p->last_line + 1)
+            on_resend(p, p->last_line + 1, 1, now); /* the number is garbled; the error before it named the line
+                                                       (only a line still kept: never "line 1", a reset) */
         else {
             if (p->o.resend_ok && p->state == AMP_PROTO_RUNNING)
                 p->skip_ok = 1; /* its ok still comes */
@@ -655,10 +675,16 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
             return;
         }
         /* thermal runaway, MINTEMP, kill(), a failed probe...: the command at the head of the queue */
-        fw_error(p, s);
-        if ((strstr(s, "halted") || strstr(s, "kill") || strstr(s, "stopped") || strstr(s, "Stopped")) &&
-            p->state != AMP_PROTO_STOPPED)
-            stop(p, AMP_EV_SHUTDOWN, s);
+        if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "stopped") || strstr(s, "Stopped")) {
+            fw_error(p, s);
+            if (p->state != AMP_PROTO_STOPPED)
+                stop(p, AMP_EV_SHUTDOWN, s);
+            return;
+        }
+        p->pend_err = 1;
+        p->pend_line = p->state == AMP_PROTO_RUNNING ? head_line(p) : 0;
+        strncpy(p->pend_text, s, sizeof p->pend_text - 1);
+        p->pend_text[sizeof p->pend_text - 1] = '\0';
         return;
     }
     if (action(p, s))
@@ -978,6 +1004,7 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         return p->o.flavor == AMP_PROTO_KLIPPER ? klipper_poll(p, now, buf, cap, len) : marlin_sync(p, now, buf, cap, len);
     /* RUNNING */
     if ((p->send_n - 1 > p->acked || p->probing) && now - p->last_rx >= p->o.timeout_ms) {
+        settle_pending_error(p, 0);
         p->n_timeouts++;
         p->last_rx = now;
         if (p->o.flavor == AMP_PROTO_KLIPPER) {
@@ -986,6 +1013,17 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         }
         /* Probe: send the newest line again. The line numbers make this safe: the printer either runs it
            (it was lost) or answers with Resend: <the line it expects>. */
+        if (p->probing && ++p->silent_probes >= 3 &&
+            now - p->probe_t0 >= (3 * p->o.timeout_ms > 30000 ? 3 * p->o.timeout_ms : 30000)) {
+            /* probes unanswered for long, no busy: a halted printer whose last words were garbled (a slow
+               host or printer only costs more probes: the line numbers make them harmless) */
+            stop(p, AMP_EV_FATAL, "the printer answers nothing (probes unanswered for 30 s or more)");
+            return 0;
+        }
+        if (!p->probing) {
+            p->silent_probes = 0;
+            p->probe_t0 = now;
+        }
         p->probing = 1;
         p->skip_ok = 0;
         p->rewind_n = -1;

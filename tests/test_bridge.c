@@ -892,6 +892,28 @@ START_TEST(reset_with_garbled_replies_names_the_lines_that_may_have_run)
 }
 END_TEST
 
+START_TEST(virtual_printer_refuses_what_each_firmware_refuses)
+{
+    vpr v;
+    char *out;
+    const char *job = make_job("job.gcode", 30, "G1 X300 Y100 E0.5");
+    /* Klipper: no move before G28 (the job has none): the first move stops the job, nothing ran */
+    vp_start(&v, "--flavor klipper");
+    ck_assert_int_eq(bridge_run(&v, job, "--flavor klipper --timeout 2", &out), 1);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "job line 5 (G1 X") != NULL && strstr(out, "!! Must home axis first") != NULL, "%s",
+                  out);
+    assert_executed_equals_job(&v, job, 0);
+    /* Marlin clamps a move outside its bed (software endstops) without a word: the log marks it */
+    vp_start(&v, "--bed 200,200,200");
+    ck_assert_int_eq(bridge_run(&v, job, FAST, &out), 0);
+    vp_stop(&v);
+    /* line 14: G90, M82, G92 E0 and ten moves before it */
+    ck_assert_int_eq(count_in_file(v.log, "# out of bed"), 1);
+    ck_assert_int_eq(count_in_file(v.log, "# out of bed: 14 G1 X300"), 1);
+}
+END_TEST
+
 static Suite *bridge_suite(void)
 {
     Suite *s = suite_create("bridge");
@@ -928,6 +950,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, marlin21_and_advanced_ok_with_noise_exactly_once);
     AMP_ADD_TEST(tc, settle_time_sweep_zero_to_fifty_ms_same_exact_result);
     AMP_ADD_TEST(tc, reset_with_garbled_replies_names_the_lines_that_may_have_run);
+    AMP_ADD_TEST(tc, virtual_printer_refuses_what_each_firmware_refuses);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -758,7 +758,7 @@ START_TEST(firmware_errors_are_attributed_to_the_line_in_flight)
     while (*tx(&p, 1))
         ;
     feed1(&p, "Error:checksum mis}atch, Last Line: 0\nResend: 1\nok\nError:Line Numbr is not Last Line Number+1, Last Lxne: 0\n"
-              "Error:No Line\r Number with checksum, Last Line: 0\nError:\n", 2); /* cut by bytes garbled into line ends */
+              "Error:No Line\r Number with checksum, Last Line: 0\nError:\nError:No L)ne\n", 2); /* cut by bytes garbled into line ends */
     ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
     {
         char text[64];
@@ -838,6 +838,47 @@ START_TEST(late_echoes_after_the_settling_time_are_still_echoes)
 }
 END_TEST
 
+START_TEST(a_printer_that_answers_no_probe_stops_the_job)
+{
+    /* a halt whose "Error:Printer halted" was garbled beyond recognition: Marlin then answers nothing */
+    amp_proto p;
+    rec r;
+    unsigned long t;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 2);
+    submit_moves(&p, 3);
+    while (*tx(&p, 100))
+        ;
+    for (t = 100; t < 60000 && p.state != AMP_PROTO_STOPPED; t += 100)
+        tx(&p, t);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_FATAL), 1);
+    /* probes every second (timeout 1 s here) for 30 s, not fewer: a slow printer only costs probes */
+    ck_assert_int_ge(count(&r, AMP_EV_TIMEOUT), 30);
+    ck_assert_int_ge((long)t, 30000);
+}
+END_TEST
+
+START_TEST(an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    /* garbled past recognition, but Marlin follows a protocol error at once with Resend: */
+    feed1(&p, "Error:Lzqe Nxmbr is jot\nResend: 1\nok\n", 2);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
+    while (*tx(&p, 100))
+        ;
+    /* a firmware error is followed by anything else: the line in flight is named */
+    feed1(&p, "ok\nError:Probing Failed\nok\n", 110);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 1);
+    ck_assert_int_eq(r.line[r.n - 2], 2);
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -870,6 +911,8 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, garbled_resend_number_is_taken_from_last_line);
     AMP_ADD_TEST(tc, oks_merged_or_garbled_by_a_corrupted_byte_still_count);
     AMP_ADD_TEST(tc, late_echoes_after_the_settling_time_are_still_echoes);
+    AMP_ADD_TEST(tc, a_printer_that_answers_no_probe_stops_the_job);
+    AMP_ADD_TEST(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
     suite_add_tcase(s, tc);
     return s;
 }

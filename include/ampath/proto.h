@@ -173,6 +173,11 @@ typedef struct amp_proto {
     unsigned long settle_until; /**< end of the settling time */
     int skip_ok;     /**< an ok owed to a Resend is expected */
     int probing;     /**< a probe is out after a timeout */
+    int silent_probes; /**< probes in a row that got no answer (with 30 s or 3 timeouts of silence: AMP_EV_FATAL) */
+    unsigned long probe_t0; /**< when the first of them went out */
+    int pend_err;      /**< an unclassified `Error:` waits for the next line (a `Resend:` makes it protocol) */
+    long pend_line;    /**< the line it hit */
+    char pend_text[AMP_PROTO_RX_MAX + 1];
     int estop;       /**< M112 pending, goes before everything */
     int start_seen;  /**< boot banner seen while connecting */
     int resync;      /**< the M110 must be (re)sent */

@@ -84,6 +84,7 @@ typedef struct vp {
     long busy_at, hangup_after, error_at, shutdown_after, halt_after, action_at;
     const char *action;
     double bed[3], ready_at;
+    double off[3]; /* G92 offsets: bed position = logical position - off (both firmwares check the bed) */
     int homed;
     long out_of_bed;
     unsigned long long rng;
@@ -273,8 +274,8 @@ static int is_cmd(const char *c, const char *name)
 }
 
 /* Commands the modelled firmwares accept (the rest get their unknown-command answer). */
-static const char *const marlin_cmds[] = {"G0", "G1", "G2", "G3", "G4", "G10", "G11", "G28", "G29", "G90", "G91",
-    "G92", "M17", "M18", "M73", "M82", "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114",
+static const char *const marlin_cmds[] = {"G0", "G1", "G2", "G3", "G4", "G10", "G11", "G20", "G21", "G28", "G29",
+    "G90", "G91", "G92", "M17", "M18", "M73", "M82", "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114",
     "M115", "M117", "M140", "M190", "M201", "M203", "M204", "M205", "M220", "M221", "M400", "M500", "M501",
     "M503", "M900", "T0", NULL};
 static const char *const klipper_cmds[] = {"G0", "G1", "G4", "G28", "G90", "G91", "G92", "M18", "M73", "M82",
@@ -298,7 +299,7 @@ static int outside_bed(const vp *v, const double t[3])
 {
     int i;
     for (i = 0; i < 3; i++)
-        if (t[i] < -1e-9 || t[i] > v->bed[i] + 1e-9)
+        if (t[i] - v->off[i] < -1e-6 || t[i] - v->off[i] > v->bed[i] + 1e-6)
             return 1;
     return 0;
 }
@@ -394,12 +395,24 @@ static int execute(vp *v, const char *cmd, long n, double now)
         if (v->plan_count > 0)
             return 0;
     } else if (is_cmd(cmd, "G28")) {
+        /* "G28 X Y" homes X and Y only (the resume preamble must not crash Z into the part) */
+        int all = !strchr(cmd + 3, 'X') && !strchr(cmd + 3, 'Y') && !strchr(cmd + 3, 'Z');
         v->homed = 1;
-        v->x = v->y = v->z = 0;
+        if (all || strchr(cmd + 3, 'X'))
+            v->x = v->off[0] = 0;
+        if (all || strchr(cmd + 3, 'Y'))
+            v->y = v->off[1] = 0;
+        if (all || strchr(cmd + 3, 'Z'))
+            v->z = v->off[2] = 0;
     } else if (is_cmd(cmd, "G92")) {
-        v->x = num_arg(cmd, 'X', v->x, NULL);
-        v->y = num_arg(cmd, 'Y', v->y, NULL);
-        v->z = num_arg(cmd, 'Z', v->z, NULL);
+        double nx = num_arg(cmd, 'X', v->x, NULL), ny = num_arg(cmd, 'Y', v->y, NULL),
+               nz = num_arg(cmd, 'Z', v->z, NULL);
+        v->off[0] += nx - v->x;
+        v->off[1] += ny - v->y;
+        v->off[2] += nz - v->z;
+        v->x = nx;
+        v->y = ny;
+        v->z = nz;
     } else if (is_cmd(cmd, "G90")) {
         v->rel = 0;
     } else if (is_cmd(cmd, "G91")) {
