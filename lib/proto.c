@@ -371,6 +371,11 @@ static void sync_ok(amp_proto *p, const char *s)
     long n = 0, b = 0;
     if (parse_adv(s + 2, &n, &b))
         p->adv_seen = 1;
+    if ((p->sync_phase == 0 || p->sync_phase == 3) && p->skip_ok) {
+        p->skip_ok = 0; /* the Resend's ok: now the M110 goes out again */
+        p->resync = 1;
+        return;
+    }
     if (p->sync_phase == 0 || p->sync_phase == 3) {
         if (p->sync_phase == 0 && p->o.learn && p->learn_fail < 2) {
             p->sync_phase = 1;
@@ -452,8 +457,13 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         if (p->sync_phase == 1 || p->sync_phase == 2) {
             p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
             p->saw_ok = 0;
+            p->skip_ok = 0;    /* the ok after it is what learning looks for */
+            p->resync = 1;
+            return;
         }
-        p->resync = 1; /* phases 0 and 3: the M110 itself was garbled */
+        /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
+           M110's (the job would start one line off): send M110 again only once it is in. */
+        p->resync = !p->skip_ok;
         return;
     }
     if (p->state != AMP_PROTO_RUNNING)
@@ -615,6 +625,55 @@ static int action(amp_proto *p, const char *s)
     return 0;
 }
 
+static void marlin_error(amp_proto *p, const char *s)
+{
+    p->n_errors++;
+    if (protocol_error(s + 6)) {
+        const char *ll = strstr(s, "Line:");
+        if (!(ll && parse_long(ll + 5, &p->last_line)))
+            p->last_line = -1;
+        emit(p, AMP_EV_ERROR, 0, s);
+        return;
+    }
+    /* thermal runaway, MINTEMP, kill(), a failed probe...: the command at the head of the queue */
+    if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "stopped") || strstr(s, "Stopped")) {
+        fw_error(p, s);
+        if (p->state != AMP_PROTO_STOPPED)
+            stop(p, AMP_EV_SHUTDOWN, s);
+        return;
+    }
+    p->pend_err = 1;
+    p->pend_line = p->state == AMP_PROTO_RUNNING ? head_line(p) : 0;
+    strncpy(p->pend_text, s, sizeof p->pend_text - 1);
+    p->pend_text[sizeof p->pend_text - 1] = '\0';
+}
+
+/* Marlin answers an unknown command with an ok. If the text is one of our lines in flight it is a warning
+   for that line; if not, it is the tail of a line cut by an RX flush, and that ok acknowledges nothing. */
+static void marlin_unknown(amp_proto *p, const char *s)
+{
+    const char *q = strchr(s, '"'), *qe = q ? strrchr(q + 1, '"') : NULL;
+    long k;
+    for (k = p->acked + 1; q && qe && k < p->send_n; k++) {
+        const amp_proto_slot *sl = &p->ring[k & RING_MASK];
+        const char *a = memchr(sl->text, ' ', sl->len), *b = NULL;
+        size_t i;
+        for (i = sl->len; i > 0; i--)
+            if (sl->text[i - 1] == '*') {
+                b = sl->text + i - 1;
+                break;
+            }
+        if (a && b && b > a && (size_t)(b - a - 1) == (size_t)(qe - q - 1) &&
+            memcmp(a + 1, q + 1, (size_t)(b - a - 1)) == 0) {
+            p->n_warnings++;
+            emit(p, AMP_EV_WARNING, k, s);
+            return;
+        }
+    }
+    p->skip_ok = 1;
+    emit(p, AMP_EV_INFO, 0, s);
+}
+
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
@@ -653,6 +712,7 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         } else if (p->state == AMP_PROTO_SYNCING) {
             p->resync = 1; /* the banner came late and our M110 went to a booting printer */
             p->sync_phase = 0;
+            p->skip_ok = 0;
         } else if (p->state == AMP_PROTO_RUNNING) {
             if (p->next_n == 1) {
                 p->state = AMP_PROTO_SYNCING;
@@ -666,54 +726,13 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         return;
     }
     if (starts(s, "Error:") || starts(s, "error:")) {
-        p->n_errors++;
-        if (protocol_error(s + 6)) {
-            const char *ll = strstr(s, "Line:");
-            if (!(ll && parse_long(ll + 5, &p->last_line)))
-                p->last_line = -1;
-            emit(p, AMP_EV_ERROR, 0, s);
-            return;
-        }
-        /* thermal runaway, MINTEMP, kill(), a failed probe...: the command at the head of the queue */
-        if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "stopped") || strstr(s, "Stopped")) {
-            fw_error(p, s);
-            if (p->state != AMP_PROTO_STOPPED)
-                stop(p, AMP_EV_SHUTDOWN, s);
-            return;
-        }
-        p->pend_err = 1;
-        p->pend_line = p->state == AMP_PROTO_RUNNING ? head_line(p) : 0;
-        strncpy(p->pend_text, s, sizeof p->pend_text - 1);
-        p->pend_text[sizeof p->pend_text - 1] = '\0';
+        marlin_error(p, s);
         return;
     }
     if (action(p, s))
         return;
     if (starts(s, "echo:Unknown command:") && p->state == AMP_PROTO_RUNNING) {
-        /* Marlin answers an unknown command with an ok. If the text is none of our lines in flight it is the
-           tail of a line cut by an RX flush, and that ok acknowledges nothing of ours. */
-        const char *q = strchr(s, '"'), *qe = q ? strrchr(q + 1, '"') : NULL;
-        long k;
-        int ours = 0;
-        for (k = p->acked + 1; q && qe && k < p->send_n && !ours; k++) {
-            const amp_proto_slot *sl = &p->ring[k & RING_MASK];
-            const char *a = memchr(sl->text, ' ', sl->len), *b = NULL;
-            size_t i;
-            for (i = sl->len; i > 0; i--)
-                if (sl->text[i - 1] == '*') {
-                    b = sl->text + i - 1;
-                    break;
-                }
-            if (a && b && b > a && (size_t)(b - a - 1) == (size_t)(qe - q - 1) && memcmp(a + 1, q + 1, (size_t)(b - a - 1)) == 0)
-                ours = 1;
-        }
-        if (!ours) {
-            p->skip_ok = 1;
-            emit(p, AMP_EV_INFO, 0, s);
-        } else {
-            p->n_warnings++;
-            emit(p, AMP_EV_WARNING, k - 1, s);
-        }
+        marlin_unknown(p, s);
         return;
     }
     if (starts(s, "echo:busy:") || starts(s, "busy:")) {
@@ -926,6 +945,7 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
             p->learn_fail++;
         p->sync_phase = 0; /* start over from M110 */
         p->resync = 1;
+        p->skip_ok = 0;
     }
     if (!p->resync)
         return 0;

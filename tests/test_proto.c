@@ -879,6 +879,35 @@ START_TEST(an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firm
 }
 END_TEST
 
+START_TEST(the_ok_after_a_resend_of_the_m110_is_not_the_m110s)
+{
+    /* found by the reset soak: the final M110 of the handshake garbled, the ok that follows its Resend taken
+       for the M110's, and the whole job ran one line off (a move repeated after the next reset) */
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    tx(&p, 1);
+    feed1(&p, "ok\n", 2);
+    ck_assert_int_eq(num(tx(&p, 3)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 6);
+    ck_assert_str_eq(tx(&p, 7), "N0 M110 N0*125\n");
+    feed1(&p, "Error:checksum mismatch, Last Line: 1\nResend: 2\n", 8);
+    ck_assert_str_eq(tx(&p, 9), ""); /* not before the Resend's ok is in */
+    feed1(&p, "ok\n", 9);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_str_eq(tx(&p, 10), "N0 M110 N0*125\n");
+    feed1(&p, "ok\n", 11);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(amp_proto_submit(&p, "G90", 3, NULL, NULL), AMP_OK);
+    ck_assert_int_eq(num(tx(&p, 12)), 1);
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -913,6 +942,7 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, late_echoes_after_the_settling_time_are_still_echoes);
     AMP_ADD_TEST(tc, a_printer_that_answers_no_probe_stops_the_job);
     AMP_ADD_TEST(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
+    AMP_ADD_TEST(tc, the_ok_after_a_resend_of_the_m110_is_not_the_m110s);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -323,10 +323,34 @@ static void planner_drain(vp *v, double now)
     }
 }
 
+/* G0/G1: 0 while the planner is full (Marlin blocks in the handler until it has room), 1 when planned. */
+static int exec_move(vp *v, const char *cmd, long n, double now)
+{
+    double d, t[3];
+    planner_drain(v, now);
+    if (v->plan_count >= v->planner)
+        return 0;
+    move_target(v, cmd, t);
+    if (outside_bed(v, t)) {
+        v->out_of_bed++; /* Marlin's software endstops clamp the move without a word */
+        logf_line(v, "# out of bed: %ld %s\n", n, cmd);
+    }
+    v->f = num_arg(cmd, 'F', v->f, NULL);
+    d = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+    v->x = t[0];
+    v->y = t[1];
+    v->z = t[2];
+    if (v->speed > 0) {
+        double start = v->plan_count ? v->plan_end[(v->plan_head + v->plan_count - 1) % PLAN_MAX] : now;
+        v->plan_end[(v->plan_head + v->plan_count) % PLAN_MAX] = start + d / v->speed;
+        v->plan_count++;
+    }
+    return 1;
+}
+
 /* Start executing the head command. Returns 1 when it finished (ok sent), 0 while it is still running. */
 static int execute(vp *v, const char *cmd, long n, double now)
 {
-    int seen = 0;
     if (!v->exec_has) {
         v->exec_has = 1;
         v->exec_ready_at = now + v->turnaround;
@@ -363,33 +387,8 @@ static int execute(vp *v, const char *cmd, long n, double now)
     if (now < v->exec_ready_at)
         return 0;
     if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
-        double nx, ny, nz, d, t[3];
-        planner_drain(v, now);
-        if (v->plan_count >= v->planner)
-            return 0; /* Marlin blocks in the handler until the planner has room */
-        move_target(v, cmd, t);
-        if (outside_bed(v, t)) {
-            v->out_of_bed++; /* Marlin's software endstops clamp the move without a word */
-            logf_line(v, "# out of bed: %ld %s\n", n, cmd);
-        }
-        v->f = num_arg(cmd, 'F', v->f, NULL);
-        nx = num_arg(cmd, 'X', v->rel ? 0 : v->x, &seen);
-        ny = num_arg(cmd, 'Y', v->rel ? 0 : v->y, &seen);
-        nz = num_arg(cmd, 'Z', v->rel ? 0 : v->z, &seen);
-        if (v->rel) {
-            nx += v->x;
-            ny += v->y;
-            nz += v->z;
-        }
-        d = sqrt((nx - v->x) * (nx - v->x) + (ny - v->y) * (ny - v->y) + (nz - v->z) * (nz - v->z));
-        v->x = nx;
-        v->y = ny;
-        v->z = nz;
-        if (v->speed > 0) {
-            double start = v->plan_count ? v->plan_end[(v->plan_head + v->plan_count - 1) % PLAN_MAX] : now;
-            v->plan_end[(v->plan_head + v->plan_count) % PLAN_MAX] = start + d / v->speed;
-            v->plan_count++;
-        }
+        if (!exec_move(v, cmd, n, now))
+            return 0;
     } else if (is_cmd(cmd, "M400")) {
         planner_drain(v, now);
         if (v->plan_count > 0)
