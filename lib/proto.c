@@ -358,6 +358,10 @@ static int ack_through_m105(amp_proto *p)
 
 static void become_ready(amp_proto *p)
 {
+    /* an M110 sent again after a timeout may still answer: its ok is no job line's (the job would run one
+       line off and a reset report name the wrong line). Swallowing one too many only delays an ack. */
+    p->stale_oks = p->o.flavor == AMP_PROTO_MARLIN && p->m110_out > 1 ? p->m110_out - 1 : 0;
+    p->m110_out = 0;
     p->state = AMP_PROTO_RUNNING;
     p->resync = 0;
     p->skip_ok = 0;
@@ -380,6 +384,7 @@ static void sync_ok(amp_proto *p, const char *s)
         if (p->sync_phase == 0 && p->o.learn && p->learn_fail < 2) {
             p->sync_phase = 1;
             p->resync = 1;
+            p->m110_out = 0; /* a second answer of a repeated M110 would come now and be ignored (phase 1) */
             return;
         }
         become_ready(p);
@@ -420,6 +425,11 @@ static void on_ok(amp_proto *p, unsigned long now)
     if (p->state != AMP_PROTO_RUNNING)
         return;
     p->last_line = -1;
+    if (p->stale_oks > 0 && p->top_sent <= p->qslots) {
+        p->stale_oks--; /* the answer of a repeated handshake M110 (only near the start of the job) */
+        emit(p, AMP_EV_INFO, 0, p->rx);
+        return;
+    }
     if (p->skip_ok) {
         /* Marlin answers each rejected line with "Resend: n" and an ok that acknowledges nothing */
         p->skip_ok = 0;
@@ -463,6 +473,8 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         }
         /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
            M110's (the job would start one line off): send M110 again only once it is in. */
+        if (p->m110_out > 0)
+            p->m110_out--; /* that M110 is answered */
         p->resync = !p->skip_ok;
         return;
     }
@@ -713,6 +725,7 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
             p->resync = 1; /* the banner came late and our M110 went to a booting printer */
             p->sync_phase = 0;
             p->skip_ok = 0;
+            p->m110_out = 0; /* it answers none of the M110s sent before */
         } else if (p->state == AMP_PROTO_RUNNING) {
             if (p->next_n == 1) {
                 p->state = AMP_PROTO_SYNCING;
@@ -958,6 +971,7 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
         return copy_out(tmp.text, tmp.len, buf, cap, len);
     }
     /* "N<k> M110 N<k>": the printer expects N<k+1> next */
+    p->m110_out++;
     p->sync_n = base;
     memcpy(cmd, "M110 N", 6);
     k = 6 + put_long(cmd + 6, base);

@@ -908,6 +908,29 @@ START_TEST(the_ok_after_a_resend_of_the_m110_is_not_the_m110s)
 }
 END_TEST
 
+START_TEST(a_repeated_m110s_late_ok_is_not_the_first_lines)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    o.learn = 0;
+    o.timeout_ms = 1000;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    ck_assert_str_eq(tx(&p, 1), "N0 M110 N0*125\n");
+    ck_assert_str_eq(tx(&p, 1100), "N0 M110 N0*125\n"); /* no answer in time: again */
+    feed1(&p, "ok\n", 1200);                              /* the first one's, late */
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    submit_moves(&p, 2);
+    ck_assert_int_eq(num(tx(&p, 1201)), 1);
+    feed1(&p, "ok\n", 1210); /* the second M110's */
+    ck_assert_int_eq(p.acked, 0);
+    feed1(&p, "ok\n", 1220);
+    ck_assert_int_eq(p.acked, 1);
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -943,6 +966,7 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, a_printer_that_answers_no_probe_stops_the_job);
     AMP_ADD_TEST(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
     AMP_ADD_TEST(tc, the_ok_after_a_resend_of_the_m110_is_not_the_m110s);
+    AMP_ADD_TEST(tc, a_repeated_m110s_late_ok_is_not_the_first_lines);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -186,6 +186,8 @@ typedef struct amp_proto {
     int verify;      /**< end-of-job check requested (amp_proto_verify) */
     int sync_phase;  /**< handshake step: 0 M110, 1 provoked resend out, 2 `N1 M105` out, 3 final M110 */
     int learn_fail;  /**< handshakes whose learning came to nothing (learning is dropped after 2) */
+    int m110_out;    /**< M110s sent in this handshake step (more than one: the others may still answer) */
+    int stale_oks;   /**< oks of repeated M110s still to come after the handshake; not acknowledgements */
     int saw_ok;      /**< learning: a bare ok came after the provoked Resend */
     int ready_seen;  /**< Klipper: `Klipper state: Ready` seen */
     int adv_seen;    /**< an `ok N.. P.. B..` was seen (the firmware speaks ADVANCED_OK) */
