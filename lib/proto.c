@@ -689,7 +689,13 @@ static void marlin_unknown(amp_proto *p, const char *s)
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
-    settle_pending_error(p, starts(s, "Resend") || starts(s, "resend") || starts(s, "rs ") || fuzzy(s, "Resend:") >= 5);
+    if (p->pend_err) {
+        int rs = starts(s, "Resend") || starts(s, "resend") || starts(s, "rs ") || fuzzy(s, "Resend:") >= 5;
+        /* a fragment (the rest of the error, split off by a byte garbled into a line end) decides nothing */
+        if (rs || starts(s, "ok") || starts(s, "Error:") || starts(s, "error:") || starts(s, "echo:") ||
+            starts(s, "//") || starts(s, "start") || starts(s, "wait") || starts(s, "busy:") || has_temp(s))
+            settle_pending_error(p, rs);
+    }
     if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
         on_ok(p, now);
         if (has_temp(s))

@@ -868,6 +868,8 @@ START_TEST(an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firm
         ;
     /* garbled past recognition, but Marlin follows a protocol error at once with Resend: */
     feed1(&p, "Error:Lzqe Nxmbr is jot\nResend: 1\nok\n", 2);
+    /* ... also when the rest of the garbled error came as a line of its own */
+    feed1(&p, "Error:Li~a\nNumber is nop Last Line Number+1, Last Line: 0\nResend: 1\nok\n", 2);
     ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
     ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
     while (*tx(&p, 100))
