@@ -487,6 +487,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
     }
     if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
         if (m == 1) {
+            emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
             stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
         } else if (m <= p->acked) {
             p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
