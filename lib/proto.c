@@ -323,10 +323,16 @@ static int parse_adv(const char *s, long *n, long *b)
     return have_n && have_b;
 }
 
+/* An ok: the printer ran the next line in order. That line must have been sent, but need not lie before
+   send_n: after a rewind on a request that was an old burst's echo after all, the printer may already hold
+   (and run) lines from the rewind point on; dropping their oks made a whole job lag one line, and a reset
+   report then named a line that had run (found by the reset soak). */
 static void ack_one(amp_proto *p)
 {
-    if (p->acked < p->send_n - 1 && p->acked < p->top_sent) {
+    if (p->acked < p->top_sent) {
         p->acked++;
+        if (p->send_n <= p->acked)
+            p->send_n = p->acked + 1; /* it ran: do not send it again */
         if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
             p->rewind_n = -1; /* the re-sent line went through: the burst is over */
             p->settling = 0;

@@ -933,6 +933,25 @@ START_TEST(a_repeated_m110s_late_ok_is_not_the_first_lines)
 }
 END_TEST
 
+START_TEST(an_ok_after_a_rewind_on_an_echo_still_counts)
+{
+    /* found by the reset soak: a request taken for a new one was an old burst's echo; the printer already
+       held the line and ran it; its ok must count, or the job lags a line and a reset report names a line
+       that ran (resuming there repeats a move) */
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 10);
+    ck_assert_int_eq(p.send_n, 1);
+    feed1(&p, "ok\n", 20); /* line 1 had arrived after all */
+    ck_assert_int_eq(p.acked, 1);
+    ck_assert_int_eq(p.send_n, 2); /* and is not sent again */
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -969,6 +988,7 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
     AMP_ADD_TEST(tc, the_ok_after_a_resend_of_the_m110_is_not_the_m110s);
     AMP_ADD_TEST(tc, a_repeated_m110s_late_ok_is_not_the_first_lines);
+    AMP_ADD_TEST(tc, an_ok_after_a_rewind_on_an_echo_still_counts);
     suite_add_tcase(s, tc);
     return s;
 }
