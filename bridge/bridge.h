@@ -64,7 +64,10 @@ typedef enum br_stop {
     BR_INTERRUPTED, /* SIGINT/SIGTERM */
     BR_CANCELLED,   /* cancel from the control socket */
     BR_LINK_LOST,   /* the device did not come back */
-    BR_JOB_ERROR    /* unreadable job or a line the printer cannot take */
+    BR_JOB_ERROR,   /* unreadable job or a line the printer cannot take */
+    BR_PRINTER_ERROR,  /* Klipper `!!`, Marlin `Error:` outside the resend protocol (unless --on-error continue) */
+    BR_PRINTER_ACTION, /* `// action:cancel` or `// action:pause` from the firmware */
+    BR_NOT_READY       /* the printer did not become ready within --ready-timeout */
 } br_stop;
 
 typedef struct br_cfg {
@@ -75,6 +78,9 @@ typedef struct br_cfg {
     int window, bufsize, rx_bytes, resend_ok;
     unsigned long timeout_ms, boot_ms, settle_ms;
     double reconnect_s; /* how long to wait for a lost device */
+    unsigned long ready_ms; /* --ready-timeout */
+    int on_error_continue;  /* --on-error continue: firmware errors are reported and counted, the job goes on */
+    int learn;              /* Marlin: learn resend-ok / ADVANCED_OK at the handshake */
     FILE *log;          /* protocol log, or NULL */
     int progress;       /* progress line on stderr */
     int quiet;
@@ -91,6 +97,7 @@ typedef struct br_session {
     int have_job;
     br_job job;
     int job_eof;
+    int end_marker; /* the closing M105 was submitted (Marlin) */
     int paused;
     int stopping; /* finish the line in flight, then stop */
     br_stop stop;
@@ -106,6 +113,15 @@ typedef struct br_session {
     double t_start, t_lost, t_progress;
     double rate_t0;
     long rate_n0;
+    /* what the printer said (issue 15) */
+    long n_fwerrors, n_warnings;
+    long err_jobline;          /* job line of the first firmware error (0 = before the job / unknown) */
+    char err_cmd[AMP_PROTO_LINE_MAX + 8], err_text[200];
+    long warn_jobline;
+    char warn_text[200];
+    char waiting[200];         /* the printer's latest words while not ready */
+    char learned[64];          /* dialect learned at the handshake */
+    long maybe_from, maybe_to; /* job lines sent but not acknowledged when the job stopped (may have run) */
 } br_session;
 
 double br_now(void);
@@ -125,5 +141,11 @@ void br_session_close(br_session *s);
 const char *br_stop_name(br_stop st);
 /** One-line status: "state=... job=... acked=N total=M line=L". */
 void br_session_status(const br_session *s, char *buf, size_t cap);
+/**
+ * The end-of-job report (what the one-shot bridge prints on stdout): commands sent and acknowledged,
+ * printer errors and warnings (job line, its text, the printer's words), and for a stop its reason, the
+ * last acknowledged job line, the lines that may have run, and the --resume-from line.
+ */
+void br_session_report(const br_session *s, FILE *f);
 
 #endif

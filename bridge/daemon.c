@@ -48,12 +48,10 @@ typedef struct dstate {
 
 void br_report(const br_session *s, FILE *out)
 {
-    fprintf(out, "sent %ld commands (moves and others), acknowledged %ld\n", s->sent_moves, s->acked_moves);
-    if (s->stop != BR_DONE)
-        fprintf(out, "stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
-                br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,
-                s->first_unacked_job_line);
-    fflush(out);
+    /* one report for the one-shot run and the daemon: firmware errors,
+     * warnings, the learned dialect, the resume line and the lines that may
+     * have run (session.c) */
+    br_session_report(s, out);
 }
 
 static int job_active(const br_session *s)

@@ -25,12 +25,17 @@ static const char usage[] =
     "  --window W           pingpong | N lines in flight | advanced (ADVANCED_OK) (default 4; klipper 16)\n"
     "  --bufsize N          printer command queue, Marlin BUFSIZE (default 4)\n"
     "  --rx-bytes N         printer serial RX buffer in bytes (default 128)\n"
-    "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: it does, as Marlin)\n"
+    "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: learned at the handshake)\n"
+    "  --resend-ok          the firmware sends an ok after 'Resend:' (no learning either)\n"
+    "  --ready-timeout S    wait at most S seconds for the printer to become ready (default 60)\n"
+    "  --on-error E         stop (default): a firmware error (Klipper '!!', Marlin 'Error:' outside the\n"
+    "                       resend protocol) stops the job, exit 1; continue: report and count it, go on\n"
     "  --timeout S          silence (no ok, busy or temperature) before a probe, seconds (default 10)\n"
-"  --settle-ms MS       after a resend request, wait MS (plus the wire time of the lines sent ahead)\n"
-    "                       for the echoes of the same request before sending again (default 30)\n"
+"  --settle-ms MS       after a resend request, wait at most MS (plus the wire time of the lines sent\n"
+    "                       ahead and twice the printer's reply time) for their echoes (default 10)\n"
     "  --boot-wait S        wait for the 'start' banner before the handshake, seconds (default 3)\n"
-    "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60)\n"
+    "  --reconnect S        how long to wait for an unplugged device to return, seconds (default 60);\n"
+    "                       the printer then says which line it expects, so nothing runs twice\n"
     "  --resume-from LINE   start the job at file line LINE after a safe restart (lift, home X Y,\n"
     "                       re-heat, return); use the line the bridge reported when it stopped\n"
     "  --log FILE           protocol log (every line sent and received, events), created 0600\n"
@@ -43,7 +48,8 @@ static const char usage[] =
     "Control socket: one command per line, one reply line ('ok ...' or 'error ...'), or one JSON object:\n"
     "  submit PATH [LINE] | status | pause | resume | cancel | estop | subscribe | unsubscribe | help | quit\n"
     "  (a PATH with spaces in double quotes; {\"cmd\":\"submit\",\"path\":\"/a b/job.gcode\",\"id\":1})\n"
-    "Exit status: 0 job done, 1 job stopped (reset, shutdown, interrupted, device lost), 2 bad usage or input.\n";
+    "Exit status: 0 job done, 1 job stopped (printer error, reset, shutdown, not ready, interrupted, device\n"
+    "lost), 2 bad usage or input.\n";
 
 static volatile sig_atomic_t sig_count;
 static void on_signal(int sig)
@@ -129,7 +135,8 @@ static int one_shot(const br_cfg *cfg, const char *job, long resume_from, int ke
             br_session_request_stop(s, BR_INTERRUPTED);
             t_stop = br_now();
         }
-        if (s->stopping && s->stop == BR_RUNNING && (sig_count > 1 || br_now() - t_stop > limit)) {
+        /* the forced stop is for a signal only: a printer-error stop keeps its own report */
+        if (s->stopping && s->stop == BR_RUNNING && sig_count > 0 && (sig_count > 1 || br_now() - t_stop > limit)) {
             s->stop = BR_INTERRUPTED;
             snprintf(s->stop_text, sizeof s->stop_text, "lines in flight not all acknowledged");
         }
@@ -183,6 +190,23 @@ int main(int argc, char **argv)
             quiet = 1;
         } else if (strcmp(a, "--no-resend-ok") == 0) {
             cfg.resend_ok = 0;
+            cfg.learn = 0;
+        } else if (strcmp(a, "--resend-ok") == 0) {
+            cfg.resend_ok = 1;
+            cfg.learn = 0;
+        } else if (strcmp(a, "--ready-timeout") == 0) {
+            NEEDVAL;
+            if (!parse_num(val, &d) || d <= 0 || d > 86400)
+                return fail("bad --ready-timeout %s", val);
+            cfg.ready_ms = (unsigned long)(d * 1000);
+        } else if (strcmp(a, "--on-error") == 0) {
+            NEEDVAL;
+            if (strcmp(val, "stop") == 0)
+                cfg.on_error_continue = 0;
+            else if (strcmp(val, "continue") == 0)
+                cfg.on_error_continue = 1;
+            else
+                return fail("bad --on-error %s (stop or continue)", val);
         } else if (strcmp(a, "--baud") == 0) {
             NEEDVAL;
             if (!parse_num(val, &d) || d < 50 || d > 4000000)

@@ -38,13 +38,15 @@ void br_cfg_default(br_cfg *c)
     c->resend_ok = 1;
     c->timeout_ms = 10000;
     c->boot_ms = 3000;
-    c->settle_ms = 30;
+    c->settle_ms = 10;
     c->reconnect_s = 60;
+    c->ready_ms = 60000;
+    c->learn = 1;
 }
 
 static const char *const stop_names[] = {"running",     "done",      "printer reset", "printer shutdown",
                                          "protocol failure", "interrupted", "cancelled", "device lost",
-                                         "job error"};
+                                         "job error", "printer error", "printer action", "printer not ready"};
 
 const char *br_stop_name(br_stop st)
 {
@@ -69,8 +71,46 @@ static void set_stop(br_session *s, br_stop st, const char *text)
     if (s->stop != BR_RUNNING)
         return;
     s->stop = st;
-    snprintf(s->stop_text, sizeof s->stop_text, "%s", text ? text : "");
+    if (text && text[0])
+        snprintf(s->stop_text, sizeof s->stop_text, "%s", text);
+    else if (!s->stopping)
+        s->stop_text[0] = '\0'; /* a requested stop keeps the reason it was given */
     logf_(s, "stop: %s %s", br_stop_name(st), s->stop_text);
+}
+
+/* Job line of engine line n (0 for none or a preamble line before any job line). */
+static long job_line_of(const br_session *s, long n)
+{
+    return n > 0 && n > s->p.top_sent - BR_MAP ? s->map[n % BR_MAP] : 0;
+}
+
+/* Firmware error or action: remember the first one with its job line and text, then stop or go on. */
+static void printer_complaint(br_session *s, const amp_proto_event *ev, br_stop why, int fatal)
+{
+    char cmd[AMP_PROTO_LINE_MAX + 8];
+    long jl = job_line_of(s, ev->line);
+    if (!amp_proto_line_text(&s->p, ev->line, cmd, sizeof cmd))
+        cmd[0] = '\0';
+    if (!s->err_text[0]) {
+        s->err_jobline = jl;
+        snprintf(s->err_cmd, sizeof s->err_cmd, "%s", cmd);
+        snprintf(s->err_text, sizeof s->err_text, "%s", ev->text);
+    }
+    if (!s->cfg.quiet && jl > 0)
+        fprintf(stderr, "%sampath-bridge: printer %s at job line %ld (%s): %s\n", s->cfg.progress ? "\n" : "",
+                why == BR_PRINTER_ACTION ? "action" : "error", jl, cmd, ev->text);
+    else if (!s->cfg.quiet) /* nothing in flight: a heater fault, a menu action */
+        fprintf(stderr, "%sampath-bridge: printer %s after job line %ld: %s\n", s->cfg.progress ? "\n" : "",
+                why == BR_PRINTER_ACTION ? "action" : "error", s->last_acked_job_line, ev->text);
+    if (fatal && s->have_job && s->stop == BR_RUNNING) {
+        char msg[sizeof s->stop_text];
+        if (jl > 0)
+            snprintf(msg, sizeof msg, "job line %ld (%s): %s", jl, cmd, ev->text);
+        else
+            snprintf(msg, sizeof msg, "after job line %ld: %s", s->last_acked_job_line, ev->text);
+        br_session_request_stop(s, why);
+        snprintf(s->stop_text, sizeof s->stop_text, "%s", msg); /* kept by set_stop when the lines in flight are done */
+    }
 }
 
 static void on_event(void *user, const amp_proto_event *ev)
@@ -79,9 +119,36 @@ static void on_event(void *user, const amp_proto_event *ev)
     logf_(s, "< %-10s %ld %s", amp_proto_event_name(ev->kind), ev->line, ev->text);
     switch (ev->kind) {
     case AMP_EV_ERROR:
-        if (!s->cfg.quiet)
-            fprintf(stderr, "ampath-bridge: printer: %s\n", ev->text);
+        break; /* the resend protocol's own errors: in the log only */
+    case AMP_EV_FWERROR:
+        s->n_fwerrors++;
+        printer_complaint(s, ev, BR_PRINTER_ERROR, !s->cfg.on_error_continue);
         break;
+    case AMP_EV_ACTION:
+        if (strncmp(ev->text, "cancel", 6) == 0 || strncmp(ev->text, "pause", 5) == 0)
+            printer_complaint(s, ev, BR_PRINTER_ACTION, 1);
+        break;
+    case AMP_EV_WARNING:
+        s->n_warnings++;
+        s->warn_jobline = job_line_of(s, ev->line);
+        snprintf(s->warn_text, sizeof s->warn_text, "%s", ev->text);
+        if (!s->cfg.quiet)
+            fprintf(stderr, "%sampath-bridge: printer warning at job line %ld: %s\n", s->cfg.progress ? "\n" : "",
+                    s->warn_jobline, ev->text);
+        break;
+    case AMP_EV_WAITING:
+        snprintf(s->waiting, sizeof s->waiting, "%s", ev->text);
+        break;
+    case AMP_EV_LEARNED:
+        snprintf(s->learned, sizeof s->learned, "%s", ev->text);
+        break;
+    case AMP_EV_NOTREADY: {
+        char msg[sizeof s->stop_text];
+        snprintf(msg, sizeof msg, "not ready after %.0f s%s%s", (double)s->cfg.ready_ms / 1000.0,
+                 s->waiting[0] ? ": " : "", s->waiting);
+        set_stop(s, BR_NOT_READY, msg);
+        break;
+    }
     case AMP_EV_RESET:
         set_stop(s, BR_RESET, ev->text);
         break;
@@ -169,6 +236,8 @@ int br_session_open(br_session *s, const br_cfg *cfg, char *why, size_t whylen)
     o.settle_ms = cfg->settle_ms;
     o.byte_us = (unsigned long)(10000000L / cfg->baud); /* ptys too: the virtual printer models a wire */
     o.boot_ms = cfg->flavor < 0 ? 0 : cfg->boot_ms; /* detection already waited for the boot */
+    o.ready_ms = cfg->ready_ms;
+    o.learn = cfg->learn;
     o.on_event = on_event;
     o.user = s;
     if (amp_proto_init(&s->p, &o, ms(br_now()), &err) != AMP_OK) {
@@ -193,6 +262,7 @@ int br_session_start_job(br_session *s, const char *path, long resume_from, char
         return -1;
     s->have_job = 1;
     s->job_eof = 0;
+    s->end_marker = 0;
     s->paused = 0;
     s->stopping = 0;
     s->stop = BR_RUNNING;
@@ -205,6 +275,10 @@ int br_session_start_job(br_session *s, const char *path, long resume_from, char
     s->first_unacked_job_line = s->job.first_line;
     s->rate_t0 = br_now();
     s->rate_n0 = 0;
+    s->n_fwerrors = s->n_warnings = 0;
+    s->err_jobline = s->warn_jobline = 0;
+    s->err_cmd[0] = s->err_text[0] = s->warn_text[0] = s->stop_text[0] = '\0';
+    s->maybe_from = s->maybe_to = 0;
     logf_(s, "job %s: %ld commands from line %ld", path, s->job.total, s->job.first_line);
     return 0;
 }
@@ -252,6 +326,14 @@ static void account(br_session *s)
     s->sent_moves = t > 0 ? s->cum[t % BR_MAP] : 0;
     s->last_acked_job_line = a > 0 ? s->map[a % BR_MAP] : 0;
     s->first_unacked_job_line = s->last_acked_job_line > 0 ? s->last_acked_job_line + 1 : s->job.first_line;
+    /* sent but not acknowledged: after a reset or a lost link their fate is unknown (an ok lost on the
+       way, or the line never ran) */
+    if (t > a && s->map[t % BR_MAP] >= s->first_unacked_job_line) {
+        s->maybe_from = s->first_unacked_job_line;
+        s->maybe_to = s->map[t % BR_MAP];
+    } else {
+        s->maybe_from = s->maybe_to = 0;
+    }
 }
 
 /* Fill the engine and the write buffer as far as the window allows. */
@@ -275,6 +357,14 @@ static void pump(br_session *s)
             long jl = 0, n = 0;
             amp_error err;
             int r = br_job_next(&s->job, cmd, sizeof cmd, &jl);
+            if (r == 0 && s->p.o.flavor == AMP_PROTO_MARLIN && !s->end_marker) {
+                /* M105 closes the job: its `ok T:` acknowledges every line before it even when their oks
+                   were garbled on the way, so that a lost last ok costs no timeout (lib/proto.c) */
+                s->end_marker = 1;
+                snprintf(cmd, sizeof cmd, "M105");
+                jl = 0;
+                r = 1;
+            }
             if (r == 0) {
                 s->job_eof = 1;
                 return;
@@ -307,6 +397,12 @@ static void progress(br_session *s, double now, int final)
     if (!s->cfg.progress || !s->have_job || (!final && now - s->t_progress < 0.5))
         return;
     s->t_progress = now;
+    if (s->p.state != AMP_PROTO_RUNNING && s->p.state != AMP_PROTO_STOPPED) {
+        fprintf(stderr, "\rwaiting for the printer to become ready (%.0f s of %.0f)%s%.60s   ", now - s->t_start,
+                (double)s->cfg.ready_ms / 1000.0, s->waiting[0] ? ": " : "", s->waiting);
+        fflush(stderr);
+        return;
+    }
     el = now - s->rate_t0;
     rate = el > 0 ? (double)s->acked_moves / el : 0;
     eta = rate > 0 ? (double)(s->job.total - s->acked_moves) / rate : 0;
@@ -383,7 +479,10 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
         account(s);
     if (s->stop == BR_RUNNING && s->have_job) {
         long inflight = s->p.top_sent - s->p.acked;
-        if (s->job_eof && amp_proto_pending(&s->p) == 0 && s->txlen == 0 && !s->p.probing && !s->p.verify) {
+        if (s->stopping && (inflight <= 0 || s->p.state == AMP_PROTO_STOPPED) && s->txlen == 0)
+            set_stop(s, (br_stop)s->stopping, "");
+        else if (s->job_eof && !s->stopping && amp_proto_pending(&s->p) == 0 && s->txlen == 0 && !s->p.probing &&
+                 !s->p.verify) {
             if (!s->verified && s->p.o.flavor == AMP_PROTO_MARLIN) {
                 /* prove receipt of the last lines before declaring the job done */
                 s->verified = 1;
@@ -393,18 +492,50 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
                 set_stop(s, BR_DONE, "");
             }
         }
-        else if (s->stopping && (inflight <= 0 || s->p.state == AMP_PROTO_STOPPED) && s->txlen == 0)
-            set_stop(s, (br_stop)s->stopping, "");
     }
     progress(s, br_now(), s->stop != BR_RUNNING);
 }
 
 void br_session_status(const br_session *s, char *buf, size_t cap)
 {
-    const char *st = s->stop != BR_RUNNING ? "stopped" : !s->have_job ? "idle" : s->paused ? "paused" : "printing";
-    snprintf(buf, cap, "state=%s job=%s acked=%ld total=%ld sent=%ld last_acked_line=%ld resume_from=%ld stop=%s",
+    int err = s->stop == BR_PRINTER_ERROR || s->stop == BR_PRINTER_ACTION || s->stop == BR_NOT_READY ||
+              (s->stop == BR_SHUTDOWN && s->n_fwerrors > 0); /* a halt the printer reported, not our estop */
+    const char *st = err                     ? "error"
+                     : s->stop != BR_RUNNING ? "stopped"
+                     : !s->have_job          ? "idle"
+                     : s->p.state != AMP_PROTO_RUNNING ? "waiting"
+                     : s->paused             ? "paused"
+                                             : "printing";
+    /* the printer's words last: they contain blanks */
+    snprintf(buf, cap,
+             "state=%s job=%s acked=%ld total=%ld sent=%ld last_acked_line=%ld resume_from=%ld stop=%s errors=%ld "
+             "warnings=%ld error_line=%ld message=%s",
              st, s->have_job ? s->job.path : "-", s->acked_moves, s->have_job ? s->job.total : 0, s->sent_moves,
-             s->last_acked_job_line, s->first_unacked_job_line, s->stop ? br_stop_name(s->stop) : "-");
+             s->last_acked_job_line, s->first_unacked_job_line, s->stop ? br_stop_name(s->stop) : "-", s->n_fwerrors,
+             s->n_warnings, s->err_jobline, s->err_text[0] ? s->err_text : s->waiting[0] ? s->waiting : "-");
+}
+
+void br_session_report(const br_session *s, FILE *f)
+{
+    fprintf(f, "sent %ld commands (moves and others), acknowledged %ld\n", s->sent_moves, s->acked_moves);
+    if (s->learned[0])
+        fprintf(f, "printer dialect: %s\n", s->learned);
+    if (s->n_fwerrors > 0)
+        fprintf(f, "printer errors: %ld%s; first at job line %ld (%s): %s\n", s->n_fwerrors,
+                s->cfg.on_error_continue ? " (--on-error continue)" : "", s->err_jobline,
+                s->err_cmd[0] ? s->err_cmd : "-", s->err_text);
+    if (s->n_warnings > 0)
+        fprintf(f, "printer warnings: %ld; last at job line %ld: %s\n", s->n_warnings, s->warn_jobline, s->warn_text);
+    if (s->stop != BR_DONE) {
+        fprintf(f, "stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
+                br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,
+                s->first_unacked_job_line);
+        if (s->maybe_from > 0 && s->maybe_to >= s->maybe_from)
+            fprintf(f, "lines %ld..%ld may have run: they were sent and their acknowledgement never came "
+                       "(check the part before resuming at %ld or %ld)\n",
+                    s->maybe_from, s->maybe_to, s->maybe_from, s->maybe_to + 1);
+    }
+    fflush(f);
 }
 
 void br_session_close(br_session *s)

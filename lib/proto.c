@@ -15,8 +15,9 @@
 #error "AMP_PROTO_RING must be a power of two"
 #endif
 
-static const char *const ev_names[] = {"ready", "ack",      "resend",  "resend-dup", "error", "busy",
-                                       "temp",  "info",     "reset",   "shutdown",   "timeout", "fatal"};
+static const char *const ev_names[] = {"ready",   "ack",     "resend",  "resend-dup", "error",    "busy",
+                                       "temp",    "info",    "reset",   "shutdown",   "timeout",  "fatal",
+                                       "fwerror", "warning", "action",  "waiting",    "notready", "learned"};
 
 const char *amp_proto_event_name(amp_proto_event_kind k)
 {
@@ -46,9 +47,12 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
     o->resend_ok = 1;
     o->boot_ms = 3000;
     o->timeout_ms = 10000;
-    o->settle_ms = 30;
+    o->settle_ms = 10;
     o->guard_nl = flavor == AMP_PROTO_MARLIN;
     o->byte_us = 0;
+    o->ready_ms = 60000;
+    o->ready_poll_ms = 1000;
+    o->learn = 1;
 }
 
 static void emit(amp_proto *p, amp_proto_event_kind k, long line, const char *text)
@@ -78,14 +82,10 @@ amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long n
     p->send_n = 1;
     p->sync_n = -1;
     p->rewind_n = -1;
+    p->last_line = -1;
     p->qslots = o->bufsize;
     p->last_rx = p->t0 = now_ms;
-    if (o->flavor == AMP_PROTO_KLIPPER) {
-        p->state = AMP_PROTO_RUNNING;
-        emit(p, AMP_EV_READY, 0, NULL);
-    } else {
-        p->state = AMP_PROTO_CONNECTING;
-    }
+    p->state = AMP_PROTO_CONNECTING; /* Klipper too: nothing is sent before it reports Ready */
     return AMP_OK;
 }
 
@@ -255,7 +255,11 @@ void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
     /* stale error replies of a burst may have been lost with the link: do not wait for them */
     p->rewind_n = -1;
     p->settling = 0;
+    p->echo_budget = 0;
 }
+
+static int has_temp(const char *s);
+static int fuzzy(const char *s, const char *pat);
 
 static void stop(amp_proto *p, amp_proto_event_kind k, const char *text)
 {
@@ -319,13 +323,20 @@ static int parse_adv(const char *s, long *n, long *b)
     return have_n && have_b;
 }
 
+/* An ok: the printer ran the next line in order. That line must have been sent, but need not lie before
+   send_n: after a rewind on a request that was an old burst's echo after all, the printer may already hold
+   (and run) lines from the rewind point on; dropping their oks made a whole job lag one line, and a reset
+   report then named a line that had run (found by the reset soak). */
 static void ack_one(amp_proto *p)
 {
-    if (p->acked < p->send_n - 1 && p->acked < p->top_sent) {
+    if (p->acked < p->top_sent) {
         p->acked++;
+        if (p->send_n <= p->acked)
+            p->send_n = p->acked + 1; /* it ran: do not send it again */
         if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
             p->rewind_n = -1; /* the re-sent line went through: the burst is over */
             p->settling = 0;
+            p->echo_budget = 0;
         }
         emit(p, AMP_EV_ACK, p->acked, p->rx);
     } else {
@@ -334,25 +345,105 @@ static void ack_one(amp_proto *p)
     }
 }
 
+/* `ok T:` is M105's answer and nothing else's: it acknowledges the oldest M105 in flight and, since Marlin
+   runs commands in order, every line before it, whose oks may have been garbled away. Returns 1 if used. */
+static int ack_through_m105(amp_proto *p)
+{
+    long k;
+    for (k = p->acked + 1; k <= p->top_sent && k < p->send_n; k++) {
+        const amp_proto_slot *sl = &p->ring[k & RING_MASK];
+        const char *sp = memchr(sl->text, ' ', sl->len);
+        if (sl->n == k && sp && strncmp(sp + 1, "M105*", 5) == 0) {
+            while (p->acked < k)
+                ack_one(p);
+            return 1;
+        }
+    }
+    return 0;
+}
+
+static void become_ready(amp_proto *p)
+{
+    /* an M110 sent again after a timeout may still answer: its ok is no job line's (the job would run one
+       line off and a reset report name the wrong line). Swallowing one too many only delays an ack. */
+    p->stale_oks = p->o.flavor == AMP_PROTO_MARLIN && p->m110_out > 1 ? p->m110_out - 1 : 0;
+    p->m110_out = 0;
+    p->state = AMP_PROTO_RUNNING;
+    p->resync = 0;
+    p->skip_ok = 0;
+    p->last_line = -1;
+    emit(p, AMP_EV_READY, 0, p->rx);
+}
+
+/* Marlin handshake (see proto.h, "Readiness"): the ok of M110, then the provoked resend and M105. */
+static void sync_ok(amp_proto *p, const char *s)
+{
+    long n = 0, b = 0;
+    if (parse_adv(s + 2, &n, &b))
+        p->adv_seen = 1;
+    if ((p->sync_phase == 0 || p->sync_phase == 3) && p->skip_ok) {
+        p->skip_ok = 0; /* the Resend's ok: now the M110 goes out again */
+        p->resync = 1;
+        return;
+    }
+    if (p->sync_phase == 0 || p->sync_phase == 3) {
+        if (p->sync_phase == 0 && p->o.learn && p->learn_fail < 2) {
+            p->sync_phase = 1;
+            p->resync = 1;
+            p->m110_out = 0; /* a second answer of a repeated M110 would come now and be ignored (phase 1) */
+            return;
+        }
+        become_ready(p);
+        return;
+    }
+    if (p->sync_phase != 2)
+        return; /* phase 1: an ok before the provoked Resend is stale */
+    if (!has_temp(s)) {
+        if (p->saw_ok == 0)
+            p->saw_ok = 1; /* the ok Marlin sends after Resend: (M105's own ok carries T:) */
+        return;
+    }
+    if (p->saw_ok == 2) {
+        /* a garbled line came between the Resend and M105's answer: it may have been the ok; ask again */
+        p->learn_fail++;
+        p->sync_phase = p->learn_fail < 2 ? 1 : 3;
+        p->resync = 1;
+        return;
+    }
+    p->o.resend_ok = p->saw_ok == 1;
+    if (p->o.mode == AMP_PROTO_ADVANCED && !p->adv_seen)
+        p->o.mode = AMP_PROTO_FIXED; /* ADVANCED_OK asked for, not spoken: the fixed window */
+    emit(p, AMP_EV_LEARNED, p->o.resend_ok,
+         p->o.resend_ok ? (p->adv_seen ? "resend-ok=1 advanced-ok=1" : "resend-ok=1 advanced-ok=0")
+                        : (p->adv_seen ? "resend-ok=0 advanced-ok=1" : "resend-ok=0 advanced-ok=0"));
+    p->sync_phase = 3; /* M110 again: M105 used line 1 */
+    p->resync = 1;
+}
+
 static void on_ok(amp_proto *p, unsigned long now)
 {
     long n = 0, b = 0;
     p->last_rx = now;
     if (p->state == AMP_PROTO_SYNCING) {
-        p->state = AMP_PROTO_RUNNING;
-        p->resync = 0;
-        p->skip_ok = 0;
-        emit(p, AMP_EV_READY, 0, p->rx);
+        sync_ok(p, p->rx);
         return;
     }
     if (p->state != AMP_PROTO_RUNNING)
         return;
+    p->last_line = -1;
+    if (p->stale_oks > 0 && p->top_sent <= p->qslots) {
+        p->stale_oks--; /* the answer of a repeated handshake M110 (only near the start of the job) */
+        emit(p, AMP_EV_INFO, 0, p->rx);
+        return;
+    }
     if (p->skip_ok) {
         /* Marlin answers each rejected line with "Resend: n" and an ok that acknowledges nothing */
         p->skip_ok = 0;
         return;
     }
     p->probing = 0;
+    if (has_temp(p->rx) && ack_through_m105(p))
+        return;
     ack_one(p);
     if (p->o.mode == AMP_PROTO_ADVANCED && p->o.flavor == AMP_PROTO_MARLIN && parse_adv(p->rx + 2, &n, &b) &&
         n >= p->acked) {
@@ -377,8 +468,20 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
     p->last_rx = now;
     if (with_ok && p->o.resend_ok)
         p->skip_ok = 1;
+    p->last_line = -1;
     if (p->state == AMP_PROTO_SYNCING) {
-        p->resync = 1; /* the M110 itself was garbled */
+        if (p->sync_phase == 1 || p->sync_phase == 2) {
+            p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
+            p->saw_ok = 0;
+            p->skip_ok = 0;    /* the ok after it is what learning looks for */
+            p->resync = 1;
+            return;
+        }
+        /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
+           M110's (the job would start one line off): send M110 again only once it is in. */
+        if (p->m110_out > 0)
+            p->m110_out--; /* that M110 is answered */
+        p->resync = !p->skip_ok;
         return;
     }
     if (p->state != AMP_PROTO_RUNNING)
@@ -390,6 +493,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
     }
     if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
         if (m == 1) {
+            emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
             stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
         } else if (m <= p->acked) {
             p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
@@ -412,6 +516,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         }
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         if (m < p->send_n) {
             p->n_rewinds++;
             emit(p, AMP_EV_RESEND, m, p->rx);
@@ -419,12 +524,20 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         p->send_n = m;
         return;
     }
-    if (p->rewind_n == m && p->settling) {
+    if (p->rewind_n == m && (p->settling || p->echo_budget > 0)) {
         /* After an error Marlin drops its receive buffer, so each line sent ahead provokes another
-           request for the same line (or cut tails of lines do): rewind once per burst, not once per
-           error, and keep quiet while the echoes arrive. */
-        if (now + p->o.settle_ms - p->settle_until < (1UL << 30))
-            p->settle_until = now + p->o.settle_ms;
+           request for the same line (or its cut tail does, once): rewind once per burst, not once per
+           error, and keep quiet while the echoes arrive. Each line that was sent after m when we rewound
+           can echo at most once, whenever its echo comes: counting them, not the clock, tells an old
+           burst's echo from a new request (a loaded host once read slow echoes as new requests, rewound
+           on each, and the re-sent lines were cut by the next flush: a livelock). */
+        unsigned long ext = now + p->o.settle_ms + 2 * p->err_lat;
+        if (p->echo_budget > 0)
+            p->echo_budget--;
+        if (p->settling && ext - p->settle_until < (1UL << 30))
+            p->settle_until = ext;
+        if (p->echo_budget == 0)
+            p->settling = 0; /* every line sent ahead has answered: the burst is over, re-send now */
         p->n_dups++;
         emit(p, AMP_EV_RESEND_DUP, m, p->rx);
         return;
@@ -435,13 +548,24 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         p->send_n = m;
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         return;
     }
     for (k = m; k <= p->top_sent && k < p->send_n; k++)
         stale_bytes += p->ring[k & RING_MASK].len;
+    if (p->ring[m & RING_MASK].n == m && m <= p->top_sent) {
+        /* how long the printer took to answer line m: the scale on which the echoes arrive */
+        unsigned long lat = now - p->ring[m & RING_MASK].t_sent;
+        if (lat > p->o.timeout_ms / 4)
+            lat = p->o.timeout_ms / 4;
+        p->err_lat = p->err_lat ? (3 * p->err_lat + lat) / 4 : lat;
+    }
+    p->echo_budget = p->send_n - 1 - m; /* lines sent after m: each echoes at most once */
+    if (p->echo_budget < 0)
+        p->echo_budget = 0;
     p->rewind_n = m;
     p->settling = 1;
-    p->settle_until = now + p->o.settle_ms + stale_bytes * p->o.byte_us / 1000UL;
+    p->settle_until = now + p->o.settle_ms + 2 * p->err_lat + stale_bytes * p->o.byte_us / 1000UL;
     p->send_n = m;
     p->n_rewinds++;
     emit(p, AMP_EV_RESEND, m, p->rx);
@@ -461,9 +585,124 @@ static int has_temp(const char *s)
     return strstr(s, " T:") != NULL || starts(s, "T:") || starts(s, "B:");
 }
 
+/* An `Error:` text (after the prefix) of the line-number/checksum protocol? Fuzzy, because on a noisy link
+   a garbled protocol error must not pass for a firmware error that stops the job. */
+static int protocol_error(const char *s)
+{
+    static const char *const msgs[] = {"Line Number is not Last Line Number+1", "checksum mismatch",
+                                       "No Checksum with line number", "No Line Number with checksum",
+                                       "Wrong checksum", "Missing checksum", "expected line"};
+    size_t i, n = strlen(s);
+    if (strstr(s, "Last Line") || strstr(s, "ast Line:"))
+        return 1;
+    for (i = 0; i < sizeof msgs / sizeof msgs[0]; i++) {
+        size_t m = strlen(msgs[i]), k = n < m ? n : m;
+        /* whole, or cut short by a byte garbled into a line end: compare what there is, allowing one
+           wrong byte in eight and one more (a cut line may be garbled too: "No L)ne") */
+        if (fuzzy(s, msgs[i]) + (int)(k / 8) + (k < m ? (k >= 4) : 2) >= (int)k)
+            return 1;
+    }
+    return 0;
+}
+
+/* The oldest line in flight: both firmwares report an error while running the command whose ok comes next. */
+static long head_line(const amp_proto *p)
+{
+    return p->acked < p->top_sent ? p->acked + 1 : 0;
+}
+
+static void fw_error(amp_proto *p, const char *s)
+{
+    p->n_fwerrors++;
+    emit(p, AMP_EV_FWERROR, p->state == AMP_PROTO_RUNNING ? head_line(p) : 0, s);
+}
+
+/* An `Error:` neither recognisably of the resend protocol nor a halt waits for the next line: Marlin
+   follows a protocol error at once with `Resend:`/`rs`, a firmware error never (on a noisy link a protocol
+   error can be garbled beyond recognition, and must not stop the job). */
+static void settle_pending_error(amp_proto *p, int next_is_resend)
+{
+    if (!p->pend_err)
+        return;
+    p->pend_err = 0;
+    if (next_is_resend) {
+        p->n_garbage++;
+        emit(p, AMP_EV_ERROR, 0, p->pend_text);
+        return;
+    }
+    p->n_fwerrors++;
+    emit(p, AMP_EV_FWERROR, p->pend_line, p->pend_text);
+}
+
+/* `// action:cancel`, `//action:pause`, ... (OctoPrint's action commands, sent by Marlin's host actions). */
+static int action(amp_proto *p, const char *s)
+{
+    if (starts(s, "// action:") || starts(s, "//action:")) {
+        emit(p, AMP_EV_ACTION, p->state == AMP_PROTO_RUNNING ? head_line(p) : 0, strchr(s, ':') + 1);
+        return 1;
+    }
+    return 0;
+}
+
+static void marlin_error(amp_proto *p, const char *s)
+{
+    p->n_errors++;
+    if (protocol_error(s + 6)) {
+        const char *ll = strstr(s, "Line:");
+        if (!(ll && parse_long(ll + 5, &p->last_line)))
+            p->last_line = -1;
+        emit(p, AMP_EV_ERROR, 0, s);
+        return;
+    }
+    /* thermal runaway, MINTEMP, kill(), a failed probe...: the command at the head of the queue */
+    if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "stopped") || strstr(s, "Stopped")) {
+        fw_error(p, s);
+        if (p->state != AMP_PROTO_STOPPED)
+            stop(p, AMP_EV_SHUTDOWN, s);
+        return;
+    }
+    p->pend_err = 1;
+    p->pend_line = p->state == AMP_PROTO_RUNNING ? head_line(p) : 0;
+    strncpy(p->pend_text, s, sizeof p->pend_text - 1);
+    p->pend_text[sizeof p->pend_text - 1] = '\0';
+}
+
+/* Marlin answers an unknown command with an ok. If the text is one of our lines in flight it is a warning
+   for that line; if not, it is the tail of a line cut by an RX flush, and that ok acknowledges nothing. */
+static void marlin_unknown(amp_proto *p, const char *s)
+{
+    const char *q = strchr(s, '"'), *qe = q ? strrchr(q + 1, '"') : NULL;
+    long k;
+    for (k = p->acked + 1; q && qe && k < p->send_n; k++) {
+        const amp_proto_slot *sl = &p->ring[k & RING_MASK];
+        const char *a = memchr(sl->text, ' ', sl->len), *b = NULL;
+        size_t i;
+        for (i = sl->len; i > 0; i--)
+            if (sl->text[i - 1] == '*') {
+                b = sl->text + i - 1;
+                break;
+            }
+        if (a && b && b > a && (size_t)(b - a - 1) == (size_t)(qe - q - 1) &&
+            memcmp(a + 1, q + 1, (size_t)(b - a - 1)) == 0) {
+            p->n_warnings++;
+            emit(p, AMP_EV_WARNING, k, s);
+            return;
+        }
+    }
+    p->skip_ok = 1;
+    emit(p, AMP_EV_INFO, 0, s);
+}
+
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
+    if (p->pend_err) {
+        int rs = starts(s, "Resend") || starts(s, "resend") || starts(s, "rs ") || fuzzy(s, "Resend:") >= 5;
+        /* a fragment (the rest of the error, split off by a byte garbled into a line end) decides nothing */
+        if (rs || starts(s, "ok") || starts(s, "Error:") || starts(s, "error:") || starts(s, "echo:") ||
+            starts(s, "//") || starts(s, "start") || starts(s, "wait") || starts(s, "busy:") || has_temp(s))
+            settle_pending_error(p, rs);
+    }
     if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
         on_ok(p, now);
         if (has_temp(s))
@@ -473,6 +712,10 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
     if (starts(s, "Resend:") || starts(s, "resend:")) {
         if (parse_long(s + 7, &m))
             on_resend(p, m, 1, now);
+        else if (p->last_line >= 1 && p->last_line + 1 <= p->top_sent &&
+                 p->ring[(p->last_line + 1) & RING_MASK].n == p->last_line + 1)
+            on_resend(p, p->last_line + 1, 1, now); /* the number is garbled; the error before it named the line
+                                                       (only a line still kept: never "line 1", a reset) */
         else {
             if (p->o.resend_ok && p->state == AMP_PROTO_RUNNING)
                 p->skip_ok = 1; /* its ok still comes */
@@ -493,10 +736,14 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
             p->start_seen = 1;
         } else if (p->state == AMP_PROTO_SYNCING) {
             p->resync = 1; /* the banner came late and our M110 went to a booting printer */
+            p->sync_phase = 0;
+            p->skip_ok = 0;
+            p->m110_out = 0; /* it answers none of the M110s sent before */
         } else if (p->state == AMP_PROTO_RUNNING) {
             if (p->next_n == 1) {
                 p->state = AMP_PROTO_SYNCING;
                 p->resync = 1;
+                p->sync_phase = 0;
             } else {
                 /* the printer lost its queue and position: never continue blindly */
                 stop(p, AMP_EV_RESET, s);
@@ -505,33 +752,13 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         return;
     }
     if (starts(s, "Error:") || starts(s, "error:")) {
-        p->n_errors++;
-        emit(p, AMP_EV_ERROR, 0, s);
-        if (strstr(s, "halted") || strstr(s, "kill") || strstr(s, "Printer stopped"))
-            stop(p, AMP_EV_SHUTDOWN, s);
+        marlin_error(p, s);
         return;
     }
+    if (action(p, s))
+        return;
     if (starts(s, "echo:Unknown command:") && p->state == AMP_PROTO_RUNNING) {
-        /* Marlin answers an unknown command with an ok. If the text is none of our lines in flight it is the
-           tail of a line cut by an RX flush, and that ok acknowledges nothing of ours. */
-        const char *q = strchr(s, '"'), *qe = q ? strrchr(q + 1, '"') : NULL;
-        long k;
-        int ours = 0;
-        for (k = p->acked + 1; q && qe && k < p->send_n && !ours; k++) {
-            const amp_proto_slot *sl = &p->ring[k & RING_MASK];
-            const char *a = memchr(sl->text, ' ', sl->len), *b = NULL;
-            size_t i;
-            for (i = sl->len; i > 0; i--)
-                if (sl->text[i - 1] == '*') {
-                    b = sl->text + i - 1;
-                    break;
-                }
-            if (a && b && b > a && (size_t)(b - a - 1) == (size_t)(qe - q - 1) && memcmp(a + 1, q + 1, (size_t)(b - a - 1)) == 0)
-                ours = 1;
-        }
-        if (!ours)
-            p->skip_ok = 1;
-        emit(p, AMP_EV_ERROR, 0, s);
+        marlin_unknown(p, s);
         return;
     }
     if (starts(s, "echo:busy:") || starts(s, "busy:")) {
@@ -554,6 +781,8 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
     }
     if (!starts(s, "echo:") && !starts(s, "//")) {
         p->n_garbage++;
+        if (p->state == AMP_PROTO_SYNCING && p->sync_phase == 2)
+            p->saw_ok = 2; /* could have been the ok after Resend: learning is inconclusive */
         if (p->o.resend_ok && p->state == AMP_PROTO_RUNNING && fuzzy(s, "Resend:") >= 5) {
             /* a garbled "Resend:": its ok must not count as an acknowledgement (an ok too few is
                repaired by the probe, an ok too many could hide a lost line) */
@@ -573,23 +802,50 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 
 static void handle_klipper(amp_proto *p, const char *s, unsigned long now)
 {
+    int syncing = p->state == AMP_PROTO_SYNCING;
     if (s[0] == 'o' && s[1] == 'k' && (s[2] == '\0' || s[2] == ' ')) {
         p->last_rx = now;
-        if (p->state == AMP_PROTO_RUNNING)
+        if (p->state == AMP_PROTO_RUNNING) {
             ack_one(p);
+        } else if (syncing && p->sync_n > 0) {
+            /* the ok of our STATUS: ready, or ask again after ready_poll_ms */
+            p->sync_n = 0;
+            if (p->ready_seen)
+                become_ready(p);
+            else
+                p->next_poll = now + p->o.ready_poll_ms;
+        }
         return;
     }
-    if (starts(s, "!!")) {
-        /* the failed command still gets its ok */
-        p->n_errors++;
-        emit(p, AMP_EV_ERROR, 0, s);
+    if (syncing && (starts(s, "!!") || starts(s, "//"))) {
+        /* STATUS answers `// Klipper state: Ready`, or `!! <why>` and `!! Klipper state: Not ready` */
+        if (strstr(s, "Klipper state: Ready"))
+            p->ready_seen = 1;
+        else if (starts(s, "!!") || strstr(s, "Klipper state:"))
+            emit(p, AMP_EV_WAITING, 0, s);
+        else
+            emit(p, AMP_EV_INFO, 0, s);
         return;
     }
-    if (starts(s, "// Klipper state: Shutdown")) {
+    if (strstr(s, "Klipper state: Shutdown") && (starts(s, "//") || starts(s, "!!"))) {
         if (p->state != AMP_PROTO_STOPPED)
             stop(p, AMP_EV_SHUTDOWN, s);
         return;
     }
+    if (starts(s, "!!")) {
+        /* "!! Move out of range", "!! Must home axis first", "!! Printer is not ready" (a restart underneath
+           us), a macro's error: the failed command still gets its ok, the host decides what happens next */
+        p->n_errors++;
+        fw_error(p, s);
+        return;
+    }
+    if (starts(s, "// Unknown command")) {
+        p->n_warnings++;
+        emit(p, AMP_EV_WARNING, head_line(p), s);
+        return;
+    }
+    if (action(p, s))
+        return;
     if (has_temp(s)) {
         p->last_rx = now;
         emit(p, AMP_EV_TEMP, 0, s);
@@ -598,15 +854,46 @@ static void handle_klipper(amp_proto *p, const char *s, unsigned long now)
     emit(p, AMP_EV_INFO, 0, s);
 }
 
+/* A Marlin reply line that two replies became when the newline between them was garbled: an `ok` next to
+   a control character (Marlin prints none). Splits it in place and handles both parts; 0 if not such a line.
+   Only next to an `ok`: a control character inside a number must keep that number unparseable. */
+static int split_merged(amp_proto *p, char *s, unsigned long now)
+{
+    size_t i, n = strlen(s);
+    for (i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)s[i];
+        int ctl = (c < 0x20 && c != '\t') || c == 0x7f;
+        if (!ctl)
+            continue;
+        if ((i == 2 && s[0] == 'o' && s[1] == 'k') ||
+            (s[i + 1] == 'o' && s[i + 2] == 'k' && (s[i + 3] == '\0' || s[i + 3] == ' '))) {
+            s[i] = '\0';
+            handle_marlin(p, s, now);
+            handle_marlin(p, s + i + 1, now);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 static void handle_line(amp_proto *p, unsigned long now)
 {
-    const char *s = p->rx;
+    char *s = p->rx;
     while (*s == ' ' && s[1] == ' ')
         s++;
-    if (p->o.flavor == AMP_PROTO_MARLIN)
-        handle_marlin(p, s, now);
-    else
+    if (p->o.flavor == AMP_PROTO_KLIPPER) {
         handle_klipper(p, s, now);
+        return;
+    }
+    if (split_merged(p, s, now))
+        return;
+    if (strlen(s) == 2 && (s[0] == 'o' || s[1] == 'k')) {
+        /* "ok" with one byte garbled: Marlin sends no other two-byte line, and a lost ok stalls the window
+           until the timeout probe */
+        s[0] = 'o';
+        s[1] = 'k';
+    }
+    handle_marlin(p, s, now);
 }
 
 void amp_proto_feed(amp_proto *p, const char *bytes, size_t n, unsigned long now_ms)
@@ -658,6 +945,85 @@ static int copy_out(const char *src, size_t n, char *buf, size_t cap, size_t *le
     return 1;
 }
 
+/* Klipper readiness: `STATUS` now and then until it answers Ready (a reply lost: again after the timeout). */
+static int klipper_poll(amp_proto *p, unsigned long now, char *buf, size_t cap, size_t *len)
+{
+    if (p->sync_n > 0 && now - p->last_rx >= p->o.timeout_ms)
+        p->sync_n = 0;
+    if (p->sync_n > 0 || now - p->next_poll >= (1UL << 30))
+        return 0; /* a STATUS is out, or the next one is not due (wrap-safe) */
+    p->sync_n = 1;
+    p->last_rx = now;
+    return copy_out("STATUS\n", 7, buf, cap, len);
+}
+
+/* Marlin handshake line of the current phase (proto.h, "Readiness"). */
+static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, size_t *len)
+{
+    amp_proto_slot tmp;
+    char cmd[32];
+    size_t k;
+    long base = p->next_n - 1;
+    if (!p->resync && now - p->last_rx >= p->o.timeout_ms) {
+        p->n_timeouts++;
+        emit(p, AMP_EV_TIMEOUT, 0, "no answer during the handshake");
+        if (p->sync_phase == 1 || p->sync_phase == 2)
+            p->learn_fail++;
+        p->sync_phase = 0; /* start over from M110 */
+        p->resync = 1;
+        p->skip_ok = 0;
+    }
+    if (!p->resync)
+        return 0;
+    p->resync = 0;
+    p->last_rx = now;
+    if (p->sync_phase == 1 || p->sync_phase == 2) {
+        /* phase 1: N<base+2> where base+1 is expected provokes a resend; phase 2: N<base+1> M105 */
+        p->sync_n = base + (p->sync_phase == 1 ? 2 : 1);
+        frame(p, &tmp, p->sync_n, "M105", 4);
+        return copy_out(tmp.text, tmp.len, buf, cap, len);
+    }
+    /* "N<k> M110 N<k>": the printer expects N<k+1> next */
+    p->m110_out++;
+    p->sync_n = base;
+    memcpy(cmd, "M110 N", 6);
+    k = 6 + put_long(cmd + 6, base);
+    frame(p, &tmp, base, cmd, k);
+    return copy_out(tmp.text, tmp.len, buf, cap, len);
+}
+
+int amp_proto_line_text(const amp_proto *p, long n, char *buf, size_t cap)
+{
+    const amp_proto_slot *sl;
+    const char *a, *b;
+    size_t k;
+    if (!cap)
+        return 0;
+    buf[0] = '\0';
+    if (n < 1 || n >= p->next_n)
+        return 0;
+    sl = &p->ring[n & RING_MASK];
+    if (sl->n != n)
+        return 0;
+    a = sl->text;
+    b = sl->text + sl->len;
+    while (b > a && (b[-1] == '\n'))
+        b--;
+    if (p->o.flavor == AMP_PROTO_MARLIN) {
+        const char *sp = memchr(a, ' ', (size_t)(b - a)), *st = b;
+        while (st > a && st[-1] != '*')
+            st--;
+        if (sp && st > sp + 1) {
+            a = sp + 1;
+            b = st - 1;
+        }
+    }
+    k = (size_t)(b - a) < cap - 1 ? (size_t)(b - a) : cap - 1;
+    memcpy(buf, a, k);
+    buf[k] = '\0';
+    return 1;
+}
+
 int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, size_t *len)
 {
     amp_proto_slot *s;
@@ -669,36 +1035,23 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
     }
     if (p->state == AMP_PROTO_STOPPED)
         return 0;
+    if (p->state != AMP_PROTO_RUNNING && p->o.ready_ms && now - p->t0 >= p->o.ready_ms) {
+        stop(p, AMP_EV_NOTREADY, "the printer did not become ready in time");
+        return 0;
+    }
     if (p->state == AMP_PROTO_CONNECTING) {
-        if (!p->start_seen && now - p->t0 < p->o.boot_ms)
+        if (p->o.flavor == AMP_PROTO_MARLIN && !p->start_seen && now - p->t0 < p->o.boot_ms)
             return 0;
         p->state = AMP_PROTO_SYNCING;
         p->resync = 1;
+        p->sync_phase = 0;
+        p->next_poll = now;
     }
-    if (p->state == AMP_PROTO_SYNCING) {
-        amp_proto_slot tmp;
-        if (!p->resync && now - p->last_rx >= p->o.timeout_ms) {
-            p->n_timeouts++;
-            emit(p, AMP_EV_TIMEOUT, 0, "no answer to M110");
-            p->resync = 1;
-        }
-        if (!p->resync)
-            return 0;
-        p->resync = 0;
-        p->sync_n = p->next_n - 1;
-        p->last_rx = now;
-        {
-            /* "N<k> M110 N<k>": the printer expects N<k+1> next */
-            char cmd[32];
-            size_t k = 0;
-            memcpy(cmd, "M110 N", 6);
-            k = 6 + put_long(cmd + 6, p->sync_n);
-            frame(p, &tmp, p->sync_n, cmd, k);
-        }
-        return copy_out(tmp.text, tmp.len, buf, cap, len);
-    }
+    if (p->state == AMP_PROTO_SYNCING)
+        return p->o.flavor == AMP_PROTO_KLIPPER ? klipper_poll(p, now, buf, cap, len) : marlin_sync(p, now, buf, cap, len);
     /* RUNNING */
     if ((p->send_n - 1 > p->acked || p->probing) && now - p->last_rx >= p->o.timeout_ms) {
+        settle_pending_error(p, 0);
         p->n_timeouts++;
         p->last_rx = now;
         if (p->o.flavor == AMP_PROTO_KLIPPER) {
@@ -707,10 +1060,22 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         }
         /* Probe: send the newest line again. The line numbers make this safe: the printer either runs it
            (it was lost) or answers with Resend: <the line it expects>. */
+        if (p->probing && ++p->silent_probes >= 3 &&
+            now - p->probe_t0 >= (3 * p->o.timeout_ms > 30000 ? 3 * p->o.timeout_ms : 30000)) {
+            /* probes unanswered for long, no busy: a halted printer whose last words were garbled (a slow
+               host or printer only costs more probes: the line numbers make them harmless) */
+            stop(p, AMP_EV_FATAL, "the printer answers nothing (probes unanswered for 30 s or more)");
+            return 0;
+        }
+        if (!p->probing) {
+            p->silent_probes = 0;
+            p->probe_t0 = now;
+        }
         p->probing = 1;
         p->skip_ok = 0;
         p->rewind_n = -1;
         p->settling = 0;
+        p->echo_budget = 0;
         emit(p, AMP_EV_TIMEOUT, p->send_n - 1, "no reply, probing");
         s = &p->ring[(p->send_n - 1) & RING_MASK];
         p->n_resent++;
@@ -741,6 +1106,7 @@ int amp_proto_next_tx(amp_proto *p, unsigned long now, char *buf, size_t cap, si
         p->n_sent++;
     if (p->send_n > p->top_sent)
         p->top_sent = p->send_n;
+    s->t_sent = now;
     if (p->send_n - 1 == p->acked)
         p->last_rx = now; /* the reply clock starts with the first line in flight */
     p->send_n++;
@@ -756,7 +1122,16 @@ long amp_proto_wait_ms(const amp_proto *p, unsigned long now)
         return -1;
     if (p->state == AMP_PROTO_CONNECTING) {
         el = now - p->t0;
+        if (p->o.flavor == AMP_PROTO_KLIPPER)
+            return 0;
         return p->start_seen || el >= p->o.boot_ms ? 0 : (long)(p->o.boot_ms - el);
+    }
+    if (p->state == AMP_PROTO_SYNCING && p->o.flavor == AMP_PROTO_KLIPPER) {
+        if (p->sync_n > 0) {
+            el = now - p->last_rx;
+            return el >= p->o.timeout_ms ? 0 : (long)(p->o.timeout_ms - el);
+        }
+        return p->next_poll - now >= (1UL << 30) ? 0 : (long)(p->next_poll - now);
     }
     if (p->verify)
         return 0;

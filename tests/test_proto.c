@@ -80,6 +80,7 @@ static void start_marlin(amp_proto *p, rec *r, amp_proto_window mode, int window
     o.window = window;
     o.timeout_ms = 1000;
     o.guard_nl = 0; /* exact framing compared below; the guard newline has its own test */
+    o.learn = 0;    /* the dialect is given here; learning has its own test */
     o.on_event = on_ev;
     o.user = r;
     memset(r, 0, sizeof *r);
@@ -98,6 +99,9 @@ static void start_klipper(amp_proto *p, rec *r)
     o.on_event = on_ev;
     o.user = r;
     ck_assert_int_eq(amp_proto_init(p, &o, 0, NULL), AMP_OK);
+    ck_assert_str_eq(tx(p, 0), "STATUS\n");
+    feed1(p, "// Klipper state: Ready\nok\n", 0);
+    ck_assert_int_eq(p->state, AMP_PROTO_RUNNING);
 }
 
 static void submit_moves(amp_proto *p, int n)
@@ -195,6 +199,7 @@ START_TEST(handshake_waits_for_a_delayed_boot_banner_and_resyncs_after_it)
     amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
     o.boot_ms = 2000;
     o.guard_nl = 0;
+    o.learn = 0;
     o.on_event = on_ev;
     o.user = &r;
     ck_assert_int_eq(amp_proto_init(&p, &o, 5000, NULL), AMP_OK);
@@ -253,13 +258,14 @@ static void one_rewind_case(const char *err1, const char *err_stale, int resend_
     ck_assert_int_eq(p.n_rewinds, 1);
     /* quiet while the echoes of the lines sent ahead arrive (each extends the settling time) */
     ck_assert_str_eq(tx(&p, 110), "");
+    /* settle_ms 10 + twice the 10 ms the printer took to answer line 1 */
     ck_assert_int_eq(amp_proto_wait_ms(&p, 110), 30);
     feed1(&p, err_stale, 125); /* for line 2 */
     ck_assert_str_eq(tx(&p, 141), "");
     feed1(&p, err_stale, 150); /* for line 3 */
-    feed1(&p, err_stale, 151); /* for line 4 */
-    ck_assert_str_eq(tx(&p, 180), "");
-    ck_assert_int_eq(num(tx(&p, 181)), 1);
+    ck_assert_str_eq(tx(&p, 151), "");
+    feed1(&p, err_stale, 151); /* for line 4: every line sent ahead has answered, no need to wait longer */
+    ck_assert_int_eq(num(tx(&p, 151)), 1);
     ck_assert_int_eq(num(tx(&p, 181)), 2);
     ck_assert_int_eq(num(tx(&p, 181)), 3);
     ck_assert_int_eq(num(tx(&p, 181)), 4);
@@ -483,7 +489,7 @@ START_TEST(klipper_has_no_numbers_acks_errors_and_stops_on_shutdown)
     ck_assert_str_eq(tx(&p, 1), ""); /* window 16 < Klipper's 20 pending lines */
     feed1(&p, "// probe: open\n!! Move out of range: 0.5 0 0 [0.000]\nok\nok\n", 2);
     ck_assert_int_eq(p.acked, 2);
-    ck_assert_int_eq(count(&r, AMP_EV_ERROR), 1);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 1);
     /* M112 jumps the queue */
     ck_assert_int_eq(amp_proto_submit(&p, "M112", 4, NULL, NULL), AMP_OK);
     ck_assert_str_eq(tx(&p, 3), "M112\n");
@@ -598,6 +604,354 @@ START_TEST(noisy_link_delivers_every_line_exactly_once_in_order)
 }
 END_TEST
 
+
+/* Marlin handshake with learning; @p reply_ok: the firmware sends ok after Resend:; @p adv: ADVANCED_OK. */
+static void learn_dialect(int reply_ok, int adv, int want_resend_ok)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    o.resend_ok = !want_resend_ok; /* the configured value is the wrong one: only learning can set it right */
+    o.mode = AMP_PROTO_ADVANCED;
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    ck_assert_str_eq(tx(&p, 1), "N0 M110 N0*125\n");
+    feed1(&p, adv ? "ok N0 P15 B3\n" : "ok\n", 2);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_int_eq(num(tx(&p, 3)), 2); /* provoked: 1 is expected */
+    ck_assert(!amp_proto_can_submit(&p));
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\n", 4);
+    if (reply_ok)
+        feed1(&p, adv ? "ok N0 P15 B3\n" : "ok\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    feed1(&p, "ok T:21.0 /0.0 B:20.0 /0.0 @:0 B@:0\n", 6);
+    ck_assert_int_eq(count(&r, AMP_EV_LEARNED), 1);
+    ck_assert_int_eq(p.o.resend_ok, want_resend_ok);
+    ck_assert_int_eq(p.o.mode, adv ? AMP_PROTO_ADVANCED : AMP_PROTO_FIXED);
+    ck_assert_str_eq(tx(&p, 7), "N0 M110 N0*125\n"); /* the numbering starts again at 1 for the job */
+    feed1(&p, "ok\n", 8);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(count(&r, AMP_EV_READY), 1);
+}
+
+START_TEST(handshake_learns_whether_ok_follows_resend_and_advanced_ok)
+{
+    learn_dialect(1, 0, 1); /* Marlin 2.1 */
+    learn_dialect(0, 0, 0); /* Prusa: Resend without ok */
+    learn_dialect(1, 1, 1); /* ADVANCED_OK */
+    learn_dialect(0, 1, 0);
+}
+END_TEST
+
+START_TEST(garbled_reply_during_learning_asks_again_instead_of_guessing)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    tx(&p, 1);
+    feed1(&p, "ok\n", 2);
+    ck_assert_int_eq(num(tx(&p, 3)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\n0k7\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 6);
+    /* "0k7" might have been the ok: no decision, the provoked resend again */
+    ck_assert_int_eq(num(tx(&p, 7)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 1\nResend: 2\nok\n", 8);
+    ck_assert_int_eq(num(tx(&p, 9)), 1);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 1\nResend: 2\nok\n", 8);
+    /* M105 line 1 again after its own resend; then the answer */
+    ck_assert_int_eq(num(tx(&p, 9)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 10);
+    ck_assert_int_eq(p.o.resend_ok, 1);
+    ck_assert_str_eq(tx(&p, 11), "N0 M110 N0*125\n");
+    feed1(&p, "ok\n", 12);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+}
+END_TEST
+
+START_TEST(klipper_not_ready_sends_nothing_of_the_job_until_ready)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    long ln;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_proto_submit(&p, "G28", 3, &ln, NULL), AMP_ERR_STATE);
+    ck_assert_str_eq(tx(&p, 0), "STATUS\n");
+    feed1(&p, "!! Printer is not ready\n!! Klipper state: Not ready\nok\n", 10);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_int_eq(count(&r, AMP_EV_WAITING), 2);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0); /* not an error of the job */
+    ck_assert_str_eq(tx(&p, 500), "");               /* asks again after ready_poll_ms */
+    ck_assert_int_eq(amp_proto_wait_ms(&p, 500), 510);
+    ck_assert_str_eq(tx(&p, 1010), "STATUS\n");
+    feed1(&p, "// Klipper state: Ready\nok\n", 1020);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(count(&r, AMP_EV_READY), 1);
+    ck_assert_int_eq(amp_proto_submit(&p, "G28", 3, &ln, NULL), AMP_OK);
+    ck_assert_int_eq(ln, 1);
+}
+END_TEST
+
+START_TEST(never_ready_gives_up_after_ready_ms)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    rec r;
+    unsigned long t;
+    memset(&r, 0, sizeof r);
+    amp_proto_opts_default(&o, AMP_PROTO_KLIPPER);
+    o.ready_ms = 5000;
+    o.on_event = on_ev;
+    o.user = &r;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    for (t = 0; t < 6000 && p.state != AMP_PROTO_STOPPED; t += 100)
+        if (*tx(&p, t))
+            feed1(&p, "!! Printer is not ready\nok\n", t);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_NOTREADY), 1);
+    ck_assert_int_ge((long)t, 5000);
+}
+END_TEST
+
+START_TEST(firmware_errors_are_attributed_to_the_line_in_flight)
+{
+    amp_proto p;
+    rec r;
+    int i;
+    start_klipper(&p, &r);
+    submit_moves(&p, 5);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "ok\n!! Move out of range: 1.5 2 0 [0.000]\nok\n// Unknown command:\"FOO\"\nok\n", 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_FWERROR; i++)
+        ;
+    ck_assert_int_lt(i, r.n);
+    ck_assert_int_eq(r.line[i], 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_WARNING; i++)
+        ;
+    ck_assert_int_eq(r.line[i], 3);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING); /* the host decides */
+    feed1(&p, "// action:cancel\n", 3);
+    ck_assert_int_eq(count(&r, AMP_EV_ACTION), 1);
+    {
+        char text[64];
+        ck_assert(amp_proto_line_text(&p, 2, text, sizeof text));
+        ck_assert_str_eq(text, "G1 X1.5 Y2 E0.01");
+    }
+    /* Marlin: protocol errors (even garbled) are not firmware errors; a thermal error is, a halt stops */
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 4);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "Error:checksum mis}atch, Last Line: 0\nResend: 1\nok\nError:Line Numbr is not Last Line Number+1, Last Lxne: 0\n"
+              "Error:No Line\r Number with checksum, Last Line: 0\nError:\nError:No L)ne\n", 2); /* cut by bytes garbled into line ends */
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
+    {
+        char text[64];
+        ck_assert(amp_proto_line_text(&p, 3, text, sizeof text));
+        ck_assert_str_eq(text, "G1 X2.5 Y4 E0.02");
+    }
+    while (*tx(&p, 200))
+        ;
+    feed1(&p, "ok\nError:Thermal Runaway, system stopped! Heater_ID: 0\nError:Printer halted. kill() called!\n", 300);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 2);
+    for (i = 0; i < r.n && r.kind[i] != AMP_EV_FWERROR; i++)
+        ;
+    ck_assert_int_eq(r.line[i], 2);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_SHUTDOWN), 1);
+}
+END_TEST
+
+START_TEST(garbled_resend_number_is_taken_from_last_line)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "ok\nError:checksum mismatch, Last Line: 1\nResend: 2x\nok\n", 2);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
+    ck_assert_int_eq(num(tx(&p, 100)), 2);
+}
+END_TEST
+
+START_TEST(oks_merged_or_garbled_by_a_corrupted_byte_still_count)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 8);
+    while (*tx(&p, 1))
+        ;
+    /* a newline garbled into a control byte merges two oks; an ok with one garbled byte */
+    feed1(&p, "ok\x0bok\noc\n", 2);
+    ck_assert_int_eq(p.acked, 3);
+    while (*tx(&p, 3))
+        ;
+    /* but a control byte inside a number keeps it unparseable: no rewind to line 2 from "Resend: 2\x17" */
+    feed1(&p, "Resend: 2\x17\n", 4);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 0);
+}
+END_TEST
+
+START_TEST(late_echoes_after_the_settling_time_are_still_echoes)
+{
+    /* a loaded host: the echoes of the lines sent ahead come after the settling time ran out and the
+       re-send began; they are still the old burst's (each line sent ahead echoes once), not new requests */
+    amp_proto p;
+    rec r;
+    int i;
+    const char *stale = "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok\n";
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 8);
+    for (i = 1; i <= 4; i++)
+        ck_assert_int_eq(num(tx(&p, 100)), i);
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 110);
+    ck_assert_str_eq(tx(&p, 120), "");
+    ck_assert_int_eq(num(tx(&p, 400)), 1); /* the settling time ran out: re-send */
+    ck_assert_int_eq(num(tx(&p, 400)), 2);
+    feed1(&p, stale, 420);
+    feed1(&p, stale, 440);
+    feed1(&p, stale, 460);
+    ck_assert_int_eq(p.n_rewinds, 1);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND_DUP), 3);
+    /* the budget is spent: a further request for line 1 is a new failure of the re-sent line */
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 480);
+    ck_assert_int_eq(p.n_rewinds, 2);
+    ck_assert_int_eq(p.echo_budget, 1); /* line 2 went out after the re-sent line 1 */
+}
+END_TEST
+
+START_TEST(a_printer_that_answers_no_probe_stops_the_job)
+{
+    /* a halt whose "Error:Printer halted" was garbled beyond recognition: Marlin then answers nothing */
+    amp_proto p;
+    rec r;
+    unsigned long t;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 2);
+    submit_moves(&p, 3);
+    while (*tx(&p, 100))
+        ;
+    for (t = 100; t < 60000 && p.state != AMP_PROTO_STOPPED; t += 100)
+        tx(&p, t);
+    ck_assert_int_eq(p.state, AMP_PROTO_STOPPED);
+    ck_assert_int_eq(count(&r, AMP_EV_FATAL), 1);
+    /* probes every second (timeout 1 s here) for 30 s, not fewer: a slow printer only costs probes */
+    ck_assert_int_ge(count(&r, AMP_EV_TIMEOUT), 30);
+    ck_assert_int_ge((long)t, 30000);
+}
+END_TEST
+
+START_TEST(an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware)
+{
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    /* garbled past recognition, but Marlin follows a protocol error at once with Resend: */
+    feed1(&p, "Error:Lzqe Nxmbr is jot\nResend: 1\nok\n", 2);
+    /* ... also when the rest of the garbled error came as a line of its own */
+    feed1(&p, "Error:Li~a\nNumber is nop Last Line Number+1, Last Line: 0\nResend: 1\nok\n", 2);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 0);
+    ck_assert_int_eq(count(&r, AMP_EV_RESEND), 1);
+    while (*tx(&p, 100))
+        ;
+    /* a firmware error is followed by anything else: the line in flight is named */
+    feed1(&p, "ok\nError:Probing Failed\nok\n", 110);
+    ck_assert_int_eq(count(&r, AMP_EV_FWERROR), 1);
+    ck_assert_int_eq(r.line[r.n - 2], 2);
+}
+END_TEST
+
+START_TEST(the_ok_after_a_resend_of_the_m110_is_not_the_m110s)
+{
+    /* found by the reset soak: the final M110 of the handshake garbled, the ok that follows its Resend taken
+       for the M110's, and the whole job ran one line off (a move repeated after the next reset) */
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    tx(&p, 1);
+    feed1(&p, "ok\n", 2);
+    ck_assert_int_eq(num(tx(&p, 3)), 2);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 0\nResend: 1\nok\n", 4);
+    ck_assert_int_eq(num(tx(&p, 5)), 1);
+    feed1(&p, "ok T:21.0 /0.0\n", 6);
+    ck_assert_str_eq(tx(&p, 7), "N0 M110 N0*125\n");
+    feed1(&p, "Error:checksum mismatch, Last Line: 1\nResend: 2\n", 8);
+    ck_assert_str_eq(tx(&p, 9), ""); /* not before the Resend's ok is in */
+    feed1(&p, "ok\n", 9);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    ck_assert_str_eq(tx(&p, 10), "N0 M110 N0*125\n");
+    feed1(&p, "ok\n", 11);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(amp_proto_submit(&p, "G90", 3, NULL, NULL), AMP_OK);
+    ck_assert_int_eq(num(tx(&p, 12)), 1);
+}
+END_TEST
+
+START_TEST(a_repeated_m110s_late_ok_is_not_the_first_lines)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.guard_nl = 0;
+    o.learn = 0;
+    o.timeout_ms = 1000;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 1);
+    ck_assert_str_eq(tx(&p, 1), "N0 M110 N0*125\n");
+    ck_assert_str_eq(tx(&p, 1100), "N0 M110 N0*125\n"); /* no answer in time: again */
+    feed1(&p, "ok\n", 1200);                              /* the first one's, late */
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    submit_moves(&p, 2);
+    ck_assert_int_eq(num(tx(&p, 1201)), 1);
+    feed1(&p, "ok\n", 1210); /* the second M110's */
+    ck_assert_int_eq(p.acked, 0);
+    feed1(&p, "ok\n", 1220);
+    ck_assert_int_eq(p.acked, 1);
+}
+END_TEST
+
+START_TEST(an_ok_after_a_rewind_on_an_echo_still_counts)
+{
+    /* found by the reset soak: a request taken for a new one was an old burst's echo; the printer already
+       held the line and ran it; its ok must count, or the job lags a line and a reset report names a line
+       that ran (resuming there repeats a move) */
+    amp_proto p;
+    rec r;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 4);
+    submit_moves(&p, 6);
+    while (*tx(&p, 1))
+        ;
+    feed1(&p, "Error:checksum mismatch, Last Line: 0\nResend: 1\nok\n", 10);
+    ck_assert_int_eq(p.send_n, 1);
+    feed1(&p, "ok\n", 20); /* line 1 had arrived after all */
+    ck_assert_int_eq(p.acked, 1);
+    ck_assert_int_eq(p.send_n, 2); /* and is not sent again */
+}
+END_TEST
+
 static Suite *proto_suite(void)
 {
     Suite *s = suite_create("proto");
@@ -622,6 +976,19 @@ static Suite *proto_suite(void)
     AMP_ADD_TEST(tc, klipper_shutdown_reports_the_last_acknowledged_line);
     AMP_ADD_TEST(tc, init_rejects_bad_options);
     AMP_ADD_TEST(tc, noisy_link_delivers_every_line_exactly_once_in_order);
+    AMP_ADD_TEST(tc, handshake_learns_whether_ok_follows_resend_and_advanced_ok);
+    AMP_ADD_TEST(tc, garbled_reply_during_learning_asks_again_instead_of_guessing);
+    AMP_ADD_TEST(tc, klipper_not_ready_sends_nothing_of_the_job_until_ready);
+    AMP_ADD_TEST(tc, never_ready_gives_up_after_ready_ms);
+    AMP_ADD_TEST(tc, firmware_errors_are_attributed_to_the_line_in_flight);
+    AMP_ADD_TEST(tc, garbled_resend_number_is_taken_from_last_line);
+    AMP_ADD_TEST(tc, oks_merged_or_garbled_by_a_corrupted_byte_still_count);
+    AMP_ADD_TEST(tc, late_echoes_after_the_settling_time_are_still_echoes);
+    AMP_ADD_TEST(tc, a_printer_that_answers_no_probe_stops_the_job);
+    AMP_ADD_TEST(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
+    AMP_ADD_TEST(tc, the_ok_after_a_resend_of_the_m110_is_not_the_m110s);
+    AMP_ADD_TEST(tc, a_repeated_m110s_late_ok_is_not_the_first_lines);
+    AMP_ADD_TEST(tc, an_ok_after_a_rewind_on_an_echo_still_counts);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -26,7 +26,7 @@ run() { # name, vprinter options
     resume=1 runs=0 rc=1
     while [ $rc = 1 ] && [ $runs -lt 10 ]; do
         rc=0
-        $B "$T/link" "$T/job.gcode" --quiet --baud 1000000 --timeout 0.1 --settle-ms 30 --boot-wait 0.2 \
+        $B "$T/link" "$T/job.gcode" --quiet --baud 1000000 --timeout 0.1 --boot-wait 0.2 \
             --resume-from $resume > "$T/out" 2>&1 || rc=$?
         runs=$((runs + 1))
         if [ $rc = 1 ]; then

@@ -13,14 +13,35 @@
  * connection starts with `N0 M110 N0` once the boot banner `start` was seen
  * or did not come. Replies understood: `ok` (plain or ADVANCED_OK
  * `ok N<n> P<p> B<b>`), `Resend: <n>` / `rs <n>` (rewind ONCE per error
- * burst: after a rewind the engine stays silent for a settling time in which
- * the requests provoked by the lines sent ahead arrive and are dropped; each
- * such echo extends it; sending during the burst would only have the printer
- * flush the re-sent lines again), `Error:...`, `echo:busy: processing` (keep-alive), `wait`,
+ * burst: each line that was sent after <n> provokes at most one more request
+ * for <n> (an echo) and those are counted and dropped, whenever they come;
+ * the engine stays silent until all have come or a settling time ran out;
+ * sending during the burst would only have the printer flush the re-sent
+ * lines again), `Error:...` (`Last Line: L` names the line of a garbled
+ * `Resend:`), `ok T:` (M105's answer acknowledges every line up to that M105:
+ * lost oks repaired), `echo:busy: processing` (keep-alive), `wait`,
  * ` T:` temperature reports, `start` (the printer reset: the engine stops and
  * reports the last acknowledged line; it never continues blindly).
  * Klipper flavor: no numbers or checksums, one `ok` per line (also after
  * `!! error`), `// ...` information, `// Klipper state: Shutdown` stops.
+ *
+ * Readiness (issue 15): nothing of the job goes out before the printer is
+ * ready. Klipper: `STATUS` (answered in every state) is repeated every
+ * opts.ready_poll_ms until it answers `Klipper state: Ready`; its `!! ...`
+ * replies meanwhile are AMP_EV_WAITING, not errors. Marlin: the boot banner or
+ * the `M110` handshake's ok; then, with opts.learn, one provoked resend
+ * (`N2 M105` where 1 is expected, then `N1 M105`) tells whether an `ok`
+ * follows `Resend:` (a bare ok between the resend and M105's `ok T:`) and
+ * whether the firmware speaks ADVANCED_OK (`ok N.. P.. B..`), and a second
+ * `M110` resets the numbering. Not ready within opts.ready_ms: AMP_EV_NOTREADY,
+ * stopped.
+ *
+ * Firmware errors: a Klipper `!!` reply and a Marlin `Error:` that is not part
+ * of the line-number/checksum protocol are AMP_EV_FWERROR, attributed to the
+ * oldest line in flight (both firmwares report an error while running the
+ * command whose ok comes next); `// action:...` is AMP_EV_ACTION; unknown-command
+ * echoes are AMP_EV_WARNING. The engine keeps going after them (the host
+ * decides); halts/kills and Klipper shutdowns stop it (AMP_EV_SHUTDOWN).
  *
  * An "acknowledged" line is one the printer answered with `ok`, i.e. it was
  * executed (Marlin and Klipper send `ok` after running a command). Lines are
@@ -85,7 +106,13 @@ typedef enum amp_proto_event_kind {
     AMP_EV_RESET,        /**< `start` mid-job: stopped; `line` = last acknowledged */
     AMP_EV_SHUTDOWN,     /**< Klipper shutdown or Marlin halt: stopped; `line` = last acknowledged */
     AMP_EV_TIMEOUT,      /**< no reply in time; Marlin: a probe line was re-sent */
-    AMP_EV_FATAL         /**< unrecoverable (resend of a line no longer kept); stopped */
+    AMP_EV_FATAL,        /**< unrecoverable (resend of a line no longer kept); stopped */
+    AMP_EV_FWERROR,      /**< firmware error (Klipper `!!`, Marlin non-protocol `Error:`); `line` = line it hit */
+    AMP_EV_WARNING,      /**< `Unknown command` echo for one of our lines; `line` = that line */
+    AMP_EV_ACTION,       /**< `// action:...` from the firmware (text holds it); `line` = oldest in flight */
+    AMP_EV_WAITING,      /**< printer not ready yet (text holds its words) */
+    AMP_EV_NOTREADY,     /**< not ready within opts.ready_ms; stopped */
+    AMP_EV_LEARNED       /**< Marlin dialect learned at the handshake (text: "resend-ok=0|1 advanced-ok=0|1") */
 } amp_proto_event_kind;
 
 /** One event; text points into the engine and is valid during the callback only. */
@@ -107,12 +134,17 @@ typedef struct amp_proto_opts {
     int resend_ok;              /**< non-zero: an `ok` follows every `Resend:` and is no acknowledgement (Marlin, default 1) */
     unsigned long boot_ms;      /**< wait this long for `start` before the handshake (default 3000) */
     unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
-    unsigned long settle_ms;    /**< after a rewind, wait this long (plus the stale bytes' wire time) for the
-                                     requests the lines sent ahead provoke, before sending again (default 30) */
+    unsigned long settle_ms;    /**< after a rewind, wait at most this long (plus the stale bytes' wire time and
+                                     twice the printer's reply time) for the requests the lines sent ahead provoke,
+                                     before sending again; the wait ends early when every line sent ahead has
+                                     echoed, and an echo that comes later is still counted as one (default 10) */
     int guard_nl;               /**< Marlin: end each line with a second newline (default 1). A corrupted newline
                                      would merge two lines into one that passes the XOR check with odds
                                      1/256; the spare newline keeps them apart (Marlin skips empty lines) */
     unsigned long byte_us;      /**< wire time of one byte in microseconds (10e6 / baud; 0 for a pty) */
+    unsigned long ready_ms;     /**< give up when the printer is not ready after this long (default 60000; 0 = never) */
+    unsigned long ready_poll_ms; /**< Klipper: repeat `STATUS` this often while not ready (default 1000) */
+    int learn;                  /**< Marlin: learn resend_ok and ADVANCED_OK at the handshake (default 1) */
     amp_proto_event_fn on_event; /**< optional event callback */
     void *user;                 /**< passed to on_event */
 } amp_proto_opts;
@@ -121,6 +153,7 @@ typedef struct amp_proto_opts {
 typedef struct amp_proto_slot {
     long n;                             /**< its line number */
     unsigned char len;                  /**< framed bytes including the newline */
+    unsigned long t_sent;               /**< when it was last transmitted (ms) */
     char text[AMP_PROTO_LINE_MAX + 8];  /**< framed line */
 } amp_proto_slot;
 
@@ -135,19 +168,36 @@ typedef struct amp_proto {
     long sync_n;     /**< number used by the pending M110, -1 if none */
     long rewind_n;   /**< target of the current error burst, -1 outside a burst */
     int settling;    /**< in a burst: requests for rewind_n are echoes of lines sent ahead */
+    long echo_budget; /**< echoes still owed by the lines that were sent after rewind_n */
+    unsigned long err_lat; /**< smoothed time from sending a line to the printer's error for it (ms) */
     unsigned long settle_until; /**< end of the settling time */
     int skip_ok;     /**< an ok owed to a Resend is expected */
     int probing;     /**< a probe is out after a timeout */
+    int silent_probes; /**< probes in a row that got no answer (with 30 s or 3 timeouts of silence: AMP_EV_FATAL) */
+    unsigned long probe_t0; /**< when the first of them went out */
+    int pend_err;      /**< an unclassified `Error:` waits for the next line (a `Resend:` makes it protocol) */
+    long pend_line;    /**< the line it hit */
+    char pend_text[AMP_PROTO_RX_MAX + 1];
     int estop;       /**< M112 pending, goes before everything */
     int start_seen;  /**< boot banner seen while connecting */
     int resync;      /**< the M110 must be (re)sent */
     int qslots;      /**< command-queue size in use (learned under ADVANCED_OK) */
     int q_cand;      /**< last queue-size estimate; adopted when two oks in a row agree */
     int verify;      /**< end-of-job check requested (amp_proto_verify) */
+    int sync_phase;  /**< handshake step: 0 M110, 1 provoked resend out, 2 `N1 M105` out, 3 final M110 */
+    int learn_fail;  /**< handshakes whose learning came to nothing (learning is dropped after 2) */
+    int m110_out;    /**< M110s sent in this handshake step (more than one: the others may still answer) */
+    int stale_oks;   /**< oks of repeated M110s still to come after the handshake; not acknowledgements */
+    int saw_ok;      /**< learning: a bare ok came after the provoked Resend */
+    int ready_seen;  /**< Klipper: `Klipper state: Ready` seen */
+    int adv_seen;    /**< an `ok N.. P.. B..` was seen (the firmware speaks ADVANCED_OK) */
+    long last_line;  /**< `Last Line: L` of the latest protocol error, -1 if none */
+    unsigned long next_poll; /**< Klipper: time of the next STATUS while not ready */
     unsigned long last_rx; /**< time of the last ok/busy/temperature/start */
     unsigned long t0;      /**< time of init or of the last link restore */
     /* counters */
     long n_sent, n_resent, n_rewinds, n_dups, n_errors, n_timeouts, n_busy, n_garbage;
+    long n_fwerrors, n_warnings;
     size_t rxlen;
     int rx_over; /**< current reply longer than AMP_PROTO_RX_MAX (tail dropped) */
     char rx[AMP_PROTO_RX_MAX + 1];
@@ -235,6 +285,13 @@ void amp_proto_estop(amp_proto *p);
  * (a resend from the last acknowledged line with M110 could run queued lines twice).
  */
 void amp_proto_link_restored(amp_proto *p, unsigned long now_ms);
+
+/**
+ * The command text of line @p n (as sent, without number and checksum) into
+ * @p buf (capacity @p cap, NUL-terminated, truncated to fit). Returns 1, or 0
+ * when the line is no longer kept (lines behind the newest AMP_PROTO_RING).
+ */
+int amp_proto_line_text(const amp_proto *p, long n, char *buf, size_t cap);
 
 /** Static name of an event kind ("ack", "resend", ...). */
 const char *amp_proto_event_name(amp_proto_event_kind k);

@@ -37,7 +37,9 @@ static const char usage[] =
     "  --log FILE           record every executed command as '<line> <command>'\n"
     "  --flavor F           marlin (default) | klipper\n"
     "  --dialect D          Marlin resend reply: 2.1 (Resend + ok, default) | 2.0 (Resend + ok_to_send,\n"
-    "                       with ADVANCED_OK fields) | bare (Resend without ok) | rs (rs N, no ok)\n"
+    "                       with ADVANCED_OK fields) | prusa or bare (Resend without ok) | rs (rs N, no ok)\n"
+    "  --bed X,Y,Z          bed volume in mm (default 220,220,250): Klipper answers '!! Move out of range'\n"
+    "                       outside it; Marlin clamps (software endstops) and the log marks '# out of bed'\n"
     "  --bufsize N          command queue slots (default 4)\n"
     "  --rx-bytes N         serial RX buffer bytes; overflowing bytes are lost (default 128)\n"
     "  --advanced-ok        answer 'ok N<n> P<p> B<b>' (B one low, as Marlin)\n"
@@ -59,7 +61,12 @@ static const char usage[] =
     "  --reset-after K      reset after executing K commands (repeatable: counts restart)\n"
     "  --hangup-after K --hangup-secs S   close the pty after K commands, reopen after S s\n"
     "  --error-at K         Klipper: the K-th received line fails ('!! ...' then ok)\n"
-    "  --shutdown-after K   Klipper: shut down after K executed commands\n";
+    "  --shutdown-after K   Klipper: shut down after K executed commands\n"
+    "  --ready-after-ms MS  Klipper: '!! Printer is not ready' (+ ok) to everything but STATUS for MS ms\n"
+    "  --halt-after K       Marlin: thermal runaway and 'Error:Printer halted. kill() called!' after K commands\n"
+    "  --action-at K --action NAME   '// action:NAME' (default cancel) after the K-th executed command\n"
+    "Klipper mode refuses moves before G28 ('!! Must home axis first') and answers unknown commands with\n"
+    "'// Unknown command'; Marlin mode answers 'echo:Unknown command' (+ ok). Neither logs those as executed.\n";
 
 typedef struct plan_move {
     double dur;
@@ -74,7 +81,12 @@ typedef struct vp {
     double corrupt_in, corrupt_out, drop_in, drop_out;
     long corrupt_line[LIST_MAX], lose_line[LIST_MAX], lose_ok[LIST_MAX], reset_after[LIST_MAX];
     int n_corrupt_line, n_lose_line, n_lose_ok, n_reset_after;
-    long busy_at, hangup_after, error_at, shutdown_after;
+    long busy_at, hangup_after, error_at, shutdown_after, halt_after, action_at;
+    const char *action;
+    double bed[3], ready_at;
+    double off[3]; /* G92 offsets: bed position = logical position - off (both firmwares check the bed) */
+    int homed;
+    long out_of_bed;
     unsigned long long rng;
     /* link */
     int mfd, sfd;
@@ -261,6 +273,37 @@ static int is_cmd(const char *c, const char *name)
     return strncmp(c, name, n) == 0 && (c[n] == '\0' || c[n] == ' ');
 }
 
+/* Commands the modelled firmwares accept (the rest get their unknown-command answer). */
+static const char *const marlin_cmds[] = {"G0", "G1", "G2", "G3", "G4", "G10", "G11", "G20", "G21", "G28", "G29",
+    "G90", "G91", "G92", "M17", "M18", "M73", "M82", "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114",
+    "M115", "M117", "M140", "M190", "M201", "M203", "M204", "M205", "M220", "M221", "M400", "M500", "M501",
+    "M503", "M900", "T0", NULL};
+static const char *const klipper_cmds[] = {"G0", "G1", "G4", "G28", "G90", "G91", "G92", "M18", "M73", "M82",
+    "M83", "M84", "M104", "M105", "M106", "M107", "M109", "M110", "M114", "M115", "M117", "M140", "M190", "M204",
+    "M220", "M221", "M400", "SET_VELOCITY_LIMIT", "SET_PRESSURE_ADVANCE", "TURN_OFF_HEATERS", "STATUS", NULL};
+
+static int known(const char *const *list, const char *cmd)
+{
+    size_t n = strcspn(cmd, " ");
+    int i;
+    for (i = 0; list[i]; i++)
+        if (strlen(list[i]) == n && strncmp(list[i], cmd, n) == 0)
+            return 1;
+    return 0;
+}
+
+/* Target of a G0/G1 in bed coordinates (absolute or relative, as the printer would compute it). */
+static void move_target(const vp *v, const char *cmd, double t[3]);
+
+static int outside_bed(const vp *v, const double t[3])
+{
+    int i;
+    for (i = 0; i < 3; i++)
+        if (t[i] - v->off[i] < -1e-6 || t[i] - v->off[i] > v->bed[i] + 1e-6)
+            return 1;
+    return 0;
+}
+
 static void send_ok(vp *v)
 {
     if (in_list(v->lose_ok, v->n_lose_ok, v->executed))
@@ -280,10 +323,34 @@ static void planner_drain(vp *v, double now)
     }
 }
 
+/* G0/G1: 0 while the planner is full (Marlin blocks in the handler until it has room), 1 when planned. */
+static int exec_move(vp *v, const char *cmd, long n, double now)
+{
+    double d, t[3];
+    planner_drain(v, now);
+    if (v->plan_count >= v->planner)
+        return 0;
+    move_target(v, cmd, t);
+    if (outside_bed(v, t)) {
+        v->out_of_bed++; /* Marlin's software endstops clamp the move without a word */
+        logf_line(v, "# out of bed: %ld %s\n", n, cmd);
+    }
+    v->f = num_arg(cmd, 'F', v->f, NULL);
+    d = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+    v->x = t[0];
+    v->y = t[1];
+    v->z = t[2];
+    if (v->speed > 0) {
+        double start = v->plan_count ? v->plan_end[(v->plan_head + v->plan_count - 1) % PLAN_MAX] : now;
+        v->plan_end[(v->plan_head + v->plan_count) % PLAN_MAX] = start + d / v->speed;
+        v->plan_count++;
+    }
+    return 1;
+}
+
 /* Start executing the head command. Returns 1 when it finished (ok sent), 0 while it is still running. */
 static int execute(vp *v, const char *cmd, long n, double now)
 {
-    int seen = 0;
     if (!v->exec_has) {
         v->exec_has = 1;
         v->exec_ready_at = now + v->turnaround;
@@ -298,8 +365,9 @@ static int execute(vp *v, const char *cmd, long n, double now)
             v->next_keepalive = now + v->busy_interval;
         }
     }
-    if (!v->klipper && !((cmd[0] == 'G' || cmd[0] == 'M' || cmd[0] == 'T') && cmd[1] >= '0' && cmd[1] <= '9')) {
-        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush): echo, no-op, ok */
+    if (!v->klipper && !known(marlin_cmds, cmd)) {
+        /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush, or SET_VELOCITY_LIMIT): echo,
+           no-op, ok */
         say(v, "echo:Unknown command: \"%s\"\n", cmd);
         send_ok(v);
         v->exec_has = 0;
@@ -319,32 +387,31 @@ static int execute(vp *v, const char *cmd, long n, double now)
     if (now < v->exec_ready_at)
         return 0;
     if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
-        double nx, ny, nz, d;
-        planner_drain(v, now);
-        if (v->plan_count >= v->planner)
-            return 0; /* Marlin blocks in the handler until the planner has room */
-        v->f = num_arg(cmd, 'F', v->f, NULL);
-        nx = num_arg(cmd, 'X', v->rel ? 0 : v->x, &seen);
-        ny = num_arg(cmd, 'Y', v->rel ? 0 : v->y, &seen);
-        nz = num_arg(cmd, 'Z', v->rel ? 0 : v->z, &seen);
-        if (v->rel) {
-            nx += v->x;
-            ny += v->y;
-            nz += v->z;
-        }
-        d = sqrt((nx - v->x) * (nx - v->x) + (ny - v->y) * (ny - v->y) + (nz - v->z) * (nz - v->z));
-        v->x = nx;
-        v->y = ny;
-        v->z = nz;
-        if (v->speed > 0) {
-            double start = v->plan_count ? v->plan_end[(v->plan_head + v->plan_count - 1) % PLAN_MAX] : now;
-            v->plan_end[(v->plan_head + v->plan_count) % PLAN_MAX] = start + d / v->speed;
-            v->plan_count++;
-        }
+        if (!exec_move(v, cmd, n, now))
+            return 0;
     } else if (is_cmd(cmd, "M400")) {
         planner_drain(v, now);
         if (v->plan_count > 0)
             return 0;
+    } else if (is_cmd(cmd, "G28")) {
+        /* "G28 X Y" homes X and Y only (the resume preamble must not crash Z into the part) */
+        int all = !strchr(cmd + 3, 'X') && !strchr(cmd + 3, 'Y') && !strchr(cmd + 3, 'Z');
+        v->homed = 1;
+        if (all || strchr(cmd + 3, 'X'))
+            v->x = v->off[0] = 0;
+        if (all || strchr(cmd + 3, 'Y'))
+            v->y = v->off[1] = 0;
+        if (all || strchr(cmd + 3, 'Z'))
+            v->z = v->off[2] = 0;
+    } else if (is_cmd(cmd, "G92")) {
+        double nx = num_arg(cmd, 'X', v->x, NULL), ny = num_arg(cmd, 'Y', v->y, NULL),
+               nz = num_arg(cmd, 'Z', v->z, NULL);
+        v->off[0] += nx - v->x;
+        v->off[1] += ny - v->y;
+        v->off[2] += nz - v->z;
+        v->x = nx;
+        v->y = ny;
+        v->z = nz;
     } else if (is_cmd(cmd, "G90")) {
         v->rel = 0;
     } else if (is_cmd(cmd, "G91")) {
@@ -443,6 +510,8 @@ static void marlin_line(vp *v, char *s, int over)
     }
     return;
 resend:
+    if (getenv("AMP_VPRINTER_TRACE"))
+        logf_line(v, "# rejected (last %ld): %s\n", v->last_n, s);
     v->rxlen = 0; /* Marlin flushes its RX buffer with the resend request */
     v->linelen = 0;
     if (v->dialect == 2)
@@ -490,22 +559,63 @@ static void klipper_shutdown(vp *v, const char *why)
     logf_line(v, "# shutdown\n");
 }
 
-static int klipper_known(const char *c)
+static void move_target(const vp *v, const char *cmd, double t[3])
 {
-    return (c[0] == 'G' || c[0] == 'M' || c[0] == 'T') && c[1] >= '0' && c[1] <= '9';
+    t[0] = num_arg(cmd, 'X', v->rel ? 0 : v->x, NULL);
+    t[1] = num_arg(cmd, 'Y', v->rel ? 0 : v->y, NULL);
+    t[2] = num_arg(cmd, 'Z', v->rel ? 0 : v->z, NULL);
+    if (v->rel) {
+        t[0] += v->x;
+        t[1] += v->y;
+        t[2] += v->z;
+    }
+}
+
+/* Klipper's answer to a command it does not run: 1 when answered (with its ok). */
+static int klipper_refuse(vp *v, const char *cmd, double now)
+{
+    double t[3];
+    if (now < v->ready_at && !is_cmd(cmd, "M115") && !is_cmd(cmd, "M110")) {
+        /* Klipper runs only a few commands (STATUS, M115, M110, M112, RESTART...) before it is ready */
+        say(v, "!! Printer is not ready\nok\n");
+        return 1;
+    }
+    if (!known(klipper_cmds, cmd)) {
+        say(v, "// Unknown command:\"%.*s\"\nok\n", (int)strcspn(cmd, " "), cmd);
+        return 1;
+    }
+    if (is_cmd(cmd, "G0") || is_cmd(cmd, "G1")) {
+        move_target(v, cmd, t);
+        if (!v->homed && (strchr(cmd, 'X') || strchr(cmd, 'Y') || strchr(cmd, 'Z'))) {
+            say(v, "!! Must home axis first: %.3f %.3f %.3f [%.3f]\nok\n", t[0], t[1], t[2], v->e);
+            return 1;
+        }
+        if (outside_bed(v, t)) {
+            say(v, "!! Move out of range: %.3f %.3f %.3f [%.3f]\nok\n", t[0], t[1], t[2], v->e);
+            return 1;
+        }
+    }
+    return 0;
 }
 
 static void klipper_exec(vp *v, double now)
 {
     char *cmd = v->q[v->qhead];
     long n = v->qn[v->qhead];
-    if (v->klipper_shutdown) {
-        say(v, "!! Printer is not ready\nok\n");
-    } else if ((v->error_at > 0 && n == v->error_at) || !klipper_known(cmd)) {
-        if (!klipper_known(cmd))
-            say(v, "!! Unknown command:\"%.*s\"\nok\n", (int)strcspn(cmd, " "), cmd);
+    if (is_cmd(cmd, "STATUS")) {
+        /* answered in every state, never logged as executed */
+        if (v->klipper_shutdown)
+            say(v, "!! Shutdown\n!! Klipper state: Shutdown\nok\n");
+        else if (now < v->ready_at)
+            say(v, "!! Printer is not ready\n!! Klipper state: Not ready\nok\n");
         else
-            say(v, "!! Move out of range: %s\nok\n", cmd);
+            say(v, "// Klipper state: Ready\nok\n");
+    } else if (v->klipper_shutdown) {
+        say(v, "!! Printer is not ready\nok\n");
+    } else if (v->error_at > 0 && n == v->error_at) {
+        say(v, "!! Move out of range: %s\nok\n", cmd);
+    } else if (klipper_refuse(v, cmd, now)) {
+        /* answered */
     } else {
         if (!execute(v, cmd, n, now))
             return;
@@ -559,8 +669,19 @@ static void on_bytes(vp *v, const char *b, ssize_t n, double now)
            in one line, so no host could pass a model with more (see docs/bridge.md, "Limits"). */
         /* The '*' is spared too: a line cut by Marlin's RX flush whose '*' is lost runs as an unnumbered
            command, a hole in the protocol no host can close (docs/bridge.md, "Limits"). */
+        /* Likewise no flip turns a byte into one that hides the '*' from Marlin: NUL ends the C string it
+           searches, ';' starts a comment, CR/LF end the line. On a whole numbered line that is only another
+           checksum error, but on a cut tail it is the same hole as a lost '*' (found as a move run twice
+           with line number 0 in the executed log: a blank flipped to NUL in a tail cut by an RX flush). */
         if (v->corrupt_in > 0 && !v->in_hit && c != '*' && rnd01(v) < v->corrupt_in) {
-            c ^= (char)(1 << (int)(rnd01(v) * 7));
+            int bit = (int)(rnd01(v) * 7), k;
+            for (k = 0; k < 7; k++) {
+                char t = (char)(c ^ (1 << ((bit + k) % 7)));
+                if (t != '\0' && t != ';' && t != '\n' && t != '\r') {
+                    c = t;
+                    break;
+                }
+            }
             v->in_hit = 1;
         }
         if (b[i] == '\n')
@@ -626,6 +747,20 @@ static void step(vp *v, double now)
                 v->outlen = keep;
                 v->protect = keep;
             }
+            return;
+        }
+        if (v->action_at > 0 && v->executed == v->action_at) {
+            v->action_at = 0;
+            say(v, "// action:%s\n", v->action);
+        }
+        if (!v->klipper && v->halt_after > 0 && v->executed == v->halt_after) {
+            /* a heater fault while printing: Marlin reports it and kill()s, answering nothing more */
+            say(v, "Error:Thermal Runaway, system stopped! Heater_ID: 0\nError:Printer halted. kill() called!\n");
+            logf_line(v, "# halted\n");
+            v->qcount = 0;
+            v->exec_has = 0;
+            v->rxlen = 0;
+            v->booting = 2;
             return;
         }
         if (v->hangup_after > 0 && v->executed == v->hangup_after && !v->hung) {
@@ -711,6 +846,9 @@ int main(int argc, char **argv)
     v->busy_interval = 2;
     v->rng = 1;
     v->mfd = v->sfd = -1;
+    v->bed[0] = v->bed[1] = 220;
+    v->bed[2] = 250;
+    v->action = "cancel";
     for (i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
 #define OPT(name) (strcmp(a, name) == 0 && val && (i++, 1))
@@ -733,7 +871,7 @@ int main(int argc, char **argv)
                 v->dialect = 21;
             else if (strcmp(val, "2.0") == 0)
                 v->dialect = 20;
-            else if (strcmp(val, "bare") == 0)
+            else if (strcmp(val, "bare") == 0 || strcmp(val, "prusa") == 0)
                 v->dialect = 1;
             else if (strcmp(val, "rs") == 0)
                 v->dialect = 2;
@@ -793,6 +931,19 @@ int main(int argc, char **argv)
             v->error_at = atol(val);
         else if (OPT("--shutdown-after"))
             v->shutdown_after = atol(val);
+        else if (OPT("--ready-after-ms"))
+            v->ready_at = atof(val) / 1000.0;
+        else if (OPT("--halt-after"))
+            v->halt_after = atol(val);
+        else if (OPT("--action-at"))
+            v->action_at = atol(val);
+        else if (OPT("--action"))
+            v->action = val;
+        else if (OPT("--bed")) {
+            if (sscanf(val, "%lf,%lf,%lf", &v->bed[0], &v->bed[1], &v->bed[2]) != 3 || v->bed[0] <= 0 ||
+                v->bed[1] <= 0 || v->bed[2] <= 0)
+                goto bad;
+        }
         else {
         bad:
             fprintf(stderr, "ampath-vprinter: bad option or value: %s\n%s", a, usage);
@@ -823,6 +974,7 @@ int main(int argc, char **argv)
     fflush(stdout);
     last = now_s();
     v->last_activity = last;
+    v->ready_at += last; /* --ready-after-ms counts from the start */
     if (v->klipper) {
         v->booting = 0;
     } else {
@@ -894,8 +1046,8 @@ int main(int argc, char **argv)
             }
         }
     }
-    fprintf(stderr, "ampath-vprinter: received %ld lines, executed %ld commands, %ld RX overruns\n", v->received,
-            v->executed, v->overruns);
+    fprintf(stderr, "ampath-vprinter: received %ld lines, executed %ld commands, %ld RX overruns, %ld moves out of bed\n",
+            v->received, v->executed, v->overruns, v->out_of_bed);
     close_pty(v);
     if (v->logf)
         fclose(v->logf);
