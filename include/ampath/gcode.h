@@ -184,6 +184,10 @@ typedef struct amp_gcode_opts {
     double radius_tol;          /**< mm, deposition radius tolerance of the simplification (0.01) */
     double min_segment;         /**< mm, shortest extruding segment unless a whole path (0.02; 0 = off) */
     int arcs;                   /**< 1: fit helical arcs, written as G2/G3 (0; needs firmware arc support) */
+    double direct_hop;          /**< mm: XY travels up to this long go straight, without retraction or lift,
+                                     when the head cone clears all printed material (3; 0 = never) */
+    double head_z_offs;         /**< mm, head cone tip above the nozzle point (SPEC §2; 0.5) */
+    double head_theta;          /**< degrees, head cone half-angle from the vertical (SPEC §2; 72) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */
@@ -209,6 +213,7 @@ typedef struct amp_gcode_stats {
     double bead_volume;           /**< sum of A L over the printed paths (SPEC §5), mm^3 */
     double first_layer_z;         /**< placed z of the first extrusion */
     amp_box3 bbox;                /**< placed bounding box of the printed vertices */
+    size_t direct_hops;           /**< travels written as one straight move without retraction or lift */
 } amp_gcode_stats;
 
 /** The motion of the last line (for callers that follow the head; kind 0 = the line was not a move). */
@@ -264,6 +269,11 @@ typedef struct amp_gcode_iter {
     double fil_area;    /* pi (d/2)^2 */
     double grid_x0, grid_y0, grid_cell;
     float grid[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* top of printed material per cell (-inf = none) */
+    float grid_c[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* highest printed centre line per cell (head cone test) */
+    float grid_cb[16 * 16]; /* highest of grid_c per block of (AMP_GCODE_GRID / 16)^2 cells */
+    double zc_max;      /* highest printed centre line so far */
+    double end_r;       /* deposition radius at the end of the last printed segment */
+    int direct;         /* the current travel is a direct hop */
     amp_gcode_block plan[AMP_GCODE_LOOKAHEAD];
     size_t plan_head, plan_n;
     double plan_v;      /* entry speed of the oldest block */
