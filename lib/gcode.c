@@ -1201,8 +1201,9 @@ static int step_path(amp_gcode_iter *it, lb *l)
         return 0;
     case PS_UNRETRACT:
         it->sub = PS_SEGS;
+        if (!it->direct) /* the head stops where it lands (an unretract usually sits there); a direct hop flows on */
+            amp_gc_plan_flush(it);
         if (it->retracted) {
-            amp_gc_plan_flush(it); /* the head stops for the unretraction; after a hop it prints on */
             move_e(it, l, +1);
             return 1;
         }
