@@ -26,6 +26,7 @@
 #error "AMP_GCODE_GRID must be a multiple of 16 (blocks of the head-cone test)"
 #endif
 #define GC_BLK (AMP_GCODE_GRID / 16) /* cells per block side of grid_cb */
+#define GC_CONE_GROUP 8 /* travel samples sharing one head-cone floor */
 
 enum { PH_HEADER, PH_START, PH_SETUP, PH_PATHS, PH_TEARDOWN, PH_END, PH_DONE };
 /* sub-steps of PH_PATHS */
@@ -46,7 +47,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->retract_length = 1.0;
     o->retract_speed = 35.0;
     o->z_hop = 0.4;
-    o->travel_corridor = 2.0;
+    o->travel_corridor = 1.0;
     o->end_lift = 10.0;
     o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* SPEC §5: Klipper uses M83 by default */
     o->hotend_temp = 210.0;
@@ -685,6 +686,48 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / GC_PI) : 0.0, len);
 }
 
+static double rect_dist(double px, double py, double x0, double y0, double side)
+{
+    double dx = fmax(0.0, fmax(x0 - px, px - (x0 + side))), dy = fmax(0.0, fmax(y0 - py, py - (y0 + side)));
+    return sqrt(dx * dx + dy * dy);
+}
+
+/*
+ * The lowest nozzle height over the interval of half-width @p hh around
+ * (@p px, @p py) whose head cone clears every printed centre line, at least
+ * @p lo; the search stops once it passes @p stop.
+ */
+static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
+{
+    double k = 1.0 / tan(it->o.head_theta * GC_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
+    double zo = it->o.head_z_offs;
+    int bi, bj, i, j;
+    if (it->zc_max - zo + k * hh <= lo)
+        return lo;
+    for (bj = 0; bj < 16; bj++)
+        for (bi = 0; bi < 16; bi++) {
+            double c = (double)it->grid_cb[bj * 16 + bi];
+            if (c - zo + k * hh <= lo ||
+                c - zo - k * (rect_dist(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs) - hh) <= lo)
+                continue;
+            for (j = bj * GC_BLK; j < (bj + 1) * GC_BLK; j++)
+                for (i = bi * GC_BLK; i < (bi + 1) * GC_BLK; i++) {
+                    c = (double)it->grid_c[j * AMP_GCODE_GRID + i];
+                    if (c - zo + k * hh > lo)
+                        lo = fmax(lo, c - zo - k * (rect_dist(px, py, it->grid_x0 + i * cell,
+                                                               it->grid_y0 + j * cell, cell) - hh));
+                }
+            if (lo > stop)
+                return lo;
+        }
+    return lo;
+}
+
+static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, double hh)
+{
+    return cone_floor(it, px, py, hh, -HUGE_VAL, z) <= z;
+}
+
 /*
  * The travel polyline from it->pos to it->travel_to (SPEC §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
@@ -697,7 +740,7 @@ static void travel_hull(amp_gcode_iter *it)
 {
     amp_vec3 a = it->pos, b = it->travel_to;
     double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), hop = it->o.z_hop;
-    double zs = a.z + hop, ze = b.z + hop, w, dt;
+    double zs = a.z + hop, ze = b.z + hop, w, dt, cf = -HUGE_VAL;
     long steps = (long)ceil(len / (0.5 * it->grid_cell)), s, maxs = (AMP_GCODE_HULL - 4) / 2 - 1;
     size_t n = 0;
     if (steps < 1)
@@ -716,6 +759,13 @@ static void travel_hull(amp_gcode_iter *it)
         } else {
             t = (double)s / (double)steps;
             z = grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w) + hop;
+            if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
+                double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
+                cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
+                                -HUGE_VAL, HUGE_VAL);
+            }
+            /* beyond the corridor: the head cone (SPEC §2) clear of every printed centre line */
+            z = fmax(z, cf);
             if (s == 0)
                 zs = fmax(zs, z);
             if (s == steps)
@@ -1010,36 +1060,6 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
  * than that cell's rectangle; beyond the reach where even the highest centre
  * line of the job is below the cone nothing needs a look.
  */
-static double rect_dist(double px, double py, double x0, double y0, double side)
-{
-    double dx = fmax(0.0, fmax(x0 - px, px - (x0 + side))), dy = fmax(0.0, fmax(y0 - py, py - (y0 + side)));
-    return sqrt(dx * dx + dy * dy);
-}
-
-static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, double hh)
-{
-    double k = 1.0 / tan(it->o.head_theta * GC_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
-    double tip = z + it->o.head_z_offs;
-    int bi, bj, i, j;
-    if (it->zc_max <= tip)
-        return 1;
-    for (bj = 0; bj < 16; bj++)
-        for (bi = 0; bi < 16; bi++) {
-            double c = (double)it->grid_cb[bj * 16 + bi];
-            if (c <= tip ||
-                c <= tip + k * (rect_dist(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs) - hh))
-                continue;
-            for (j = bj * GC_BLK; j < (bj + 1) * GC_BLK; j++)
-                for (i = bi * GC_BLK; i < (bi + 1) * GC_BLK; i++) {
-                    c = (double)it->grid_c[j * AMP_GCODE_GRID + i];
-                    if (c > tip &&
-                        c > tip + k * (rect_dist(px, py, it->grid_x0 + i * cell, it->grid_y0 + j * cell, cell) - hh))
-                        return 0;
-                }
-        }
-    return 1;
-}
-
 /*
  * May the travel to the start of the next path (radius @p rb) be a direct hop:
  * one straight move, no retraction, no lift (slicers' travel without z-hop

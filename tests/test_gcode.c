@@ -1626,8 +1626,8 @@ END_TEST
 /*
  * Issue 14 item 4 on a real covering (the demo helix at eps 3 through the tool): direct hops cut the retractions
  * and the travel time share; every direct hop passes the independent cone checker and every lifted travel the
- * hop-clearance checker. Measured: direct hops off 54.0 % of the time in travel, 3,304 retractions, travel 0.77 x
- * the extrusion; on 42.5 %, 1,291 retractions, 0.66 x.
+ * hop-clearance checker. Measured: direct hops off 51.5 % of the time in travel, 3,304 retractions, travel 0.72 x
+ * the extrusion; on 40.5 %, 1,296 retractions, 0.63 x.
  */
 START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
 {
@@ -1655,7 +1655,7 @@ START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
     ck_assert_int_eq(amp_test_run_tool(args, off, sizeof off), 0);
     snprintf(args, sizeof args, "gcode %s-h.amp --json -o %s-on.gcode", d, d);
     ck_assert_int_eq(amp_test_run_tool(args, on, sizeof on), 0);
-    ck_assert_double_gt(json_num(off, "travel_time_fraction"), 0.50);
+    ck_assert_double_lt(json_num(on, "travel_time_fraction"), json_num(off, "travel_time_fraction") - 0.07);
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), 0.45);
     ck_assert_double_lt(json_num(on, "retractions"), 0.5 * json_num(off, "retractions"));
     ck_assert_double_lt(json_num(on, "travel_per_print_length"), json_num(off, "travel_per_print_length") - 0.05);

@@ -77,7 +77,16 @@
  * unretracts. The material top is tracked conservatively in a fixed grid of
  * AMP_GCODE_GRID^2 cells over the XY bounding box of the job: every printed
  * segment raises the cells within its radius to its highest z (+ r for
- * tubes), so a travel can be higher than needed but never lower.
+ * tubes), so a travel can be higher than needed but never lower. Beyond the
+ * corridor the head cone (tip head_z_offs above the nozzle, half-angle
+ * head_theta; SPEC §2) must clear every printed centre line (a second grid
+ * holds the highest centre line per cell).
+ *
+ * Direct hops (issue 14 item 4): a travel of at most direct_hop in XY is one
+ * straight G0 without retraction or lift, blended into the printing that
+ * follows, when along it the head cone clears every printed centre line and,
+ * away from its ends (bead radius + 2 cells), no printed material is above
+ * the nozzle.
  *
  * Print-time estimate: every move is a block of a look-ahead planner of
  * AMP_GCODE_LOOKAHEAD blocks, like the firmware's block buffer: trapezoidal
@@ -154,7 +163,7 @@ typedef struct amp_gcode_opts {
     double retract_length;      /**< mm of filament pulled back before a travel (1.0; 0 = none) */
     double retract_speed;       /**< mm/s of filament for retract and unretract (35) */
     double z_hop;               /**< mm of clearance above printed material during a travel (0.4) */
-    double travel_corridor;     /**< mm half-width around a travel line checked for material (2.0) */
+    double travel_corridor;     /**< mm half-width around a travel line checked for material (1.0) */
     double end_lift;            /**< mm the head rises at the end of the job (10) */
     int relative_e;             /**< 1: M83 relative E; 0: M82 absolute E (Marlin 0, Klipper 1) */
     double hotend_temp;         /**< deg C for the built-in start sequence (210; 0 = do not heat) */
