@@ -725,7 +725,7 @@ static double cone_floor(const amp_gcode_iter *it, double px, double py, double 
 
 static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, double hh)
 {
-    return cone_floor(it, px, py, hh, -HUGE_VAL, z) <= z;
+    return cone_floor(it, px, py, hh, z, z) <= z; /* from z up: blocks below the cone at z need no look */
 }
 
 /*
@@ -761,8 +761,9 @@ static void travel_hull(amp_gcode_iter *it)
             z = grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w) + hop;
             if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
                 double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
+                /* from min(zs, ze) up: the hull of the lifted ends is never lower */
                 cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
-                                -HUGE_VAL, HUGE_VAL);
+                                fmin(a.z, b.z) + hop, HUGE_VAL);
             }
             /* beyond the corridor: the head cone (SPEC §2) clear of every printed centre line */
             z = fmax(z, cf);
