@@ -694,8 +694,13 @@ static double rect_dist(double px, double py, double x0, double y0, double side)
 
 /*
  * The lowest nozzle height over the interval of half-width @p hh around
- * (@p px, @p py) whose head cone clears every printed centre line, at least
- * @p lo; the search stops once it passes @p stop.
+ * (@p px, @p py) whose head cone (SPEC §2: tip z_offs above the nozzle,
+ * half-angle theta; paper §5.1) clears every printed centre line — the
+ * criterion Algorithm 2 and `ampath check` apply to printing points — at
+ * least @p lo; the search stops once it passes @p stop. Each centre-line
+ * point lies in a cell of grid_c holding at least its z and is no nearer than
+ * that cell's rectangle; blocks of cells (grid_cb) too low to matter at their
+ * distance are skipped whole.
  */
 static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
 {
@@ -1051,22 +1056,13 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
     }
 }
 
-
-/*
- * The head cone at the nozzle points of the interval of half-width @p hh
- * around sample (@p px, @p py) at lowest height @p z (SPEC §2: tip z_offs
- * above, half-angle theta; paper §5.1): clear of every printed centre line,
- * the criterion Algorithm 2 and `ampath check` apply to printing points. Each
- * centre-line point lies in a cell holding at least its z, and is no nearer
- * than that cell's rectangle; beyond the reach where even the highest centre
- * line of the job is below the cone nothing needs a look.
- */
 /*
  * May the travel to the start of the next path (radius @p rb) be a direct hop:
  * one straight move, no retraction, no lift (slicers' travel without z-hop
  * inside the part)? When it is at most direct_hop long and at every point the
  * head cone is clear (cone_clear) and, away from its ends, no printed
- * material rises above the nozzle. Within the bead radius and two grid cells
+ * material rises above the nozzle, and it rises or falls by at most z_hop.
+ * Within the bead radius and two grid cells
  * of either end the nozzle is in the bead it leaves or in the place of the one
  * it starts, where the cone test alone applies (the grid's cells there hold
  * those beads' own tops).
@@ -1077,7 +1073,8 @@ static int direct_ok(const amp_gcode_iter *it, double dxy, double rb)
     double cell = it->grid_cell, hh, dz;
     double ea = it->end_r + 2.0 * cell, eb = rb + 2.0 * cell;
     long steps = (long)ceil(dxy / (0.5 * cell)), s;
-    if (!(dxy <= it->o.direct_hop) || !it->printed_any || it->have_pos != 2)
+    /* within the z-hop band only: a steeper hop would pass its ends' zones unchecked */
+    if (!(dxy <= it->o.direct_hop) || !it->printed_any || it->have_pos != 2 || !(fabs(b.z - a.z) <= it->o.z_hop))
         return 0;
     if (steps < 1)
         steps = 1;
