@@ -22,6 +22,11 @@
 #define GC_COORD_MAX 99999.0 /* keeps every number short enough for AMP_GCODE_LINE_MAX */
 #define GC_FIT_TOL 5e-4      /* half the 0.001 mm resolution of the written coordinates */
 #define GC_HEADER_LINES 9
+#if AMP_GCODE_GRID % 16 != 0
+#error "AMP_GCODE_GRID must be a multiple of 16 (blocks of the head-cone test)"
+#endif
+#define GC_BLK (AMP_GCODE_GRID / 16) /* cells per block side of grid_cb */
+#define GC_CONE_GROUP 8 /* travel samples sharing one head-cone floor */
 
 enum { PH_HEADER, PH_START, PH_SETUP, PH_PATHS, PH_TEARDOWN, PH_END, PH_DONE };
 /* sub-steps of PH_PATHS */
@@ -42,7 +47,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->retract_length = 1.0;
     o->retract_speed = 35.0;
     o->z_hop = 0.4;
-    o->travel_corridor = 2.0;
+    o->travel_corridor = 1.0;
     o->end_lift = 10.0;
     o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* SPEC §5: Klipper uses M83 by default */
     o->hotend_temp = 210.0;
@@ -70,6 +75,9 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->chord_tol = 0.01;
     o->radius_tol = 0.01;
     o->min_segment = 0.02;
+    o->direct_hop = 3.0;
+    o->head_z_offs = 0.5;
+    o->head_theta = 72.0;
 }
 
 /* ---------------------------------------------------------------- line builder */
@@ -154,7 +162,7 @@ static int grid_index(double v, double v0, double cell)
  * every point within w of the segment lies in a visited cell (conservative).
  * mode 0: raise cells to @p top; mode 1: return the highest cell.
  */
-static double grid_walk(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double top, int mode)
+static double grid_walk(amp_gcode_iter *it, float *grid, amp_vec3 a, amp_vec3 b, double w, double top, int mode)
 {
     double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), h, best = -HUGE_VAL;
     double cell = it->grid_cell;
@@ -170,8 +178,13 @@ static double grid_walk(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, do
         int i, j;
         for (j = j0; j <= j1; j++)
             for (i = i0; i <= i1; i++) {
-                float *c = &it->grid[j * AMP_GCODE_GRID + i];
+                float *c = &grid[j * AMP_GCODE_GRID + i];
                 if (mode == 0) {
+                    if (grid == it->grid_c) {
+                        float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i / GC_BLK];
+                        if ((double)*cb < top)
+                            *cb = nextafterf((float)top, HUGE_VALF);
+                    }
                     if ((double)*c < top) {
                         *c = (float)top;
                         if ((double)*c < top) /* float rounding must not lower the top */
@@ -186,7 +199,7 @@ static double grid_walk(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, do
 }
 
 /* Highest material top in the cells of the box of half-width @p w around (px, py); -HUGE_VAL if none. */
-static double grid_top_box(const amp_gcode_iter *it, double px, double py, double w)
+static double grid_top_box(const amp_gcode_iter *it, const float *grid, double px, double py, double w)
 {
     double cell = it->grid_cell, best = -HUGE_VAL;
     int i0 = grid_index(px - w, it->grid_x0, cell), i1 = grid_index(px + w, it->grid_x0, cell);
@@ -194,8 +207,8 @@ static double grid_top_box(const amp_gcode_iter *it, double px, double py, doubl
     int i, j;
     for (j = j0; j <= j1; j++)
         for (i = i0; i <= i1; i++)
-            if ((double)it->grid[j * AMP_GCODE_GRID + i] > best)
-                best = (double)it->grid[j * AMP_GCODE_GRID + i];
+            if ((double)grid[j * AMP_GCODE_GRID + i] > best)
+                best = (double)grid[j * AMP_GCODE_GRID + i];
     return best;
 }
 
@@ -263,6 +276,9 @@ static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
     NEED(o->fan_off_layers >= 0 && o->fan_off_layers <= 100000, "fan off layers", "in [0, 100000]");
     NEED(IN(o->fan_speed, 0.0, 1.0), "fan speed", "in [0, 1]");
     NEED(IN(o->retract_min_travel, 0.0, 1000.0), "retract min travel", "in [0, 1000] mm");
+    NEED(IN(o->direct_hop, 0.0, 1000.0), "direct hop", "in [0, 1000] mm");
+    NEED(IN(o->head_z_offs, 0.0, 1000.0), "head z_offs", "in [0, 1000] mm");
+    NEED(IN(o->head_theta, 1.0, 89.0), "head theta", "in [1, 89] degrees");
     NEED(IN(o->chord_tol, 0.0, 10.0), "chord tolerance", "in [0, 10] mm");
     NEED(IN(o->radius_tol, 0.0, 10.0), "radius tolerance", "in [0, 10] mm");
     NEED(IN(o->min_segment, 0.0, 10.0), "min segment", "in [0, 10] mm");
@@ -449,7 +465,12 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->first_done = it->fan_on = it->travel_retract = it->path_first = 0;
     it->hull_n = it->hull_i = 0;
     for (i = 0; i < AMP_GCODE_GRID * AMP_GCODE_GRID; i++)
-        it->grid[i] = -HUGE_VALF;
+        it->grid[i] = it->grid_c[i] = -HUGE_VALF;
+    for (i = 0; i < 16 * 16; i++)
+        it->grid_cb[i] = -HUGE_VALF;
+    it->zc_max = -HUGE_VAL;
+    it->end_r = 0.0;
+    it->direct = 0;
     it->plan_head = it->plan_n = 0;
     it->plan_v = 0.0;
     it->plan_print = 0;
@@ -602,7 +623,11 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
     /* a planar bead's top is its vertex z (layer top); a tube rises r above its centre line */
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
     if (r > 0.0)
-        grid_walk(it, va->p, vb->p, r, top, 0);
+        grid_walk(it, it->grid, va->p, vb->p, r, top, 0);
+    /* the centre line, for the head cone of direct hops (the model of paper §5.1 and `ampath check`) */
+    grid_walk(it, it->grid_c, va->p, vb->p, 0.0, fmax(va->p.z, vb->p.z), 0);
+    it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
+    it->end_r = vb->r;
 }
 
 /*
@@ -661,6 +686,53 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / GC_PI) : 0.0, len);
 }
 
+static double rect_dist(double px, double py, double x0, double y0, double side)
+{
+    double dx = fmax(0.0, fmax(x0 - px, px - (x0 + side))), dy = fmax(0.0, fmax(y0 - py, py - (y0 + side)));
+    return sqrt(dx * dx + dy * dy);
+}
+
+/*
+ * The lowest nozzle height over the interval of half-width @p hh around
+ * (@p px, @p py) whose head cone (SPEC §2: tip z_offs above the nozzle,
+ * half-angle theta; paper §5.1) clears every printed centre line — the
+ * criterion Algorithm 2 and `ampath check` apply to printing points — at
+ * least @p lo; the search stops once it passes @p stop. Each centre-line
+ * point lies in a cell of grid_c holding at least its z and is no nearer than
+ * that cell's rectangle; blocks of cells (grid_cb) too low to matter at their
+ * distance are skipped whole.
+ */
+static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
+{
+    double k = 1.0 / tan(it->o.head_theta * GC_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
+    double zo = it->o.head_z_offs;
+    int bi, bj, i, j;
+    if (it->zc_max - zo + k * hh <= lo)
+        return lo;
+    for (bj = 0; bj < 16; bj++)
+        for (bi = 0; bi < 16; bi++) {
+            double c = (double)it->grid_cb[bj * 16 + bi];
+            if (c - zo + k * hh <= lo ||
+                c - zo - k * (rect_dist(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs) - hh) <= lo)
+                continue;
+            for (j = bj * GC_BLK; j < (bj + 1) * GC_BLK; j++)
+                for (i = bi * GC_BLK; i < (bi + 1) * GC_BLK; i++) {
+                    c = (double)it->grid_c[j * AMP_GCODE_GRID + i];
+                    if (c - zo + k * hh > lo)
+                        lo = fmax(lo, c - zo - k * (rect_dist(px, py, it->grid_x0 + i * cell,
+                                                               it->grid_y0 + j * cell, cell) - hh));
+                }
+            if (lo > stop)
+                return lo;
+        }
+    return lo;
+}
+
+static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, double hh)
+{
+    return cone_floor(it, px, py, hh, z, z) <= z; /* from z up: blocks below the cone at z need no look */
+}
+
 /*
  * The travel polyline from it->pos to it->travel_to (SPEC §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
@@ -673,7 +745,7 @@ static void travel_hull(amp_gcode_iter *it)
 {
     amp_vec3 a = it->pos, b = it->travel_to;
     double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), hop = it->o.z_hop;
-    double zs = a.z + hop, ze = b.z + hop, w, dt;
+    double zs = a.z + hop, ze = b.z + hop, w, dt, cf = -HUGE_VAL;
     long steps = (long)ceil(len / (0.5 * it->grid_cell)), s, maxs = (AMP_GCODE_HULL - 4) / 2 - 1;
     size_t n = 0;
     if (steps < 1)
@@ -691,7 +763,15 @@ static void travel_hull(amp_gcode_iter *it)
             z = ze;
         } else {
             t = (double)s / (double)steps;
-            z = grid_top_box(it, a.x + t * dx, a.y + t * dy, w) + hop;
+            z = grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w) + hop;
+            if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
+                double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
+                /* from min(zs, ze) up: the hull of the lifted ends is never lower */
+                cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
+                                fmin(a.z, b.z) + hop, HUGE_VAL);
+            }
+            /* beyond the corridor: the head cone (SPEC §2) clear of every printed centre line */
+            z = fmax(z, cf);
             if (s == 0)
                 zs = fmax(zs, z);
             if (s == steps)
@@ -976,6 +1056,42 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
     }
 }
 
+/*
+ * May the travel to the start of the next path (radius @p rb) be a direct hop:
+ * one straight move, no retraction, no lift (slicers' travel without z-hop
+ * inside the part)? When it is at most direct_hop long and at every point the
+ * head cone is clear (cone_clear) and, away from its ends, no printed
+ * material rises above the nozzle, and it rises or falls by at most z_hop.
+ * Within the bead radius and two grid cells
+ * of either end the nozzle is in the bead it leaves or in the place of the one
+ * it starts, where the cone test alone applies (the grid's cells there hold
+ * those beads' own tops).
+ */
+static int direct_ok(const amp_gcode_iter *it, double dxy, double rb)
+{
+    amp_vec3 a = it->pos, b = it->travel_to;
+    double cell = it->grid_cell, hh, dz;
+    double ea = it->end_r + 2.0 * cell, eb = rb + 2.0 * cell;
+    long steps = (long)ceil(dxy / (0.5 * cell)), s;
+    /* within the z-hop band only: a steeper hop would pass its ends' zones unchecked */
+    if (!(dxy <= it->o.direct_hop) || !it->printed_any || it->have_pos != 2 || !(fabs(b.z - a.z) <= it->o.z_hop))
+        return 0;
+    if (steps < 1)
+        steps = 1;
+    hh = 0.5 * dxy / (double)steps;
+    dz = 0.5 * fabs(b.z - a.z) / (double)steps;
+    for (s = 0; s <= steps; s++) {
+        double t = (double)s / (double)steps;
+        amp_vec3 p = amp_v3_lerp(a, b, t);
+        double zlo = p.z - dz; /* lowest nozzle height of the interval */
+        if (!cone_clear(it, p.x, p.y, zlo, hh))
+            return 0;
+        if (t * dxy - hh >= ea && (1.0 - t) * dxy - hh >= eb && grid_top_box(it, it->grid, p.x, p.y, hh) > zlo)
+            return 0;
+    }
+    return 1;
+}
+
 /* Decide the travel to the current path; 0 when the path starts where the head is (no travel). */
 static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
 {
@@ -988,7 +1104,18 @@ static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
     /* short hops need no retraction (PrusaSlicer's retract_before_travel) */
     it->travel_retract = it->printed_any && it->o.retract_length > 0.0 && !it->retracted &&
                          dxy >= it->o.retract_min_travel;
-    if (it->printed_any && it->have_pos == 2) {
+    it->direct = direct_ok(it, dxy, v[0].r);
+    if (it->direct) { /* straight from end to start, the pressure kept */
+        it->stats.direct_hops++;
+        it->travel_retract = 0;
+        it->travel_from = it->pos;
+        it->hull_t[0] = 0.0;
+        it->hull_z[0] = it->pos.z;
+        it->hull_t[1] = 1.0;
+        it->hull_z[1] = it->travel_to.z;
+        it->hull_n = 2;
+        it->hull_i = 1;
+    } else if (it->printed_any && it->have_pos == 2) {
         travel_hull(it);
     } else { /* the first approach: lift above the start, move, descend */
         double zt = fmin(fmax(it->travel_to.z, it->have_pos ? it->pos.z : it->travel_to.z) + it->o.z_hop, it->zmax);
@@ -1092,7 +1219,8 @@ static int step_path(amp_gcode_iter *it, lb *l)
         return 0;
     case PS_UNRETRACT:
         it->sub = PS_SEGS;
-        amp_gc_plan_flush(it); /* the head stops where it starts to print (an unretract usually sits there) */
+        if (!it->direct) /* the head stops where it lands (an unretract usually sits there); a direct hop flows on */
+            amp_gc_plan_flush(it);
         if (it->retracted) {
             move_e(it, l, +1);
             return 1;

@@ -39,8 +39,12 @@ const char cmd_gcode_usage[] =
     "  --min-segment L         shortest extruding segment unless a whole path, mm (0.02; 0 = off)\n"
     "  --arcs                  fit helical arcs within the tolerances and write them as G2/G3 (Marlin with\n"
     "                          ARC_SUPPORT, Klipper with [gcode_arcs])\n"
-    "  --corridor W            half-width around a travel line checked for material, mm (2.0)\n"
+    "  --corridor W            half-width around a travel line checked for material, mm (1.0;\n"
+    "                          beyond it the head cone is checked)\n"
     "  --end-lift H            lift at the end of the job, mm (10)\n"
+    "  --direct-hop D          travels up to D mm go straight without retraction or lift where the head\n"
+    "                          cone clears the printed material (3; 0 = always retract and lift)\n"
+    "  --z-offs Z, --theta DEG head cone of the direct-hop test (SPEC 2: 0.5 mm, 72 degrees)\n"
     "  --junction-deviation J  junction deviation of the time estimate, mm (0.05)\n"
     "  --relative-e / --absolute-e   M83 or M82 (default: klipper relative, marlin absolute)\n"
     "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's\n"
@@ -133,6 +137,7 @@ static void print_json(const char *in, const char *out, const amp_printer *pr, c
     cli_json_int(&j, "travels", (long long)st->travels);
     cli_json_int(&j, "travel_moves", (long long)st->travel_moves);
     cli_json_int(&j, "retractions", (long long)st->retractions);
+    cli_json_int(&j, "direct_hops", (long long)st->direct_hops);
     cli_json_int(&j, "lowered_feed_segments", (long long)st->lowered_feed_segments);
     cli_json_num(&j, "print_length_mm", st->print_length);
     cli_json_num(&j, "travel_length_mm", st->travel_length);
@@ -173,10 +178,10 @@ static void print_human(const char *in, const char *out, const amp_printer *pr, 
 {
     long t = (long)(st->time + 0.5);
     printf("%s%s for %s: %lu lines, %lu paths (%lu skipped), %lu segments (%lu input), %lu travels, %lu "
-           "retractions\n",
+           "retractions (%lu direct hops)\n",
            out ? "wrote " : "", out ? out : in, pr->name, (unsigned long)st->lines, (unsigned long)st->paths,
            (unsigned long)st->paths_skipped, (unsigned long)st->segments, (unsigned long)st->input_segments,
-           (unsigned long)st->travels, (unsigned long)st->retractions);
+           (unsigned long)st->travels, (unsigned long)st->retractions, (unsigned long)st->direct_hops);
     printf("placed at offset %.3f %.3f %.3f mm: X %.2f..%.2f, Y %.2f..%.2f, Z %.2f..%.2f\n", it->off.x, it->off.y,
            it->off.z, st->bbox.min.x, st->bbox.max.x, st->bbox.min.y, st->bbox.max.y, st->bbox.min.z, st->bbox.max.z);
     printf("printed %.1f mm, travel %.1f mm, filament %.1f mm (%.1f mm^3 for %.1f mm^3 of beads)\n", st->print_length,
@@ -189,7 +194,7 @@ static void print_human(const char *in, const char *out, const amp_printer *pr, 
 typedef struct cli_vals {
     double filament, flow, max_flow, feed, first_feed, travel_feed, retract, retract_speed, retract_min, z_hop;
     double hotend, bed, hotend1, bed1, fan, fan_off, accel, jd, max_xy, max_z, max_e;
-    double chord, rtol, minseg, corridor, end_lift;
+    double chord, rtol, minseg, corridor, end_lift, hop, zoffs, theta;
 } cli_vals;
 
 #define OVR(name, field, val)                                                                                      \
@@ -236,6 +241,9 @@ static void apply_overrides(const cli_opt *opts, const cli_vals *v, amp_gcode_op
     OVR("min-segment", min_segment, v->minseg);
     OVR("corridor", travel_corridor, v->corridor);
     OVR("end-lift", end_lift, v->end_lift);
+    OVR("direct-hop", direct_hop, v->hop);
+    OVR("z-offs", head_z_offs, v->zoffs);
+    OVR("theta", head_theta, v->theta);
 }
 
 /* The part's volume from --mesh (0 when not given); CLI_USAGE on a bad file. */
@@ -312,7 +320,8 @@ int cmd_gcode(int argc, char **argv)
                       {"chord-tol", CLI_DOUBLE, &v.chord, 0},   {"radius-tol", CLI_DOUBLE, &v.rtol, 0},
                       {"min-segment", CLI_DOUBLE, &v.minseg, 0}, {"corridor", CLI_DOUBLE, &v.corridor, 0},
                       {"end-lift", CLI_DOUBLE, &v.end_lift, 0}, {"relative-e", CLI_FLAG, &rel, 0},
-                      {"arcs", CLI_FLAG, &arcs, 0},
+                      {"arcs", CLI_FLAG, &arcs, 0},             {"direct-hop", CLI_DOUBLE, &v.hop, 0},
+                      {"z-offs", CLI_DOUBLE, &v.zoffs, 0},      {"theta", CLI_DOUBLE, &v.theta, 0},
                       {"absolute-e", CLI_FLAG, &abs_e, 0},      {"start", CLI_STR, &start, 0},
                       {"end", CLI_STR, &end, 0},                {"output", CLI_STR, &out, 0},
                       {"json", CLI_FLAG, &json, 0},             {NULL, CLI_FLAG, NULL, 0}};

@@ -77,7 +77,16 @@
  * unretracts. The material top is tracked conservatively in a fixed grid of
  * AMP_GCODE_GRID^2 cells over the XY bounding box of the job: every printed
  * segment raises the cells within its radius to its highest z (+ r for
- * tubes), so a travel can be higher than needed but never lower.
+ * tubes), so a travel can be higher than needed but never lower. Beyond the
+ * corridor the head cone (tip head_z_offs above the nozzle, half-angle
+ * head_theta; SPEC §2) must clear every printed centre line (a second grid
+ * holds the highest centre line per cell).
+ *
+ * Direct hops (issue 14 item 4): a travel of at most direct_hop in XY is one
+ * straight G0 without retraction or lift, blended into the printing that
+ * follows, when along it the head cone clears every printed centre line and,
+ * away from its ends (bead radius + 2 cells), no printed material is above
+ * the nozzle.
  *
  * Print-time estimate: every move is a block of a look-ahead planner of
  * AMP_GCODE_LOOKAHEAD blocks, like the firmware's block buffer: trapezoidal
@@ -154,7 +163,7 @@ typedef struct amp_gcode_opts {
     double retract_length;      /**< mm of filament pulled back before a travel (1.0; 0 = none) */
     double retract_speed;       /**< mm/s of filament for retract and unretract (35) */
     double z_hop;               /**< mm of clearance above printed material during a travel (0.4) */
-    double travel_corridor;     /**< mm half-width around a travel line checked for material (2.0) */
+    double travel_corridor;     /**< mm half-width around a travel line checked for material (1.0) */
     double end_lift;            /**< mm the head rises at the end of the job (10) */
     int relative_e;             /**< 1: M83 relative E; 0: M82 absolute E (Marlin 0, Klipper 1) */
     double hotend_temp;         /**< deg C for the built-in start sequence (210; 0 = do not heat) */
@@ -184,6 +193,10 @@ typedef struct amp_gcode_opts {
     double radius_tol;          /**< mm, deposition radius tolerance of the simplification (0.01) */
     double min_segment;         /**< mm, shortest extruding segment unless a whole path (0.02; 0 = off) */
     int arcs;                   /**< 1: fit helical arcs, written as G2/G3 (0; needs firmware arc support) */
+    double direct_hop;          /**< mm: XY travels up to this long go straight, without retraction or lift,
+                                     when the head cone clears all printed material (3; 0 = never) */
+    double head_z_offs;         /**< mm, head cone tip above the nozzle point (SPEC §2; 0.5) */
+    double head_theta;          /**< degrees, head cone half-angle from the vertical (SPEC §2; 72) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */
@@ -209,6 +222,7 @@ typedef struct amp_gcode_stats {
     double bead_volume;           /**< sum of A L over the printed paths (SPEC §5), mm^3 */
     double first_layer_z;         /**< placed z of the first extrusion */
     amp_box3 bbox;                /**< placed bounding box of the printed vertices */
+    size_t direct_hops;           /**< travels written as one straight move without retraction or lift */
 } amp_gcode_stats;
 
 /** The motion of the last line (for callers that follow the head; kind 0 = the line was not a move). */
@@ -264,6 +278,11 @@ typedef struct amp_gcode_iter {
     double fil_area;    /* pi (d/2)^2 */
     double grid_x0, grid_y0, grid_cell;
     float grid[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* top of printed material per cell (-inf = none) */
+    float grid_c[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* highest printed centre line per cell (head cone test) */
+    float grid_cb[16 * 16]; /* highest of grid_c per block of (AMP_GCODE_GRID / 16)^2 cells */
+    double zc_max;      /* highest printed centre line so far */
+    double end_r;       /* deposition radius at the end of the last printed segment */
+    int direct;         /* the current travel is a direct hop */
     amp_gcode_block plan[AMP_GCODE_LOOKAHEAD];
     size_t plan_head, plan_n;
     double plan_v;      /* entry speed of the oldest block */

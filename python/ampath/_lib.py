@@ -260,7 +260,8 @@ _GCODE_OPTS = [
     ("bed_min_x", _D), ("bed_min_y", _D), ("bed_max_x", _D), ("bed_max_y", _D), ("max_height", _D),
     ("first_layer_height", _D), ("first_layer_feed", _D), ("first_layer_hotend_temp", _D),
     ("first_layer_bed_temp", _D), ("fan_off_layers", c_int), ("fan_speed", _D), ("retract_min_travel", _D),
-    ("chord_tol", _D), ("radius_tol", _D), ("min_segment", _D), ("arcs", c_int)]
+    ("chord_tol", _D), ("radius_tol", _D), ("min_segment", _D), ("arcs", c_int),
+    ("direct_hop", _D), ("head_z_offs", _D), ("head_theta", _D)]
 
 
 class amp_gcode_opts(Structure):
@@ -273,7 +274,7 @@ class amp_gcode_stats(Structure):
                 + [(n, _D) for n in ("print_length", "travel_length", "filament_length", "filament_volume", "time",
                                      "print_time", "travel_time", "max_travel_z")]
                 + [(n, c_size_t) for n in ("input_segments", "arcs", "travel_moves")]
-                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3)])
+                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3), ("direct_hops", c_size_t)])
 
 
 class amp_printer(Structure):
