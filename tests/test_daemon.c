@@ -225,7 +225,15 @@ static int split(char *s, char **argv, int n)
 /* Children die with the test (a failed assertion must not leave daemons behind). */
 static pid_t spawn(char **argv, const char *out, const char *err, const char *in, const char *tmpdir)
 {
-    pid_t pid = fork();
+    pid_t pid;
+    /* scratch names repeat when pids wrap (pid_max 32768): a file left by an
+     * older run must not be read as this child's output before the child has
+     * opened (truncated) it — daemon_start polls stderr for its banner */
+    if (out)
+        unlink(out);
+    if (err)
+        unlink(err);
+    pid = fork();
     ck_assert_int_ge(pid, 0);
     if (pid == 0) {
         prctl(PR_SET_PDEATHSIG, SIGKILL);

@@ -69,5 +69,6 @@ $B $LINK $D/helix.gcode --boot-wait 0.2 --quiet
 kill $VP 2>/dev/null; wait $VP 2>/dev/null || true
 SENT=$(grep -c '^G[01] ' $D/helix.gcode || true)
 DONE=$(grep -c '^[0-9]* G[01] ' $D/printer.log || true)
-echo "virtual printer: executed $DONE of $SENT moves of $D/helix.gcode"
-[ "$SENT" = "$DONE" ]
+OFFBED=$(grep -c '# out of bed' $D/printer.log || true)
+echo "virtual printer: executed $DONE of $SENT moves of $D/helix.gcode, $OFFBED outside its 220 x 220 x 250 bed"
+[ "$SENT" = "$DONE" ] && [ "$OFFBED" = 0 ]
