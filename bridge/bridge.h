@@ -34,6 +34,7 @@ typedef struct br_job {
     int is_amp;          /* .amp: G-code made on the fly by the library's writer (SPEC §5) */
     amp_pathset ps;
     amp_gcode_opts go;
+    amp_printer pr;  /* .amp: the printer profile the G-code is written for (go points into it) */
     amp_gcode_iter it;
     char path[PATH_MAX];
     long line;       /* job line number of the last line returned (1-based file line) */
@@ -47,9 +48,13 @@ typedef struct br_job {
 /**
  * Open a job and check every line before anything is sent (over-long lines are
  * refused here). @p resume_from > 1 builds the safe-restart preamble from the
- * state the job had reached before that line. 0 or -1 with @p why.
+ * state the job had reached before that line. An `.amp` job is written for the
+ * printer profile @p printer (a built-in name or a PrusaSlicer `.ini`, as
+ * `ampath gcode --printer`; NULL = the generic profile): its bed, placement,
+ * temperatures, speeds and start/end G-code. 0 or -1 with @p why.
  */
-int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resume_from, char *why, size_t whylen);
+int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, long resume_from,
+                char *why, size_t whylen);
 /** Next command: 1 with @p buf and *jobline (0 for preamble lines), 0 at the end, -1 on a read error. */
 int br_job_next(br_job *j, char *buf, size_t cap, long *jobline);
 void br_job_close(br_job *j);
@@ -81,6 +86,7 @@ typedef struct br_cfg {
     unsigned long ready_ms; /* --ready-timeout */
     int on_error_continue;  /* --on-error continue: firmware errors are reported and counted, the job goes on */
     int learn;              /* Marlin: learn resend-ok / ADVANCED_OK at the handshake */
+    const char *printer;    /* --printer: profile for .amp jobs (NULL = generic) */
     FILE *log;          /* protocol log, or NULL */
     int progress;       /* progress line on stderr */
     int quiet;

@@ -132,8 +132,10 @@ static int ends_with(const char *s, const char *suf)
     return a >= b && strcmp(s + a - b, suf) == 0;
 }
 
-/* .amp: parse the paths and start the G-code writer with the defaults of the flavor. */
-static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, char *why, size_t whylen)
+/* .amp: parse the paths and start the G-code writer for the printer profile;
+ * the firmware flavour is the one the bridge speaks, whatever the profile says. */
+static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, char *why,
+                    size_t whylen)
 {
     char *text = NULL;
     size_t len = 0;
@@ -148,7 +150,13 @@ static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, char *
         return -1;
     }
     amp_free(NULL, text);
-    amp_gcode_opts_default(&j->go, flavor == AMP_PROTO_KLIPPER ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN);
+    if (amp_printer_load(&j->pr, printer ? printer : "generic", &err) != AMP_OK ||
+        amp_printer_gcode_opts(&j->pr, &j->go, &err) != AMP_OK) {
+        snprintf(why, whylen, "%s", err.msg);
+        amp_pathset_free(&j->ps);
+        return -1;
+    }
+    j->go.flavor = flavor == AMP_PROTO_KLIPPER ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN;
     if (amp_gcode_iter_init(&j->it, &j->ps, &j->go, &err) != AMP_OK) {
         snprintf(why, whylen, "%s: %s", path, err.msg);
         amp_pathset_free(&j->ps);
@@ -269,7 +277,8 @@ static int check_command(const char *c, amp_proto_flavor flavor, char *bad, size
     return 0;
 }
 
-int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resume_from, char *why, size_t whylen)
+int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, long resume_from,
+                char *why, size_t whylen)
 {
     char buf[JOB_LINE_MAX];
     long line = 0, worst_n;
@@ -281,7 +290,7 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, long resum
     if (check_source(path, why, whylen) != 0)
         return -1;
     if (ends_with(path, ".amp")) {
-        if (open_amp(j, path, flavor, why, whylen) != 0)
+        if (open_amp(j, path, flavor, printer, why, whylen) != 0)
             return -1;
     } else {
         j->f = fopen(path, "r");

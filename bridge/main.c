@@ -38,6 +38,8 @@ static const char usage[] =
     "                       the printer then says which line it expects, so nothing runs twice\n"
     "  --resume-from LINE   start the job at file line LINE after a safe restart (lift, home X Y,\n"
     "                       re-heat, return); use the line the bridge reported when it stopped\n"
+    "  --printer P          printer profile for .amp jobs (built-in name or PrusaSlicer .ini, as ampath gcode\n"
+    "                       --printer): bed, placement, temperatures, speeds, start/end G-code (default generic)\n"
     "  --log FILE           protocol log (every line sent and received, events), created 0600\n"
     "  --quiet              no progress line and no printer messages on stderr\n"
     "  --keep-hot           after a signal or cancel, leave the heaters on (default: M104 S0, M140 S0, M107)\n"
@@ -186,6 +188,20 @@ int main(int argc, char **argv)
             if (!parse_num(val, &d) || d <= 0 || d > 86400)
                 return fail("bad --client-timeout %s", val);
             dopts.idle_s = d;
+        } else if (strcmp(a, "--printer") == 0) {
+            amp_printer *pr;
+            amp_error err;
+            NEEDVAL;
+            /* checked now, so that a bad profile is bad usage before the port is opened */
+            pr = malloc(sizeof *pr);
+            if (!pr)
+                return fail("out of memory%s", "");
+            if (amp_printer_load(pr, val, &err) != AMP_OK) {
+                free(pr);
+                return fail("%s", err.msg);
+            }
+            free(pr);
+            cfg.printer = val;
         } else if (strcmp(a, "--quiet") == 0) {
             quiet = 1;
         } else if (strcmp(a, "--no-resend-ok") == 0) {

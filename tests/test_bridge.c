@@ -642,6 +642,46 @@ START_TEST(amp_job_is_converted_on_the_fly_with_the_gcode_writer)
 END_TEST
 
 
+START_TEST(amp_job_is_written_for_the_printer_profile_given)
+{
+    /* --printer as for ampath gcode: the same job lands centred on the ender3's bed with its start
+       sequence when the bridge is told the printer, and exactly as the writer makes it for that profile */
+    amp_pathset ps;
+    amp_buf b;
+    amp_printer pr;
+    amp_gcode_opts o;
+    vpr v;
+    char *out, amp[256], gc[256];
+    FILE *f;
+    int k;
+    snprintf(amp, sizeof amp, "%s", amp_test_tmp("prof.amp"));
+    snprintf(gc, sizeof gc, "%s", amp_test_tmp("prof.gcode"));
+    amp_pathset_init(&ps, NULL);
+    amp_buf_init(&b, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < 60; k++)
+        amp_pathset_push(&ps, amp_v3(10 * cos(0.1 * k), 10 * sin(0.1 * k), 0.3 + 0.01 * k), 0.3, NULL);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, amp, NULL, NULL), AMP_OK);
+    ck_assert_int_eq(amp_printer_load(&pr, "ender3", NULL), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_opts(&pr, &o, NULL), AMP_OK);
+    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
+    f = fopen(gc, "w");
+    fwrite(b.data, 1, b.len, f);
+    fclose(f);
+    amp_buf_free(&b);
+    amp_pathset_free(&ps);
+    vp_start(&v, "");
+    ck_assert_int_eq(bridge_run(&v, amp, "--printer ender3", &out), 0);
+    vp_stop(&v);
+    assert_executed_equals_job(&v, gc, -1);
+    /* a profile that does not exist is bad usage, before the port is opened */
+    vp_start(&v, "");
+    ck_assert_int_eq(bridge_run(&v, amp, "--printer no-such-printer", &out), 2);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "unknown printer") != NULL, "%s", out);
+}
+END_TEST
+
 /* Lines of the bridge log after the first line containing @p mark that start with "> " (sent). */
 static int sent_after(const char *log, const char *mark)
 {
@@ -938,6 +978,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
     AMP_ADD_TEST(tc, amp_job_is_converted_on_the_fly_with_the_gcode_writer);
+    AMP_ADD_TEST(tc, amp_job_is_written_for_the_printer_profile_given);
     AMP_ADD_TEST(tc, soak_one_percent_corrupted_bytes_both_ways);
     AMP_ADD_TEST(tc, soak_corrupted_commands_and_two_resets_resume_exactly);
     AMP_ADD_TEST(tc, klipper_started_before_ready_runs_every_move_once_none_before_ready);
