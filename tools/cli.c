@@ -316,6 +316,20 @@ void cli_json_close(cli_json *j)
     }
 }
 
+void cli_json_csv(cli_json *j, const char *key, const char *csv)
+{
+    const char *u;
+    cli_json_arr(j, key);
+    for (u = csv; *u;) {
+        char item[128];
+        size_t n = strcspn(u, ",");
+        snprintf(item, sizeof item, "%.*s", (int)(n < 127 ? n : 127), u);
+        cli_json_str(j, NULL, item);
+        u += n + (u[n] == ',');
+    }
+    cli_json_close(j);
+}
+
 void cli_json_vec3(cli_json *j, const char *key, amp_vec3 v)
 {
     cli_json_arr(j, key);

@@ -88,6 +88,7 @@ void cli_json_arr(cli_json *j, const char *key); /* open a nested array */
 void cli_json_close(cli_json *j);                /* close the innermost object or array */
 void cli_json_vec3(cli_json *j, const char *key, amp_vec3 v); /* "key": [x, y, z] */
 void cli_json_box(cli_json *j, const char *key, amp_box3 b);  /* "key": [xmin, ymin, zmin, xmax, ymax, zmax] */
+void cli_json_csv(cli_json *j, const char *key, const char *csv); /* "key": ["a", "b"] from "a,b" */
 void cli_json_end(cli_json *j);                  /* close everything and print a newline */
 
 /* ---- progress: a bar on stderr only when stderr is a terminal ---- */

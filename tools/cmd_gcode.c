@@ -115,7 +115,6 @@ static void print_json(const char *in, const char *out, const amp_printer *pr, c
 {
     cli_json j;
     double sup = amp_pathset_volume(ps, AMP_ROLE_SUPPORT), obj = amp_pathset_volume(ps, AMP_ROLE_OBJECT);
-    const char *u;
     cli_json_begin(&j, stdout);
     cli_json_str(&j, "input", in);
     cli_json_str(&j, "printer", pr->name);
@@ -158,15 +157,7 @@ static void print_json(const char *in, const char *out, const amp_printer *pr, c
     cli_json_num(&j, "travel_time_fraction", st->time > 0.0 ? st->travel_time / st->time : 0.0);
     cli_json_num(&j, "max_travel_z_mm", st->max_travel_z);
     cli_json_int(&j, "printer_keys_read", (long long)pr->n_keys);
-    cli_json_arr(&j, "printer_unknown_keys");
-    for (u = pr->unknown; *u;) {
-        char key[128];
-        size_t n = strcspn(u, ",");
-        snprintf(key, sizeof key, "%.*s", (int)(n < 127 ? n : 127), u);
-        cli_json_str(&j, NULL, key);
-        u += n + (u[n] == ',');
-    }
-    cli_json_close(&j);
+    cli_json_csv(&j, "printer_unknown_keys", pr->unknown);
     cli_json_num(&j, "seconds", secs);
     if (out)
         cli_json_str(&j, "output", out);

@@ -16,7 +16,6 @@ const char cmd_printer_usage[] =
 static void json_profile(const amp_printer *p)
 {
     cli_json j;
-    const char *u;
     cli_json_begin(&j, stdout);
     cli_json_str(&j, "name", p->name);
     cli_json_str(&j, "model", p->model);
@@ -51,15 +50,7 @@ static void json_profile(const amp_printer *p)
     cli_json_str(&j, "end_gcode", p->end_out);
     cli_json_int(&j, "keys_read", (long long)p->n_keys);
     cli_json_int(&j, "unknown_key_count", (long long)p->n_unknown);
-    cli_json_arr(&j, "unknown_keys");
-    for (u = p->unknown; *u;) {
-        char key[128];
-        size_t n = strcspn(u, ",");
-        snprintf(key, sizeof key, "%.*s", (int)(n < 127 ? n : 127), u);
-        cli_json_str(&j, NULL, key);
-        u += n + (u[n] == ',');
-    }
-    cli_json_close(&j);
+    cli_json_csv(&j, "unknown_keys", p->unknown);
     cli_json_end(&j);
 }
 
