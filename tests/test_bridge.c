@@ -18,34 +18,6 @@
 
 #include "testutil.h"
 
-#define MAXARGS 48
-
-static const char *prog(const char *env)
-{
-    const char *p = getenv(env);
-    ck_assert_msg(p != NULL, "%s not set (run through make check)", env);
-    return p;
-}
-
-static void msleep(int ms)
-{
-    struct timespec ts;
-    ts.tv_sec = ms / 1000;
-    ts.tv_nsec = (long)(ms % 1000) * 1000000L;
-    nanosleep(&ts, NULL);
-}
-
-/* Split a space-separated option string into argv (no quoting needed in these tests). */
-static int split(char *s, char **argv, int n)
-{
-    char *tok = strtok(s, " ");
-    while (tok && n < MAXARGS - 1) {
-        argv[n++] = tok;
-        tok = strtok(NULL, " ");
-    }
-    argv[n] = NULL;
-    return n;
-}
 
 typedef struct vpr {
     pid_t pid;
@@ -56,18 +28,18 @@ typedef struct vpr {
 static void vp_start(vpr *v, const char *opts)
 {
     char buf[1024];
-    char *argv[MAXARGS];
+    char *argv[AMP_TEST_MAXARGS];
     int n = 0, i;
     snprintf(v->link, sizeof v->link, "%s", amp_test_tmp("vp-link"));
     snprintf(v->log, sizeof v->log, "%s", amp_test_tmp("vp-log"));
     unlink(v->link);
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)prog("AMP_VPRINTER");
+    argv[n++] = (char *)amp_test_prog("AMP_VPRINTER");
     argv[n++] = "--link";
     argv[n++] = v->link;
     argv[n++] = "--log";
     argv[n++] = v->log;
-    n = split(buf, argv, n);
+    n = amp_test_split(buf, argv, n);
     v->pid = fork();
     ck_assert_int_ge(v->pid, 0);
     if (v->pid == 0) {
@@ -76,7 +48,7 @@ static void vp_start(vpr *v, const char *opts)
         _exit(127);
     }
     for (i = 0; i < 500 && access(v->link, F_OK) != 0; i++)
-        msleep(10);
+        amp_test_msleep(10);
     ck_assert_msg(access(v->link, F_OK) == 0, "virtual printer did not create %s", v->link);
 }
 
@@ -100,20 +72,20 @@ static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char 
 {
     static char obuf[8192];
     char buf[1024], outpath[256];
-    char *argv[MAXARGS];
+    char *argv[AMP_TEST_MAXARGS];
     int n = 0, st;
     pid_t pid;
     FILE *f;
     size_t len;
     snprintf(outpath, sizeof outpath, "%s", amp_test_tmp("bridge-out"));
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)prog("AMP_BRIDGE");
+    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
     argv[n++] = (char *)v->link;
     argv[n++] = (char *)job;
     argv[n++] = "--quiet";
     argv[n++] = "--log";
     argv[n++] = (char *)amp_test_tmp("bridge-log");
-    n = split(buf, argv, n);
+    n = amp_test_split(buf, argv, n);
     pid = fork();
     ck_assert_int_ge(pid, 0);
     if (pid == 0) {
@@ -123,7 +95,7 @@ static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char 
         _exit(127);
     }
     if (sigint_ms > 0) {
-        msleep(sigint_ms);
+        amp_test_msleep(sigint_ms);
         kill(pid, SIGINT);
     }
     waitpid(pid, &st, 0);
@@ -492,12 +464,12 @@ START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
     if (pid == 0) {
         freopen("/dev/null", "w", stdout);
         freopen("/dev/null", "w", stderr);
-        execl(prog("AMP_BRIDGE"), "ampath-bridge", v.link, "--daemon", "--socket", sock, "--flavor", "klipper",
+        execl(amp_test_prog("AMP_BRIDGE"), "ampath-bridge", v.link, "--daemon", "--socket", sock, "--flavor", "klipper",
               "--quiet", (char *)NULL);
         _exit(127);
     }
     for (i = 0; i < 300 && stat(sock, &st) != 0; i++)
-        msleep(10);
+        amp_test_msleep(10);
     ck_assert_int_eq(stat(sock, &st), 0);
     ck_assert_int_eq(st.st_mode & 0777, 0600);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
@@ -510,14 +482,14 @@ START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
         ck_assert_int_eq(ctl(sock, cmd, reply, sizeof reply), 0);
         ck_assert_msg(strncmp(reply, "ok started", 10) == 0, "%s", reply);
     }
-    msleep(300); /* Klipper's 20-line queue is full now (20 ms per command) */
+    amp_test_msleep(300); /* Klipper's 20-line queue is full now (20 ms per command) */
     ck_assert_int_eq(ctl(sock, "pause\n", reply, sizeof reply), 0);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
     ck_assert_ptr_nonnull(strstr(reply, "state=paused"));
     ck_assert_int_eq(ctl(sock, "resume\n", reply, sizeof reply), 0);
     ck_assert_int_eq(ctl(sock, "estop\n", reply, sizeof reply), 0);
     ck_assert_ptr_nonnull(strstr(reply, "ok"));
-    msleep(200);
+    amp_test_msleep(200);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
     ck_assert_msg(strstr(reply, "stop=\"printer shutdown\"") != NULL, "%s", reply);
     ck_assert_int_eq(ctl(sock, "quit\n", reply, sizeof reply), 0);

@@ -26,7 +26,6 @@
 #include "daemon.h"
 #include "testutil.h"
 
-#define MAXARGS 48
 #define DEADLINE 120.0 /* seconds: generous, a loaded machine under ASan is slow; never reached when working */
 
 static const char *FAST = "--timeout 0.3 --settle-ms 5 --boot-wait 0.3 --baud 1000000";
@@ -189,37 +188,11 @@ END_TEST
 
 /* ------------------------------------------------------------------ processes */
 
-static const char *prog(const char *env)
-{
-    const char *p = getenv(env);
-    ck_assert_msg(p != NULL, "%s not set (run through make check)", env);
-    return p;
-}
-
 static double now_s(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static void msleep(int ms)
-{
-    struct timespec ts;
-    ts.tv_sec = ms / 1000;
-    ts.tv_nsec = (long)(ms % 1000) * 1000000L;
-    nanosleep(&ts, NULL);
-}
-
-static int split(char *s, char **argv, int n)
-{
-    char *tok = strtok(s, " ");
-    while (tok && n < MAXARGS - 1) {
-        argv[n++] = tok;
-        tok = strtok(NULL, " ");
-    }
-    argv[n] = NULL;
-    return n;
 }
 
 /* Children die with the test (a failed assertion must not leave daemons behind). */
@@ -259,7 +232,7 @@ static int wait_exit(pid_t pid)
         pid_t r = waitpid(pid, &st, WNOHANG);
         if (r == pid)
             return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-        msleep(10);
+        amp_test_msleep(10);
     }
     kill(pid, SIGKILL);
     waitpid(pid, &st, 0);
@@ -301,7 +274,7 @@ typedef struct vpr {
 static void vp_start(vpr *v, const char *tag, const char *opts)
 {
     char buf[1024], name[64];
-    char *argv[MAXARGS];
+    char *argv[AMP_TEST_MAXARGS];
     int n = 0;
     double t0 = now_s();
     snprintf(name, sizeof name, "vp-link-%s", tag);
@@ -311,15 +284,15 @@ static void vp_start(vpr *v, const char *tag, const char *opts)
     unlink(v->link);
     unlink(v->log);
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)prog("AMP_VPRINTER");
+    argv[n++] = (char *)amp_test_prog("AMP_VPRINTER");
     argv[n++] = "--link";
     argv[n++] = v->link;
     argv[n++] = "--log";
     argv[n++] = v->log;
-    split(buf, argv, n);
+    amp_test_split(buf, argv, n);
     v->pid = spawn(argv, NULL, NULL, NULL, NULL);
     while (access(v->link, F_OK) != 0 && now_s() - t0 < DEADLINE)
-        msleep(10);
+        amp_test_msleep(10);
     ck_assert_msg(access(v->link, F_OK) == 0, "virtual printer did not create %s", v->link);
 }
 
@@ -369,7 +342,7 @@ static int daemon_start(dmn *d, const vpr *v, const char *tag, const char *sock,
                         const char *tmpdir)
 {
     char buf[1024], name[64];
-    char *argv[MAXARGS];
+    char *argv[AMP_TEST_MAXARGS];
     int n = 0, st;
     double t0 = now_s();
     snprintf(d->sock, sizeof d->sock, "%s", sock ? sock : ""); /* amp_test_tmp's buffers rotate */
@@ -378,14 +351,14 @@ static int daemon_start(dmn *d, const vpr *v, const char *tag, const char *sock,
     snprintf(name, sizeof name, "d-err-%s", tag);
     snprintf(d->err, sizeof d->err, "%s", amp_test_tmp(name));
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)prog("AMP_BRIDGE");
+    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
     argv[n++] = (char *)v->link;
     argv[n++] = "--daemon";
     if (sock) {
         argv[n++] = "--socket";
         argv[n++] = d->sock;
     }
-    split(buf, argv, n);
+    amp_test_split(buf, argv, n);
     d->pid = spawn(argv, d->out, d->err, NULL, tmpdir);
     /* up when it says so on stderr (a connect could reach another daemon on the same path) */
     while (now_s() - t0 < DEADLINE) {
@@ -397,7 +370,7 @@ static int daemon_start(dmn *d, const vpr *v, const char *tag, const char *sock,
             snprintf(d->sock, sizeof d->sock, "%.*s", (int)strcspn(p, "\n"), p);
             return -1;
         }
-        msleep(10);
+        amp_test_msleep(10);
     }
     ck_abort_msg("daemon did not come up: %s", slurp(d->err));
     return -2;
@@ -505,7 +478,7 @@ static void wait_state(const char *sock, const char *want)
         status_num(sock, "acked", st, sizeof st);
         if (want ? strcmp(st, want) == 0 : strcmp(st, "printing") != 0 && strcmp(st, "stopping") != 0)
             return;
-        msleep(20);
+        amp_test_msleep(20);
     }
     ck_abort_msg("state %s never reached (now %s)", want ? want : "end", st);
 }
@@ -514,7 +487,7 @@ static void wait_acked(const char *sock, long n)
 {
     double t0 = now_s();
     while (now_s() - t0 < DEADLINE && status_num(sock, "acked", NULL, 0) < n)
-        msleep(20);
+        amp_test_msleep(20);
     ck_assert_int_ge((long)status_num(sock, "acked", NULL, 0), n);
 }
 
@@ -731,7 +704,7 @@ START_TEST(crowd_of_idle_clients_cannot_lock_out_estop)
         /* the printer got it */
         double t0 = now_s();
         while (count_in_file(v.log, "# shutdown") == 0 && now_s() - t0 < DEADLINE)
-            msleep(20);
+            amp_test_msleep(20);
         ck_assert_int_eq(count_in_file(v.log, "# shutdown"), 1);
     }
     /* quit is no priority command: refused while the crowd holds every slot */
@@ -1024,7 +997,7 @@ START_TEST(two_programs_never_share_the_printer)
     vp_start(&v, "a", "");
     ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
     snprintf(out, sizeof out, "%s", amp_test_tmp("oneshot-out"));
-    argv[n++] = (char *)prog("AMP_BRIDGE");
+    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
     argv[n++] = v.link;
     argv[n++] = (char *)job;
     argv[n++] = "--boot-wait";
@@ -1083,14 +1056,14 @@ START_TEST(job_piped_on_stdin_is_refused_and_a_redirected_file_runs)
     const char *job = make_job("job.gcode", 30, NULL);
     vp_start(&v, "a", "");
     snprintf(out, sizeof out, "%s", amp_test_tmp("oneshot-out"));
-    argv[n++] = (char *)prog("AMP_BRIDGE");
+    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
     argv[n++] = v.link;
     argv[n++] = "/dev/stdin";
     argv[n++] = "--boot-wait";
     argv[n++] = "0.3";
     argv[n] = NULL;
     /* a pipe: was "sent 0 commands", exit 0 */
-    snprintf(cmd, sizeof cmd, "cat %s | %s %s /dev/stdin --boot-wait 0.3 > %s 2>&1", job, prog("AMP_BRIDGE"), v.link,
+    snprintf(cmd, sizeof cmd, "cat %s | %s %s /dev/stdin --boot-wait 0.3 > %s 2>&1", job, amp_test_prog("AMP_BRIDGE"), v.link,
              out);
     rc = system(cmd);
     ck_assert_msg(WIFEXITED(rc) && WEXITSTATUS(rc) == 2, "exit %d: %s", WEXITSTATUS(rc), slurp(out));

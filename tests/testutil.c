@@ -3,9 +3,37 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "testutil.h"
+
+const char *amp_test_prog(const char *env)
+{
+    const char *p = getenv(env);
+    ck_assert_msg(p != NULL, "%s not set (run through make check)", env);
+    return p;
+}
+
+void amp_test_msleep(int ms)
+{
+    struct timespec ts;
+    ts.tv_sec = ms / 1000;
+    ts.tv_nsec = (long)(ms % 1000) * 1000000L;
+    nanosleep(&ts, NULL);
+}
+
+int amp_test_split(char *s, char **argv, int n)
+{
+    char *tok = strtok(s, " ");
+    while (tok && n < AMP_TEST_MAXARGS - 1) {
+        argv[n++] = tok;
+        tok = strtok(NULL, " ");
+    }
+    argv[n] = NULL;
+    return n;
+}
 
 const char *amp_test_tmp(const char *name)
 {

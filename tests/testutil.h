@@ -37,6 +37,20 @@
 /** A scratch file path unique to this process: "/tmp/ampath-test-<pid>-<name>". Static buffer per call site. */
 const char *amp_test_tmp(const char *name);
 
+/** Most arguments amp_test_split() fills, the terminating NULL included. */
+#define AMP_TEST_MAXARGS 48
+
+/** The program named by environment variable @p env (set by make check); fails the test when unset. */
+const char *amp_test_prog(const char *env);
+/** Sleep @p ms milliseconds. */
+void amp_test_msleep(int ms);
+/**
+ * Split the space-separated words of @p s (modified in place; no quoting) into
+ * @p argv from index @p n on, NULL-terminated within AMP_TEST_MAXARGS; returns
+ * the new count.
+ */
+int amp_test_split(char *s, char **argv, int n);
+
 /** An allocator that fails after @p budget successful allocations (for out-of-memory paths). */
 typedef struct amp_test_failalloc {
     amp_allocator a;
