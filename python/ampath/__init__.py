@@ -12,7 +12,8 @@ See README.md "Using ampath from Python".
 
 from ._lib import LIBRARY_PATH
 from .core import Error, Mesh, Path, PathSet, Trivariate, mesh_names, trivariate_names
-from .pipeline import (GCode, Printer, Slices, check, cover, coverage_gap, field, gcode, mdr, order, printer_names,
+from .checks import check
+from .pipeline import (GCode, Printer, Slices, cover, coverage_gap, field, gcode, mdr, order, printer_names,
                        slice, support)
 from .preview import preview
 from .bridge import BridgeClient, BridgeError

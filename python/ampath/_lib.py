@@ -245,6 +245,25 @@ class amp_field_stats(Structure):
                 ("shell_paths", c_size_t), ("shell_length", c_double)]
 
 
+AMP_SWEEP_MAX = 256
+
+
+class amp_sweep(Structure):
+    _fields_ = [("n", c_size_t), ("p", amp_vec3 * AMP_SWEEP_MAX), ("t", amp_vec3 * AMP_SWEEP_MAX),
+                ("nrm", amp_vec3 * AMP_SWEEP_MAX), ("s", c_double * AMP_SWEEP_MAX)]
+
+
+class amp_hold_opts(Structure):
+    _fields_ = [(n, c_double) for n in ("overhang", "max_gap", "bridge", "cantilever", "step")]
+
+
+class amp_hold_report(Structure):
+    _fields_ = [("alloc", c_void_p), ("samples", c_size_t), ("unheld", c_size_t), ("bridges", c_size_t),
+                ("bridged_mm", c_double), ("tips", c_size_t), ("failures", c_size_t), ("failed_mm", c_double),
+                ("npaths_failed", c_size_t), ("paths_failed", POINTER(c_size_t)), ("worst_path", c_size_t),
+                ("worst_mm", c_double), ("worst_at", amp_vec3)]
+
+
 class amp_preview_stats(Structure):
     _fields_ = [("width", c_int), ("height", c_int), ("paths", c_size_t), ("support", c_size_t),
                 ("vertices", c_size_t), ("drawn", c_size_t), ("bytes", c_size_t)]
@@ -299,7 +318,8 @@ STRUCTS = {cls.__name__: cls for cls in (
     amp_tri, amp_mesh, amp_stl_stats, amp_head, amp_cover_opts, amp_cover_stats, amp_cover_gap, amp_order_opts,
     amp_order_stats, amp_mdr_opts, amp_mdr_stats, amp_support_opts, amp_support_stats, amp_ring, amp_polyset,
     amp_slice_opts, amp_layer, amp_slices, amp_contpath_opts, amp_contpath_stats, amp_stroke_report,
-    amp_gouge_violation, amp_field, amp_field_opts, amp_field_stats, amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
+    amp_gouge_violation, amp_field, amp_field_opts, amp_field_stats, amp_sweep, amp_hold_opts, amp_hold_report,
+    amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
     amp_printer)}
 
 # ---------------------------------------------------------------- prototypes
@@ -370,8 +390,17 @@ _PROTOS = {
                             E]),
     "amp_field_builtin": (c_int, [P(amp_field), c_char_p, amp_box3, E]),
     "amp_field_from_spline": (c_int, [P(amp_field), P(amp_spline), c_int, E]),
+    "amp_field_sweep": (c_int, [P(amp_field), P(amp_sweep), P(amp_vec3), c_size_t, c_double, E]),
     "amp_field_opts_default": (None, [P(amp_field_opts)]),
     "amp_field_cover": (c_int, [P(amp_field), c_void_p, P(amp_field_opts), P(amp_pathset), P(amp_field_stats), E]),
+    "amp_coverage_gap": (c_int, [P(amp_pathset), c_void_p, c_size_t, c_ulong, c_double, P(c_double), P(c_double),
+                                 E]),
+    "amp_over_coverage": (c_double, [P(amp_pathset), c_double]),
+    "amp_bvh_inside": (c_int, [c_void_p, amp_vec3]),
+    "amp_bvh_closest": (c_double, [c_void_p, amp_vec3, P(amp_vec3), P(c_size_t)]),
+    "amp_hold_opts_default": (None, [P(amp_hold_opts)]),
+    "amp_hold_check": (c_int, [P(amp_pathset), P(amp_hold_opts), P(amp_hold_report), E]),
+    "amp_hold_report_free": (None, [P(amp_hold_report)]),
     "amp_slices_init": (None, [P(amp_slices), c_void_p]),
     "amp_slices_free": (None, [P(amp_slices)]),
     "amp_slice_mesh": (c_int, [P(amp_mesh), P(amp_slice_opts), P(amp_slices), E]),
@@ -458,7 +487,7 @@ DEFAULTS = ((amp_cover_opts, "amp_cover_opts_default", ()), (amp_order_opts, "am
             (amp_mdr_opts, "amp_mdr_opts_default", (0.5,)), (amp_support_opts, "amp_support_opts_default", ()),
             (amp_field_opts, "amp_field_opts_default", ()),
             (amp_contpath_opts, "amp_contpath_opts_default", (0.225,)),
-            (amp_gcode_opts, "amp_gcode_opts_default", (0,)))
+            (amp_gcode_opts, "amp_gcode_opts_default", (0,)), (amp_hold_opts, "amp_hold_opts_default", ()))
 
 
 def probe_default(cls, fn, args=(), c_struct=None):

@@ -204,6 +204,7 @@ class PathSet(_Owner):
         self._ps = L.amp_pathset()
         lib.amp_pathset_init(ctypes.byref(self._ps), None)
         self.stats = {}
+        self.source = None  # the file it was read from (ampath.check reads the eps `ampath cover` noted there)
 
     def _release(self):
         lib.amp_pathset_free(ctypes.byref(self._ps))
@@ -220,6 +221,7 @@ class PathSet(_Owner):
         if st:
             ps.close()
         _check(st, err)
+        ps.source = os.fsdecode(filename)
         return ps
 
     @classmethod

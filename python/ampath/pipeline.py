@@ -71,28 +71,100 @@ def coverage_gap(trivariate, paths, samples=20000, seed=1):
     return d
 
 
-def field(mesh, field, spacing=1.0, pattern="grid", dir="w", **opts):
-    """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
-    "box" or a Trivariate (curves along @dir). Options: step, min_len, radius, shells (amp_field_opts)."""
-    f, o, st, err = L.amp_field(), L.amp_field_opts(), L.new(L.amp_field_stats), _err()
+def _regions(regions, loaded):
+    """Region meshes (Mesh objects or `.stl` names) for amp_field_opts.within/without; the ones loaded here
+    are appended to @loaded (the caller closes them)."""
+    out = []
+    for r in regions:
+        if not isinstance(r, Mesh):
+            r = Mesh.load(r)
+            loaded.append(r)
+        out.append(r)
+    return out
+
+
+def _spine_points(along):
+    """The sweep spine: a PathSet or `.amp` file (its first path, as the tool's --along) or a sequence of
+    (x, y, z[, r]) points (or an (n, 3|4) NumPy array)."""
+    if isinstance(along, (str, bytes)) or hasattr(along, "__fspath__"):
+        with PathSet.read(along) as ps:
+            return [p[:3] for p in ps[0].points] if len(ps) else []
+    if isinstance(along, PathSet):
+        return [p[:3] for p in along[0].points] if len(along) else []
+    return [tuple(p[:3]) for p in (along.tolist() if hasattr(along, "tolist") else along)]
+
+
+def _field_of(field, mesh, dir, along, side, f, err):
+    """Fill the amp_field @f as cmd_field.c does; returns what must outlive the call (sweep, trivariate)."""
     if isinstance(field, Trivariate):
         _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
-    else:
+        return [field]
+    if (field == "sweep") != (along is not None):
+        _fail("along (the spine) goes with field 'sweep' (and is required by it)")
+    if field == "sweep":
+        pts = _spine_points(along)
+        arr = (L.amp_vec3 * max(1, len(pts)))(*[L.amp_vec3(*p) for p in pts])
+        sw = L.new(L.amp_sweep)  # about 25 KB of caller memory the field points into
+        _check(lib.amp_field_sweep(ctypes.byref(f), ctypes.byref(sw), arr, len(pts), side, ctypes.byref(err)), err)
+        return [sw]
+    if field in ("helix-square", "box"):
         _check(lib.amp_field_builtin(ctypes.byref(f), _b(field), lib.amp_mesh_bbox(mesh._ref), ctypes.byref(err)),
                err)
-    lib.amp_field_opts_default(ctypes.byref(o))
-    o.spacing = spacing
+        return []
+    t = Trivariate.load(field)  # a .spl file or a built-in trivariate name, as the tool
+    try:
+        _check(lib.amp_field_from_spline(ctypes.byref(f), t._ref, _dir(dir), ctypes.byref(err)), err)
+    except BaseException:
+        t.close()
+        raise
+    return [t]
+
+
+def field(mesh, field, spacing=1.0, pattern="grid", dir="w", along=None, side=6.0, within=None, without=(),
+          progress=None, **opts):
+    """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
+    "box", "sweep" (a square of side @side mm swept along the spine @along: a PathSet or `.amp` file, its
+    first path, or a sequence of points; paper Fig. 6), a Trivariate, or a built-in trivariate name or `.spl`
+    file (curves along @dir). @within: cover only the part inside this closed region (a Mesh or `.stl`);
+    @without: a region or a list of regions whose parts other fields cover (the tool's --within/--without).
+    Options: step, min_len, radius, shells (amp_field_opts). @progress: a callable taking the fraction done."""
+    f, o, st, err = L.amp_field(), L.amp_field_opts(), L.new(L.amp_field_stats), _err()
     if pattern not in ("grid", "hex"):
         _fail("pattern must be grid or hex")
+    lib.amp_field_opts_default(ctypes.byref(o))
+    o.spacing = spacing
     o.pattern = 0 if pattern == "grid" else 1
     _apply(o, opts, "field", skip=("spacing", "pattern", "within", "without", "nwithout"))
-    out = PathSet()
+    pr = _Progress(progress)
+    o.progress = pr.c
+    if without is None or isinstance(without, (Mesh, str, bytes)) or hasattr(without, "__fspath__"):
+        without = [] if without is None else [without]
+    loaded, out, keep = [], PathSet(), []
+    try:
+        keep = _field_of(field, mesh, dir, along, side, f, err)
+        if not isinstance(field, Trivariate):
+            loaded += [k for k in keep if isinstance(k, Trivariate)]  # loaded by name here: closed below
+        regions = _regions(([within] if within is not None else []) + list(without), loaded)
+        with _hold(*regions):
+            bvhs = [r.bvh() for r in regions]
+            if within is not None:
+                o.within = bvhs.pop(0)
+            arr = (ctypes.c_void_p * max(1, len(bvhs)))(*bvhs)
+            o.without, o.nwithout = (ctypes.cast(arr, ctypes.c_void_p), len(bvhs)) if bvhs else (None, 0)
 
-    def go():
-        _check(lib.amp_field_cover(ctypes.byref(f), mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
-                                   ctypes.byref(err)), err)
-        out.stats = _todict(st)
-    return _run(go, out, None, (mesh,))
+            def go():
+                _check(lib.amp_field_cover(ctypes.byref(f), mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
+                                           ctypes.byref(err)), err)
+                out.stats = _todict(st)
+            _run(go, out, pr, [mesh] + [k for k in keep if isinstance(k, Trivariate)])
+        del arr
+    except BaseException:
+        out.close()
+        raise
+    finally:
+        for m in loaded:
+            m.close()
+    return out
 
 
 def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts):
@@ -371,62 +443,6 @@ def slice(mesh, layer, first_layer=0.0, continuous=False, radius=None, nozzle=No
         return sl.continuous(r, **opts) if continuous else sl.polygons(r)
 
 
-# ---------------------------------------------------------------- check
-
-
-def _planar(path):
-    pts = path.points
-    return len(pts) > 0 and all(abs(p[2] - pts[0][2]) <= 1e-9 for p in pts)
-
-
-def check(paths, trivariate=None, z_offs=0.5, theta_deg=72.0, eps=None, samples=20000, seed=1):
-    """Independent verification as `ampath check` does it, figures as a dict: "coverage" (with a
-    trivariate), "gouge" (object paths), "strokes" (planar paths), each with "ran" and "ok", and "ok"."""
-    with _hold(paths, trivariate):
-        return _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed)
-
-
-def _check_held(paths, trivariate, z_offs, theta_deg, eps, samples, seed):
-    res = {}
-    h = _head(z_offs, theta_deg)
-    if trivariate is not None:
-        if eps is None:
-            eps = max((v[3] for p in paths for v in p.points), default=0.0)
-        g = coverage_gap(trivariate, paths, samples, seed)
-        g.update(ran=True, ok=g["gap"] <= eps, eps=eps)
-        res["coverage"] = g
-    else:
-        res["coverage"] = {"ran": False, "reason": "no model"}
-    if any(p.role == "object" for p in paths):
-        v, err = L.new(L.amp_gouge_violation), _err()
-        st = lib.amp_gouge_check(paths._ref, ctypes.byref(h), 0, 1e-6, ctypes.byref(v), ctypes.byref(err))
-        if st not in (0, -10):
-            _check(st, err)
-        res["gouge"] = {"ran": True, "ok": st == 0}
-        if st:
-            res["gouge"]["violation"] = _todict(v)
-            res["gouge"]["message"] = err.msg.decode()
-    else:
-        res["gouge"] = {"ran": False, "reason": "no object paths"}
-    planar = [i for i, p in enumerate(paths) if _planar(p)]
-    if planar:
-        tot = dict(paths=len(planar), segments=0, pseudo=0, crossings=0, repeated_edges=0, failed=0)
-        for i in planar:
-            rep, err = L.new(L.amp_stroke_report), _err()
-            st = lib.amp_pathset_stroke_check(paths._ref, i, None, 1e-6, ctypes.byref(rep), ctypes.byref(err))
-            if st == -2:
-                _check(st, err)
-            tot["failed"] += st != 0
-            for k in ("segments", "pseudo", "crossings", "repeated_edges"):
-                tot[k] += getattr(rep, k)
-        tot.update(ran=True, ok=tot["failed"] == 0)
-        res["strokes"] = tot
-    else:
-        res["strokes"] = {"ran": False, "reason": "no planar paths"}
-    res["ok"] = all(s.get("ok", True) for s in res.values())
-    return res
-
-
 # ---------------------------------------------------------------- printers and G-code
 
 
@@ -535,5 +551,5 @@ def _gcode_held(paths, output, o, pr, keep):
     return GCode(text, _todict(st), pr)
 
 
-__all__ = ["cover", "coverage_gap", "field", "order", "mdr", "support", "Slices", "slice", "check",
+__all__ = ["cover", "coverage_gap", "field", "order", "mdr", "support", "Slices", "slice",
            "printer_names", "Printer", "GCode", "gcode", "Error"]

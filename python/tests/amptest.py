@@ -1,5 +1,6 @@
 """Shared helpers of the Python tests: where the programs are, running the tool, comparing outputs."""
 
+import math
 import os
 import shutil
 import subprocess
@@ -45,6 +46,17 @@ def strip_comments(data):
     if isinstance(data, str):
         data = data.encode()
     return b"".join(l for l in data.splitlines(True) if not l.startswith(b"#"))
+
+
+def as_tool_prints(x):
+    """A figure as `ampath ... --json` prints it: %.12g, non-finite as null; timings dropped."""
+    if isinstance(x, dict):
+        return {k: as_tool_prints(v) for k, v in x.items() if k not in ("time_s", "input")}
+    if isinstance(x, (list, tuple)):
+        return [as_tool_prints(v) for v in x]
+    if isinstance(x, float):
+        return float("%.12g" % x) if math.isfinite(x) else None
+    return x
 
 
 def read(path):

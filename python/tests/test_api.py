@@ -101,7 +101,7 @@ class Stages(TmpCase):
                 res = ampath.check(good, trivariate=v, eps=3, samples=2000)
                 self.assertTrue(res["ok"], res)
                 self.assertTrue(res["gouge"]["ok"])
-                self.assertLessEqual(res["coverage"]["gap"], 3)
+                self.assertLessEqual(res["coverage"]["coverage_gap_mm"], 3)
         # a high path printed first, then one right under it: the head gouges the first
         with ampath.PathSet() as bad:
             bad.add([(0, 0, 5), (10, 0, 5)], radius=0.5)

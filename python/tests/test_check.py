@@ -1,0 +1,111 @@
+"""ampath.check against `ampath check ... --json` on the same inputs: every section (coverage of a trivariate
+and of a mesh, gouge, strokes with and without layer polygons, support holding) with the same keys and
+the same figures (the tool prints numbers with 12 significant digits; only the timings differ)."""
+
+import json
+
+from amptest import TmpCase, ampath, as_tool_prints, tool
+
+
+class CheckFigures(TmpCase):
+    def setUp(self):
+        super().setUp()
+        # the helix: covered, ordered and supported by the tool (its paths fail the support check: 68 object
+        # paths are left unheld by `ampath support` at eps 3; planar support paths run the stroke check)
+        tool("model", "helix", "-o", self.p("h.stl"))
+        tool("cover", "helix", "--eps", 3, "--dir", "u", "-o", self.p("c.amp"))
+        tool("order", self.p("c.amp"), "-o", self.p("o.amp"))
+        tool("support", self.p("o.amp"), "--mesh", self.p("h.stl"), "-o", self.p("s.amp"))
+
+    def same(self, amp, tool_args, **kw):
+        """The tool's figures and Python's on @amp; returns them (after asserting they are equal)."""
+        r = tool("check", amp, "--json", *tool_args, ok=False)
+        self.assertIn(r.returncode, (0, 1), r.stderr)
+        theirs = json.loads(r.stdout)
+        ours = ampath.check(amp, **kw)
+        ours["gouge"].pop("message", None)  # the tool prints it on stderr, without --json (below)
+        self.assertEqual(as_tool_prints(ours), as_tool_prints(theirs), " ".join(map(str, tool_args)))
+        self.assertEqual(ours["ok"], r.returncode == 0)
+        return ours, theirs
+
+    def test_mesh_coverage_and_support_equal_the_tool(self):
+        ours, _ = self.same(self.p("s.amp"), ["--mesh", self.p("h.stl"), "--samples", 2000],
+                            mesh=self.p("h.stl"), samples=2000)
+        cov, sup = ours["coverage"], ours["support"]
+        self.assertEqual((cov["ran"], cov["model"]), (True, "mesh"))
+        self.assertGreater(cov["vertices_outside"], 0)  # the paths of the exact model poke out of its tessellation
+        self.assertFalse(cov["ok"])
+        self.assertTrue(sup["ran"])
+        self.assertFalse(sup["ok"])
+        self.assertEqual(sup["unheld_paths"], len(sup["unheld_path_list"]))
+        self.assertIn(sup["worst_path"], sup["unheld_path_list"])
+        self.assertTrue(ours["strokes"]["ok"] and ours["gouge"]["ok"])
+        # options of the tool, as keyword arguments: a wider tolerance outside, a longer bridge, a Mesh object
+        with ampath.Mesh.load(self.p("h.stl")) as m:
+            ours, _ = self.same(self.p("s.amp"), ["--mesh", self.p("h.stl"), "--samples", 500, "--seed", 7,
+                                                  "--eps", 2, "--tol", 0.1, "--bridge", 30, "--overhang", 60,
+                                                  "--max-gap", 2],
+                                mesh=m, samples=500, seed=7, eps=2, tol=0.1, bridge=30, overhang_deg=60, max_gap=2)
+        self.assertEqual(ours["coverage"]["eps"], 2)
+        self.assertEqual(ours["support"]["bridge_mm"], 30)
+
+    def test_trivariate_coverage_takes_the_eps_cover_recorded(self):
+        ours, _ = self.same(self.p("s.amp"), ["--trivariate", "helix", "--samples", 2000],
+                            trivariate="helix", samples=2000)
+        self.assertEqual((ours["coverage"]["eps"], ours["coverage"]["eps_from"]), (3, "path file"))
+        self.assertTrue(ours["coverage"]["ok"])
+        with ampath.Trivariate.model("helix") as v, ampath.PathSet.read(self.p("o.amp")) as ps:
+            ours, _ = self.same(self.p("o.amp"), ["--trivariate", "helix", "--samples", 1000, "--no-gouge",
+                                                  "--support", "--eps", 0.4],
+                                trivariate=v, samples=1000, skip=("gouge",), support=True, eps=0.4)
+            self.assertFalse(ours["coverage"]["ok"])  # a gap above 0.4 mm
+            self.assertEqual(ours["gouge"], {"ran": False, "reason": "skipped on request"})
+            self.assertTrue(ours["support"]["ran"])  # no support paths, but asked for
+            self.assertEqual(ampath.check(ps, trivariate=v, samples=1000)["coverage"]["eps_from"], "path file")
+        with ampath.PathSet.read(self.p("o.amp")) as ps, ampath.PathSet().extend(ps) as copy:
+            self.assertEqual(ampath.check(copy, trivariate="helix", samples=500)["coverage"]["eps_from"],
+                             "largest radius")  # made in memory: no file to read the eps from
+
+    def test_strokes_against_the_layer_polygons_equal_the_tool(self):
+        tool("slice", self.p("h.stl"), "--layer", 0.6, "--continuous", "-o", self.p("cont.amp"))
+        ours, _ = self.same(self.p("cont.amp"), ["--mesh", self.p("h.stl"), "--layer", 0.6],
+                            mesh=self.p("h.stl"), layer=0.6)
+        st = ours["strokes"]
+        self.assertTrue(st["ran"] and st["ok"])
+        self.assertEqual(ours["coverage"]["reason"], "--layer given: the mesh is used for the stroke check")
+        # checked against another layer height, the strokes match no layer: the check fails, as the tool's
+        ours, _ = self.same(self.p("cont.amp"), ["--mesh", self.p("h.stl"), "--layer", 0.5],
+                            mesh=self.p("h.stl"), layer=0.5)
+        self.assertFalse(ours["strokes"]["ok"])
+        self.assertGreater(ours["strokes"]["paths_without_layer"], 0)
+
+    def test_a_gouge_and_a_bead_in_the_air_fail_as_in_the_tool(self):
+        with ampath.PathSet() as bad:
+            bad.add([(0, 0, 5), (10, 0, 5)], radius=0.5)  # printed first, high: then the head hits it
+            bad.add([(0, 0, 1), (10, 0, 1)], radius=0.5)
+            bad.write(self.p("bad.amp"))
+        ours, _ = self.same(self.p("bad.amp"), ["--support"], support=True)
+        self.assertFalse(ours["gouge"]["ok"])
+        message = ampath.check(self.p("bad.amp"))["gouge"]["message"]
+        self.assertIn("ampath check: %s\n" % message, tool("check", self.p("bad.amp"), ok=False).stderr)
+        self.assertEqual(ours["gouge"]["violation"]["later_path"], 1)
+        self.assertFalse(ours["support"]["ok"])  # the path at z = 5 is printed over nothing
+        self.assertEqual(ours["support"]["unheld_path_list"][0], 0)
+        ours, _ = self.same(self.p("bad.amp"), [])
+        self.assertEqual(ours["support"]["reason"],
+                         "no support paths (--support requires every object path to be held)")
+
+    def test_bad_options_raise_as_the_tool_refuses_them(self):
+        for kw in (dict(trivariate="helix", mesh=self.p("h.stl")), dict(eps=0), dict(samples=0),
+                   dict(layer=0.3), dict(tol=-1), dict(overhang_deg=90), dict(bridge=-1), dict(skip=("speed",))):
+            with self.assertRaises(ampath.Error, msg=str(kw)) as cm:
+                ampath.check(self.p("o.amp"), **kw)
+            self.assertEqual(cm.exception.name, "AMP_ERR_ARG")
+        with self.assertRaises(ampath.Error) as cm:
+            ampath.check(self.p("o.amp"), trivariate=self.p("missing.spl"))
+        self.assertIn("missing.spl", cm.exception.message)
+
+
+if __name__ == "__main__":
+    import unittest
+    unittest.main()
