@@ -8,8 +8,8 @@ replies carry "ok" (and echo our "id"), events carry "event".
             if ev["event"] == "end":
                 break
 
-Pure standard library; no libampath call. Requests from several threads are serialised by a lock;
-events() is meant for one consumer.
+Pure standard library (no libampath call; failures are ampath.Error all the same). Thread-safe: requests
+from any thread, events() in one consumer thread at the same time (a reader thread sorts the lines).
 """
 
 import collections
@@ -18,12 +18,17 @@ import os
 import socket
 import threading
 
+from .core import Error
 
-class BridgeError(Exception):
-    """The daemon refused a request (.reply holds its answer) or the connection failed."""
+_ERR_IO, _ERR_STATE = -5, -8  # AMP_ERR_IO, AMP_ERR_STATE
 
-    def __init__(self, message, reply=None):
-        super().__init__(message)
+
+class BridgeError(Error):
+    """The daemon refused a request (status AMP_ERR_STATE; .reply holds its answer) or the connection failed
+    (AMP_ERR_IO). A subclass of ampath.Error: `except ampath.Error` catches the bridge's failures too."""
+
+    def __init__(self, message, reply=None, status=_ERR_IO):
+        super().__init__(status, message)
         self.reply = reply
 
 
@@ -36,27 +41,45 @@ def default_socket():
 
 
 class BridgeClient:
+    """One connection to the daemon. Thread-safe: any thread may send requests while another iterates over
+    events(); a reader thread of the client sorts what arrives into replies (by "id") and events."""
+
     def __init__(self, path=None, timeout=30.0):
         self.path = path or default_socket()
         self.timeout = timeout
         self._sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self._sock.settimeout(timeout)
         try:
+            self._sock.settimeout(timeout)
             self._sock.connect(self.path)
+            self._sock.settimeout(None)  # the reader blocks; waits are bounded on the conditions below
         except OSError as e:
             self._sock.close()
             raise BridgeError("%s: %s" % (self.path, e.strerror or e)) from e
-        self._buf = b""
+        self._send_lock = threading.Lock()
+        self._cond = threading.Condition()
+        self._replies = {}  # id -> reply, until its request takes it
+        self._pending = []  # ids sent and not answered, oldest first
         self._events = collections.deque()
-        self._lock = threading.Lock()
+        self._eof = None  # why the connection ended (str), once it has
         self._next_id = 1
+        self._reader = threading.Thread(target=self._read_loop, name="ampath-bridge-reader", daemon=True)
+        self._reader.start()
 
     # ------------------------------------------------------------ plumbing
 
     def close(self):
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
+        """Close the connection (idempotent); the reader thread ends."""
+        sock, self._sock = getattr(self, "_sock", None), None
+        if sock is None:
+            return
+        try:
+            sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
+        sock.close()
+        reader = getattr(self, "_reader", None)
+        if reader is not None and reader is not threading.current_thread():
+            reader.join()
 
     def __enter__(self):
         return self
@@ -67,44 +90,60 @@ class BridgeClient:
     def __del__(self):
         self.close()
 
-    def _readline(self, timeout):
-        while b"\n" not in self._buf:
-            self._sock.settimeout(timeout)
-            try:
-                chunk = self._sock.recv(65536)
-            except socket.timeout:
-                return None
-            if not chunk:
-                raise EOFError("the daemon closed the connection")
-            self._buf += chunk
-        line, self._buf = self._buf.split(b"\n", 1)
-        return json.loads(line.decode("utf-8"))
+    def _read_loop(self):
+        buf, sock, why = b"", self._sock, "the daemon closed the connection"
+        try:
+            while True:
+                chunk = sock.recv(65536)
+                if not chunk:
+                    break
+                buf += chunk
+                while b"\n" in buf:
+                    line, buf = buf.split(b"\n", 1)
+                    if line.strip():
+                        self._deliver(json.loads(line.decode("utf-8")))
+        except (OSError, ValueError) as e:
+            why = "connection lost: %s" % e if self._sock is not None else "closed"
+        with self._cond:
+            self._eof = why if self._sock is not None else "closed"
+            self._cond.notify_all()
+
+    def _deliver(self, msg):
+        with self._cond:
+            if "event" in msg:
+                self._events.append(msg)
+            else:
+                rid = msg.get("id")
+                if rid not in self._pending and self._pending:
+                    rid = self._pending[0]  # a reply without our id answers the oldest request
+                if rid in self._pending:
+                    self._pending.remove(rid)
+                    self._replies[rid] = msg
+            self._cond.notify_all()
 
     def request(self, cmd, **fields):
-        """Send one request and return its reply (a dict); events that arrive first are kept for events().
-        Raises BridgeError when the reply says "ok": false."""
-        with self._lock:
-            if self._sock is None:
-                raise BridgeError("closed")
+        """Send one request and return its reply (a dict). Raises BridgeError when the reply says
+        "ok": false (AMP_ERR_STATE), or when no reply comes within the client's timeout (AMP_ERR_IO)."""
+        with self._cond:
+            if self._sock is None or self._eof:
+                raise BridgeError("%s: %s" % (cmd, self._eof or "closed"))
             rid = self._next_id
             self._next_id += 1
-            msg = dict(fields, cmd=cmd, id=rid)
-            self._sock.sendall((json.dumps(msg) + "\n").encode())
-            while True:
-                try:
-                    reply = self._readline(self.timeout)
-                except EOFError as e:
-                    raise BridgeError(str(e)) from e
-                if reply is None:
-                    raise BridgeError("no reply to %s within %g s" % (cmd, self.timeout))
-                if "event" in reply:
-                    self._events.append(reply)
-                    continue
-                if reply.get("id", rid) != rid:
-                    continue
-                if not reply.get("ok"):
-                    raise BridgeError("%s: %s" % (cmd, reply.get("error", "refused")), reply)
-                return reply
+            self._pending.append(rid)
+        try:
+            with self._send_lock:
+                self._sock.sendall((json.dumps(dict(fields, cmd=cmd, id=rid)) + "\n").encode())
+        except (OSError, AttributeError) as e:
+            raise BridgeError("%s: %s" % (cmd, getattr(e, "strerror", None) or e)) from e
+        with self._cond:
+            if not self._cond.wait_for(lambda: rid in self._replies or self._eof, self.timeout):
+                raise BridgeError("no reply to %s within %g s" % (cmd, self.timeout))
+            reply = self._replies.pop(rid, None)
+        if reply is None:
+            raise BridgeError("%s: %s" % (cmd, self._eof))
+        if not reply.get("ok"):
+            raise BridgeError("%s: %s" % (cmd, reply.get("error", "refused")), reply, _ERR_STATE)
+        return reply
 
     # ------------------------------------------------------------ the commands of docs/bridge.md
 
@@ -141,20 +180,13 @@ class BridgeClient:
 
     def events(self, timeout=None):
         """Iterate over events ({"event": "state"|"progress"|"error"|"warning"|"end", ...}) after subscribe().
-        Ends when the daemon closes the connection, or when no event came for @timeout seconds."""
+        Ends when the connection ends, or when no event came for @timeout seconds (None: no limit).
+        Meant for one consumer; other threads may send requests meanwhile."""
         while True:
-            with self._lock:
-                if self._events:
-                    ev = self._events.popleft()
-                else:
-                    if self._sock is None:
-                        return
-                    try:
-                        ev = self._readline(timeout)
-                    except EOFError:
-                        return
-                    if ev is None:
-                        return
-                    if "event" not in ev:
-                        continue  # a late reply to a request that timed out
+            with self._cond:
+                if not self._cond.wait_for(lambda: self._events or self._eof, timeout):
+                    return
+                if not self._events:
+                    return
+                ev = self._events.popleft()
             yield ev

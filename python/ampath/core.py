@@ -294,12 +294,12 @@ class PathSet(_Owner):
         """All vertices as an (n, 4) NumPy array of x, y, z, r (needs NumPy; one copy, no Python loop)."""
         if _np is None:
             raise ImportError("NumPy is not installed")
-        self._live()
-        n = self._ps.nverts
-        if n == 0:
-            return _np.zeros((0, 4))
-        buf = (ctypes.c_double * (4 * n)).from_address(ctypes.addressof(self._ps.verts.contents))
-        return _np.array(buf, dtype=float).reshape(n, 4)
+        with self._using():  # add() in another thread waits: the vertex array does not move under the copy
+            n = self._ps.nverts
+            if n == 0:
+                return _np.zeros((0, 4))
+            buf = (ctypes.c_double * (4 * n)).from_address(ctypes.addressof(self._ps.verts.contents))
+            return _np.array(buf, dtype=float).reshape(n, 4)
 
     @property
     def vertex_count(self):

@@ -78,12 +78,12 @@ def main(argv=None):
         figures["gcode"] = gcode
         if a.bridge is not None:
             figures["bridge"] = send(a.bridge or None, gcode, a.follow)
+    except ampath.BridgeError as e:  # an ampath.Error too: caught first
+        print("host_plugin: bridge: %s" % e.message, file=sys.stderr)
+        return 1
     except ampath.Error as e:
         print("host_plugin: %s" % e.message, file=sys.stderr)
         return 2
-    except ampath.BridgeError as e:
-        print("host_plugin: bridge: %s" % e, file=sys.stderr)
-        return 1
     print(json.dumps(figures))
     return 0 if figures.get("bridge", "done") in ("done", "submitted") else 1
 

@@ -51,6 +51,34 @@ class Paths(TmpCase):
             self.assertEqual(a.shape, (8, 4))
             self.assertTrue((a[:4] == pts).all())
             self.assertTrue((ps[1].array()[:, 3] == 0.3).all())
+            self.assertEqual(ps[0].points, [tuple(map(float, p)) for p in square()])
+            # a NumPy spine for the sweep field, as a sequence would be
+            with ampath.Mesh.model("crocodile-like") as m:
+                spine = [(14, 2, 13), (16, 6, 9), (19, 15, 6), (17, 17, -1)]
+                with ampath.field(m, "sweep", along=numpy.array(spine), side=7, spacing=3) as a, \
+                        ampath.field(m, "sweep", along=spine, side=7, spacing=3) as b:
+                    self.assertEqual(a.to_amp(), b.to_amp())
+                    self.assertEqual(a.array().shape, (a.vertex_count, 4))
+
+    def test_without_numpy_sequences_work_and_arrays_say_numpy_is_missing(self):
+        code = ("import sys; sys.modules['numpy'] = None\n"  # as if NumPy were not installed
+                "import ampath\n"
+                "ps = ampath.PathSet().add([(0, 0, 0.2), (10, 0, 0.2)], radius=0.25)\n"
+                "print(ps[0].points)\n"
+                "for a in (ps.array, ps[0].array):\n"
+                "    try:\n"
+                "        a()\n"
+                "    except ImportError as e:\n"
+                "        print(e)\n")
+        import os
+        import subprocess
+        import sys
+        from amptest import HERE
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                           env=dict(os.environ, PYTHONPATH=os.path.join(HERE, "..")))
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(r.stdout.splitlines(), ["[(0.0, 0.0, 0.2, 0.25), (10.0, 0.0, 0.2, 0.25)]",
+                                                 "NumPy is not installed", "NumPy is not installed"])
 
     def test_closed_objects_refuse_use_and_close_twice_is_harmless(self):
         ps = ampath.PathSet().add(square())

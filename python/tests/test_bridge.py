@@ -6,6 +6,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 import unittest
 
@@ -140,24 +141,55 @@ class Bridge(TmpCase):
             with self.assertRaises(ampath.BridgeError) as cm:
                 b.submit(self.p("no-such-job.gcode"))
             self.assertFalse(cm.exception.reply["ok"])
+            self.assertIsInstance(cm.exception, ampath.Error)  # one exception type for the whole package
+            self.assertEqual(cm.exception.name, "AMP_ERR_STATE")
             self.assertIn("no-such-job", str(cm.exception))
             self.assertEqual(b.status()["state"], "idle")  # the connection still works
-        with self.assertRaises(ampath.BridgeError):
+        with self.assertRaises(ampath.BridgeError) as cm:
             ampath.BridgeClient(self.p("no-such.sock"))
+        self.assertEqual(cm.exception.name, "AMP_ERR_IO")
 
-    def test_pause_resume_and_cancel(self):
+    def test_pause_resume_and_cancel_while_another_thread_follows_the_events(self):
+        """A host follows the events in one thread while its UI pauses, resumes and cancels from another:
+        no request waits for the next event (while paused there is none)."""
         job = self.job(150, length=2)
+        seen, done = [], threading.Event()
+
+        def consume(b):
+            for ev in b.events(timeout=DEADLINE):
+                seen.append(ev)
+                if ev["event"] == "end":
+                    break
+            done.set()
+
         with ampath.BridgeClient(self.sock) as b:
             b.subscribe()
             b.submit(job)
+            consumer = threading.Thread(target=consume, args=(b,))
+            consumer.start()
             b.pause()
             wait_for(lambda: b.status()["state"] == "paused", "paused")
-            b.resume()
+            wait_for(lambda: any(e["event"] == "state" and e["state"] == "paused" for e in seen), "the paused event")
+            b.resume()  # the consumer waits for an event meanwhile: before, this waited for it to time out
+            self.assertFalse(done.is_set(), "resume() waited for the event consumer")
             wait_for(lambda: b.status()["state"] != "paused", "resumed")
             b.cancel()
-            end = self.follow(b)
+            consumer.join(DEADLINE)
+            end = seen[-1]
+            self.assertEqual(end["event"], "end")
             self.assertEqual(end["state"], "cancelled")
             self.assertLess(end["acked"], end["total"])
+        self.assertRaises(ampath.BridgeError, b.status)  # closed
+
+    def test_a_closed_connection_ends_the_events_and_fails_requests(self):
+        with ampath.BridgeClient(self.sock) as b, ampath.BridgeClient(self.sock) as other:
+            b.subscribe()
+            other.quit()  # the daemon exits: our connection ends
+            self.assertEqual([e for e in b.events(timeout=DEADLINE) if e["event"] == "end"], [])
+            with self.assertRaises(ampath.Error) as cm:
+                b.status()
+            self.assertEqual(cm.exception.name, "AMP_ERR_IO")
+        self.assertEqual(self.daemon.wait(DEADLINE), 0)
 
 
 if __name__ == "__main__":
