@@ -13,11 +13,22 @@ import unittest
 from amptest import BRIDGE, HERE, VPRINTER, TmpCase, ampath
 
 EXAMPLE = os.path.join(HERE, "..", "examples", "host_plugin.py")
+README = os.path.join(HERE, "..", "..", "README.md")
 
 
-def box_stl(path, sx=12.0, sy=8.0, sz=1.2):
-    """An ASCII STL of a closed box on the plate (two outward triangles per face)."""
-    v = [(x * sx, y * sy, z * sz) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
+def readme_python():
+    """The Python example of README.md's section "Using ampath from Python"."""
+    with open(README) as f:
+        text = f.read()
+    section = text[text.index("## Using ampath from Python"):]
+    start = section.index("```python\n") + len("```python\n")
+    return section[start:section.index("```\n", start)]
+
+
+def box_stl(path, sx=12.0, sy=8.0, sz=1.2, at=(0, 0, 0)):
+    """An ASCII STL of a closed box (two outward triangles per face), on the plate or with its lowest
+    corner @at."""
+    v = [(at[0] + x * sx, at[1] + y * sy, at[2] + z * sz) for z in (0, 1) for y in (0, 1) for x in (0, 1)]
     quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
     with open(path, "w") as f:
         f.write("solid box\n")
@@ -135,6 +146,33 @@ class Bridge(TmpCase):
             moves = sum(1 for l in f if l.startswith(("G0 ", "G1 ")))
         done = sum(1 for l in self.executed() if " G0 " in l or " G1 " in l)
         self.assertEqual(done, moves)
+
+    def test_the_readme_example_runs_as_written(self):
+        """README.md "Using ampath from Python", run as a user would: in a directory holding part.stl (and
+        the spine and region it names), with the daemon at its default socket ($XDG_RUNTIME_DIR)."""
+        work = self.p("user")
+        os.makedirs(work)
+        box_stl(os.path.join(work, "part.stl"), 20, 10, 6)
+        with open(os.path.join(work, "spine.amp"), "w") as f:
+            f.write("ampath-paths 1\npath object 2\n5 5 -1 1\n5 5 7 1\n")  # a square of side 4 along it
+        box_stl(os.path.join(work, "region.stl"), 3, 3, 8, at=(3.5, 3.5, -1))  # inside the sweep
+        # the daemon's default socket in a runtime directory of ours (mode 0700, as logind makes it)
+        run = self.p("run")
+        os.makedirs(run, mode=0o700)
+        os.symlink(self.sock, os.path.join(run, "ampath-bridge.sock"))
+        env = dict(os.environ, XDG_RUNTIME_DIR=run, PYTHONPATH=os.path.join(HERE, ".."))
+        r = subprocess.run([sys.executable, "-c", readme_python()], cwd=work, env=env, capture_output=True, text=True,
+                           timeout=1800)
+        self.assertEqual(r.returncode, 0, r.stderr[-3000:])
+        out = r.stdout.splitlines()
+        self.assertEqual(out[-1], "done")  # the job printed on the virtual printer
+        self.assertIn("AMP_ERR_IO", out[-2])
+        self.assertTrue(all(os.path.exists(os.path.join(work, f)) for f in ("helix.gcode", "mine.gcode")))
+        import ast
+        figures = [ast.literal_eval(l) for l in out if l.startswith("{")]
+        strokes, cover = [d for d in figures if "ran" in d]
+        self.assertTrue(strokes["ok"] and strokes["paths"] > 0, strokes)
+        self.assertTrue(cover["ok"] and cover["model"] == "mesh", cover)  # the two fields cover the part
 
     def test_refusals_raise_bridge_error_with_the_reply(self):
         with ampath.BridgeClient(self.sock) as b:
