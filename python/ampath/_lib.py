@@ -14,7 +14,7 @@ import ctypes.util
 import os
 import subprocess
 
-from ctypes import (POINTER, Structure, c_char, c_char_p, c_double, c_float, c_int, c_long, c_size_t,
+from ctypes import (POINTER, Structure, c_char, c_char_p, c_double, c_int, c_long, c_size_t,
                     c_uint32, c_ulong, c_void_p)
 
 # ---------------------------------------------------------------- finding the library

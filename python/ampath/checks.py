@@ -68,7 +68,8 @@ def _eps_from_comment(ps):
     return 0.0
 
 
-def _coverage_trivariate(ps, obj, v, eps):
+def _trivariate_eps(ps, obj, eps):
+    """The allowed gap and where it came from, as tools/check_trivariate.c picks them."""
     eps_from = "--eps"
     if eps is None:
         eps, eps_from = _eps_from_comment(ps), "path file"
@@ -79,7 +80,7 @@ def _coverage_trivariate(ps, obj, v, eps):
 
 
 def _run_trivariate(ps, obj, v, eps, samples, seed):
-    eps, eps_from = _coverage_trivariate(ps, obj, v, eps)
+    eps, eps_from = _trivariate_eps(ps, obj, eps)
     g, err = L.new(L.amp_cover_gap), _err()
     _check(lib.amp_cover_measure_gap(v._ref, obj._ref, samples, seed, ctypes.byref(g), ctypes.byref(err)), err)
     return {"ran": True, "ok": g.gap <= eps, "model": "trivariate", "eps": eps, "eps_from": eps_from,
@@ -275,7 +276,8 @@ def check(paths, trivariate=None, mesh=None, layer=None, first_layer=0.0, z_offs
 
 
 def _slices_for(mesh, layer, first_layer):
-    """The layers the strokes are checked against, from a fresh copy of the mesh (slicing orients it)."""
+    """The layers the strokes are checked against, from a copy of the mesh (slicing orients it; the caller's
+    Mesh stays as it is): a Mesh passes through its binary STL, exact for a mesh read from one."""
     from .pipeline import Slices
     if isinstance(mesh, Mesh):
         with Mesh.from_stl_bytes(mesh.to_stl()) as m:

@@ -8,7 +8,6 @@ so a leak can hide in it."""
 import ctypes
 import gc
 import os
-import sys
 import tracemalloc
 import unittest
 
