@@ -36,12 +36,25 @@ class SweepAndRegions(TmpCase):
             f.write(box_stl(*BOX))
 
     def field_tool(self, out, *args):
-        tool("field", self.p("croc.stl"), "--samples", 0, "-o", self.p(out), *args)
+        r = tool("field", self.p("croc.stl"), "--samples", 0, "--json", "-o", self.p(out), *args)
+        self.figures = json.loads(r.stdout)
         return strip_comments(read(self.p(out)))
+
+    def assertSameFigures(self, stats, figures):
+        """.stats against the tool's --json (amp_field_stats under the tool's names)."""
+        names = {"curves": "curves", "pieces": "paths", "length_before": "length_before_mm",
+                 "length_after": "length_after_mm", "radius": "radius_mm", "target": "covering_radius_mm",
+                 "bound": "bound_mm", "inserted": "inserted_curves", "shell_paths": "shell_paths",
+                 "shell_length": "shell_length_mm"}
+        self.assertEqual(as_tool_prints({names[k]: stats[k] for k in names}),
+                         {v: figures[v] for v in names.values()})
+        self.assertEqual([stats["grid_a"], stats["grid_b"]], figures["grid"])
+        self.assertEqual(bool(stats["bound_met"]), figures["bound_met"])
 
     def test_sweep_field_matches_the_tool_byte_for_byte(self):
         theirs = self.field_tool("leg.amp.out", "--field", "sweep", "--along", self.p("leg.amp"), "--side", 7,
                                  "--spacing", 2)
+        figures = self.figures
         other = self.field_tool("leg5.amp.out", "--field", "sweep", "--along", self.p("leg.amp"), "--side", 5,
                                 "--spacing", 2)
         self.assertNotEqual(theirs, other)  # the side matters: the comparison can fail
@@ -52,6 +65,7 @@ class SweepAndRegions(TmpCase):
                 with ampath.field(m, "sweep", along=along, side=7, spacing=2, progress=seen.append) as ps:
                     self.assertSameBytes(strip_comments(ps.to_amp()), theirs, "sweep along %r" % (along,))
                     self.assertEqual(ps.stats["pieces"], len(ps))
+                    self.assertSameFigures(ps.stats, figures)
             with ampath.field(m, "sweep", along=spine, side=5, spacing=2) as ps:
                 self.assertSameBytes(strip_comments(ps.to_amp()), other, "sweep, side 5")
             # the library's refusals, with its message: one spine point; a spine turning back on itself
@@ -77,6 +91,7 @@ class SweepAndRegions(TmpCase):
         leg = self.field_tool("part-leg.amp", "--field", "sweep", "--along", self.p("leg.amp"), "--side", 7,
                               "--spacing", 2, "--within", self.p("box.stl"))
         body = self.field_tool("part-body.amp", "--field", "box", "--spacing", 3, "--without", self.p("box.stl"))
+        body_figures = self.figures
         whole = self.field_tool("whole-leg.amp", "--field", "sweep", "--along", self.p("leg.amp"), "--side", 7,
                                 "--spacing", 2)
         self.assertNotEqual(leg, whole)  # the region cuts the field: the comparison can fail
@@ -86,6 +101,7 @@ class SweepAndRegions(TmpCase):
                 with ampath.field(m, "box", spacing=3, without=box) as b, ampath.field(m, "box", spacing=3,
                                                                                      without=[box]) as b2:
                     self.assertSameBytes(strip_comments(b.to_amp()), body, "box --without")
+                    self.assertSameFigures(b.stats, body_figures)
                     self.assertEqual(b.to_amp(), b2.to_amp())  # one region or a list of them
                     # no vertex of the leg's part outside the box, none of the body's inside it (the seam
                     # is found to 1e-6 mm)
