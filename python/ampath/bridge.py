@@ -137,6 +137,7 @@ class BridgeClient:
             raise BridgeError("%s: %s" % (cmd, getattr(e, "strerror", None) or e)) from e
         with self._cond:
             if not self._cond.wait_for(lambda: rid in self._replies or self._eof, self.timeout):
+                self._pending.remove(rid)  # a late reply is dropped
                 raise BridgeError("no reply to %s within %g s" % (cmd, self.timeout))
             reply = self._replies.pop(rid, None)
         if reply is None:
