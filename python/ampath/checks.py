@@ -261,7 +261,7 @@ def check(paths, trivariate=None, mesh=None, layer=None, first_layer=0.0, z_offs
         if not isinstance(paths, PathSet):
             paths = PathSet.read(paths)
             own.append(paths)
-        if trivariate is not None and not isinstance(trivariate, Trivariate):
+        if trivariate is not None and not isinstance(trivariate, Trivariate) and "coverage" not in skip:
             trivariate = Trivariate.load(trivariate)
             own.append(trivariate)
         if mesh is not None and not isinstance(mesh, Mesh) and "coverage" not in skip and layer is None:
@@ -292,7 +292,7 @@ def _run_all(paths, trivariate, mesh, layer, first_layer, head, eps, samples, se
     for name in _NAMES:
         if name in skip:
             res[name] = {"ran": False, "reason": "skipped on request"}
-        elif name == "coverage":
+        elif name == "coverage":  # (skipped, an unloaded model is not looked at)
             res[name] = _coverage(paths, trivariate, mesh, layer, eps, samples, seed, tol)
         elif name == "gouge":
             res[name] = _gouge(paths, head)
