@@ -254,6 +254,7 @@ def check(paths, trivariate=None, mesh=None, layer=None, first_layer=0.0, z_offs
     recorded in the file @paths was read from, else the largest vertex radius). @skip: names of checks not
     to run (the tool's --no-NAME). @support: run the support check even without support paths.
     Bad options raise Error (AMP_ERR_ARG); a failed check is not an exception: its section has "ok": False."""
+    skip = (skip,) if isinstance(skip, str) else tuple(skip)
     _validate(trivariate, mesh, layer, first_layer, eps, samples, tol, overhang_deg, max_gap, bridge, skip)
     head = _head(z_offs, theta_deg)
     own = []

@@ -61,6 +61,7 @@ class CheckFigures(TmpCase):
                                 trivariate=v, samples=1000, skip=("gouge",), support=True, eps=0.4)
             self.assertFalse(ours["coverage"]["ok"])  # a gap above 0.4 mm
             self.assertEqual(ours["gouge"], {"ran": False, "reason": "skipped on request"})
+            self.assertEqual(ampath.check(ps, skip="gouge")["gouge"]["reason"], "skipped on request")
             self.assertTrue(ours["support"]["ran"])  # no support paths, but asked for
             self.assertEqual(ampath.check(ps, trivariate=v, samples=1000)["coverage"]["eps_from"], "path file")
         with ampath.PathSet.read(self.p("o.amp")) as ps, ampath.PathSet().extend(ps) as copy:
