@@ -13,7 +13,8 @@ int bench_cover(cli_json *j, int quick)
     amp_spline v;
     amp_cover_opts o;
     amp_cover_stats st;
-    amp_cover_gap g;
+    amp_coverage g;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     amp_pathset ps;
     double t0, t_cover, t_base, t_gap, *par;
     size_t i, n;
@@ -41,7 +42,8 @@ int bench_cover(cli_json *j, int quick)
         amp_spline_eval(&v, par + 3 * i, &pts[i], NULL);
     t_base = cli_now() - t0;
     t0 = cli_now();
-    if (amp_cover_measure_gap(&v, &ps, quick ? 5000 : 20000, 1, &g, NULL) != AMP_OK || g.gap > o.eps)
+    dom.trivariate = &v;
+    if (amp_check_coverage(&ps, &dom, quick ? 5000 : 20000, 1, &g, NULL) != AMP_OK || g.gap > o.eps)
         rc = CLI_FAILED;
     t_gap = cli_now() - t0;
     if (j) {

@@ -53,7 +53,8 @@ static double eps_from_comment(const char *file)
 int check_trivariate(const check_ctx *c, cli_json *j)
 {
     amp_spline v;
-    amp_cover_gap g;
+    amp_coverage g;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     amp_error err;
     int rc;
     double eps = c->eps;
@@ -72,7 +73,8 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         }
     }
     amp_error_clear(&err);
-    if (amp_cover_measure_gap(&v, c->ps, (size_t)c->samples, c->seed, &g, &err) != AMP_OK) {
+    dom.trivariate = &v;
+    if (amp_check_coverage(c->ps, &dom, (size_t)c->samples, c->seed, &g, &err) != AMP_OK) {
         amp_spline_free(&v);
         return cli_fail_err("check", &err);
     }

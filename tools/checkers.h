@@ -65,7 +65,7 @@ int check_stroke(const check_ctx *c, cli_json *j);
 /*
  * Support (paper 1 §5.3): every extruded point of an object path is printed
  * over material printed earlier or the bed, within the overhang rule, bridges
- * allowed (lib amp_hold_check, tools/check_support.c). Runs when the file has
+ * allowed (lib amp_check_hold, tools/check_support.c). Runs when the file has
  * support paths, or on request (--support).
  */
 int check_support(const check_ctx *c, cli_json *j);

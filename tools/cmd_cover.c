@@ -78,7 +78,8 @@ int cmd_cover(int argc, char **argv)
     int json = 0, npos = 0, rc;
     amp_cover_opts o;
     amp_cover_stats st;
-    amp_cover_gap gap;
+    amp_coverage gap;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     amp_spline v;
     amp_pathset ps;
     amp_error err;
@@ -145,7 +146,8 @@ int cmd_cover(int argc, char **argv)
         return CLI_USAGE;
     }
     memset(&gap, 0, sizeof gap);
-    if (json && samples > 0 && amp_cover_measure_gap(&v, &ps, (size_t)samples, 1, &gap, &err) != AMP_OK) {
+    dom.trivariate = &v;
+    if (json && samples > 0 && amp_check_coverage(&ps, &dom, (size_t)samples, 1, &gap, &err) != AMP_OK) {
         amp_spline_free(&v);
         amp_pathset_free(&ps);
         return cli_fail_err("cover", &err);

@@ -146,11 +146,16 @@ static int measure_gap(const amp_pathset *ps, const amp_bvh *b, long samples, do
                        double *gap_in, double *mean)
 {
     amp_error err;
+    amp_coverage g;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
+    dom.mesh = b;
     amp_error_clear(&err);
-    if (amp_coverage_gap(ps, b, (size_t)samples, 1, 0.0, gap_all, mean, &err) != AMP_OK)
+    if (amp_check_coverage(ps, &dom, (size_t)samples, 1, &g, &err) != AMP_OK)
         return cli_fail_err("field", &err);
-    if (amp_coverage_gap(ps, b, (size_t)samples, 2, spacing, gap_in, NULL, &err) != AMP_OK)
-        *gap_in = -1;
+    *gap_all = g.gap;
+    *mean = g.mean;
+    dom.margin = spacing;
+    *gap_in = amp_check_coverage(ps, &dom, (size_t)samples, 2, &g, &err) == AMP_OK ? g.gap : -1;
     return CLI_OK;
 }
 

@@ -325,7 +325,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         amp_stroke_report rep;
         amp_status cs;
         const amp_polyset *reg = ps.paths[i].n ? layer_region(sl, amp_pathset_path_verts(&ps, i)[0].p.z) : NULL;
-        cs = amp_pathset_stroke_check(&ps, i, reg, 1e-6, &rep, &err);
+        cs = amp_check_path_stroke(&ps, i, reg, 1e-6, &rep, &err);
         if (cs == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
             free(per);

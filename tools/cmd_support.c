@@ -137,7 +137,7 @@ int cmd_support(int argc, char **argv)
     /* name what the support leaves unheld (the check of `ampath check`, paper 1 §5.3) */
     amp_hold_opts_default(&ho);
     ho.max_gap = o.min_gap;
-    if (amp_hold_check(&out, &ho, &hr, &err) != AMP_OK) {
+    if (amp_check_hold(&out, &ho, &hr, &err) != AMP_OK) {
         rc = cli_fail_err("support", &err);
         goto done;
     }

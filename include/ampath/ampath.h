@@ -4,13 +4,14 @@
 
 #include "alloc.h"
 #include "bvh.h"
+#include "check.h"
 #include "complex2.h"
 #include "contpath.h"
 #include "cover.h"
 #include "euler.h"
 #include "field.h"
 #include "gcode.h"
-#include "gouge.h"
+#include "head.h"
 #include "io.h"
 #include "mdr.h"
 #include "mesh.h"
@@ -24,7 +25,6 @@
 #include "spline.h"
 #include "status.h"
 #include "support.h"
-#include "support_check.h"
 #include "vec.h"
 #include "version.h"
 

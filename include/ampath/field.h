@@ -186,18 +186,7 @@ typedef struct amp_field_stats {
 amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
                            amp_field_stats *stats, amp_error *err);
 
-/**
- * Coverage gap of @p ps in the solid of @p b: @p nsamples points drawn
- * uniformly (deterministic generator seeded by @p seed) in the solid and at
- * least @p margin mm (>= 0) from its surface; for each, the distance to the
- * nearest path segment. *gap receives the largest and *mean (may be NULL) the
- * mean distance. Inside (margin >= S) a lattice cover has gap <= its covering
- * radius; next to the surface the clipped-away curves leave up to about S.
- * Errors: AMP_ERR_ARG (no path segment, nsamples 0, negative margin),
- * AMP_ERR_GEOMETRY (no sample found in 100 nsamples tries), AMP_ERR_NOMEM.
- */
-amp_status amp_coverage_gap(const amp_pathset *ps, const amp_bvh *b, size_t nsamples, unsigned long seed,
-                            double margin, double *gap, double *mean, amp_error *err);
+/* The coverage of a field's paths is measured by amp_check_coverage() (check.h). */
 
 #ifdef __cplusplus
 }

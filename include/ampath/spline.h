@@ -249,6 +249,10 @@ amp_status amp_trivariate_model(const char *name, const amp_allocator *a, amp_sp
 /** NULL-terminated list of the built-in trivariate names. */
 const char *const *amp_trivariate_model_names(void);
 
+/** Volume of a trivariate (mm^3): Gauss–Legendre quadrature of |det J| (3 points per direction per cell of a
+ * 12^3 grid). Pure function; 0 where evaluation fails. */
+double amp_trivariate_volume(const amp_spline *v);
+
 #ifdef __cplusplus
 }
 #endif

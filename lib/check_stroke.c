@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "ampath/contpath.h"
+#include "ampath/check.h"
 
 typedef struct vkey {
     double x, y;
@@ -193,13 +193,13 @@ static int yrows_contains(const yrows *y, amp_vec2 q, double tol)
     return in;
 }
 
-amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
+amp_status amp_check_stroke(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err)
 {
-    return amp_stroke_check_radii(pts, NULL, n, region, tol, rep, err);
+    return amp_check_stroke_radii(pts, NULL, n, region, tol, rep, err);
 }
 
-amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
+amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
                                   double tol, amp_stroke_report *rep, amp_error *err)
 {
     size_t ne = 0;
@@ -352,5 +352,28 @@ out:
     yrows_free(al, &yr);
     if (rep)
         *rep = r;
+    return st;
+}
+
+amp_status amp_check_path_stroke(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    amp_stroke_report *rep, amp_error *err)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, k;
+    amp_vec2 *p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
+    double *r = amp_alloc(ps->alloc, (n + 1) * sizeof *r);
+    amp_status st;
+    if (!p || !r) {
+        amp_free(ps->alloc, p);
+        amp_free(ps->alloc, r);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+    }
+    for (k = 0; k < n; k++) {
+        p[k] = amp_v2(v[k].p.x, v[k].p.y);
+        r[k] = v[k].r;
+    }
+    st = amp_check_stroke_radii(p, r, n, region, tol, rep, err);
+    amp_free(ps->alloc, p);
+    amp_free(ps->alloc, r);
     return st;
 }

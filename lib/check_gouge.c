@@ -1,9 +1,9 @@
-/* Independent gouge checker (see gouge.h): numerical clearance, pairwise or with a column pyramid. */
+/* Independent gouge checker (see check.h): numerical clearance, pairwise or with a column pyramid. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#include "ampath/gouge.h"
+#include "ampath/check.h"
 
 /* One segment in print order: vertices a and b of the pathset (a == b for a one-vertex path). */
 typedef struct gseg {
@@ -361,7 +361,7 @@ done:
     return found;
 }
 
-amp_status amp_gouge_check(const amp_pathset *ps, const amp_head *h, amp_gouge_method m, double tol,
+amp_status amp_check_gouge(const amp_pathset *ps, const amp_head *h, amp_gouge_method m, double tol,
                            amp_gouge_violation *vout, amp_error *err)
 {
     gctx c;
@@ -369,7 +369,7 @@ amp_status amp_gouge_check(const amp_pathset *ps, const amp_head *h, amp_gouge_m
     amp_gouge_violation v;
     amp_status st = AMP_OK;
     if (!ps || !h)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_gouge_check: NULL argument");
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_gouge: NULL argument");
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0 || !isfinite(h->theta) || h->theta <= 0.0 ||
         h->theta >= 1.57079632679489661923)
         return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",
