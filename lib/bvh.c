@@ -1,6 +1,6 @@
 /*
  * BVH over a triangle mesh: rays, segments, closest points, the generalised
- * winding number and polyline clipping (paper §4.2: covering curves are cut
+ * winding number and polyline clipping ([P1 §4.2]: covering curves are cut
  * to the mesh and only the inside parts are printed).
  *
  * The tree is built with a binned surface-area heuristic. Each node also

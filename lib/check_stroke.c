@@ -1,4 +1,4 @@
-/* Independent checker of continuous strokes (paper 2 §4: no crossovers,
+/* Independent checker of continuous strokes ([P2 §4]: no crossovers,
  * every edge once, inside the polygon). Shares no code with lib/contpath.c. */
 #include <math.h>
 #include <stdlib.h>

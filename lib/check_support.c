@@ -1,4 +1,4 @@
-/* Held-path check (paper 1 §5.3): every object bead is printed over earlier material or the bed. */
+/* Held-path check ([P1 §5.3]): every object bead is printed over earlier material or the bed. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>

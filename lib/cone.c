@@ -1,4 +1,4 @@
-/* The print-head cone (SPEC §2, paper §5.1 Fig. 9) and the exact segment-cone test of Fig. 10. */
+/* The print-head cone (docs/interfaces.md §2, [P1 §5.1] Fig. 9) and the exact segment-cone test of Fig. 10. */
 #include <math.h>
 
 #include "ampath/order.h"
@@ -92,7 +92,7 @@ int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, siz
     return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
 }
 
-/* q is inside the head printing p, beyond the tolerance (SPEC §2) */
+/* q is inside the head printing p, beyond the tolerance (docs/interfaces.md §2) */
 static int point_clear(double zo, double k, amp_vec3 p, amp_vec3 q)
 {
     double dz = q.z - p.z - zo - AMP_CONE_TOL, dx = q.x - p.x, dy = q.y - p.y;

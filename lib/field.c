@@ -1,5 +1,5 @@
 /*
- * Direction-field covering of a mesh (paper §4.2): the iso-curves of a field
+ * Direction-field covering of a mesh ([P1 §4.2]): the iso-curves of a field
  * F(u, v, w) in one direction, sampled on a grid or honeycomb of the other
  * two parameters at a spacing in millimetres, clipped to the mesh; and the
  * coverage gap measured by sampling the solid.
@@ -17,7 +17,7 @@
 
 /* ------------------------------------------------------------ built-ins */
 
-/* helix-square: the SPEC §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
+/* helix-square: the docs/interfaces.md §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
 static amp_status eval_helix_square(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
 {
     const double R = 20, P = 40, k = P / (2 * PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * PI * R / (2 * PI * len);
@@ -692,7 +692,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
 /* ------------------------------------------------- surface layer (shells) */
 
 /*
- * Shell curves (paper 1 §4.2, like a slicer's perimeters but along the field):
+ * Shell curves ([P1 §4.2], like a slicer's perimeters but along the field):
  * the lattice curves at corners (i/na, j/nb) that run within the band
  * [-S/2, S/2) of signed distance to the surface, shifted j S deeper for shell
  * j, are projected onto the surface offset inward by d_j = S/2 + j S (the

@@ -1,5 +1,5 @@
 /*
- * G-code writer (SPEC §5): an allocation-free line iterator over a path set.
+ * G-code writer (docs/interfaces.md §5): an allocation-free line iterator over a path set.
  *
  * The iterator is a small state machine (header, start sequence, set-up,
  * paths with their travels, teardown, end sequence). Init checks the job,
@@ -49,7 +49,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->z_hop = 0.4;
     o->travel_corridor = 1.0;
     o->end_lift = 10.0;
-    o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* SPEC §5: Klipper uses M83 by default */
+    o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* docs/interfaces.md §5: Klipper uses M83 by default */
     o->hotend_temp = 210.0;
     o->bed_temp = 60.0;
     o->start_gcode = NULL;
@@ -59,7 +59,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->max_feed_xy = 200.0;
     o->max_feed_z = 10.0;
     o->max_feed_e = 60.0;
-    /* the generic printer of SPEC §5: 220 x 220 x 250 mm */
+    /* the generic printer of docs/interfaces.md §5: 220 x 220 x 250 mm */
     o->profile = "generic";
     o->place = AMP_PLACE_CENTER;
     o->bed_max_x = 220.0;
@@ -300,7 +300,7 @@ static size_t next_segment(const amp_pathset *ps, size_t i, size_t k)
     return n > 0 ? n - 1 : 0;
 }
 
-/* Depth of a bead below its vertex: h for a planar bead, r for a tube (SPEC §5). */
+/* Depth of a bead below its vertex: h for a planar bead, r for a tube (docs/interfaces.md §5). */
 static double bead_depth(const amp_path *p, double r) { return p->h > 0.0 ? p->h : r; }
 
 /* Does vertex @p i lie within the tolerances of the chord v[k] -> v[j] (position and radius)? */
@@ -313,13 +313,13 @@ static int chord_keeps(const amp_gcode_opts *o, const amp_pvert *v, size_t k, si
     foot = amp_v3_add(v[k].p, amp_v3_scale(d, t));
     if (amp_v3_dist(foot, v[i].p) > o->chord_tol)
         return 0;
-    /* the deposition radius must follow the chord too (MDR, paper §5.2); E stays exact either way */
+    /* the deposition radius must follow the chord too (MDR, [P1 §5.2]); E stays exact either way */
     return fabs(v[k].r + t * (v[j].r - v[k].r) - v[i].r) <= o->radius_tol;
 }
 
 /*
  * End vertex of the written segment that starts at vertex @p k of path @p i
- * (clean segments, SPEC §5): the farthest vertex whose chord keeps every
+ * (clean segments, docs/interfaces.md §5): the farthest vertex whose chord keeps every
  * vertex in between within the tolerances, extended while the chord is
  * shorter than min_segment; a short remainder joins the last segment.
  */
@@ -418,7 +418,7 @@ static amp_status fit_axis(const amp_gcode_opts *o, char axis, double lo, double
                     o->profile ? o->profile : "?", axis, lo, hi, b0, b1, over);
 }
 
-/* The placement offset (SPEC §5) and the check that the placed job fits the bed volume. */
+/* The placement offset (docs/interfaces.md §5) and the check that the placed job fits the bed volume. */
 static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *err)
 {
     const amp_gcode_opts *o = &it->o;
@@ -562,7 +562,7 @@ static void put_e(amp_gcode_iter *it, lb *l)
     it->e_units = u;
 }
 
-/* A model coordinate as written: placed on the bed (SPEC §5). */
+/* A model coordinate as written: placed on the bed (docs/interfaces.md §5). */
 static void put_coord(amp_gcode_iter *it, lb *l, char axis, double v)
 {
     double off = axis == 'X' ? it->off.x : axis == 'Y' ? it->off.y : it->off.z;
@@ -624,14 +624,14 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
     if (r > 0.0)
         grid_walk(it, it->grid, va->p, vb->p, r, top, 0);
-    /* the centre line, for the head cone of direct hops (the model of paper §5.1 and `ampath check`) */
+    /* the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
     grid_walk(it, it->grid_c, va->p, vb->p, 0.0, fmax(va->p.z, vb->p.z), 0);
     it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
     it->end_r = vb->r;
 }
 
 /*
- * The written segment from vertex k to vertex j of the current path (SPEC §5,
+ * The written segment from vertex k to vertex j of the current path (docs/interfaces.md §5,
  * clean segments): a straight G1, or with @p arc a G2/G3 along it.
  */
 static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_gc_arc *arc)
@@ -694,8 +694,8 @@ static double rect_dist(double px, double py, double x0, double y0, double side)
 
 /*
  * The lowest nozzle height over the interval of half-width @p hh around
- * (@p px, @p py) whose head cone (SPEC §2: tip z_offs above the nozzle,
- * half-angle theta; paper §5.1) clears every printed centre line — the
+ * (@p px, @p py) whose head cone (docs/interfaces.md §2: tip z_offs above the nozzle,
+ * half-angle theta; [P1 §5.1]) clears every printed centre line — the
  * criterion Algorithm 2 and `ampath check` apply to printing points — at
  * least @p lo; the search stops once it passes @p stop. Each centre-line
  * point lies in a cell of grid_c holding at least its z and is no nearer than
@@ -734,7 +734,7 @@ static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, 
 }
 
 /*
- * The travel polyline from it->pos to it->travel_to (SPEC §5: gouge-free,
+ * The travel polyline from it->pos to it->travel_to (docs/interfaces.md §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
  * of the start and end lifted by z_hop and of the material tops + z_hop
  * sampled along the line within the corridor. Each sample's box covers half
@@ -770,7 +770,7 @@ static void travel_hull(amp_gcode_iter *it)
                 cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
                                 fmin(a.z, b.z) + hop, HUGE_VAL);
             }
-            /* beyond the corridor: the head cone (SPEC §2) clear of every printed centre line */
+            /* beyond the corridor: the head cone (docs/interfaces.md §2) clear of every printed centre line */
             z = fmax(z, cf);
             if (s == 0)
                 zs = fmax(zs, z);
@@ -1029,7 +1029,7 @@ static int setup_line(amp_gcode_iter *it, lb *l, size_t k)
 /* ---------------------------------------------------------------- the state machine */
 
 /*
- * Classify the path that starts (SPEC §5 first layer): first-layer or not,
+ * Classify the path that starts (docs/interfaces.md §5 first layer): first-layer or not,
  * and its layer for the fan. Planar jobs know their layers from the bead z;
  * tubes count layers of first_layer_height from the bed.
  */

@@ -1,5 +1,5 @@
 /*
- * Arc fitting for the G-code writer (SPEC §5 clean segments, `--arcs`): the
+ * Arc fitting for the G-code writer (docs/interfaces.md §5 clean segments, `--arcs`): the
  * longest run of path vertices that lies on one circle in XY, with z and the
  * deposition radius linear in the swept angle (helical arcs, as Marlin's and
  * Klipper's G2/G3 take them), within the writer's tolerances.

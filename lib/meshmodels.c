@@ -1,7 +1,7 @@
 /*
- * Built-in triangle meshes (SPEC §4 `ampath model NAME -o FILE.stl`):
+ * Built-in triangle meshes (docs/interfaces.md §4 `ampath model NAME -o FILE.stl`):
  *
- *  helix           the boundary of the helix solid of SPEC §4 / paper Fig. 2:
+ *  helix           the boundary of the helix solid of docs/interfaces.md §4 / paper Fig. 2:
  *                  a disc of radius 5 swept along c(t) = (20 cos 2πt,
  *                  20 sin 2πt, z0 + 40 t) in the plane normal to c'(t),
  *                  closed by two flat caps, lowest point at z = 0.
@@ -88,7 +88,7 @@ static void to_plate(amp_mesh *m)
 
 /* ------------------------------------------------------------- helix */
 
-/* SPEC §4: radius 20, pitch 40, disc radius 5; z0 puts the lowest point (on the t = 0 cap) at z = 0. */
+/* docs/interfaces.md §4: radius 20, pitch 40, disc radius 5; z0 puts the lowest point (on the t = 0 cap) at z = 0. */
 #define HX_R 20.0
 #define HX_P 40.0
 #define HX_A 5.0

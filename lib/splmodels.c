@@ -1,5 +1,5 @@
 /*
- * Built-in trivariates: helix (SPEC §4, paper Fig. 2), torus-quarter (paper
+ * Built-in trivariates: helix (docs/interfaces.md §4, paper Fig. 2), torus-quarter (paper
  * Fig. 4, ×50 to millimetres) and vase (paper Fig. 18). Circles are rational
  * quadratic arcs, so discs and revolutions are exact; only the helix's height
  * along its arc is approximated (16 arcs keep it within 0.004 mm).

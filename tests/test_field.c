@@ -1,4 +1,4 @@
-/* Direction-field covering of meshes (paper §4.2): spacing, clipping, coverage gap. */
+/* Direction-field covering of meshes ([P1 §4.2]): spacing, clipping, coverage gap. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -346,7 +346,7 @@ END_TEST
 
 START_TEST(trivariate_field_is_covered_by_algorithm_1_within_its_bound)
 {
-    /* the helix trivariate (SPEC §4) as the field over the helix mesh: its curves lie inside the solid */
+    /* the helix trivariate (docs/interfaces.md §4) as the field over the helix mesh: its curves lie inside the solid */
     amp_mesh m;
     amp_bvh *b;
     amp_spline sp;
@@ -630,7 +630,7 @@ static double zone_gap(const amp_pathset *ps, const amp_bvh *b, amp_vec3 lo, amp
 }
 
 /*
- * Several fields in one model (paper §4.2, Fig. 6): the crocodile's front leg
+ * Several fields in one model ([P1 §4.2], Fig. 6): the crocodile's front leg
  * gets a sweep field along it, restricted to a region box around the leg
  * below the belly; the body gets the box field everywhere else. Each field's
  * adaptive lattice treats the region's boundary like the surface, so the

@@ -1,4 +1,4 @@
-/* G-code writer (SPEC §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
+/* G-code writer (docs/interfaces.md §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -1556,7 +1556,7 @@ static int is_direct(const gsim *s, const seg *tr)
 }
 
 /*
- * Independent head-cone checker of the direct hops (SPEC §2, paper §5.1): at
+ * Independent head-cone checker of the direct hops (docs/interfaces.md §2, [P1 §5.1]): at
  * every point p of such a travel (sampled every 0.05 mm) no earlier extrusion
  * centre line rises above the cone, tip z_offs above p, half-angle theta:
  * q.z - cot(theta) |q.xy - p.xy| <= p.z + z_offs (1e-3 for the written

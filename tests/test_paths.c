@@ -1,4 +1,4 @@
-/* .amp format and in-memory paths (SPEC §3). */
+/* .amp format and in-memory paths (docs/interfaces.md §3). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* Printer profiles (SPEC §5): built-ins, the PrusaSlicer/OrcaSlicer .ini reader, placeholders, the CLI. */
+/* Printer profiles (docs/interfaces.md §5): built-ins, the PrusaSlicer/OrcaSlicer .ini reader, placeholders, the CLI. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>

@@ -682,7 +682,7 @@ START_TEST(bad_arguments_get_errors_not_undefined_behaviour)
 }
 END_TEST
 
-/* Distance from p to the exact helix solid of SPEC §4: min over t of the distance to the disc at c(t). */
+/* Distance from p to the exact helix solid of docs/interfaces.md §4: min over t of the distance to the disc at c(t). */
 static double helix_solid_dist(amp_vec3 p, double *tbest)
 {
     const double R = 20, H = 40, RD = 5, L = sqrt(4 * PI * PI * R * R + H * H), z0 = RD * 2 * PI * R / L;

@@ -1,4 +1,4 @@
-/* Benchmark (SPEC §7): slicing + continuous paths on a ~100k-triangle mesh,
+/* Benchmark (docs/interfaces.md §7): slicing + continuous paths on a ~100k-triangle mesh,
  * against a plain per-layer rectilinear infill made by the same tool
  * (extrusion starts, travel). */
 #include <math.h>

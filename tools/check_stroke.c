@@ -1,4 +1,4 @@
-/* ampath check for continuous strokes (paper 2 §4): independent verification
+/* ampath check for continuous strokes ([P2 §4]): independent verification
  * with amp_check_stroke(). */
 #include <math.h>
 #include <stdio.h>

@@ -1,4 +1,4 @@
-/* `ampath check` support checker (paper 1 §5.3): every object bead held by earlier material or the bed. */
+/* `ampath check` support checker ([P1 §5.3]): every object bead held by earlier material or the bed. */
 #include "checkers.h"
 
 #define DEG 57.295779513082320876

@@ -1,5 +1,5 @@
 /*
- * checkers.h — the independent checkers behind `ampath check` (SPEC §4).
+ * checkers.h — the independent checkers behind `ampath check` (docs/interfaces.md §4).
  *
  * tools/cmd_check.c parses the common options once, loads the paths, and
  * calls every checker of its table. A checker lives in tools/check_NAME.c and
@@ -63,7 +63,7 @@ int check_mesh(const check_ctx *c, cli_json *j);
 int check_stroke(const check_ctx *c, cli_json *j);
 
 /*
- * Support (paper 1 §5.3): every extruded point of an object path is printed
+ * Support ([P1 §5.3]): every extruded point of an object path is printed
  * over material printed earlier or the bed, within the overhang rule, bridges
  * allowed (lib amp_check_hold, tools/check_support.c). Runs when the file has
  * support paths, or on request (--support).

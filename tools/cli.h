@@ -1,5 +1,5 @@
 /*
- * cli.h — shared plumbing of the `ampath` commands (SPEC §4): option parsing,
+ * cli.h — shared plumbing of the `ampath` commands (docs/interfaces.md §4): option parsing,
  * one-object JSON output, progress bars, error exits, common loaders.
  *
  * A command is a file tools/cmd_NAME.c defining

@@ -1,4 +1,4 @@
-/* ampath cover TRIVARIATE — paper 1 §4.1: adaptive iso-surfaces (Algorithm 1), then iso-curves (SPEC §4). */
+/* ampath cover TRIVARIATE — [P1 §4.1]: adaptive iso-surfaces (Algorithm 1), then iso-curves (docs/interfaces.md §4). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* ampath field MESH.stl --field NAME --spacing S — paper §4.2: direction-field curves clipped to a mesh. */
+/* ampath field MESH.stl --field NAME --spacing S — [P1 §4.2]: direction-field curves clipped to a mesh. */
 #include <stdlib.h>
 #include <string.h>
 

@@ -1,4 +1,4 @@
-/* ampath gcode PATHS.amp — MDR-modulated G-code, placed on a printer's bed (SPEC §4, §5). */
+/* ampath gcode PATHS.amp — MDR-modulated G-code, placed on a printer's bed (docs/interfaces.md §4, §5). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,4 +1,4 @@
-/* ampath model NAME -o FILE — write a built-in model (SPEC §4). */
+/* ampath model NAME -o FILE — write a built-in model (docs/interfaces.md §4). */
 #include <stdio.h>
 #include <string.h>
 

@@ -1,4 +1,4 @@
-/* ampath order — fragments and Algorithm 2 (paper §5.1): a gouge-free print order. */
+/* ampath order — fragments and Algorithm 2 ([P1 §5.1]): a gouge-free print order. */
 #include <string.h>
 
 #include "cli.h"

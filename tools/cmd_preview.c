@@ -1,4 +1,4 @@
-/* ampath preview PATHS.amp -o OUT.svg|OUT.png — a picture of the paths (SPEC §4). */
+/* ampath preview PATHS.amp -o OUT.svg|OUT.png — a picture of the paths (docs/interfaces.md §4). */
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* ampath slice MESH.stl --layer H --polygons — planar layers (paper 2 §2.2 step 1, SPEC §4). */
+/* ampath slice MESH.stl --layer H --polygons — planar layers ([P2 §2.2] step 1, docs/interfaces.md §4). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -70,7 +70,7 @@ static int write_amp(const char *file, const amp_slices *sl, double radius, doub
             size_t n = P->rings[r].n;
             if (amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err) != AMP_OK)
                 goto fail;
-            /* closed path: the last vertex repeats the first (SPEC §4) */
+            /* closed path: the last vertex repeats the first (docs/interfaces.md §4) */
             for (k = 0; k <= n; k++)
                 if (amp_pathset_push(&ps, amp_v3(p[k % n].x, p[k % n].y, sl->layers[i].z_cut), radius, &err) !=
                     AMP_OK)
@@ -399,7 +399,7 @@ int cmd_slice(int argc, char **argv)
     if (!opts[0].seen)
         return cli_fail("slice", CLI_USAGE, "--layer H is required");
     if (printer && !opts[15].seen && !opts[6].seen) {
-        /* the profile's nozzle sets the bead (SPEC §4: 1.125 x the nozzle), as --nozzle does */
+        /* the profile's nozzle sets the bead (docs/interfaces.md §4: 1.125 x the nozzle), as --nozzle does */
         amp_printer *pr = malloc(sizeof *pr);
         amp_error err;
         if (!pr)

@@ -134,7 +134,7 @@ int cmd_support(int argc, char **argv)
     if (rc != CLI_OK)
         goto done;
     rc = CLI_USAGE;
-    /* name what the support leaves unheld (the check of `ampath check`, paper 1 §5.3) */
+    /* name what the support leaves unheld (the check of `ampath check`, [P1 §5.3]) */
     amp_hold_opts_default(&ho);
     ho.max_gap = o.min_gap;
     if (amp_check_hold(&out, &ho, &hr, &err) != AMP_OK) {

@@ -1,4 +1,4 @@
-/* headopt.h — the print-head options shared by order, check, support and mdr (SPEC §2, §4). */
+/* headopt.h — the print-head options shared by order, check, support and mdr (docs/interfaces.md §2, §4). */
 #ifndef AMP_TOOLS_HEADOPT_H
 #define AMP_TOOLS_HEADOPT_H
 

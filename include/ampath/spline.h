@@ -202,7 +202,7 @@ amp_status amp_spline_derivative(const amp_spline *s, int d, amp_spline *out, am
  */
 double amp_spline_polygon_length_bound(const amp_spline *s, int d, double *seg);
 
-/* ---- the .spl text format (SPEC §4) ---- */
+/* ---- the .spl text format (docs/interfaces.md §4) ---- */
 
 /**
  * Parse every object of a .spl text (@p len bytes, NUL not required).
@@ -233,7 +233,7 @@ amp_status amp_spline_write(const amp_spline *s, int header, amp_sink_fn sink, v
 
 /**
  * Build the built-in trivariate @p name into @p out (must not hold memory):
- *  - "helix": SPEC §4 / paper Fig. 2, disc of radius 5 mm swept along the helix
+ *  - "helix": docs/interfaces.md §4 / paper Fig. 2, disc of radius 5 mm swept along the helix
  *    of radius 20 mm and pitch 40 mm, lowest point at z = 0; (u, v) map the
  *    square onto the disc exactly (rational biquadratic), w follows the helix
  *    (16 rational quadratic arcs: x, y exact, z within 0.004 mm).

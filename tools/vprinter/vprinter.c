@@ -1,5 +1,5 @@
 /*
- * ampath-vprinter — a virtual 3-D printer on a pseudo-terminal (SPEC §8).
+ * ampath-vprinter — a virtual 3-D printer on a pseudo-terminal (docs/interfaces.md §8).
  *
  * Speaks Marlin (2.1 or 2.0 dialect, BUFSIZE, RX buffer, ADVANCED_OK, a planner
  * draining at a modelled speed, a modelled baud rate) or Klipper's pty protocol,
