@@ -26,7 +26,8 @@
         return failed ? EXIT_FAILURE : EXIT_SUCCESS;                                                                 \
     }
 
-/** Add a test with a per-test timeout in seconds (generous: sanitizer runs are slower). */
+/** Add a test to @p tc. Timeouts are the test case's (Check's default, or CK_DEFAULT_TIMEOUT from make check),
+ *  not per test. */
 #define AMP_ADD_TEST(tc, fn) tcase_add_test(tc, fn)
 
 /** Assert two doubles are within tol. */
