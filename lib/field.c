@@ -22,7 +22,7 @@ static amp_status eval_helix_square(const amp_field *f, const double uvw[3], amp
 {
     const double R = 20, P = 40, k = P / (2 * PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * PI * R / (2 * PI * len);
     double w = 2 * PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
-    /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/meshmodels.c) */
+    /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/mesh_models.c) */
     amp_vec3 c = amp_v3(R * cos(w), R * sin(w), z0 + P * uvw[2]);
     amp_vec3 n = amp_v3(-cos(w), -sin(w), 0), bb = amp_v3(k * sin(w) / len, -k * cos(w) / len, R / len);
     (void)err;

@@ -27,7 +27,7 @@ double amp_fix_torus_sdf(amp_vec3 p, double R, double r);
 double amp_fix_mesh_dist(const amp_mesh *m, amp_vec3 p);
 
 /**
- * The helix solid of docs/interfaces.md §4, computed independently of lib/meshmodels.c:
+ * The helix solid of docs/interfaces.md §4, computed independently of lib/mesh_models.c:
  * the point c(t) + u N(t) + v B(t) (N, B: unit normal-plane frame, N towards
  * the axis), with z0 = 5π/√(π²+1) so that the lowest point is at z = 0.
  */

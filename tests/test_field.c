@@ -212,7 +212,7 @@ static double nearest_path(const amp_pathset *ps, amp_vec3 p)
     return sqrt(best);
 }
 
-/* The crocodile's front leg (hip, knee, foot; radius 2.6 -> 1.9 mm, lib/meshmodels.c). */
+/* The crocodile's front leg (hip, knee, foot; radius 2.6 -> 1.9 mm, lib/mesh_models.c). */
 static const amp_vec3 croc_leg[3] = {{16, 6, 9}, {19, 15, 6}, {17, 17, 1.9}};
 
 /* Largest distance to the paths over 216 points of the leg's core (within 1.5 mm of its axis). */

@@ -229,7 +229,7 @@ amp_status amp_spline_read_file(const char *path, const amp_allocator *a, amp_sp
  */
 amp_status amp_spline_write(const amp_spline *s, int header, amp_sink_fn sink, void *user, amp_error *err);
 
-/* ---- built-in trivariates (lib/splmodels.c) ---- */
+/* ---- built-in trivariates (lib/spline_models.c) ---- */
 
 /**
  * Build the built-in trivariate @p name into @p out (must not hold memory):
