@@ -1131,32 +1131,33 @@ static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
 }
 
 /* One line (or none) of a path: the per-path sub-steps in order. */
-static int step_path(amp_gcode_iter *it, lb *l)
+/* The comment that opens a path; a path without a segment of non-zero length is skipped. */
+static int path_comment(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_pvert *v)
 {
-    const amp_pathset *ps = it->ps;
-    const amp_path *p = &ps->paths[it->path];
-    const amp_pvert *v = amp_pathset_path_verts(ps, it->path);
-    const amp_gcode_opts *o = &it->o;
-    switch (it->sub) {
-    case PS_COMMENT: {
-        int skip;
-        it->seg = next_segment(ps, it->path, 0);
-        skip = it->seg + 1 >= p->n;
-        lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
-               p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
-               skip ? " (skipped: no segment of non-zero length)" : "");
-        if (skip) {
-            it->stats.paths_skipped++;
-            it->path++;
-            return 1;
-        }
-        it->seg = 0;
-        it->stats.paths++;
-        begin_path(it, p, v);
-        it->sub = PS_HOTEND;
+    int skip;
+    it->seg = next_segment(it->ps, it->path, 0);
+    skip = it->seg + 1 >= p->n;
+    lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
+           p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
+           skip ? " (skipped: no segment of non-zero length)" : "");
+    if (skip) {
+        it->stats.paths_skipped++;
+        it->path++;
         return 1;
     }
-    case PS_HOTEND: /* above the first layer: the other layers' temperatures, once */
+    it->seg = 0;
+    it->stats.paths++;
+    begin_path(it, p, v);
+    it->sub = PS_HOTEND;
+    return 1;
+}
+
+/* Above the first layer: the other layers' temperatures, once; the part-cooling fan from its layer on. */
+static int layer_settings(amp_gcode_iter *it, lb *l)
+{
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
+    case PS_HOTEND:
         it->sub = PS_BED;
         if (!it->path_first && !it->first_done && o->hotend_temp > 0.0 && o->hotend_temp != o->first_layer_hotend_temp)
             return temp_line(l, "M104", o->hotend_temp, " ; hot end after the first layer");
@@ -1169,7 +1170,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
                 return temp_line(l, "M140", o->bed_temp, " ; bed after the first layer");
         }
         return 0;
-    case PS_FAN:
+    default: /* PS_FAN */
         it->sub = PS_PLAN;
         if (!it->fan_on && o->fan_speed > 0.0 && it->layer >= o->fan_off_layers) {
             it->fan_on = 1;
@@ -1179,6 +1180,14 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
+    }
+}
+
+/* The travel to the path's start: plan, retract, lift, the hull's hops, descend, unretract. */
+static int travel_step(amp_gcode_iter *it, lb *l, const amp_pvert *v)
+{
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
     case PS_PLAN:
         it->sub = plan_travel(it, v) ? PS_RETRACT : PS_SEGS;
         return 0;
@@ -1217,7 +1226,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
-    case PS_UNRETRACT:
+    default: /* PS_UNRETRACT */
         it->sub = PS_SEGS;
         if (!it->direct) /* the head stops where it lands (an unretract usually sits there); a direct hop flows on */
             amp_gc_plan_flush(it);
@@ -1226,21 +1235,49 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
-    default: /* PS_SEGS: it->seg is the vertex the head is at */
-        if (it->seg + 1 < p->n && next_segment(ps, it->path, it->seg) + 1 < p->n) {
-            amp_gc_arc arc;
-            int use_arc;
-            it->nxt = next_vertex(it, it->path, it->seg);
-            use_arc = o->arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, o, &arc);
-            if (use_arc)
-                it->nxt = arc.end;
-            move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
-            it->seg = it->nxt;
-            return 1;
-        }
-        it->path++;
-        it->sub = PS_COMMENT;
-        return 0;
+    }
+}
+
+/* One printing move (a segment, or a fitted arc over several); at the path's end, on to the next path. */
+static int print_step(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_pvert *v)
+{
+    /* it->seg is the vertex the head is at */
+    if (it->seg + 1 < p->n && next_segment(it->ps, it->path, it->seg) + 1 < p->n) {
+        amp_gc_arc arc;
+        int use_arc;
+        it->nxt = next_vertex(it, it->path, it->seg);
+        use_arc = it->o.arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, &it->o, &arc);
+        if (use_arc)
+            it->nxt = arc.end;
+        move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
+        it->seg = it->nxt;
+        return 1;
+    }
+    it->path++;
+    it->sub = PS_COMMENT;
+    return 0;
+}
+
+static int step_path(amp_gcode_iter *it, lb *l)
+{
+    const amp_path *p = &it->ps->paths[it->path];
+    const amp_pvert *v = amp_pathset_path_verts(it->ps, it->path);
+    switch (it->sub) {
+    case PS_COMMENT:
+        return path_comment(it, l, p, v);
+    case PS_HOTEND:
+    case PS_BED:
+    case PS_FAN:
+        return layer_settings(it, l);
+    case PS_PLAN:
+    case PS_RETRACT:
+    case PS_LIFT:
+    case PS_HULL:
+    case PS_DESCEND:
+    case PS_UNRETRACT:
+        return travel_step(it, l, v);
+    default:
+        return print_step(it, l, p, v);
     }
 }
 
