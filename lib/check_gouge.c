@@ -415,7 +415,7 @@ amp_status amp_check_gouge(const amp_pathset *ps, const amp_head *h, amp_gouge_m
     if (!ps || !h)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_gouge: NULL argument");
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0 || !isfinite(h->theta) || h->theta <= 0.0 ||
-        h->theta >= 1.57079632679489661923)
+        h->theta >= 0.5 * AMP_PI)
         return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",
                         h->z_offs, h->theta * 57.295779513082320876);
     if (!isfinite(tol) || tol < 0.0)

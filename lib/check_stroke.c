@@ -76,7 +76,7 @@ static int seg_conflict(const seg2 *s, const seg2 *t)
 /* Is angle c strictly inside the CCW arc from a to b? */
 static int in_arc(double a, double b, double c)
 {
-    double w = 6.283185307179586;
+    double w = 2.0 * AMP_PI;
     double ab = fmod(b - a + 2 * w, w), ac = fmod(c - a + 2 * w, w);
     return ac > 0 && ac < ab;
 }

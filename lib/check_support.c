@@ -7,7 +7,7 @@
 
 void amp_hold_opts_default(amp_hold_opts *o)
 {
-    o->overhang = 0.25 * 3.14159265358979323846;
+    o->overhang = 0.25 * AMP_PI;
     o->max_gap = 1.0;
     o->bridge = 5.0;
     o->cantilever = 1.0;
@@ -229,7 +229,7 @@ amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hol
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_hold: NULL argument");
     memset(rep, 0, sizeof *rep);
     rep->alloc = ps->alloc;
-    if (!(o->overhang >= 0.0 && o->overhang < 0.5 * 3.14159265358979323846) || !(o->max_gap >= 0.0) ||
+    if (!(o->overhang >= 0.0 && o->overhang < 0.5 * AMP_PI) || !(o->max_gap >= 0.0) ||
         !(o->bridge >= 0.0) || !(o->cantilever >= 0.0) || !(o->step > 0.0) ||
         !isfinite(o->max_gap + o->bridge + o->cantilever + o->step))
         return amp_fail(err, AMP_ERR_RANGE, 0,

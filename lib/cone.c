@@ -15,7 +15,7 @@ void amp_head_default(amp_head *h)
 
 amp_status amp_head_validate(const amp_head *h, amp_error *err)
 {
-    const double half_pi = 1.57079632679489661923;
+    const double half_pi = 0.5 * AMP_PI;
     if (!h)
         return amp_fail(err, AMP_ERR_ARG, 0, "no head geometry given");
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0)

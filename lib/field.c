@@ -13,15 +13,14 @@
 #include "ampath/field.h"
 #include "ampath/spline.h"
 
-#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------ built-ins */
 
 /* helix-square: the docs/interfaces.md §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
 static amp_status eval_helix_square(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
 {
-    const double R = 20, P = 40, k = P / (2 * PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * PI * R / (2 * PI * len);
-    double w = 2 * PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
+    const double R = 20, P = 40, k = P / (2 * AMP_PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * AMP_PI * R / (2 * AMP_PI * len);
+    double w = 2 * AMP_PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
     /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/mesh_models.c) */
     amp_vec3 c = amp_v3(R * cos(w), R * sin(w), z0 + P * uvw[2]);
     amp_vec3 n = amp_v3(-cos(w), -sin(w), 0), bb = amp_v3(k * sin(w) / len, -k * cos(w) / len, R / len);

@@ -17,7 +17,6 @@
 #include "gcode_internal.h"
 
 #define GC_MAGIC 0x67636f64u
-#define GC_PI 3.14159265358979323846
 #define GC_MIN_SEG 1e-9      /* segments shorter than this (mm) are not printed */
 #define GC_COORD_MAX 99999.0 /* keeps every number short enough for AMP_GCODE_LINE_MAX */
 #define GC_FIT_TOL 5e-4      /* half the 0.001 mm resolution of the written coordinates */
@@ -507,7 +506,7 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     if (js.bb.max.z + it->off.z + js.rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
         return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: the job rises beyond %g mm", GC_COORD_MAX);
     it->ps = ps;
-    it->fil_area = GC_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
+    it->fil_area = AMP_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
     /* the grid (model coordinates) covers every vertex with its radius and a travel corridor around it */
     margin = js.rmax + it->o.travel_corridor + 1.0;
     ext = fmax(js.bb.max.x - js.bb.min.x, js.bb.max.y - js.bb.min.y) + 2.0 * margin;
@@ -683,7 +682,7 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     it->pos = b;
     if (de > 0.0)
         it->printed_any = 1;
-    set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / GC_PI) : 0.0, len);
+    set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / AMP_PI) : 0.0, len);
 }
 
 static double rect_dist(double px, double py, double x0, double y0, double side)
@@ -704,7 +703,7 @@ static double rect_dist(double px, double py, double x0, double y0, double side)
  */
 static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
 {
-    double k = 1.0 / tan(it->o.head_theta * GC_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
+    double k = 1.0 / tan(it->o.head_theta * AMP_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
     double zo = it->o.head_z_offs;
     int bi, bj, i, j;
     if (it->zc_max - zo + k * hh <= lo)

@@ -7,7 +7,6 @@
 
 #include "meshfix.h"
 
-#define PI 3.14159265358979323846
 
 amp_status amp_fix_torus(amp_mesh *m, double R, double r, int nu, int nv)
 {
@@ -16,7 +15,7 @@ amp_status amp_fix_torus(amp_mesh *m, double R, double r, int nu, int nv)
     amp_status st = AMP_OK;
     for (i = 0; i < nu && st == AMP_OK; i++)
         for (j = 0; j < nv && st == AMP_OK; j++) {
-            double u = 2 * PI * i / nu, v = 2 * PI * j / nv;
+            double u = 2 * AMP_PI * i / nu, v = 2 * AMP_PI * j / nv;
             st = amp_mesh_add_vertex(m, amp_v3((R + r * cos(v)) * cos(u), (R + r * cos(v)) * sin(u), r * sin(v)),
                                      NULL, NULL);
         }
@@ -89,15 +88,15 @@ double amp_fix_mesh_dist(const amp_mesh *m, amp_vec3 p)
 
 static amp_vec3 helix_c(double t)
 {
-    double z0 = 5 * PI / sqrt(PI * PI + 1);
-    return amp_v3(20 * cos(2 * PI * t), 20 * sin(2 * PI * t), z0 + 40 * t);
+    double z0 = 5 * AMP_PI / sqrt(AMP_PI * AMP_PI + 1);
+    return amp_v3(20 * cos(2 * AMP_PI * t), 20 * sin(2 * AMP_PI * t), z0 + 40 * t);
 }
 
 amp_vec3 amp_fix_helix_point(double t, double u, double v)
 {
     /* frame from derivatives: T = c'/|c'|, N = -(horizontal radial), B = T x N */
-    amp_vec3 d1 = amp_v3(-40 * PI * sin(2 * PI * t), 40 * PI * cos(2 * PI * t), 40);
-    amp_vec3 T = amp_v3_normalize(d1), N = amp_v3(-cos(2 * PI * t), -sin(2 * PI * t), 0);
+    amp_vec3 d1 = amp_v3(-40 * AMP_PI * sin(2 * AMP_PI * t), 40 * AMP_PI * cos(2 * AMP_PI * t), 40);
+    amp_vec3 T = amp_v3_normalize(d1), N = amp_v3(-cos(2 * AMP_PI * t), -sin(2 * AMP_PI * t), 0);
     amp_vec3 B = amp_v3_cross(T, N);
     return amp_v3_add(helix_c(t), amp_v3_add(amp_v3_scale(N, u), amp_v3_scale(B, v)));
 }

@@ -289,7 +289,7 @@ START_TEST(clip_circle_in_torus_with_missing_triangle_stays_whole)
     m.tris[100] = m.tris[--m.ntris];
     b = build(&m);
     for (k = 0; k <= 200; k++) {
-        double u = 2 * 3.14159265358979323846 * k / 200;
+        double u = 2 * AMP_PI * k / 200;
         c[k].p = amp_v3((TR + 3) * cos(u), (TR + 3) * sin(u), 1.0);
         c[k].r = 0.4;
     }
@@ -324,7 +324,7 @@ START_TEST(clip_helix_field_curve_to_helix_mesh)
     b = build(&m);
     c = malloc(n * sizeof *c);
     for (i = 0; i < n; i++) {
-        double t = -0.05 + 1.1 * (double)i / (double)(n - 1), u = 7 * sin(5 * 3.14159265358979323846 * t);
+        double t = -0.05 + 1.1 * (double)i / (double)(n - 1), u = 7 * sin(5 * AMP_PI * t);
         int in = t >= 0 && t <= 1 && u * u + 1 < 25;
         c[i].p = amp_fix_helix_point(t, u, 1);
         c[i].r = 0.5;

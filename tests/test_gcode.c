@@ -8,7 +8,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------------ a small G-code reader */
 
@@ -396,7 +395,7 @@ static double formula_e(const amp_pathset *ps, size_t i, size_t k, const amp_gco
 {
     const amp_pvert *v = amp_pathset_path_verts(ps, i);
     double r = 0.5 * (v[k].r + v[k + 1].r), L = amp_v3_dist(v[k].p, v[k + 1].p);
-    return o->flow * (PI * r * r * L) / (PI * (o->filament_diameter / 2) * (o->filament_diameter / 2));
+    return o->flow * (AMP_PI * r * r * L) / (AMP_PI * (o->filament_diameter / 2) * (o->filament_diameter / 2));
 }
 
 /* ------------------------------------------------------------------ tests */
@@ -438,7 +437,7 @@ START_TEST(e_per_segment_matches_formula_for_constant_and_varying_radius)
     ck_assert_uint_gt(checked - varying, 500); /* the rings: constant radius */
     /* total filament = flow * deposited volume / filament area */
     ck_assert_near(it.stats.filament_length,
-                   o.flow * amp_pathset_volume(&ps, -1) / (PI * 2.85 * 2.85 / 4), 1e-9 * it.stats.filament_length);
+                   o.flow * amp_pathset_volume(&ps, -1) / (AMP_PI * 2.85 * 2.85 / 4), 1e-9 * it.stats.filament_length);
     amp_pathset_free(&ps);
 }
 END_TEST
@@ -465,7 +464,7 @@ START_TEST(volumetric_cap_lowers_feed_exactly_where_needed)
     ck_assert_uint_eq(s.nsegs, (size_t)n);
     for (k = 0; k < s.nsegs; k++) {
         const amp_pvert *v = ps.verts;
-        double r = 0.5 * (v[k].r + v[k + 1].r), area = PI * r * r;
+        double r = 0.5 * (v[k].r + v[k + 1].r), area = AMP_PI * r * r;
         if (area * o.print_feed > o.max_volumetric_flow) {
             ck_assert_msg(area * s.segs[k].feed <= o.max_volumetric_flow * (1 + 1e-12), "segment %lu over the cap",
                           (unsigned long)k);
@@ -1006,7 +1005,7 @@ START_TEST(planar_beads_extrude_the_rounded_rectangle)
     amp_gcode_opts o;
     gsim s;
     char *text;
-    const double S = 20, h = 0.2, r = 0.225, fil = PI * 1.75 * 1.75 / 4;
+    const double S = 20, h = 0.2, r = 0.225, fil = AMP_PI * 1.75 * 1.75 / 4;
     double part = S * S * 5 * h, vol, ext;
     size_t i;
     amp_pathset_init(&ps, NULL);
@@ -1187,7 +1186,7 @@ START_TEST(simplified_paths_stay_within_tolerance_without_micro_segments)
     gsim s;
     char *text;
     size_t k, n = 6000, shortest_at = 0;
-    double shortest = HUGE_VAL, worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    double shortest = HUGE_VAL, worst = 0, fil = AMP_PI * 1.75 * 1.75 / 4;
     amp_pathset_init(&ps, NULL);
     /* a 30 mm arc of radius 10 sampled every 5 um (below a motor step), radius 0.3 +- 0.05 slowly */
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
@@ -1459,7 +1458,7 @@ END_TEST
 /* Distance from p to written move k: a chord, or a helical arc (radial and z error, p's angle inside the sweep). */
 static double dist_to_move(const seg *m, amp_vec3 p)
 {
-    double t, R, a0, a1, ap, sweep, f, twopi = 2 * PI;
+    double t, R, a0, a1, ap, sweep, f, twopi = 2 * AMP_PI;
     if (!m->arc)
         return sqrt(amp_v3_seg_dist2(p, m->a, m->b, &t));
     R = hypot(m->a.x - m->cx, m->a.y - m->cy);
@@ -1483,13 +1482,13 @@ START_TEST(arcs_follow_the_input_within_tolerance)
     gsim s;
     char *text;
     size_t k, i, n = 4000, arcs = 0;
-    double worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    double worst = 0, fil = AMP_PI * 1.75 * 1.75 / 4;
     amp_pathset_init(&ps, NULL);
     /* one and a half turns of a helix of radius 12 (pitch 2 mm), sampled every 0.03 mm, then a straight line */
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
     for (k = 0; k <= n; k++) {
-        double a = 3 * PI * k / n;
-        amp_pathset_push(&ps, amp_v3(12 * cos(a), 12 * sin(a), 0.3 + a / PI), 0.3 + 0.02 * sin(a), NULL);
+        double a = 3 * AMP_PI * k / n;
+        amp_pathset_push(&ps, amp_v3(12 * cos(a), 12 * sin(a), 0.3 + a / AMP_PI), 0.3 + 0.02 * sin(a), NULL);
     }
     for (k = 1; k <= 50; k++)
         amp_pathset_push(&ps, amp_v3(-12 - 0.1 * k, 0, 3.3), 0.3, NULL);
@@ -1564,7 +1563,7 @@ static int is_direct(const gsim *s, const seg *tr)
  */
 static int count_cone_gouges(const gsim *s, double z_offs, double theta_deg, size_t *hops)
 {
-    double k = 1.0 / tan(theta_deg * 3.14159265358979323846 / 180.0);
+    double k = 1.0 / tan(theta_deg * AMP_PI / 180.0);
     size_t t, g;
     int bad = 0;
     *hops = 0;

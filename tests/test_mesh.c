@@ -9,7 +9,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 static void make_torus(amp_mesh *m, double R, double r, int nu, int nv)
 {
@@ -224,7 +223,7 @@ START_TEST(stl_roundtrip_binary_and_ascii_preserves_torus)
         amp_buf_free(&buf);
     }
     /* the analytic torus volume 2 pi^2 R r^2 within the tessellation error */
-    ck_assert_near(amp_mesh_volume(&m), 2 * PI * PI * 20 * 25, 0.03 * 2 * PI * PI * 20 * 25);
+    ck_assert_near(amp_mesh_volume(&m), 2 * AMP_PI * AMP_PI * 20 * 25, 0.03 * 2 * AMP_PI * AMP_PI * 20 * 25);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, amp_test_tmp("torus.stl"), 1, &err), AMP_OK);
     amp_mesh_init(&back, NULL);
     ck_assert_int_eq(amp_mesh_read_stl_file(&back, amp_test_tmp("torus.stl"), &err), AMP_OK);
@@ -413,7 +412,7 @@ static double helix_deviation(const amp_mesh *m)
     }
     ck_assert_int_eq(amp_bvh_build(&b, m, &err), AMP_OK);
     for (k = 0; k < 4000; k++) {
-        double t = amp_fix_rand(&s), th = 2 * PI * amp_fix_rand(&s), rho = k % 4 == 0 ? 5 * sqrt(amp_fix_rand(&s)) : 5;
+        double t = amp_fix_rand(&s), th = 2 * AMP_PI * amp_fix_rand(&s), rho = k % 4 == 0 ? 5 * sqrt(amp_fix_rand(&s)) : 5;
         amp_vec3 q;
         if (k % 4 == 0)
             t = k % 8 == 0 ? 0 : 1; /* a cap point */
@@ -428,7 +427,7 @@ START_TEST(helix_mesh_is_within_0_05_mm_of_the_exact_solid)
 {
     amp_mesh m, coarse;
     amp_error err;
-    double arc = 40 * sqrt(PI * PI + 1), dev;
+    double arc = 40 * sqrt(AMP_PI * AMP_PI + 1), dev;
     amp_box3 b;
     amp_mesh_init(&m, NULL);
     amp_mesh_init(&coarse, NULL);
@@ -440,10 +439,10 @@ START_TEST(helix_mesh_is_within_0_05_mm_of_the_exact_solid)
     ck_assert_int_eq(amp_mesh_model("helix", 1.0, &coarse, &err), AMP_OK);
     ck_assert_msg(helix_deviation(&coarse) > 0.05, "coarse helix deviates only %g", helix_deviation(&coarse));
     /* volume of a disc swept along a curve = area x arc length (no self-overlap) */
-    ck_assert_near(amp_mesh_volume(&m), PI * 25 * arc, 0.01 * PI * 25 * arc);
-    ck_assert_msg(amp_mesh_volume(&m) < PI * 25 * arc, "inscribed mesh must be smaller");
+    ck_assert_near(amp_mesh_volume(&m), AMP_PI * 25 * arc, 0.01 * AMP_PI * 25 * arc);
+    ck_assert_msg(amp_mesh_volume(&m) < AMP_PI * 25 * arc, "inscribed mesh must be smaller");
     b = amp_mesh_bbox(&m);
-    ck_assert_near(b.max.z, 40 + 2 * 5 * PI / sqrt(PI * PI + 1), 0.05);
+    ck_assert_near(b.max.z, 40 + 2 * 5 * AMP_PI / sqrt(AMP_PI * AMP_PI + 1), 0.05);
     ck_assert_near(b.max.x, 25, 0.05);
     amp_mesh_free(&m);
     amp_mesh_free(&coarse);

@@ -8,7 +8,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 static unsigned long rng_state = 12345;
 static int dbl_cmp(const void *a, const void *b)
@@ -685,7 +684,7 @@ END_TEST
 /* Distance from p to the exact helix solid of docs/interfaces.md §4: min over t of the distance to the disc at c(t). */
 static double helix_solid_dist(amp_vec3 p, double *tbest)
 {
-    const double R = 20, H = 40, RD = 5, L = sqrt(4 * PI * PI * R * R + H * H), z0 = RD * 2 * PI * R / L;
+    const double R = 20, H = 40, RD = 5, L = sqrt(4 * AMP_PI * AMP_PI * R * R + H * H), z0 = RD * 2 * AMP_PI * R / L;
     double best = HUGE_VAL, bt = 0, lo, hi;
     int i, pass;
     lo = 0;
@@ -693,9 +692,9 @@ static double helix_solid_dist(amp_vec3 p, double *tbest)
     for (pass = 0; pass < 4; pass++) {
         double step = (hi - lo) / 200, t0 = bt;
         for (i = 0; i <= 200; i++) {
-            double t = lo + step * i, ph = 2 * PI * t, dist;
+            double t = lo + step * i, ph = 2 * AMP_PI * t, dist;
             amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), z0 + H * t);
-            amp_vec3 T = amp_v3_scale(amp_v3(-2 * PI * R * sin(ph), 2 * PI * R * cos(ph), H), 1 / L);
+            amp_vec3 T = amp_v3_scale(amp_v3(-2 * AMP_PI * R * sin(ph), 2 * AMP_PI * R * cos(ph), H), 1 / L);
             amp_vec3 q = amp_v3_sub(p, c);
             double hn = amp_v3_dot(q, T), rr = sqrt(fmax(0, amp_v3_len2(q) - hn * hn));
             dist = rr <= RD ? fabs(hn) : hypot(hn, rr - RD);
@@ -720,7 +719,7 @@ START_TEST(helix_model_is_within_0_05_mm_of_the_swept_disc)
     amp_spline s;
     int i, j, l;
     double worst = 0, worst_boundary = 0, zmin = HUGE_VAL;
-    const double R = 20, H = 40, L = sqrt(4 * PI * PI * R * R + H * H);
+    const double R = 20, H = 40, L = sqrt(4 * AMP_PI * AMP_PI * R * R + H * H);
     ck_assert_int_eq(amp_trivariate_model("helix", NULL, &s, NULL), AMP_OK);
     for (l = 0; l <= 64; l++)
         for (j = 0; j <= 8; j++)
@@ -731,8 +730,8 @@ START_TEST(helix_model_is_within_0_05_mm_of_the_swept_disc)
                 zmin = fmin(zmin, p.z);
                 if (i == 0 || i == 8 || j == 0 || j == 8) {
                     /* the spline's side boundary lies on the tube of radius 5 around the helix */
-                    double ph = 2 * PI * t;
-                    amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), 5 * 2 * PI * R / L + H * t);
+                    double ph = 2 * AMP_PI * t;
+                    amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), 5 * 2 * AMP_PI * R / L + H * t);
                     worst_boundary = fmax(worst_boundary, fabs(amp_v3_dist(p, c) - 5.0));
                 }
             }
@@ -775,7 +774,7 @@ START_TEST(torus_quarter_and_vase_are_exact_revolutions)
     {
         /* the wall's cross-section area changes substantially along the height */
         amp_vec3 i0 = ev(&s, 0, 0, 0.45), o0 = ev(&s, 1, 0, 0.45), i1 = ev(&s, 0, 0, 0.8), o1 = ev(&s, 1, 0, 0.8);
-        double a0 = PI * (o0.x * o0.x - i0.x * i0.x), a1 = PI * (o1.x * o1.x - i1.x * i1.x);
+        double a0 = AMP_PI * (o0.x * o0.x - i0.x * i0.x), a1 = AMP_PI * (o1.x * o1.x - i1.x * i1.x);
         ck_assert_double_gt(fmax(a0, a1) / fmin(a0, a1), 2.0);
     }
     amp_spline_free(&s);

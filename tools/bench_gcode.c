@@ -13,7 +13,7 @@ static void bench_rings(amp_pathset *ps, int layers, int rings, int nper)
         for (j = 0; j < rings; j++) {
             amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
             for (k = 0; k <= nper; k++) {
-                double w = 6.283185307179586 * (double)k / nper, rad = 5.0 + 0.9 * j;
+                double w = 2.0 * AMP_PI * (double)k / nper, rad = 5.0 + 0.9 * j;
                 amp_pathset_push(ps, amp_v3(rad * cos(w), rad * sin(w), 0.3 * (i + 1)),
                                  0.25 + 0.15 * sin(3 * w) * sin(3 * w), NULL);
             }

@@ -13,7 +13,7 @@
 static int make_mesh(amp_mesh *m, int nu, int nv)
 {
     int i, j;
-    const double tau = 6.283185307179586;
+    const double tau = 2.0 * AMP_PI;
     for (i = 0; i < nu; i++)
         for (j = 0; j < nv; j++) {
             double u = tau * i / nu, v = tau * j / nv, rr = 9 + 1.5 * sin(5 * u), rho = 30 + rr * cos(v);

@@ -20,7 +20,7 @@ extern "C" {
 
 /** Paper defaults (docs/interfaces.md §2): tip 0.5 mm above the printed point, half-angle 0.4*pi (72 degrees). */
 #define AMP_HEAD_DEFAULT_Z_OFFS 0.5
-#define AMP_HEAD_DEFAULT_THETA (0.4 * 3.14159265358979323846)
+#define AMP_HEAD_DEFAULT_THETA (0.4 * AMP_PI)
 
 /** Clearance (mm) above which the cone is considered to touch: contact at exactly 0 is allowed. */
 #define AMP_CONE_TOL 1e-9
