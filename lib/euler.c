@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "ampath/euler.h"
+#include "uf.h"
 
 /* Intersection of the lines p + s*d and q + t*e; 0 when (nearly) parallel. */
 static int line_meet(amp_vec2 p, amp_vec2 d, amp_vec2 q, amp_vec2 e, amp_vec2 *out)
@@ -421,13 +422,6 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
-static size_t uf_find(size_t *par, size_t x)
-{
-    while (par[x] != x)
-        x = par[x] = par[par[x]];
-    return x;
-}
-
 /* The Lemma 3.3 repair's working state: the input, k̂ (marked cells, sub), T(k̂), T(T(k̂)) and the maps. */
 typedef struct repair {
     const amp_cx2 *khat;
@@ -509,7 +503,7 @@ static amp_status extract_subcomplex(repair *r, amp_error *err)
     for (h = 0; h < khat->nfidx; h++) {
         size_t t = khat->he_twin[h];
         if (t != AMP_CX2_NONE && r->mark[khat->he_face[h]] && r->mark[khat->he_face[t]])
-            r->par[uf_find(r->par, khat->he_face[h])] = uf_find(r->par, khat->he_face[t]);
+            amp_uf_union(r->par, khat->he_face[h], khat->he_face[t]);
     }
     for (i = 0; i < khat->nv; i++)
         r->vmap[i] = UINT32_MAX;
@@ -518,7 +512,7 @@ static amp_status extract_subcomplex(repair *r, amp_error *err)
         if (!r->mark[f])
             continue;
         r->s.cells++;
-        r->s.components += uf_find(r->par, f) == f;
+        r->s.components += amp_uf_find(r->par, f) == f;
         for (j = 0; j < n && rc == AMP_OK; j++) {
             uint32_t v = khat->fidx[a + j];
             if (r->vmap[v] == UINT32_MAX)
