@@ -54,7 +54,7 @@ int bench_cover(cli_json *j, int quick)
         cli_json_int(j, "vertices", (long long)st.vertices);
         cli_json_num(j, "length_mm", st.length);
         cli_json_num(j, "eval_per_vertex_baseline_s", t_base);
-        cli_json_num(j, "cover_over_baseline", t_cover / (t_base > 0 ? t_base : 1e-9));
+        cli_json_num(j, "cover_over_baseline", t_cover / cli_positive(t_base));
         cli_json_num(j, "coverage_gap_mm", g.gap);
         cli_json_num(j, "gap_measurement_s", t_gap);
         cli_json_num(j, "over_coverage", g.volume > 0 ? g.deposited / g.volume : 0);
@@ -63,7 +63,7 @@ int bench_cover(cli_json *j, int quick)
                "x%.1f the per-vertex evaluation baseline (%.3f s); measured gap %.3f mm (%.3f s), "
                "over-coverage %.2f\n",
                o.eps, t_cover, (unsigned long)st.surfaces, (unsigned long)st.curves, (unsigned long)st.vertices,
-               st.length, t_cover / (t_base > 0 ? t_base : 1e-9), t_base, g.gap, t_gap,
+               st.length, t_cover / cli_positive(t_base), t_base, g.gap, t_gap,
                g.volume > 0 ? g.deposited / g.volume : 0);
     free(par);
     free(pts);

@@ -253,7 +253,7 @@ int bench_slice(cli_json *j, int quick)
             cli_json_num(j, "rectilinear_infill_mm", rs.length);
             cli_json_num(j, "rectilinear_spacing_mm", spacing);
             cli_json_num(j, "continuous_travel_mm", travel_c);
-            cli_json_num(j, "travel_ratio", travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+            cli_json_num(j, "travel_ratio", travel_c / cli_positive(rs.travel));
             cli_json_num(j, "rectilinear_travel_mm", rs.travel);
             cli_json_num(j, "rectilinear_s", t_rect);
         } else {
@@ -265,7 +265,7 @@ int bench_slice(cli_json *j, int quick)
                    (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
                    st.infill_length, rs.length, spacing);
             printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, rs.travel,
-                   travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+                   travel_c / cli_positive(rs.travel));
         }
     }
     if (rc == CLI_OK)

@@ -4,33 +4,6 @@
 
 #include "checkers.h"
 
-int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
-{
-    amp_error err;
-    amp_spline *list;
-    size_t n, i;
-    const char *const *names = amp_trivariate_model_names();
-    amp_error_clear(&err);
-    for (i = 0; names[i]; i++)
-        if (strcmp(names[i], what) == 0) {
-            if (amp_trivariate_model(what, NULL, out, &err) != AMP_OK)
-                return cli_fail_err(cmd, &err);
-            return CLI_OK;
-        }
-    if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
-        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
-    for (i = 0; i < n && list[i].dim != 3; i++)
-        ;
-    if (i == n) {
-        amp_spline_list_free(NULL, list, n);
-        return cli_fail(cmd, CLI_USAGE, "%s: no trivariate in the file", what);
-    }
-    *out = list[i];
-    amp_spline_init(&list[i]);
-    amp_spline_list_free(NULL, list, n);
-    return CLI_OK;
-}
-
 /* The eps recorded by `ampath cover` in a comment of the path file, or 0. */
 static double eps_from_comment(const char *file)
 {

@@ -70,7 +70,5 @@ int check_stroke(const check_ctx *c, cli_json *j);
  */
 int check_support(const check_ctx *c, cli_json *j);
 
-/** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
-int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);
 
 #endif

@@ -451,3 +451,40 @@ int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, con
         return cli_fail_err(cmd, &err);
     return CLI_OK;
 }
+
+void cli_progress_fn(void *user, double fraction) { cli_progress_update((cli_progress *)user, fraction); }
+
+int cli_ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+double cli_positive(double seconds) { return seconds > 0 ? seconds : 1e-9; }
+
+int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
+{
+    amp_error err;
+    amp_spline *list;
+    size_t n, i;
+    const char *const *names = amp_trivariate_model_names();
+    amp_error_clear(&err);
+    for (i = 0; names[i]; i++)
+        if (strcmp(names[i], what) == 0) {
+            if (amp_trivariate_model(what, NULL, out, &err) != AMP_OK)
+                return cli_fail_err(cmd, &err);
+            return CLI_OK;
+        }
+    if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
+        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
+    for (i = 0; i < n && list[i].dim != 3; i++)
+        ;
+    if (i == n) {
+        amp_spline_list_free(NULL, list, n);
+        return cli_fail(cmd, CLI_USAGE, "%s: no trivariate in the file", what);
+    }
+    *out = list[i];
+    amp_spline_init(&list[i]);
+    amp_spline_list_free(NULL, list, n);
+    return CLI_OK;
+}

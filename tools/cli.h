@@ -101,6 +101,16 @@ typedef struct cli_progress {
 void cli_progress_begin(cli_progress *p, const char *label);
 void cli_progress_update(cli_progress *p, double fraction);
 void cli_progress_end(cli_progress *p);
+/** The library's progress callback (amp_progress_fn) drawing the bar of @p user, a cli_progress. */
+void cli_progress_fn(void *user, double fraction);
+
+/** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
+int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);
+/** 1 when @p s ends with @p suffix. */
+int cli_ends_with(const char *s, const char *suffix);
+/** The rate guard of the benchmarks: @p seconds, or 1e-9 when it is not positive, as the divisor of a rate or
+ *  ratio measured in one run (a step too fast for the clock gives a large finite figure, not inf or NaN). */
+double cli_positive(double seconds);
 
 /** Monotonic wall clock in seconds. */
 double cli_now(void);

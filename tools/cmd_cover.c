@@ -68,7 +68,6 @@ static double estimate_curves(const amp_spline *v, int d, double eps, double cho
     return (ceil(net_length(v, d) / thr) + 1) * (ceil(net_length(v, e0) / thr) + 1);
 }
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 int cmd_cover(int argc, char **argv)
 {
@@ -125,7 +124,7 @@ int cmd_cover(int argc, char **argv)
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
     cli_progress_begin(&bar, "cover");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     t0 = cli_now();
     rc = amp_cover_trivariate(&v, &o, &ps, &st, &err);

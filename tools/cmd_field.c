@@ -102,7 +102,6 @@ static void print_report(const report *r, int json)
     }
 }
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 /* The sweep field of --along SPINE.amp (its first path) and --side W; *sw is malloc'ed and must outlive f. */
 static int load_sweep(const char *along, double side, amp_field *f, amp_sweep **sw)
@@ -253,7 +252,7 @@ int cmd_field(int argc, char **argv)
     o.nwithout = rb[1] != NULL;
     t0 = cli_now();
     cli_progress_begin(&bar, "field");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
     cli_progress_end(&bar);

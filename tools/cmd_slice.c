@@ -48,12 +48,6 @@ const char cmd_slice_usage[] =
     "(open_chains, per layer) with a warning on stderr. --continuous checks every path it writes\n"
     "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
-static int ends_with(const char *s, const char *suf)
-{
-    size_t n = strlen(s), m = strlen(suf);
-    return n >= m && strcmp(s + n - m, suf) == 0;
-}
-
 static int write_amp(const char *file, const amp_slices *sl, double radius, double layer)
 {
     amp_pathset ps;
@@ -466,14 +460,14 @@ int cmd_slice(int argc, char **argv)
                 (unsigned long)sl.open_chains);
     if (rc == CLI_OK && continuous) {
         long li = -1;
-        if (out && ends_with(out, ".svg"))
+        if (out && cli_ends_with(out, ".svg"))
             li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
-        rc = li < -1 || (out && ends_with(out, ".svg") && li < 0) ? CLI_USAGE
+        rc = li < -1 || (out && cli_ends_with(out, ".svg") && li < 0) ? CLI_USAGE
                                                                    : run_continuous(pos[0], out, &sl, &co, json, t0, epsc, li);
         goto done;
     }
     if (rc == CLI_OK && out) {
-        if (ends_with(out, ".svg")) {
+        if (cli_ends_with(out, ".svg")) {
             long li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
             rc = li < 0 ? CLI_USAGE : write_svg(out, &sl, li, radius);
         } else
