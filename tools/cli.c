@@ -116,18 +116,39 @@ static int check_range(const char *cmd, const cli_opt *o, double v, const char *
     return CLI_OK;
 }
 
-static int set_value(const char *cmd, cli_opt *o, const char *val)
+int cli_number(const char *s, double *out)
 {
     char *end;
+    double d;
+    errno = 0;
+    d = strtod(s, &end);
+    if (end == s || *end || !isfinite(d))
+        return -1;
+    *out = d;
+    return 0;
+}
+
+int cli_integer(const char *s, long *out)
+{
+    char *end;
+    long l;
+    errno = 0;
+    l = strtol(s, &end, 10);
+    if (end == s || *end || errno)
+        return -1;
+    *out = l;
+    return 0;
+}
+
+static int set_value(const char *cmd, cli_opt *o, const char *val)
+{
     switch (o->kind) {
     case CLI_STR:
         *(const char **)o->dst = val;
         return CLI_OK;
     case CLI_DOUBLE: {
         double d;
-        errno = 0;
-        d = strtod(val, &end);
-        if (end == val || *end || !isfinite(d))
+        if (cli_number(val, &d) != 0)
             return cli_fail(cmd, CLI_USAGE, "--%s expects a number, got '%s'", o->name, val);
         if (check_range(cmd, o, d, val) != CLI_OK)
             return CLI_USAGE;
@@ -136,9 +157,7 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
     }
     case CLI_LONG: {
         long l;
-        errno = 0;
-        l = strtol(val, &end, 10);
-        if (end == val || *end || errno)
+        if (cli_integer(val, &l) != 0)
             return cli_fail(cmd, CLI_USAGE, "--%s expects an integer, got '%s'", o->name, val);
         if (check_range(cmd, o, (double)l, val) != CLI_OK)
             return CLI_USAGE;
