@@ -4,7 +4,7 @@
 #include "fixture_geom.h"
 
 
-void amp_fixture_helix(amp_pathset *ps, int nstrands, int nper)
+void fx_helix(amp_pathset *ps, int nstrands, int nper)
 {
     int j, k;
     for (j = 0; j < nstrands; j++) {
@@ -23,7 +23,7 @@ void amp_fixture_helix(amp_pathset *ps, int nstrands, int nper)
         amp_pathset_push(ps, amp_v3(21.0, 0.0, 0.5 * k), 0.25, NULL);
 }
 
-void amp_fixture_rings(amp_pathset *ps, double cx, double cy, int nlayers, int nrings, int nper, double r)
+void fx_rings(amp_pathset *ps, double cx, double cy, int nlayers, int nrings, int nper, double r)
 {
     int i, j, k;
     for (i = 0; i < nlayers; i++)

@@ -1042,23 +1042,23 @@ static Suite *euler_suite(void)
 {
     Suite *s = suite_create("euler");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, euler_transform_of_a_random_triangulation_has_degree_four_everywhere);
-    AMP_ADD_TEST(tc, generalized_transform_makes_square_tri_and_hex_grids_euler);
-    AMP_ADD_TEST(tc, single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two);
-    AMP_ADD_TEST(tc, single_cell_with_a_short_edge_drops_it_and_is_euler_after_the_generalized_transform);
-    AMP_ADD_TEST(tc, interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two);
-    AMP_ADD_TEST(tc, checkers_fail_on_broken_complexes);
-    AMP_ADD_TEST(tc, combinatorial_changes_follow_lemma_3_1_degrees);
-    AMP_ADD_TEST(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
-    AMP_ADD_TEST(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
-    AMP_ADD_TEST(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
-    AMP_ADD_TEST(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
-    AMP_ADD_TEST(tc, offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes);
-    AMP_ADD_TEST(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
-    AMP_ADD_TEST(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
-    AMP_ADD_TEST(tc, bad_inputs_are_rejected_with_reasons);
+    tcase_add_test(tc, euler_transform_of_a_random_triangulation_has_degree_four_everywhere);
+    tcase_add_test(tc, generalized_transform_makes_square_tri_and_hex_grids_euler);
+    tcase_add_test(tc, single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two);
+    tcase_add_test(tc, single_cell_with_a_short_edge_drops_it_and_is_euler_after_the_generalized_transform);
+    tcase_add_test(tc, interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two);
+    tcase_add_test(tc, checkers_fail_on_broken_complexes);
+    tcase_add_test(tc, combinatorial_changes_follow_lemma_3_1_degrees);
+    tcase_add_test(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
+    tcase_add_test(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
+    tcase_add_test(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
+    tcase_add_test(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
+    tcase_add_test(tc, offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes);
+    tcase_add_test(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
+    tcase_add_test(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
+    tcase_add_test(tc, bad_inputs_are_rejected_with_reasons);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(euler_suite)
+FX_TEST_MAIN(euler_suite)

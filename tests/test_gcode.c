@@ -386,8 +386,8 @@ static void raw_opts(amp_gcode_opts *o, int flavor)
 static void demo_like(amp_pathset *ps)
 {
     amp_pathset_init(ps, NULL);
-    amp_fixture_rings(ps, 0, 0, 4, 3, 48, 0.25);
-    amp_fixture_helix(ps, 12, 120);
+    fx_rings(ps, 0, 0, 4, 3, 48, 0.25);
+    fx_helix(ps, 12, 120);
 }
 
 /* Expected E of segment k of path i: flow * (pi r^2 L) / (pi (d/2)^2), r the mean of the end radii. */
@@ -521,7 +521,7 @@ START_TEST(gouge_checker_catches_a_travel_without_lift)
     char *text, *p, *q;
     size_t near;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 2, 3, 48, 0.25);
+    fx_rings(&ps, 0, 0, 2, 3, 48, 0.25);
     raw_opts(&o, AMP_FLAVOR_MARLIN);
     o.retract_length = 0;
     text = gen(&ps, &o, NULL);
@@ -695,7 +695,7 @@ START_TEST(caller_start_and_end_sequences_replace_the_built_in_ones)
     char *text;
     gsim s;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 1, 12, 0.3);
     amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
     o.start_gcode = "G28\r\n\nM109 S215 ; mine\n";
     o.end_gcode = "M84 ; my end";
@@ -770,7 +770,7 @@ START_TEST(bad_input_gives_clear_errors)
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&empty, NULL);
     amp_buf_init(&b, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 1, 12, 0.3);
     amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
 
     ck_assert_int_eq(amp_gcode_iter_init(&it, NULL, &o, &err), AMP_ERR_ARG);
@@ -835,7 +835,7 @@ START_TEST(sink_failure_stops_the_writer)
     amp_error err;
     int n = 20;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 2, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 2, 12, 0.3);
     ck_assert_int_eq(amp_gcode_write(&ps, NULL, failing_sink, &n, NULL, &err), AMP_ERR_IO);
     ck_assert_ptr_nonnull(strstr(err.msg, "line 21"));
     amp_pathset_free(&ps);
@@ -845,7 +845,7 @@ END_TEST
 START_TEST(gcode_command_writes_file_and_reports_json)
 {
     amp_pathset ps;
-    const char *in = amp_test_tmp("cli.amp"), *out = amp_test_tmp("cli.gcode"), *start = amp_test_tmp("start.gcode");
+    const char *in = fx_tmp("cli.amp"), *out = fx_tmp("cli.gcode"), *start = fx_tmp("start.gcode");
     char args[2048], json[4096];
     FILE *f;
     gsim s;
@@ -853,7 +853,7 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     char *text;
     int rc;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 2, 2, 24, 0.3);
+    fx_rings(&ps, 0, 0, 2, 2, 24, 0.3);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     f = fopen(start, "w");
     fputs("G28\nM109 S199\n", f);
@@ -861,7 +861,7 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     snprintf(args, sizeof args,
              "gcode %s --flavor klipper --feed 25 --first-layer-feed 25 --chord-tol 0 --min-segment 0 --start %s "
              "--json -o %s", in, start, out);
-    rc = amp_test_run_tool(args, json, sizeof json);
+    rc = fx_run_tool(args, json, sizeof json);
     ck_assert_msg(rc != -2, "AMP_TOOL not set");
     ck_assert_int_eq(rc, 0);
     ck_assert_ptr_nonnull(strstr(json, "\"flavor\":\"klipper\""));
@@ -884,13 +884,13 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     /* bad usage and bad input: exit 2, no output written */
     remove(out);
     snprintf(args, sizeof args, "gcode %s --flavor reprap -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     snprintf(args, sizeof args, "gcode %s --filament 0 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, amp_test_tmp("nope"), out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "gcode %s -o %s", amp_test_tmp("nope.amp"), out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, fx_tmp("nope"), out);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s -o %s", fx_tmp("nope.amp"), out);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     remove(in);
     remove(start);
@@ -919,11 +919,11 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
     size_t i, len;
     gsim s;
     const char *d;
-    snprintf(dir, sizeof dir, "%s", amp_test_tmp("demo"));
+    snprintf(dir, sizeof dir, "%s", fx_tmp("demo"));
     d = dir;
     for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
         snprintf(args, sizeof args, steps[i], d, d, d);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
     }
     snprintf(args, sizeof args, "%s-h.gcode", d);
     ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
@@ -1119,7 +1119,7 @@ START_TEST(a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow)
     amp_gcode_opts o;
     amp_gcode_iter it;
     amp_error err;
-    const char *in = amp_test_tmp("big.amp"), *out = amp_test_tmp("big.gcode");
+    const char *in = fx_tmp("big.amp"), *out = fx_tmp("big.gcode");
     char args[1024], tmp[1024];
     FILE *f;
     amp_pathset_init(&ps, NULL);
@@ -1148,20 +1148,20 @@ START_TEST(a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow)
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     remove(out);
     snprintf(args, sizeof args, "gcode %s -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     snprintf(tmp, sizeof tmp, "%s.tmp", out);
     ck_assert_ptr_null(fopen(tmp, "rb"));
     snprintf(args, sizeof args, "gcode %s --printer prusa-mk3s --place 125,208 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     snprintf(args, sizeof args, "gcode %s --printer voron-350 -o %s", in, out); /* fits a 350 mm bed */
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     f = fopen(out, "rb");
     ck_assert_ptr_nonnull(f);
     fclose(f);
     snprintf(args, sizeof args, "gcode %s --place 1,2,3 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     remove(out);
     remove(in);
     amp_pathset_free(&ps);
@@ -1405,11 +1405,11 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
         gsim s;
         int planar = 0;
         double part, sup, ext, beads;
-        snprintf(base, sizeof base, "%s", amp_test_tmp(meshes[i]));
+        snprintf(base, sizeof base, "%s", fx_tmp(meshes[i]));
         snprintf(args, sizeof args, "model %s -o %s.stl", meshes[i], base);
-        ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+        ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
         snprintf(args, sizeof args, "slice %s.stl --layer 0.2 --continuous --radius 0.225 -o %s.amp", base, base);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "%s", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "%s", args);
         amp_pathset_init(&ps, NULL);
         snprintf(args, sizeof args, "%s.amp", base);
         ck_assert_int_eq(amp_pathset_read_file(&ps, args, NULL), AMP_OK);
@@ -1421,7 +1421,7 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
             ck_assert_int_eq(amp_pathset_write_file(&ps, args, NULL, NULL), AMP_OK);
         }
         snprintf(args, sizeof args, "gcode %s.amp --mesh %s.stl --json -o %s.gcode", base, base, base);
-        ck_assert_msg(amp_test_run_tool(args, json, sizeof json) == 0, "%s", args);
+        ck_assert_msg(fx_run_tool(args, json, sizeof json) == 0, "%s", args);
         snprintf(args, sizeof args, "%s.gcode", base);
         ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
         amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
@@ -1665,16 +1665,16 @@ START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
     amp_gcode_opts o;
     gsim s;
     const char *d;
-    snprintf(dir, sizeof dir, "%s", amp_test_tmp("hops"));
+    snprintf(dir, sizeof dir, "%s", fx_tmp("hops"));
     d = dir;
     for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
         snprintf(args, sizeof args, steps[i], d, d, d);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
     }
     snprintf(args, sizeof args, "gcode %s-h.amp --direct-hop 0 --json -o %s-off.gcode", d, d);
-    ck_assert_int_eq(amp_test_run_tool(args, off, sizeof off), 0);
+    ck_assert_int_eq(fx_run_tool(args, off, sizeof off), 0);
     snprintf(args, sizeof args, "gcode %s-h.amp --json -o %s-on.gcode", d, d);
-    ck_assert_int_eq(amp_test_run_tool(args, on, sizeof on), 0);
+    ck_assert_int_eq(fx_run_tool(args, on, sizeof on), 0);
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), json_num(off, "travel_time_fraction") - 0.07);
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), 0.45);
     ck_assert_double_lt(json_num(on, "retractions"), 0.5 * json_num(off, "retractions"));
@@ -1741,4 +1741,4 @@ static Suite *gcode_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(gcode_suite)
+FX_TEST_MAIN(gcode_suite)

@@ -69,10 +69,10 @@ static Suite *heap_suite(void)
 {
     Suite *s = suite_create("heap");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, pops_in_order_of_the_better_relation);
-    AMP_ADD_TEST(tc, equal_items_come_out_in_a_fixed_order);
+    tcase_add_test(tc, pops_in_order_of_the_better_relation);
+    tcase_add_test(tc, equal_items_come_out_in_a_fixed_order);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(heap_suite)
+FX_TEST_MAIN(heap_suite)

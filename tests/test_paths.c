@@ -175,14 +175,14 @@ END_TEST
 
 START_TEST(out_of_memory_is_reported_and_leaves_set_consistent)
 {
-    amp_test_failalloc fa;
+    fx_failalloc fa;
     amp_pathset ps;
     amp_error err;
     long budget;
     const char *text = "ampath-paths 1\npath object 3\n0 0 0 1\n1 0 0 1\n2 0 0 1\npath support 1\n5 5 5 0\n";
     for (budget = 0; budget < 6; budget++) {
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         amp_pathset_init(&ps, &fa.a);
         st = parse(&ps, text, &err);
         ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
@@ -200,7 +200,7 @@ START_TEST(file_write_is_atomic_and_reads_back)
 {
     amp_pathset ps, back;
     amp_error err;
-    const char *file = amp_test_tmp("rt.amp");
+    const char *file = fx_tmp("rt.amp");
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&back, NULL);
     ck_assert_int_eq(parse(&ps, "ampath-paths 1\npath object 2\n0 0 0 1\n3 4 0 1\n", &err), AMP_OK);
@@ -233,4 +233,4 @@ static Suite *paths_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(paths_suite)
+FX_TEST_MAIN(paths_suite)

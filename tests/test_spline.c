@@ -666,11 +666,11 @@ START_TEST(bad_arguments_get_errors_not_undefined_behaviour)
     }
     amp_spline_free(&s);
     {
-        amp_test_failalloc fa;
+        fx_failalloc fa;
         long budget;
         for (budget = 0; budget < 4; budget++) {
             amp_status st;
-            amp_test_failalloc_init(&fa, budget);
+            fx_failalloc_init(&fa, budget);
             st = amp_trivariate_model("helix", &fa.a, &s, &err);
             ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
             amp_spline_free(&s);
@@ -784,13 +784,13 @@ END_TEST
 /* ---- the CLI ---- */
 static int run_tool(const char *args, const char *stdin_text, char *out, size_t cap)
 {
-    return amp_test_run_tool_ex(args, stdin_text ? stdin_text : "", 1, out, cap);
+    return fx_run_tool_ex(args, stdin_text ? stdin_text : "", 1, out, cap);
 }
 
 START_TEST(cli_model_and_eval_print_full_precision_points)
 {
     char args[512], out[4096];
-    const char *spl = amp_test_tmp("helix.spl");
+    const char *spl = fx_tmp("helix.spl");
     amp_spline s;
     double x, y, z;
     amp_vec3 e, d;
@@ -822,13 +822,13 @@ START_TEST(cli_model_and_eval_print_full_precision_points)
     snprintf(args, sizeof args, "eval %s --derivative q", spl);
     ck_assert_int_eq(run_tool(args, "0.5 0.5 0.5\n", out, sizeof out), 2);
     /* .stl output gives the mesh of the model; a trivariate-only model gives its tessellated boundary */
-    snprintf(args, sizeof args, "model helix -o %s --json", amp_test_tmp("helix.stl"));
+    snprintf(args, sizeof args, "model helix -o %s --json", fx_tmp("helix.stl"));
     ck_assert_int_eq(run_tool(args, NULL, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"kind\":\"mesh\""));
-    remove(amp_test_tmp("helix.stl"));
-    snprintf(args, sizeof args, "model vase -o %s", amp_test_tmp("vase.stl"));
+    remove(fx_tmp("helix.stl"));
+    snprintf(args, sizeof args, "model vase -o %s", fx_tmp("vase.stl"));
     ck_assert_int_eq(run_tool(args, NULL, out, sizeof out), 0);
-    remove(amp_test_tmp("vase.stl"));
+    remove(fx_tmp("vase.stl"));
     ck_assert_int_eq(run_tool("model teapot -o /tmp/teapot.stl", NULL, out, sizeof out), 2);
     ck_assert_ptr_nonnull(strstr(out, "unknown mesh model"));
     ck_assert_int_eq(run_tool("model teapot -o /tmp/x.spl", NULL, out, sizeof out), 2);
@@ -839,7 +839,7 @@ END_TEST
 
 START_TEST(parser_out_of_memory_is_reported_without_leaks)
 {
-    amp_test_failalloc fa;
+    fx_failalloc fa;
     amp_spline v, *list;
     amp_buf buf;
     size_t n;
@@ -850,7 +850,7 @@ START_TEST(parser_out_of_memory_is_reported_without_leaks)
     ck_assert_int_eq(amp_spline_write(&v, 0, amp_buf_sink, &buf, NULL), AMP_OK);
     for (budget = 0; budget < 12; budget++) {
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         st = amp_spline_parse(buf.data, buf.len, &fa.a, &list, &n, NULL);
         ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
         if (st == AMP_OK) {
@@ -892,4 +892,4 @@ static Suite *spline_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(spline_suite)
+FX_TEST_MAIN(spline_suite)

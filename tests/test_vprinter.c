@@ -12,7 +12,7 @@ static int vprinter_status(const char *args)
     char cmd[1024];
     int st;
     /* an accepted option starts the printer, which runs until killed: timeout ends it (status 124) */
-    snprintf(cmd, sizeof cmd, "timeout 10 '%s' %s > /dev/null 2>&1", amp_test_prog("AMP_VPRINTER"), args);
+    snprintf(cmd, sizeof cmd, "timeout 10 '%s' %s > /dev/null 2>&1", fx_prog("AMP_VPRINTER"), args);
     st = system(cmd);
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
@@ -38,10 +38,10 @@ static Suite *vprinter_suite(void)
 {
     Suite *s = suite_create("vprinter");
     TCase *tc = tcase_create("options");
-    AMP_ADD_TEST(tc, malformed_numbers_are_refused_with_exit_2);
-    AMP_ADD_TEST(tc, help_and_well_formed_numbers_still_parse);
+    tcase_add_test(tc, malformed_numbers_are_refused_with_exit_2);
+    tcase_add_test(tc, help_and_well_formed_numbers_still_parse);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(vprinter_suite)
+FX_TEST_MAIN(vprinter_suite)
