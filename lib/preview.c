@@ -1,5 +1,5 @@
 /* Pictures of path sets (PNG rasterised here and encoded by preview_png.c, or SVG): `ampath preview` and the bindings.
- * Moved from tools/render.c into the library (issue 20) so that hosts get the same bytes as the tool;
+ * In the library so that hosts (the Python binding) get the same bytes as the tool;
  * output goes through an amp_sink_fn, memory through the path set's allocator. */
 #include <math.h>
 #include <stdarg.h>

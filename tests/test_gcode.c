@@ -911,7 +911,7 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
         "order %s-c.amp -o %s-o.amp",
         "mdr %s-o.amp --nominal 0.5 -o %s-m.amp",
         "support %s-m.amp --mesh %s-helix.stl -o %s-h.amp",
-        /* eps 3 leaves more than 1 mm of air between beads: not held (issue 17), beside the point here */
+        /* eps 3 leaves more than 1 mm of air between beads: not held (ampath check's support section), beside the point here */
         "check %s-h.amp --trivariate %s-helix.spl --no-support",
         "gcode %s-h.amp -o %s-h.gcode",
     };
@@ -929,7 +929,7 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
     ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
     ck_assert_uint_gt(len, 100000);
     {
-        /* issue 14: on the default printer's bed, the lowest bead resting on it (curved: at its radius) */
+        /* print-ready jobs: on the default printer's bed, the lowest bead resting on it (curved: at its radius) */
         amp_gcode_opts o;
         double lowest = HUGE_VAL;
         size_t k;
@@ -957,7 +957,7 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
 END_TEST
 
 
-/* ------------------------------------------------------------------ issue 14: print-ready jobs */
+/* ------------------------------------------------------------------ print-ready jobs (docs/interfaces.md §5) */
 
 /*
  * @p layers planar layers of height @p h filling the square [x0, x0+S] x [y0, y0+S]:
@@ -1390,7 +1390,7 @@ static double json_num(const char *json, const char *key)
 /*
  * Issue 14 proof for planar jobs: `slice --continuous` of each built-in mesh, then `gcode`: every coordinate on the
  * generic bed, the first extrusion at the first-layer height, plastic within 3 % of the beads and at most
- * 1.05 x (part + support). Until slice writes bead heights itself (issue 14, another branch), the test gives
+ * 1.05 x (part + support). Where a path carries no bead height, the test gives
  * its paths h = the layer height, which is what that change writes.
  */
 START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
@@ -1526,7 +1526,7 @@ START_TEST(arcs_follow_the_input_within_tolerance)
 }
 END_TEST
 
-/* ------------------------------------------------------------------ direct hops (issue 14 item 4) */
+/* ------------------------------------------------------------------ direct hops */
 
 /* Highest q.z - k |q.xy - p.xy| over the segment g (concave in the parameter: ternary search). */
 static double cone_reach(const seg *g, amp_vec3 p, double k)

@@ -1,5 +1,5 @@
 /*
- * Tests of lib/io.c and the tool's file handling (issue 21): the one safe
+ * Tests of lib/io.c and the tool's file handling: the one safe
  * writer (symlinks, devices, FIFOs, unique temporaries, permissions, a full or
  * size-limited disk), size checks before reading, the lexer's line limit, no
  * leak on a parse error, and the work estimates that refuse runaway requests.

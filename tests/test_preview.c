@@ -406,7 +406,7 @@ START_TEST(preview_bad_usage_exits_2)
 }
 END_TEST
 
-/* The renderer lives in the library (issue 20): the library's pictures written into memory are the
+/* The renderer lives in the library: the library's pictures written into memory are the
  * tool's files byte for byte, PNG and SVG, at a legend size of each kind. */
 START_TEST(library_pictures_are_the_tool_files_byte_for_byte)
 {

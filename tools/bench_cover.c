@@ -1,5 +1,5 @@
 /*
- * Benchmark: covering the built-in helix at eps 0.5 mm ([P1 §4.1], issue 4):
+ * Benchmark: covering the built-in helix at eps 0.5 mm ([P1 §4.1]):
  * wall time, surfaces, curves, measured gap, against a same-run baseline — the
  * time to evaluate the trivariate at every path vertex once (the floor any
  * covering that outputs these vertices pays).

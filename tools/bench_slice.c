@@ -78,7 +78,7 @@ static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *hav
     }
 }
 
-/* Scaling series (issue 16: linear cost): the bumpy torus scaled by s in x
+/* Scaling series (the cost must grow linearly): the bumpy torus scaled by s in x
  * and y (a quarter size at s = 1), 1 mm layers, default continuous paths;
  * the time per printed millimetre should stay flat as the part grows. */
 static int scaling(cli_json *j, int quick)
@@ -136,7 +136,7 @@ static int scaling(cli_json *j, int quick)
     return rc;
 }
 
-/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
+/* Side by side with PrusaSlicer (target: slice --continuous +
  * gcode in at most half its wall time), when `prusa-slicer` is installed:
  * the same mesh, 0.2 mm layers, 0.4 mm nozzle, headless --export-gcode.
  * Skipped with a message otherwise. */

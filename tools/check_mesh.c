@@ -1,6 +1,6 @@
 /*
- * ampath check --mesh: coverage of a mesh's solid by paths (issue 5, paper
- * §4.2): samples points inside the mesh (winding-number test), measures the
+ * ampath check --mesh: coverage of a mesh's solid by paths
+ * ([P1 §4.2]): samples points inside the mesh (winding-number test), measures the
  * largest distance to the nearest path (the coverage gap), and checks that no
  * path vertex lies outside the mesh by more than 0.01 mm.
  */
@@ -8,7 +8,7 @@
 
 #include "checkers.h"
 
-/* Vertices farther than this outside the mesh fail the check (issue 5); --tol above it widens it, for
+/* Vertices farther than this outside the mesh fail the check; --tol above it widens it, for
  * paths made on the exact model and checked against its tessellation. */
 #define OUTSIDE_TOL 0.01
 

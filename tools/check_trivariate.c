@@ -1,4 +1,4 @@
-/* ampath check --trivariate: independent ε-coverage measurement of a volumetric covering (issue 4). */
+/* ampath check --trivariate: independent ε-coverage measurement of a volumetric covering ([P1 §4.1]). */
 #include <stdlib.h>
 #include <string.h>
 

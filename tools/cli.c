@@ -28,7 +28,7 @@ int cli_fail_err(const char *cmd, const amp_error *err)
 
 /*
  * Accepted ranges of the numeric options, by name (and command where one name means
- * different things), checked once here for every command (issue 21): a value outside is
+ * different things), checked once here for every command: a value outside is
  * refused with exit 2 before any work, instead of `--feed 1e-300` writing F0 or
  * `--layer 1e308` giving 0 layers. The bounds are physical plausibility for an FDM printer
  * and its geometry (mm, mm/s, degrees, C), generous on both sides; the first match wins.
@@ -170,7 +170,7 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
     return cli_fail(cmd, CLI_USAGE, "--%s takes no value", o->name);
 }
 
-/* ---- work limits (issue 21): estimated before the work, overridable per run ---- */
+/* ---- work limits: estimated before the work, overridable per run ---- */
 cli_limits cli_work = {CLI_DEFAULT_MAX_CURVES, CLI_DEFAULT_MAX_SEGMENTS};
 
 /* The --max-... options of the commands that estimate their work: accepted next to the
@@ -428,7 +428,7 @@ int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps)
     amp_error_clear(&err);
     if (amp_pathset_read_file(ps, file, &err) != AMP_OK) {
         /* the parser keeps what it had grown: release it here, once for every command,
-         * so that a bad input exits 2 and not 1 with a leak report under ASan (issue 21) */
+         * so that a bad input exits 2 and not 1 with a leak report under ASan */
         amp_pathset_free(ps);
         return cli_fail_err(cmd, &err);
     }

@@ -42,7 +42,7 @@ int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char 
               int *npos);
 
 /*
- * Work limits (issue 21): commands whose work grows without bound with a small
+ * Work limits: commands whose work grows without bound with a small
  * tolerance or a large input estimate it first and refuse (exit 2, the estimate
  * in the message) above these limits, which --max-curves N (cover) and
  * --max-segments N (slice, euler, check) raise for one run. Documented in the

@@ -55,7 +55,7 @@ static double net_length(const amp_spline *v, int d)
 }
 
 /*
- * Work estimate before covering (issue 21): Algorithm 1 halves the covering direction
+ * Work estimate before covering: Algorithm 1 halves the covering direction
  * until neighbouring surfaces are within thr = eps - delta by the Lemma A.2 measure, and
  * each surface is covered the same way by curves, so about (L_d / thr + 1) surfaces of
  * (L_e0 / thr + 1) curves each. Measured on the built-in models it is within a factor of

@@ -82,7 +82,7 @@
  * head_theta; docs/interfaces.md §2) must clear every printed centre line (a second grid
  * holds the highest centre line per cell).
  *
- * Direct hops (issue 14 item 4): a travel of at most direct_hop in XY is one
+ * Direct hops: a travel of at most direct_hop in XY is one
  * straight G0 without retraction or lift, blended into the printing that
  * follows, when along it the head cone clears every printed centre line and,
  * away from its ends (bead radius + 2 cells), no printed material is above
