@@ -498,6 +498,42 @@ amp_status amp_spline_eval_partial(const amp_spline *s, const double *par, const
 /* ---- batched evaluation ---- */
 
 /*
+ * A point of a cubic curve at t in span u[0] <= t < u[1] from its four control points @p p (x y z w each):
+ * the recurrence of NURBS Book A2.2 written out (compilers at -O2 do not unroll it), with the span's
+ * reciprocal knot differences i<j><r> = 1 / (u[1 + r] - u[1 + r - j]) given, so no division per point.
+ */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline amp_vec3 cubic_point(const double *p, const double *u, double t, double i10, double i20, double i21,
+                                   double i30, double i31, double i32)
+{
+    double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
+    double n0, n1, n2, tmp, sv, Nb[4];
+    tmp = i10;
+    n0 = r1 * tmp;
+    n1 = l1 * tmp;
+    tmp = n0 * i20;
+    n0 = r1 * tmp;
+    sv = l2 * tmp;
+    tmp = n1 * i21;
+    n1 = sv + r2 * tmp;
+    n2 = l1 * tmp;
+    tmp = n0 * i30;
+    Nb[0] = r1 * tmp;
+    sv = l3 * tmp;
+    tmp = n1 * i31;
+    Nb[1] = sv + r2 * tmp;
+    sv = l2 * tmp;
+    tmp = n2 * i32;
+    Nb[2] = sv + r3 * tmp;
+    Nb[3] = l1 * tmp;
+    return amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
+                  Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
+                  Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+}
+
+/*
  * Points of a polynomial curve at a list of parameters. The reciprocals of the
  * knot differences of Cox-de Boor (NURBS Book A2.2) depend only on the span, so
  * they are computed once per span and the per-point basis needs no division:
@@ -537,32 +573,11 @@ static inline int curve_block(const amp_spline *s, const double *par, size_t n, 
                 }
             }
             if (k == 4) {
-                /* the cubic recurrence written out (compilers at -O2 do not unroll it) */
-                const double *I = inv, *u = U + cur;
-                double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
-                double n0, n1, n2, tmp, sv;
-                tmp = I[AMP_SPLINE_MAX_ORDER];
-                n0 = r1 * tmp;
-                n1 = l1 * tmp;
-                tmp = n0 * I[2 * AMP_SPLINE_MAX_ORDER];
-                n0 = r1 * tmp;
-                sv = l2 * tmp;
-                tmp = n1 * I[2 * AMP_SPLINE_MAX_ORDER + 1];
-                n1 = sv + r2 * tmp;
-                n2 = l1 * tmp;
-                tmp = n0 * I[3 * AMP_SPLINE_MAX_ORDER];
-                Nb[0] = r1 * tmp;
-                sv = l3 * tmp;
-                tmp = n1 * I[3 * AMP_SPLINE_MAX_ORDER + 1];
-                Nb[1] = sv + r2 * tmp;
-                sv = l2 * tmp;
-                tmp = n2 * I[3 * AMP_SPLINE_MAX_ORDER + 2];
-                Nb[2] = sv + r3 * tmp;
-                Nb[3] = l1 * tmp;
-                p = s->cp + 4 * (cur - 3);
-                out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
-                                Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
-                                Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+                const double *I = inv;
+                out[i] = cubic_point(s->cp + 4 * (cur - 3), U + cur, t, I[AMP_SPLINE_MAX_ORDER],
+                                     I[2 * AMP_SPLINE_MAX_ORDER], I[2 * AMP_SPLINE_MAX_ORDER + 1],
+                                     I[3 * AMP_SPLINE_MAX_ORDER], I[3 * AMP_SPLINE_MAX_ORDER + 1],
+                                     I[3 * AMP_SPLINE_MAX_ORDER + 2]);
                 continue;
             }
             basis_inv(U, cur, k, t, inv, Nb);
@@ -668,32 +683,7 @@ static inline int curve_block_indexed(const amp_spline *s, const span_index *x, 
             cur = span_index_find(x, U, t);
         I = x->inv + cur * x->ntri;
         if (k == 4) {
-            /* the cubic recurrence written out, as curve_block */
-            const double *u = U + cur;
-            double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
-            double n0, n1, n2, tmp, sv;
-            tmp = I[0];
-            n0 = r1 * tmp;
-            n1 = l1 * tmp;
-            tmp = n0 * I[1];
-            n0 = r1 * tmp;
-            sv = l2 * tmp;
-            tmp = n1 * I[2];
-            n1 = sv + r2 * tmp;
-            n2 = l1 * tmp;
-            tmp = n0 * I[3];
-            Nb[0] = r1 * tmp;
-            sv = l3 * tmp;
-            tmp = n1 * I[4];
-            Nb[1] = sv + r2 * tmp;
-            sv = l2 * tmp;
-            tmp = n2 * I[5];
-            Nb[2] = sv + r3 * tmp;
-            Nb[3] = l1 * tmp;
-            p = s->cp + 4 * (cur - 3);
-            out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
-                            Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
-                            Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+            out[i] = cubic_point(s->cp + 4 * (cur - 3), U + cur, t, I[0], I[1], I[2], I[3], I[4], I[5]);
             continue;
         }
         /* NURBS Book A2.2 with the span's reciprocals (basis_inv's recurrence) */
