@@ -156,10 +156,11 @@ $(AMPATH): $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
 	@echo '  LD      $@'
 	$(Q)$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA) -o $@ $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
 
-$(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(LIBA)
+# the virtual printer parses its numbers as ampath does (tools/cli.c)
+$(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(B)/tools/cli.o $(LIBA)
 	@mkdir -p $(dir $@)
 	@echo '  LD      $@'
-	$(Q)$(CC) $(ALL_LDFLAGS) $(VPR_OBJ) $(LIBA) -o $@ -lutil -lm
+	$(Q)$(CC) $(ALL_LDFLAGS) $(VPR_OBJ) $(B)/tools/cli.o $(LIBA) -o $@ -lutil -lm
 
 # ---- bridge ----
 $(B)/bridge/%.o: bridge/%.c $(B)/gen/cflags

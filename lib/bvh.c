@@ -1,6 +1,6 @@
 /*
  * BVH over a triangle mesh: rays, segments, closest points, the generalised
- * winding number and polyline clipping (paper §4.2: covering curves are cut
+ * winding number and polyline clipping ([P1 §4.2]: covering curves are cut
  * to the mesh and only the inside parts are printed).
  *
  * The tree is built with a binned surface-area heuristic. Each node also
@@ -21,7 +21,6 @@
 #define NBINS 16
 /* far-field criterion: |p - centroid| > BETA * radius */
 #define BETA 4.0
-#define FOUR_PI 12.566370614359172
 
 typedef struct bvh_node {
     amp_box3 box;
@@ -611,7 +610,7 @@ double amp_bvh_winding_exact(const amp_bvh *b, amp_vec3 p)
     size_t i;
     for (i = 0; i < b->ntris; i++)
         s += solid_angle(&b->tris[i], p);
-    return s / FOUR_PI;
+    return s / (4.0 * AMP_PI);
 }
 
 double amp_bvh_winding(const amp_bvh *b, amp_vec3 p)
@@ -636,7 +635,7 @@ double amp_bvh_winding(const amp_bvh *b, amp_vec3 p)
             stack[sp++] = nd->right;
         }
     }
-    return s / FOUR_PI;
+    return s / (4.0 * AMP_PI);
 }
 
 int amp_bvh_inside(const amp_bvh *b, amp_vec3 p) { return amp_bvh_winding(b, p) >= 0.5; }

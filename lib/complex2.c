@@ -351,125 +351,167 @@ static int convex_overlap(const amp_vec2 *a, size_t na, const amp_vec2 *b, size_
     return 1;
 }
 
-amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell, amp_grid_kind kind, amp_error *err)
+/* A lattice over a hull: integer corner keys (X, Y) map to o + X*ax + Y*ay, ax = (axx, 0), ay = (ayx, ayy). */
+typedef struct lattice {
+    amp_grid_kind kind;
+    double cell, xmin, xmax, ymin, ymax, axx, ayx, ayy;
+    amp_vec2 o;
+    long j0, j1; /* rows */
+    size_t m;    /* corners per cell */
+} lattice;
+
+/* The basis and the rows of @p kind over the hull's box (xmin.. set); AMP_ERR_ARG for an unknown kind. */
+static amp_status lattice_basis(lattice *L, amp_error *err)
 {
-    /* lattice basis: integer corner keys (X, Y) map to o + X*ax + Y*ay */
-    static const int sq[1][4][2] = {{{0, 0}, {1, 0}, {1, 1}, {0, 1}}};
+    double cell = L->cell;
+    L->o = amp_v2(L->xmin - cell, L->ymin - cell);
+    L->m = L->kind == AMP_GRID_TRI ? 3 : (L->kind == AMP_GRID_HEX ? 6 : 4);
+    if (L->kind == AMP_GRID_SQUARE || L->kind == AMP_GRID_STRIPS_X || L->kind == AMP_GRID_STRIPS_Y) {
+        /* a strip lattice is the square lattice stretched along one axis */
+        L->axx = L->kind == AMP_GRID_STRIPS_X ? AMP_GRID_STRIP_ASPECT * cell : cell;
+        L->ayy = L->kind == AMP_GRID_STRIPS_Y ? AMP_GRID_STRIP_ASPECT * cell : cell;
+        L->ayx = 0;
+        L->o = amp_v2(L->xmin - L->axx, L->ymin - L->ayy);
+        L->j0 = 0, L->j1 = (long)((L->ymax - L->o.y) / L->ayy) + 1;
+    } else if (L->kind == AMP_GRID_TRI) {
+        L->axx = cell, L->ayx = 0.5 * cell, L->ayy = cell * 0.8660254037844386;
+        L->j0 = 0, L->j1 = (long)((L->ymax - L->o.y) / L->ayy) + 1;
+    } else if (L->kind == AMP_GRID_HEX) {
+        L->axx = cell * 0.8660254037844386, L->ayx = 0, L->ayy = 0.5 * cell;
+        L->j0 = 0, L->j1 = (long)((L->ymax - L->o.y) / (1.5 * cell)) + 2;
+    } else
+        return amp_fail(err, AMP_ERR_ARG, 0, "unknown grid kind %d", (int)L->kind);
+    return AMP_OK;
+}
+
+/* The columns of row cj. */
+static void lattice_row(const lattice *L, long cj, long *i0, long *i1)
+{
+    if (L->kind == AMP_GRID_TRI) {
+        *i0 = (long)floor((L->xmin - L->o.x - cj * L->ayx) / L->cell) - 1;
+        *i1 = (long)ceil((L->xmax - L->o.x - cj * L->ayx) / L->cell) + 1;
+    } else if (L->kind == AMP_GRID_HEX) {
+        *i0 = -1;
+        *i1 = (long)((L->xmax - L->o.x) / (L->cell * 1.7320508075688772)) + 2;
+    } else {
+        *i0 = 0;
+        *i1 = (long)((L->xmax - L->o.x) / L->axx) + 1;
+    }
+}
+
+static amp_vec2 lattice_point(const lattice *L, int64_t X, int64_t Y)
+{
+    return amp_v2(L->o.x + X * L->axx + Y * L->ayx, L->o.y + Y * L->ayy);
+}
+
+/* Corner keys and points of cell (ci, cj) of type t (the two triangles of a rhombus: t = 0, 1). */
+static void lattice_cell(const lattice *L, long ci, long cj, size_t t, int64_t *X, int64_t *Y, amp_vec2 *poly)
+{
+    static const int sq[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
     static const int tri[2][3][2] = {{{0, 0}, {1, 0}, {0, 1}}, {{1, 0}, {1, 1}, {0, 1}}};
     static const int hex[6][2] = {{0, -2}, {1, -1}, {1, 1}, {0, 2}, {-1, 1}, {-1, -1}};
-    double xmin = HUGE_VAL, xmax = -HUGE_VAL, ymin = HUGE_VAL, ymax = -HUGE_VAL, axx, ayx, ayy;
-    amp_vec2 o, poly[6];
-    lkey *keys = NULL;
-    size_t nkeys = 0, cap = 0, i, j, ncell = 0;
-    uint32_t *vid = NULL;
-    long ci, cj, i0, i1, j0, j1;
-    amp_status st = AMP_OK;
-    amp_cx2_free(k);
-    if (!(cell > 0) || !isfinite(cell))
-        return amp_fail(err, AMP_ERR_ARG, 0, "cell size must be positive");
-    if (n < 3 || amp_ring_area(hull, n) <= 0)
-        return amp_fail(err, AMP_ERR_ARG, 0, "hull must be a counter-clockwise polygon with positive area");
-    for (i = 0; i < n; i++) {
-        xmin = fmin(xmin, hull[i].x);
-        xmax = fmax(xmax, hull[i].x);
-        ymin = fmin(ymin, hull[i].y);
-        ymax = fmax(ymax, hull[i].y);
-    }
-    if ((xmax - xmin) / cell * (ymax - ymin) / cell > 4e6)
-        return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 4000000 cells (cell %g too small)", cell);
-    o = amp_v2(xmin - cell, ymin - cell);
-    if (kind == AMP_GRID_SQUARE || kind == AMP_GRID_STRIPS_X || kind == AMP_GRID_STRIPS_Y) {
-        /* a strip lattice is the square lattice stretched along one axis */
-        axx = kind == AMP_GRID_STRIPS_X ? AMP_GRID_STRIP_ASPECT * cell : cell;
-        ayy = kind == AMP_GRID_STRIPS_Y ? AMP_GRID_STRIP_ASPECT * cell : cell;
-        ayx = 0;
-        o = amp_v2(xmin - axx, ymin - ayy);
-        j0 = 0, j1 = (long)((ymax - o.y) / ayy) + 1;
-    } else if (kind == AMP_GRID_TRI) {
-        axx = cell, ayx = 0.5 * cell, ayy = cell * 0.8660254037844386;
-        j0 = 0, j1 = (long)((ymax - o.y) / ayy) + 1;
-    } else if (kind == AMP_GRID_HEX) {
-        axx = cell * 0.8660254037844386, ayx = 0, ayy = 0.5 * cell;
-        j0 = 0, j1 = (long)((ymax - o.y) / (1.5 * cell)) + 2;
-    } else
-        return amp_fail(err, AMP_ERR_ARG, 0, "unknown grid kind %d", (int)kind);
-    for (cj = j0; cj <= j1 && st == AMP_OK; cj++) {
-        if (kind == AMP_GRID_TRI) {
-            i0 = (long)floor((xmin - o.x - cj * ayx) / cell) - 1;
-            i1 = (long)ceil((xmax - o.x - cj * ayx) / cell) + 1;
-        } else if (kind == AMP_GRID_HEX) {
-            i0 = -1;
-            i1 = (long)((xmax - o.x) / (cell * 1.7320508075688772)) + 2;
+    size_t c;
+    for (c = 0; c < L->m; c++) {
+        if (L->m == 4) {
+            X[c] = ci + sq[c][0];
+            Y[c] = cj + sq[c][1];
+        } else if (L->kind == AMP_GRID_TRI) {
+            X[c] = ci + tri[t][c][0];
+            Y[c] = cj + tri[t][c][1];
         } else {
-            i0 = 0;
-            i1 = (long)((xmax - o.x) / axx) + 1;
+            X[c] = 2 * ci + (cj & 1) + hex[c][0];
+            Y[c] = 3 * cj + hex[c][1];
         }
-        for (ci = i0; ci <= i1 && st == AMP_OK; ci++) {
-            size_t t, ntype = kind == AMP_GRID_TRI ? 2 : 1;
+        poly[c] = lattice_point(L, X[c], Y[c]);
+    }
+}
+
+/* The corners of every cell meeting the hull, cell after cell, into *keys; *ncell receives the cells. */
+static amp_status lattice_cells(const lattice *L, const amp_vec2 *hull, size_t n, const amp_allocator *al,
+                                lkey **keys, size_t *nkeys, size_t *ncell)
+{
+    size_t cap = 0, ntype = L->kind == AMP_GRID_TRI ? 2 : 1, t, c;
+    long ci, cj, i0, i1;
+    for (cj = L->j0; cj <= L->j1; cj++) {
+        lattice_row(L, cj, &i0, &i1);
+        for (ci = i0; ci <= i1; ci++)
             for (t = 0; t < ntype; t++) {
                 int64_t X[6], Y[6];
-                size_t m = kind == AMP_GRID_TRI ? 3 : (kind == AMP_GRID_HEX ? 6 : 4), c;
-                for (c = 0; c < m; c++) {
-                    if (m == 4) {
-                        X[c] = ci + sq[0][c][0];
-                        Y[c] = cj + sq[0][c][1];
-                    } else if (kind == AMP_GRID_TRI) {
-                        X[c] = ci + tri[t][c][0];
-                        Y[c] = cj + tri[t][c][1];
-                    } else {
-                        X[c] = 2 * ci + (cj & 1) + hex[c][0];
-                        Y[c] = 3 * cj + hex[c][1];
-                    }
-                    poly[c] = amp_v2(o.x + X[c] * axx + Y[c] * ayx, o.y + Y[c] * ayy);
-                }
-                if (!convex_overlap(poly, m, hull, n))
+                amp_vec2 poly[6];
+                void *p = *keys;
+                lattice_cell(L, ci, cj, t, X, Y, poly);
+                if (!convex_overlap(poly, L->m, hull, n))
                     continue;
-                {
-                    void *p = keys;
-                    if (amp_grow(k->alloc, &p, &cap, nkeys + m, sizeof *keys) != AMP_OK) {
-                        st = AMP_ERR_NOMEM;
-                        break;
-                    }
-                    keys = p;
+                if (amp_grow(al, &p, &cap, *nkeys + L->m, sizeof **keys) != AMP_OK)
+                    return AMP_ERR_NOMEM;
+                *keys = p;
+                for (c = 0; c < L->m; c++) {
+                    (*keys)[*nkeys].x = X[c];
+                    (*keys)[*nkeys].y = Y[c];
+                    (*keys)[*nkeys].corner = *nkeys;
+                    (*nkeys)++;
                 }
-                for (c = 0; c < m; c++) {
-                    keys[nkeys].x = X[c];
-                    keys[nkeys].y = Y[c];
-                    keys[nkeys].corner = nkeys;
-                    nkeys++;
-                }
-                ncell++;
+                (*ncell)++;
             }
-        }
     }
-    if (st != AMP_OK || ncell == 0) {
-        amp_free(k->alloc, keys);
-        return st != AMP_OK ? amp_fail(err, st, 0, "out of memory for the grid")
-                            : amp_fail(err, AMP_ERR_GEOMETRY, 0, "no grid cell meets the hull");
-    }
-    /* weld corners by their integer lattice keys (exact, no float compare) */
-    vid = amp_alloc(k->alloc, nkeys * sizeof *vid);
-    if (!vid) {
-        amp_free(k->alloc, keys);
+    return AMP_OK;
+}
+
+/* Weld corners by their integer lattice keys (exact, no float compare) and add the cells to @p k. */
+static amp_status lattice_weld(amp_cx2 *k, const lattice *L, lkey *keys, size_t nkeys, size_t ncell, amp_error *err)
+{
+    uint32_t *vid = amp_alloc(k->alloc, nkeys * sizeof *vid);
+    amp_status st = AMP_OK;
+    size_t i, j;
+    if (!vid)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the grid");
-    }
     if (nkeys > 1)
         qsort(keys, nkeys, sizeof *keys, cmp_lkey);
     for (i = 0; i < nkeys && st == AMP_OK; i++) {
         uint32_t id = (uint32_t)k->nv - 1;
         if (i == 0 || keys[i].x != keys[i - 1].x || keys[i].y != keys[i - 1].y)
-            st = amp_cx2_add_vertex(k, amp_v2(o.x + keys[i].x * axx + keys[i].y * ayx, o.y + keys[i].y * ayy), &id,
-                                    err);
+            st = amp_cx2_add_vertex(k, lattice_point(L, keys[i].x, keys[i].y), &id, err);
         vid[keys[i].corner] = id;
     }
-    {
-        size_t m = kind == AMP_GRID_TRI ? 3 : (kind == AMP_GRID_HEX ? 6 : 4);
-        for (j = 0; j < ncell && st == AMP_OK; j++)
-            st = amp_cx2_add_face(k, vid + j * m, m, AMP_CELL_INPUT, err);
-    }
-    amp_free(k->alloc, keys);
+    for (j = 0; j < ncell && st == AMP_OK; j++)
+        st = amp_cx2_add_face(k, vid + j * L->m, L->m, AMP_CELL_INPUT, err);
     amp_free(k->alloc, vid);
-    if (st == AMP_OK)
-        st = amp_cx2_build(k, err);
     return st;
+}
+
+amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell, amp_grid_kind kind, amp_error *err)
+{
+    lattice L;
+    lkey *keys = NULL;
+    size_t nkeys = 0, i, ncell = 0;
+    amp_status st;
+    amp_cx2_free(k);
+    if (!(cell > 0) || !isfinite(cell))
+        return amp_fail(err, AMP_ERR_ARG, 0, "cell size must be positive");
+    if (n < 3 || amp_ring_area(hull, n) <= 0)
+        return amp_fail(err, AMP_ERR_ARG, 0, "hull must be a counter-clockwise polygon with positive area");
+    memset(&L, 0, sizeof L);
+    L.kind = kind;
+    L.cell = cell;
+    L.xmin = L.ymin = HUGE_VAL;
+    L.xmax = L.ymax = -HUGE_VAL;
+    for (i = 0; i < n; i++) {
+        L.xmin = fmin(L.xmin, hull[i].x);
+        L.xmax = fmax(L.xmax, hull[i].x);
+        L.ymin = fmin(L.ymin, hull[i].y);
+        L.ymax = fmax(L.ymax, hull[i].y);
+    }
+    if ((L.xmax - L.xmin) / cell * (L.ymax - L.ymin) / cell > 4e6)
+        return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 4000000 cells (cell %g too small)", cell);
+    if ((st = lattice_basis(&L, err)) != AMP_OK)
+        return st;
+    st = lattice_cells(&L, hull, n, k->alloc, &keys, &nkeys, &ncell);
+    if (st != AMP_OK || ncell == 0) {
+        amp_free(k->alloc, keys);
+        return st != AMP_OK ? amp_fail(err, st, 0, "out of memory for the grid")
+                            : amp_fail(err, AMP_ERR_GEOMETRY, 0, "no grid cell meets the hull");
+    }
+    st = lattice_weld(k, &L, keys, nkeys, ncell, err);
+    amp_free(k->alloc, keys);
+    return st == AMP_OK ? amp_cx2_build(k, err) : st;
 }

@@ -1,8 +1,8 @@
-/* The print-head cone (SPEC §2, paper §5.1 Fig. 9) and the exact segment-cone test of Fig. 10. */
+/* The print-head cone (docs/interfaces.md §2, [P1 §5.1] Fig. 9) and the exact segment-cone test of Fig. 10. */
 #include <math.h>
 
 #include "ampath/order.h"
-#include "fragbvh.h"
+#include "cone.h"
 
 /* Euclidean length in the plane; coordinates are millimetres, so no overflow guard (hypot) is needed. */
 static double len2d(double x, double y) { return sqrt(x * x + y * y); }
@@ -15,7 +15,7 @@ void amp_head_default(amp_head *h)
 
 amp_status amp_head_validate(const amp_head *h, amp_error *err)
 {
-    const double half_pi = 1.57079632679489661923;
+    const double half_pi = 0.5 * AMP_PI;
     if (!h)
         return amp_fail(err, AMP_ERR_ARG, 0, "no head geometry given");
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0)
@@ -92,7 +92,7 @@ int amp_fragment_below(const amp_fragments *fs, const amp_head *h, size_t a, siz
     return amp_fragment_below_k(fs, h->z_offs, 1.0 / tan(h->theta), a, b);
 }
 
-/* q is inside the head printing p, beyond the tolerance (SPEC §2) */
+/* q is inside the head printing p, beyond the tolerance (docs/interfaces.md §2) */
 static int point_clear(double zo, double k, amp_vec3 p, amp_vec3 q)
 {
     double dz = q.z - p.z - zo - AMP_CONE_TOL, dx = q.x - p.x, dy = q.y - p.y;

@@ -459,26 +459,3 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
     amp_free(out->alloc, ke);
     return rc;
 }
-
-amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
-                                    amp_stroke_report *rep, amp_error *err)
-{
-    const amp_pvert *v = amp_pathset_path_verts(ps, i);
-    size_t n = ps->paths[i].n, k;
-    amp_vec2 *p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
-    double *r = amp_alloc(ps->alloc, (n + 1) * sizeof *r);
-    amp_status st;
-    if (!p || !r) {
-        amp_free(ps->alloc, p);
-        amp_free(ps->alloc, r);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
-    }
-    for (k = 0; k < n; k++) {
-        p[k] = amp_v2(v[k].p.x, v[k].p.y);
-        r[k] = v[k].r;
-    }
-    st = amp_stroke_check_radii(p, r, n, region, tol, rep, err);
-    amp_free(ps->alloc, p);
-    amp_free(ps->alloc, r);
-    return st;
-}

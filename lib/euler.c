@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "ampath/euler.h"
+#include "uf.h"
 
 /* Intersection of the lines p + s*d and q + t*e; 0 when (nearly) parallel. */
 static int line_meet(amp_vec2 p, amp_vec2 d, amp_vec2 q, amp_vec2 e, amp_vec2 *out)
@@ -173,6 +174,139 @@ static amp_status add_cell(amp_cx2 *out, uint32_t *v, size_t n, int cls, int *co
     return AMP_OK;
 }
 
+/* The working state of T(K): copies of the corners (cmap), kept boundary vertices (bmap), vertex fans. */
+typedef struct tstate {
+    const amp_cx2 *k;
+    amp_cx2 *out;
+    amp_euler_stats s;
+    uint32_t *cmap;      /* half-edge h -> copy of its corner in the Class 1 cell of its face */
+    uint32_t *bmap;      /* boundary vertex of K -> its vertex in K̂ (UINT32_MAX for the others) */
+    uint32_t *loop;      /* one cell's vertices */
+    size_t *vstart;      /* CSR of the outgoing half-edges per vertex (vhe) */
+    size_t *vhe;
+    unsigned char *seen; /* half-edge already in a Class 3 fan */
+} tstate;
+
+/* Class 1: mitered offsets of every face; cmap[h] = copy of the corner of half-edge h. */
+static amp_status class1_cells(tstate *t, const amp_euler_opts *o, face_off *fo, amp_error *err)
+{
+    const amp_cx2 *k = t->k;
+    amp_status rc = AMP_OK;
+    size_t f;
+    for (f = 0; f < k->nf && rc == AMP_OK; f++) {
+        size_t a = k->fstart[f], n = k->fstart[f + 1] - a, j;
+        uint32_t base = (uint32_t)t->out->nv;
+        if ((rc = miter_face(k, f, o->offset, o->combinatorial, fo, err)) != AMP_OK)
+            break;
+        t->s.collapsed_edges += n - fo->nalive;
+        for (j = 0; j < fo->nalive && rc == AMP_OK; j++)
+            rc = amp_cx2_add_vertex(t->out, fo->pt[j], NULL, err);
+        for (j = 0; j < n; j++)
+            t->cmap[a + j] = base + (uint32_t)fo->corner[j];
+        for (j = 0; j < fo->nalive; j++)
+            t->loop[j] = base + (uint32_t)j;
+        if (rc == AMP_OK)
+            rc = amp_cx2_add_face(t->out, t->loop, fo->nalive, AMP_CELL_CLASS1, err);
+    }
+    return rc;
+}
+
+/* The boundary vertices of K stay as vertices of K̂. */
+static amp_status keep_boundary(tstate *t, amp_error *err)
+{
+    const amp_cx2 *k = t->k;
+    amp_status rc = AMP_OK;
+    size_t h, v;
+    for (v = 0; v < k->nv; v++)
+        t->bmap[v] = UINT32_MAX;
+    for (h = 0; h < k->nfidx && rc == AMP_OK; h++)
+        if (k->he_twin[h] == AMP_CX2_NONE) {
+            uint32_t ends[2];
+            int e;
+            ends[0] = k->fidx[h];
+            ends[1] = k->fidx[amp_cx2_he_next(k, h)];
+            for (e = 0; e < 2 && rc == AMP_OK; e++)
+                if (t->bmap[ends[e]] == UINT32_MAX)
+                    rc = amp_cx2_add_vertex(t->out, k->v[ends[e]], &t->bmap[ends[e]], err);
+        }
+    return rc;
+}
+
+/* Class 2: one trapezium per edge (a segment where two corners coincide). */
+static amp_status class2_cells(tstate *t, amp_error *err)
+{
+    const amp_cx2 *k = t->k;
+    amp_status rc = AMP_OK;
+    size_t h;
+    int col;
+    for (h = 0; h < k->nfidx && rc == AMP_OK; h++) {
+        size_t tw = k->he_twin[h], hn = amp_cx2_he_next(k, h);
+        if (tw != AMP_CX2_NONE && tw < h)
+            continue;
+        if (tw != AMP_CX2_NONE) {
+            t->loop[0] = t->cmap[amp_cx2_he_next(k, tw)]; /* a in g */
+            t->loop[1] = t->cmap[tw];                     /* b in g */
+        } else {
+            t->loop[0] = t->bmap[k->fidx[h]];
+            t->loop[1] = t->bmap[k->fidx[hn]];
+        }
+        t->loop[2] = t->cmap[hn]; /* b in f */
+        t->loop[3] = t->cmap[h];  /* a in f */
+        rc = add_cell(t->out, t->loop, 4, AMP_CELL_CLASS2, &col, err);
+        t->s.collapsed_class2 += (size_t)col;
+    }
+    return rc;
+}
+
+/* Class 3: the copies of each vertex around it, CCW (outgoing half-edges advance by twin(prev(h))); a
+ * boundary fan starts at v itself, so boundary fans go first (pass 0), then the closed ones. */
+static amp_status class3_cells(tstate *t, amp_error *err)
+{
+    const amp_cx2 *k = t->k;
+    amp_status rc = AMP_OK;
+    size_t h, v, i;
+    int col;
+    for (h = 0; h < k->nfidx; h++)
+        t->vstart[k->fidx[h] + 2]++;
+    for (v = 0; v < k->nv; v++)
+        t->vstart[v + 2] += t->vstart[v + 1];
+    for (h = 0; h < k->nfidx; h++)
+        t->vhe[t->vstart[k->fidx[h] + 1]++] = h;
+    for (v = 0; v < k->nv && rc == AMP_OK; v++) {
+        int pass;
+        for (pass = 0; pass < 2 && rc == AMP_OK; pass++)
+            for (i = t->vstart[v]; i < t->vstart[v + 1] && rc == AMP_OK; i++) {
+                size_t hh = t->vhe[i], m = 0;
+                if (t->seen[hh] || (pass == 0 && k->he_twin[hh] != AMP_CX2_NONE))
+                    continue;
+                if (pass == 0)
+                    t->loop[m++] = t->bmap[v];
+                for (;;) {
+                    size_t p;
+                    t->seen[hh] = 1;
+                    t->loop[m++] = t->cmap[hh];
+                    p = k->he_twin[amp_cx2_he_prev(k, hh)];
+                    if (p == AMP_CX2_NONE || t->seen[p] || m > k->nfidx)
+                        break;
+                    hh = p;
+                }
+                if (m >= 3)
+                    rc = add_cell(t->out, t->loop, m, AMP_CELL_CLASS3, &col, err);
+            }
+    }
+    return rc;
+}
+
+static void face_off_free(const amp_allocator *al, face_off *fo)
+{
+    amp_free(al, fo->pt);
+    amp_free(al, fo->alive);
+    amp_free(al, fo->corner);
+    amp_free(al, fo->dir);
+    amp_free(al, fo->base);
+    amp_free(al, fo->corner_pt);
+}
+
 /* T(K) (§1.3). @p bmap_out (optional, k->nv entries) receives, for every
  * boundary vertex of K, its index in K̂ (UINT32_MAX for the others): the
  * boundary of K is kept as it is, which is what lets Lemma 3.3 glue a
@@ -181,15 +315,11 @@ static amp_status transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *
                             uint32_t *bmap_out, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
-    amp_euler_stats s0;
+    tstate t;
     face_off fo;
-    uint32_t *cmap = NULL, *bmap = NULL, *loop = NULL;
-    size_t *vstart = NULL, *vhe = NULL;
-    unsigned char *seen = NULL;
-    size_t f, h, maxn = 3, i, v;
-    amp_status rc = AMP_OK;
-    int col;
-    memset(&s0, 0, sizeof s0);
+    size_t f, maxn = 3;
+    amp_status rc;
+    memset(&t, 0, sizeof t);
     memset(&fo, 0, sizeof fo);
     amp_cx2_free(out);
     if (!o || !(o->offset > 0) || !isfinite(o->offset))
@@ -201,117 +331,36 @@ static amp_status transform(const amp_cx2 *k, const amp_euler_opts *o, amp_cx2 *
     for (f = 0; f < k->nf; f++)
         if (amp_cx2_face_size(k, f) > maxn)
             maxn = amp_cx2_face_size(k, f);
+    t.k = k;
+    t.out = out;
     fo.pt = amp_alloc(al, maxn * sizeof *fo.pt);
     fo.alive = amp_alloc(al, maxn * sizeof *fo.alive);
     fo.corner = amp_alloc(al, maxn * sizeof *fo.corner);
     fo.dir = amp_alloc(al, maxn * sizeof *fo.dir);
     fo.base = amp_alloc(al, maxn * sizeof *fo.base);
     fo.corner_pt = amp_alloc(al, maxn * sizeof *fo.corner_pt);
-    cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *cmap);
-    bmap = bmap_out ? bmap_out : amp_alloc(al, (k->nv + 1) * sizeof *bmap);
-    loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *loop);
-    vstart = amp_calloc(al, k->nv + 2, sizeof *vstart);
-    vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *vhe);
-    seen = amp_calloc(al, k->nfidx + 1, 1);
-    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !fo.corner_pt || !cmap || !bmap || !loop || !vstart || !vhe ||
-        !seen) {
+    t.cmap = amp_alloc(al, (k->nfidx + 1) * sizeof *t.cmap);
+    t.bmap = bmap_out ? bmap_out : amp_alloc(al, (k->nv + 1) * sizeof *t.bmap);
+    t.loop = amp_alloc(al, (2 * k->nfidx + 4) * sizeof *t.loop);
+    t.vstart = amp_calloc(al, k->nv + 2, sizeof *t.vstart);
+    t.vhe = amp_alloc(al, (k->nfidx + 1) * sizeof *t.vhe);
+    t.seen = amp_calloc(al, k->nfidx + 1, 1);
+    if (!fo.pt || !fo.alive || !fo.corner || !fo.dir || !fo.base || !fo.corner_pt || !t.cmap || !t.bmap || !t.loop ||
+        !t.vstart || !t.vhe || !t.seen)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Euler transformation");
-        goto done;
-    }
-    /* Class 1: mitered offsets; cmap[h] = copy of the corner of half-edge h */
-    for (f = 0; f < k->nf && rc == AMP_OK; f++) {
-        size_t a = k->fstart[f], n = k->fstart[f + 1] - a, j;
-        uint32_t base = (uint32_t)out->nv;
-        if ((rc = miter_face(k, f, o->offset, o->combinatorial, &fo, err)) != AMP_OK)
-            break;
-        s0.collapsed_edges += n - fo.nalive;
-        for (j = 0; j < fo.nalive && rc == AMP_OK; j++)
-            rc = amp_cx2_add_vertex(out, fo.pt[j], NULL, err);
-        for (j = 0; j < n; j++)
-            cmap[a + j] = base + (uint32_t)fo.corner[j];
-        for (j = 0; j < fo.nalive; j++)
-            loop[j] = base + (uint32_t)j;
-        if (rc == AMP_OK)
-            rc = amp_cx2_add_face(out, loop, fo.nalive, AMP_CELL_CLASS1, err);
-    }
-    /* boundary vertices of K stay as vertices of K̂ */
-    for (v = 0; v < k->nv; v++)
-        bmap[v] = UINT32_MAX;
-    for (h = 0; h < k->nfidx && rc == AMP_OK; h++)
-        if (k->he_twin[h] == AMP_CX2_NONE) {
-            uint32_t ends[2];
-            int e;
-            ends[0] = k->fidx[h];
-            ends[1] = k->fidx[amp_cx2_he_next(k, h)];
-            for (e = 0; e < 2 && rc == AMP_OK; e++)
-                if (bmap[ends[e]] == UINT32_MAX)
-                    rc = amp_cx2_add_vertex(out, k->v[ends[e]], &bmap[ends[e]], err);
-        }
-    /* Class 2: one trapezium per edge */
-    for (h = 0; h < k->nfidx && rc == AMP_OK; h++) {
-        size_t t = k->he_twin[h], hn = amp_cx2_he_next(k, h);
-        if (t != AMP_CX2_NONE && t < h)
-            continue;
-        if (t != AMP_CX2_NONE) {
-            loop[0] = cmap[amp_cx2_he_next(k, t)]; /* a in g */
-            loop[1] = cmap[t];                     /* b in g */
-        } else {
-            loop[0] = bmap[k->fidx[h]];
-            loop[1] = bmap[k->fidx[hn]];
-        }
-        loop[2] = cmap[hn]; /* b in f */
-        loop[3] = cmap[h];  /* a in f */
-        rc = add_cell(out, loop, 4, AMP_CELL_CLASS2, &col, err);
-        s0.collapsed_class2 += (size_t)col;
-    }
-    /* Class 3: the copies of each vertex around it, CCW (outgoing half-edges
-     * advance by twin(prev(h))); a boundary fan starts at v itself */
-    for (h = 0; h < k->nfidx; h++)
-        vstart[k->fidx[h] + 2]++;
-    for (v = 0; v < k->nv; v++)
-        vstart[v + 2] += vstart[v + 1];
-    for (h = 0; h < k->nfidx; h++)
-        vhe[vstart[k->fidx[h] + 1]++] = h;
-    for (v = 0; v < k->nv && rc == AMP_OK; v++) {
-        int pass;
-        for (pass = 0; pass < 2 && rc == AMP_OK; pass++)
-            for (i = vstart[v]; i < vstart[v + 1] && rc == AMP_OK; i++) {
-                size_t hh = vhe[i], m = 0;
-                if (seen[hh] || (pass == 0 && k->he_twin[hh] != AMP_CX2_NONE))
-                    continue;
-                if (pass == 0)
-                    loop[m++] = bmap[v];
-                for (;;) {
-                    size_t p;
-                    seen[hh] = 1;
-                    loop[m++] = cmap[hh];
-                    p = k->he_twin[amp_cx2_he_prev(k, hh)];
-                    if (p == AMP_CX2_NONE || seen[p] || m > k->nfidx)
-                        break;
-                    hh = p;
-                }
-                if (m >= 3)
-                    rc = add_cell(out, loop, m, AMP_CELL_CLASS3, &col, err);
-            }
-    }
-    if (rc == AMP_OK)
+    else if ((rc = class1_cells(&t, o, &fo, err)) == AMP_OK && (rc = keep_boundary(&t, err)) == AMP_OK &&
+             (rc = class2_cells(&t, err)) == AMP_OK && (rc = class3_cells(&t, err)) == AMP_OK)
         rc = amp_cx2_build(out, err);
-done:
-    amp_free(al, fo.pt);
-    amp_free(al, fo.alive);
-    amp_free(al, fo.corner);
-    amp_free(al, fo.dir);
-    amp_free(al, fo.base);
-    amp_free(al, fo.corner_pt);
-    amp_free(al, cmap);
-    if (bmap != bmap_out)
-        amp_free(al, bmap);
-    amp_free(al, loop);
-    amp_free(al, vstart);
-    amp_free(al, vhe);
-    amp_free(al, seen);
+    face_off_free(al, &fo);
+    amp_free(al, t.cmap);
+    if (t.bmap != bmap_out)
+        amp_free(al, t.bmap);
+    amp_free(al, t.loop);
+    amp_free(al, t.vstart);
+    amp_free(al, t.vhe);
+    amp_free(al, t.seen);
     if (st)
-        *st = s0;
+        *st = t.s;
     return rc;
 }
 
@@ -373,11 +422,169 @@ static uint64_t edge_key(uint32_t a, uint32_t b)
     return a < b ? ((uint64_t)a << 32) | b : ((uint64_t)b << 32) | a;
 }
 
-static size_t uf_find(size_t *par, size_t x)
+/* The Lemma 3.3 repair's working state: the input, k̂ (marked cells, sub), T(k̂), T(T(k̂)) and the maps. */
+typedef struct repair {
+    const amp_cx2 *khat;
+    const amp_allocator *al;
+    amp_euler_repair_stats s;
+    amp_cx2 sub, t1, t2;     /* k̂ on its own vertices, T(k̂), T(T(k̂)) */
+    uint64_t *keys;          /* collapsed edges ê, sorted */
+    unsigned char *cover;    /* per collapsed edge: seen on a cell */
+    unsigned char *mark;     /* per cell of K̂: in k̂ */
+    size_t *par;             /* union-find over cells: components k̂_j */
+    uint32_t *vmap, *vback;  /* K̂ vertex <-> sub vertex */
+    uint32_t *bmap1, *bmap2; /* boundary vertices through T and T again */
+    uint32_t *tmap;          /* T(T(k̂)) vertex -> out vertex */
+    uint32_t *loop;          /* one face's vertices (maxn) */
+    size_t maxn;             /* largest face of K̂, at least 3 */
+} repair;
+
+static void repair_free(repair *r)
 {
-    while (par[x] != x)
-        x = par[x] = par[par[x]];
-    return x;
+    amp_cx2_free(&r->sub);
+    amp_cx2_free(&r->t1);
+    amp_cx2_free(&r->t2);
+    amp_free(r->al, r->keys);
+    amp_free(r->al, r->cover);
+    amp_free(r->al, r->mark);
+    amp_free(r->al, r->par);
+    amp_free(r->al, r->vmap);
+    amp_free(r->al, r->vback);
+    amp_free(r->al, r->bmap1);
+    amp_free(r->al, r->bmap2);
+    amp_free(r->al, r->tmap);
+    amp_free(r->al, r->loop);
+}
+
+static amp_status repair_nomem(amp_error *err)
+{
+    return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
+}
+
+/* k̂: the cells with a collapsed edge ê; each must be a Class 3 cell and each ê on some cell. */
+static amp_status mark_collapsed_cells(repair *r, amp_error *err)
+{
+    const amp_cx2 *khat = r->khat;
+    size_t i, h, f;
+    for (i = 0; i < khat->nxe; i++)
+        r->keys[i] = edge_key(khat->xedge[2 * i], khat->xedge[2 * i + 1]);
+    if (khat->nxe > 1)
+        qsort(r->keys, khat->nxe, sizeof *r->keys, cmp_u64);
+    for (h = 0; h < khat->nfidx && khat->nxe; h++) {
+        uint64_t key = edge_key(khat->fidx[h], khat->fidx[amp_cx2_he_next(khat, h)]);
+        const uint64_t *hit = bsearch(&key, r->keys, khat->nxe, sizeof *r->keys, cmp_u64);
+        if (!hit)
+            continue;
+        f = khat->he_face[h];
+        if (khat->fclass[f] != AMP_CELL_CLASS3)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                            "free edge %lu-%lu lies on a 2-cell of class %d, not between Class 3 cells (Lemma 3.3)",
+                            (unsigned long)(key >> 32), (unsigned long)(key & 0xffffffffu), khat->fclass[f]);
+        r->mark[f] = 1;
+        r->cover[hit - r->keys] = 1;
+    }
+    for (i = 0; i < khat->nxe; i++)
+        if (!r->cover[i])
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                            "free edge %lu-%lu is in no 2-cell: not a Class 2 cell collapsed between Class 3 cells "
+                            "(Lemma 3.3)",
+                            (unsigned long)(r->keys[i] >> 32), (unsigned long)(r->keys[i] & 0xffffffffu));
+    return AMP_OK;
+}
+
+/* The components k̂_j (marked cells joined by shared edges, counted) and the sub-complex k̂ on its own vertices. */
+static amp_status extract_subcomplex(repair *r, amp_error *err)
+{
+    const amp_cx2 *khat = r->khat;
+    amp_status rc = AMP_OK;
+    size_t i, h, f;
+    for (f = 0; f < khat->nf; f++)
+        r->par[f] = f;
+    for (h = 0; h < khat->nfidx; h++) {
+        size_t t = khat->he_twin[h];
+        if (t != AMP_CX2_NONE && r->mark[khat->he_face[h]] && r->mark[khat->he_face[t]])
+            amp_uf_union(r->par, khat->he_face[h], khat->he_face[t]);
+    }
+    for (i = 0; i < khat->nv; i++)
+        r->vmap[i] = UINT32_MAX;
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++) {
+        size_t a = khat->fstart[f], n = khat->fstart[f + 1] - a, j;
+        if (!r->mark[f])
+            continue;
+        r->s.cells++;
+        r->s.components += amp_uf_find(r->par, f) == f;
+        for (j = 0; j < n && rc == AMP_OK; j++) {
+            uint32_t v = khat->fidx[a + j];
+            if (r->vmap[v] == UINT32_MAX)
+                rc = amp_cx2_add_vertex(&r->sub, khat->v[v], &r->vmap[v], err);
+            r->loop[j] = r->vmap[v];
+        }
+        if (rc == AMP_OK)
+            rc = amp_cx2_add_face(&r->sub, r->loop, n, AMP_CELL_INPUT, err);
+    }
+    return rc;
+}
+
+/* Def. 3.2 on k̂: T(T(k̂)), offsets a quarter of the smallest feature; tmap glues k̂'s boundary vertices,
+ * which survive both passes, back onto K̂'s. */
+static amp_status transform_twice(repair *r, amp_error *err)
+{
+    amp_status rc;
+    size_t i;
+    r->vback = amp_alloc(r->al, r->sub.nv * sizeof *r->vback);
+    r->bmap1 = amp_alloc(r->al, r->sub.nv * sizeof *r->bmap1);
+    if (!r->vback || !r->bmap1)
+        return repair_nomem(err);
+    for (i = 0; i < r->khat->nv; i++)
+        if (r->vmap[i] != UINT32_MAX)
+            r->vback[r->vmap[i]] = (uint32_t)i;
+    if ((rc = amp_cx2_build(&r->sub, err)) != AMP_OK ||
+        (rc = transform_fitting(&r->sub, 0.25 * feature_size(&r->sub), &r->t1, r->bmap1, err)) != AMP_OK)
+        return rc;
+    if (!(r->bmap2 = amp_alloc(r->al, r->t1.nv * sizeof *r->bmap2)))
+        return repair_nomem(err);
+    if ((rc = transform_fitting(&r->t1, 0.25 * feature_size(&r->t1), &r->t2, r->bmap2, err)) != AMP_OK)
+        return rc;
+    if (!(r->tmap = amp_alloc(r->al, (r->t2.nv + 1) * sizeof *r->tmap)))
+        return repair_nomem(err);
+    for (i = 0; i < r->t2.nv; i++)
+        r->tmap[i] = UINT32_MAX;
+    for (i = 0; i < r->sub.nv; i++) {
+        uint32_t u = r->bmap1[i];
+        if (u == UINT32_MAX || r->bmap2[u] == UINT32_MAX)
+            return amp_fail(err, AMP_ERR_GEOMETRY, 0, "vertex %lu is inside the Class 3 sub-complex (Lemma 3.3)",
+                            (unsigned long)r->vback[i]);
+        r->tmap[r->bmap2[u]] = r->vback[i];
+    }
+    return AMP_OK;
+}
+
+/* (K̂ \ k̂) ∪ T(T(k̂)) into @p out; the free edges ê are inside k̂ and go with it. */
+static amp_status splice_repaired(repair *r, amp_cx2 *out, amp_error *err)
+{
+    const amp_cx2 *khat = r->khat;
+    amp_status rc = AMP_OK;
+    size_t i, f;
+    for (i = 0; i < khat->nv && rc == AMP_OK; i++)
+        rc = amp_cx2_add_vertex(out, khat->v[i], NULL, err);
+    for (f = 0; f < khat->nf && rc == AMP_OK; f++)
+        if (!r->mark[f])
+            rc = amp_cx2_add_face(out, khat->fidx + khat->fstart[f], amp_cx2_face_size(khat, f), khat->fclass[f], err);
+    for (i = 0; i < r->t2.nv && rc == AMP_OK; i++)
+        if (r->tmap[i] == UINT32_MAX)
+            rc = amp_cx2_add_vertex(out, r->t2.v[i], &r->tmap[i], err);
+    for (f = 0; f < r->t2.nf && rc == AMP_OK; f++) {
+        size_t a = r->t2.fstart[f], n = r->t2.fstart[f + 1] - a, j;
+        uint32_t *lp = n <= r->maxn ? r->loop : NULL;
+        if (!lp && !(lp = amp_alloc(r->al, n * sizeof *lp)))
+            return repair_nomem(err);
+        for (j = 0; j < n; j++)
+            lp[j] = r->tmap[r->t2.fidx[a + j]];
+        rc = amp_cx2_add_face(out, lp, n, r->t2.fclass[f], err);
+        if (lp != r->loop)
+            amp_free(r->al, lp);
+    }
+    return rc == AMP_OK ? amp_cx2_build(out, err) : rc;
 }
 
 /*
@@ -396,170 +603,46 @@ static size_t uf_find(size_t *par, size_t x)
  */
 amp_status amp_euler_repair(const amp_cx2 *khat, amp_cx2 *out, amp_euler_repair_stats *st, amp_error *err)
 {
-    const amp_allocator *al = out->alloc;
-    amp_euler_repair_stats s0;
-    amp_cx2 sub, t1, t2;
-    uint64_t *keys = NULL;
-    unsigned char *mark = NULL, *cover = NULL;
-    uint32_t *vmap = NULL, *vback = NULL, *bmap1 = NULL, *bmap2 = NULL, *tmap = NULL, *loop = NULL;
-    size_t *par = NULL;
-    size_t i, f, h, maxn = 3;
-    amp_status rc = AMP_OK;
-    memset(&s0, 0, sizeof s0);
+    repair r;
+    size_t f;
+    amp_status rc;
+    memset(&r, 0, sizeof r);
     if (st)
-        *st = s0;
+        *st = r.s;
     if (out == khat)
         return amp_fail(err, AMP_ERR_ARG, 0, "Lemma 3.3 repair needs distinct input and output complexes");
     amp_cx2_free(out);
     if (!khat->built || (khat->nf && !khat->he_twin))
         return amp_fail(err, AMP_ERR_STATE, 0, "complex topology not built (amp_cx2_build)");
-    amp_cx2_init(&sub, al);
-    amp_cx2_init(&t1, al);
-    amp_cx2_init(&t2, al);
+    r.khat = khat;
+    r.al = out->alloc;
+    r.maxn = 3;
+    amp_cx2_init(&r.sub, r.al);
+    amp_cx2_init(&r.t1, r.al);
+    amp_cx2_init(&r.t2, r.al);
     for (f = 0; f < khat->nf; f++)
-        if (amp_cx2_face_size(khat, f) > maxn)
-            maxn = amp_cx2_face_size(khat, f);
-    keys = amp_alloc(al, (khat->nxe + 1) * sizeof *keys);
-    cover = amp_calloc(al, khat->nxe + 1, 1);
-    mark = amp_calloc(al, khat->nf + 1, 1);
-    par = amp_alloc(al, (khat->nf + 1) * sizeof *par);
-    vmap = amp_alloc(al, (khat->nv + 1) * sizeof *vmap);
-    loop = amp_alloc(al, (maxn + 1) * sizeof *loop);
-    if (!keys || !cover || !mark || !par || !vmap || !loop) {
-        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
-        goto done;
-    }
-    for (i = 0; i < khat->nxe; i++)
-        keys[i] = edge_key(khat->xedge[2 * i], khat->xedge[2 * i + 1]);
-    if (khat->nxe > 1)
-        qsort(keys, khat->nxe, sizeof *keys, cmp_u64);
-    /* k̂: the cells with a collapsed edge ê */
-    for (h = 0; h < khat->nfidx && khat->nxe; h++) {
-        uint64_t key = edge_key(khat->fidx[h], khat->fidx[amp_cx2_he_next(khat, h)]);
-        const uint64_t *hit = bsearch(&key, keys, khat->nxe, sizeof *keys, cmp_u64);
-        if (!hit)
-            continue;
-        f = khat->he_face[h];
-        if (khat->fclass[f] != AMP_CELL_CLASS3) {
-            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
-                          "free edge %lu-%lu lies on a 2-cell of class %d, not between Class 3 cells (Lemma 3.3)",
-                          (unsigned long)(key >> 32), (unsigned long)(key & 0xffffffffu), khat->fclass[f]);
-            goto done;
-        }
-        mark[f] = 1;
-        cover[hit - keys] = 1;
-    }
-    for (i = 0; i < khat->nxe; i++)
-        if (!cover[i]) {
-            rc = amp_fail(err, AMP_ERR_GEOMETRY, 0,
-                          "free edge %lu-%lu is in no 2-cell: not a Class 2 cell collapsed between Class 3 cells "
-                          "(Lemma 3.3)",
-                          (unsigned long)(keys[i] >> 32), (unsigned long)(keys[i] & 0xffffffffu));
-            goto done;
-        }
-    /* components k̂_j: marked cells joined by shared edges */
-    for (f = 0; f < khat->nf; f++)
-        par[f] = f;
-    for (h = 0; h < khat->nfidx; h++) {
-        size_t t = khat->he_twin[h];
-        if (t != AMP_CX2_NONE && mark[khat->he_face[h]] && mark[khat->he_face[t]])
-            par[uf_find(par, khat->he_face[h])] = uf_find(par, khat->he_face[t]);
-    }
-    /* the sub-complex k̂ on its own vertices */
-    for (i = 0; i < khat->nv; i++)
-        vmap[i] = UINT32_MAX;
-    for (f = 0; f < khat->nf && rc == AMP_OK; f++) {
-        size_t a = khat->fstart[f], n = khat->fstart[f + 1] - a, j;
-        if (!mark[f])
-            continue;
-        s0.cells++;
-        s0.components += uf_find(par, f) == f;
-        for (j = 0; j < n && rc == AMP_OK; j++) {
-            uint32_t v = khat->fidx[a + j];
-            if (vmap[v] == UINT32_MAX)
-                rc = amp_cx2_add_vertex(&sub, khat->v[v], &vmap[v], err);
-            loop[j] = vmap[v];
-        }
+        if (amp_cx2_face_size(khat, f) > r.maxn)
+            r.maxn = amp_cx2_face_size(khat, f);
+    r.keys = amp_alloc(r.al, (khat->nxe + 1) * sizeof *r.keys);
+    r.cover = amp_calloc(r.al, khat->nxe + 1, 1);
+    r.mark = amp_calloc(r.al, khat->nf + 1, 1);
+    r.par = amp_alloc(r.al, (khat->nf + 1) * sizeof *r.par);
+    r.vmap = amp_alloc(r.al, (khat->nv + 1) * sizeof *r.vmap);
+    r.loop = amp_alloc(r.al, (r.maxn + 1) * sizeof *r.loop);
+    if (!r.keys || !r.cover || !r.mark || !r.par || !r.vmap || !r.loop)
+        rc = repair_nomem(err);
+    else if ((rc = mark_collapsed_cells(&r, err)) == AMP_OK && (rc = extract_subcomplex(&r, err)) == AMP_OK) {
+        r.s.collapsed_edges = khat->nxe;
+        if (r.sub.nf)
+            rc = transform_twice(&r, err);
         if (rc == AMP_OK)
-            rc = amp_cx2_add_face(&sub, loop, n, AMP_CELL_INPUT, err);
+            rc = splice_repaired(&r, out, err);
     }
-    s0.collapsed_edges = khat->nxe;
-    if (rc == AMP_OK && sub.nf) {
-        vback = amp_alloc(al, sub.nv * sizeof *vback);
-        bmap1 = amp_alloc(al, sub.nv * sizeof *bmap1);
-        if (!vback || !bmap1)
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
-        for (i = 0; i < khat->nv && rc == AMP_OK; i++)
-            if (vmap[i] != UINT32_MAX)
-                vback[vmap[i]] = (uint32_t)i;
-        if (rc == AMP_OK)
-            rc = amp_cx2_build(&sub, err);
-        /* Def. 3.2 on k̂: T(T(k̂)), offsets a quarter of the smallest feature */
-        if (rc == AMP_OK)
-            rc = transform_fitting(&sub, 0.25 * feature_size(&sub), &t1, bmap1, err);
-        if (rc == AMP_OK && !(bmap2 = amp_alloc(al, t1.nv * sizeof *bmap2)))
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
-        if (rc == AMP_OK)
-            rc = transform_fitting(&t1, 0.25 * feature_size(&t1), &t2, bmap2, err);
-        if (rc == AMP_OK && !(tmap = amp_alloc(al, (t2.nv + 1) * sizeof *tmap)))
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
-        if (rc == AMP_OK) {
-            /* boundary vertices of k̂ survive both passes: glue them back */
-            for (i = 0; i < t2.nv; i++)
-                tmap[i] = UINT32_MAX;
-            for (i = 0; i < sub.nv; i++) {
-                uint32_t u = bmap1[i];
-                if (u == UINT32_MAX || bmap2[u] == UINT32_MAX) {
-                    rc = amp_fail(err, AMP_ERR_GEOMETRY, 0, "vertex %lu is inside the Class 3 sub-complex (Lemma 3.3)",
-                                  (unsigned long)vback[i]);
-                    break;
-                }
-                tmap[bmap2[u]] = vback[i];
-            }
-        }
-    }
-    /* (K̂ \ k̂) ∪ T(T(k̂)); the free edges ê are inside k̂ and go with it */
-    for (i = 0; i < khat->nv && rc == AMP_OK; i++)
-        rc = amp_cx2_add_vertex(out, khat->v[i], NULL, err);
-    for (f = 0; f < khat->nf && rc == AMP_OK; f++)
-        if (!mark[f])
-            rc = amp_cx2_add_face(out, khat->fidx + khat->fstart[f], amp_cx2_face_size(khat, f), khat->fclass[f], err);
-    for (i = 0; i < t2.nv && rc == AMP_OK; i++)
-        if (tmap[i] == UINT32_MAX)
-            rc = amp_cx2_add_vertex(out, t2.v[i], &tmap[i], err);
-    for (f = 0; f < t2.nf && rc == AMP_OK; f++) {
-        size_t a = t2.fstart[f], n = t2.fstart[f + 1] - a, j;
-        uint32_t *lp = n <= maxn ? loop : NULL;
-        if (!lp && !(lp = amp_alloc(al, n * sizeof *lp))) {
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the Lemma 3.3 repair");
-            break;
-        }
-        for (j = 0; j < n; j++)
-            lp[j] = tmap[t2.fidx[a + j]];
-        rc = amp_cx2_add_face(out, lp, n, t2.fclass[f], err);
-        if (lp != loop)
-            amp_free(al, lp);
-    }
-    if (rc == AMP_OK)
-        rc = amp_cx2_build(out, err);
-done:
     if (rc != AMP_OK)
         amp_cx2_free(out);
     else if (st)
-        *st = s0;
-    amp_cx2_free(&sub);
-    amp_cx2_free(&t1);
-    amp_cx2_free(&t2);
-    amp_free(al, keys);
-    amp_free(al, cover);
-    amp_free(al, mark);
-    amp_free(al, par);
-    amp_free(al, vmap);
-    amp_free(al, vback);
-    amp_free(al, bmap1);
-    amp_free(al, bmap2);
-    amp_free(al, tmap);
-    amp_free(al, loop);
+        *st = r.s;
+    repair_free(&r);
     return rc;
 }
 

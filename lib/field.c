@@ -1,5 +1,5 @@
 /*
- * Direction-field covering of a mesh (paper §4.2): the iso-curves of a field
+ * Direction-field covering of a mesh ([P1 §4.2]): the iso-curves of a field
  * F(u, v, w) in one direction, sampled on a grid or honeycomb of the other
  * two parameters at a spacing in millimetres, clipped to the mesh; and the
  * coverage gap measured by sampling the solid.
@@ -13,16 +13,15 @@
 #include "ampath/field.h"
 #include "ampath/spline.h"
 
-#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------ built-ins */
 
-/* helix-square: the SPEC §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
+/* helix-square: the docs/interfaces.md §4 helix (radius 20, pitch 40, z0 = 5π/√(π²+1)) with a 12 mm square section. */
 static amp_status eval_helix_square(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
 {
-    const double R = 20, P = 40, k = P / (2 * PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * PI * R / (2 * PI * len);
-    double w = 2 * PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
-    /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/meshmodels.c) */
+    const double R = 20, P = 40, k = P / (2 * AMP_PI), len = sqrt(R * R + k * k), z0 = 5 * 2 * AMP_PI * R / (2 * AMP_PI * len);
+    double w = 2 * AMP_PI * uvw[2], a = f->p[0] * (uvw[0] - 0.5), b = f->p[0] * (uvw[1] - 0.5);
+    /* Frenet frame: N towards the axis, B = T x N, both normal to c'(t) (as in lib/mesh_models.c) */
     amp_vec3 c = amp_v3(R * cos(w), R * sin(w), z0 + P * uvw[2]);
     amp_vec3 n = amp_v3(-cos(w), -sin(w), 0), bb = amp_v3(k * sin(w) / len, -k * cos(w) / len, R / len);
     (void)err;
@@ -692,7 +691,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
 /* ------------------------------------------------- surface layer (shells) */
 
 /*
- * Shell curves (paper 1 §4.2, like a slicer's perimeters but along the field):
+ * Shell curves ([P1 §4.2], like a slicer's perimeters but along the field):
  * the lattice curves at corners (i/na, j/nb) that run within the band
  * [-S/2, S/2) of signed distance to the surface, shifted j S deeper for shell
  * j, are projected onto the surface offset inward by d_j = S/2 + j S (the
@@ -858,175 +857,4 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
     if (stats)
         *stats = s;
     return st;
-}
-
-/* ---------------------------------------------------------- coverage gap */
-
-/* Uniform grid of path segments (CSR lists per cell) for nearest-segment queries. */
-typedef struct seg_grid {
-    const amp_allocator *alloc;
-    amp_box3 box;
-    double cell;
-    size_t n[3];
-    size_t *start; /* ncells + 1 */
-    size_t *items; /* segment = index of its first vertex in ps->verts */
-} seg_grid;
-
-static size_t clampi(double x, size_t n)
-{
-    if (x < 0)
-        return 0;
-    if (x >= (double)n)
-        return n - 1;
-    return (size_t)x;
-}
-
-static void cell_range(const seg_grid *g, amp_vec3 a, amp_vec3 b, size_t lo[3], size_t hi[3])
-{
-    lo[0] = clampi((fmin(a.x, b.x) - g->box.min.x) / g->cell, g->n[0]);
-    lo[1] = clampi((fmin(a.y, b.y) - g->box.min.y) / g->cell, g->n[1]);
-    lo[2] = clampi((fmin(a.z, b.z) - g->box.min.z) / g->cell, g->n[2]);
-    hi[0] = clampi((fmax(a.x, b.x) - g->box.min.x) / g->cell, g->n[0]);
-    hi[1] = clampi((fmax(a.y, b.y) - g->box.min.y) / g->cell, g->n[1]);
-    hi[2] = clampi((fmax(a.z, b.z) - g->box.min.z) / g->cell, g->n[2]);
-}
-
-/* pass 0 counts, pass 1 fills */
-static void grid_insert(seg_grid *g, const amp_pathset *ps, size_t *fill)
-{
-    size_t i, k, x, y, z;
-    for (i = 0; i < ps->npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        for (k = 0; k + 1 < ps->paths[i].n; k++) {
-            size_t lo[3], hi[3];
-            cell_range(g, v[k].p, v[k + 1].p, lo, hi);
-            for (z = lo[2]; z <= hi[2]; z++)
-                for (y = lo[1]; y <= hi[1]; y++)
-                    for (x = lo[0]; x <= hi[0]; x++) {
-                        size_t c = (z * g->n[1] + y) * g->n[0] + x;
-                        if (fill)
-                            g->items[fill[c]++] = ps->paths[i].first + k;
-                        else
-                            g->start[c + 1]++;
-                    }
-        }
-    }
-}
-
-static amp_status grid_build(seg_grid *g, const amp_pathset *ps, amp_box3 box, amp_error *err)
-{
-    size_t nseg = 0, i, nc, *fill;
-    amp_vec3 sz;
-    double vol;
-    for (i = 0; i < ps->npaths; i++)
-        nseg += ps->paths[i].n > 1 ? ps->paths[i].n - 1 : 0;
-    if (nseg == 0)
-        return amp_fail(err, AMP_ERR_ARG, 0, "no path segment to measure the coverage of");
-    g->box = amp_box3_union(box, amp_pathset_bbox(ps));
-    sz = amp_box3_size(g->box);
-    vol = fmax(sz.x, 1e-3) * fmax(sz.y, 1e-3) * fmax(sz.z, 1e-3);
-    /* about one segment per cell, cells no smaller than 1/1000 of the box */
-    g->cell = fmax(cbrt(vol / (double)nseg), 1e-3 * fmax(sz.x, fmax(sz.y, sz.z)));
-    g->n[0] = (size_t)(sz.x / g->cell) + 1;
-    g->n[1] = (size_t)(sz.y / g->cell) + 1;
-    g->n[2] = (size_t)(sz.z / g->cell) + 1;
-    nc = g->n[0] * g->n[1] * g->n[2];
-    g->start = amp_calloc(g->alloc, nc + 1, sizeof *g->start);
-    fill = amp_calloc(g->alloc, nc, sizeof *fill);
-    if (!g->start || !fill) {
-        amp_free(g->alloc, fill);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the segment grid");
-    }
-    grid_insert(g, ps, NULL);
-    for (i = 0; i < nc; i++)
-        g->start[i + 1] += g->start[i];
-    g->items = amp_calloc(g->alloc, g->start[nc] ? g->start[nc] : 1, sizeof *g->items);
-    if (!g->items) {
-        amp_free(g->alloc, fill);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the segment grid");
-    }
-    memcpy(fill, g->start, nc * sizeof *fill);
-    grid_insert(g, ps, fill);
-    amp_free(g->alloc, fill);
-    return AMP_OK;
-}
-
-/* Distance from p to the nearest segment: rings of cells around p's cell until no closer cell can remain. */
-static double grid_nearest(const seg_grid *g, const amp_pathset *ps, amp_vec3 p)
-{
-    size_t c0[3], kmax = g->n[0] + g->n[1] + g->n[2];
-    double best = HUGE_VAL;
-    long k;
-    cell_range(g, p, p, c0, c0);
-    for (k = 0; k <= (long)kmax; k++) {
-        long x, y, z;
-        for (z = (long)c0[2] - k; z <= (long)c0[2] + k; z++)
-            for (y = (long)c0[1] - k; y <= (long)c0[1] + k; y++)
-                for (x = (long)c0[0] - k; x <= (long)c0[0] + k; x++) {
-                    size_t c, it;
-                    if (x < 0 || y < 0 || z < 0 || x >= (long)g->n[0] || y >= (long)g->n[1] || z >= (long)g->n[2])
-                        continue;
-                    /* only the shell of the ring: inner cells were visited before */
-                    if (labs(x - (long)c0[0]) != k && labs(y - (long)c0[1]) != k && labs(z - (long)c0[2]) != k)
-                        continue;
-                    c = ((size_t)z * g->n[1] + (size_t)y) * g->n[0] + (size_t)x;
-                    for (it = g->start[c]; it < g->start[c + 1]; it++) {
-                        size_t s = g->items[it];
-                        best = fmin(best, amp_v3_seg_dist2(p, ps->verts[s].p, ps->verts[s + 1].p, NULL));
-                    }
-                }
-        /* every cell outside ring k is at least k cells away */
-        if (best < HUGE_VAL && sqrt(best) <= (double)k * g->cell)
-            break;
-    }
-    return sqrt(best);
-}
-
-static double rnd(unsigned long long *s)
-{
-    *s ^= *s >> 12;
-    *s ^= *s << 25;
-    *s ^= *s >> 27;
-    return (double)((*s * 0x2545F4914F6CDD1DULL) >> 11) / 9007199254740992.0;
-}
-
-amp_status amp_coverage_gap(const amp_pathset *ps, const amp_bvh *b, size_t nsamples, unsigned long seed,
-                            double margin, double *gap, double *mean, amp_error *err)
-{
-    seg_grid g;
-    amp_box3 box;
-    unsigned long long s = 0x9E3779B97F4A7C15ULL ^ (unsigned long long)seed;
-    size_t got = 0, tries = 0;
-    double worst = 0, sum = 0;
-    amp_status st;
-    if (!ps || !b || !gap || nsamples == 0 || !(margin >= 0))
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_coverage_gap: bad argument");
-    memset(&g, 0, sizeof g);
-    g.alloc = ps->alloc;
-    box = amp_bvh_bbox(b);
-    if ((st = grid_build(&g, ps, box, err)) != AMP_OK) {
-        amp_free(g.alloc, g.start);
-        return st;
-    }
-    while (got < nsamples && tries < 100 * nsamples) {
-        amp_vec3 p = amp_v3(box.min.x + rnd(&s) * (box.max.x - box.min.x), box.min.y + rnd(&s) * (box.max.y - box.min.y),
-                            box.min.z + rnd(&s) * (box.max.z - box.min.z));
-        tries++;
-        if (!amp_bvh_inside(b, p) || (margin > 0 && amp_bvh_closest(b, p, NULL, NULL) < margin))
-            continue;
-        {
-            double d = grid_nearest(&g, ps, p);
-            worst = fmax(worst, d);
-            sum += d;
-            got++;
-        }
-    }
-    amp_free(g.alloc, g.start);
-    amp_free(g.alloc, g.items);
-    if (got == 0)
-        return amp_fail(err, AMP_ERR_GEOMETRY, 0, "no sample point fell inside the mesh");
-    *gap = worst;
-    if (mean)
-        *mean = sum / (double)got;
-    return AMP_OK;
 }

@@ -14,6 +14,7 @@
 #include <stdint.h>
 
 #include "ampath/order.h"
+#include "cone.h"
 
 #define AMP_FBVH_NONE 0xffffffffU
 
@@ -72,21 +73,5 @@ uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, dou
  * Returns the number of fragments reported. */
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,
                           int (*cb)(void *user, uint32_t g), void *user);
-
-/* amp_cone_clearance and amp_fragment_below with k = cot(theta) precomputed (hot loops). */
-double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1);
-int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b);
-
-/* Horizontal distance between the xy projections of two boxes (0 when they overlap). Inline and without
- * fmax: it is the innermost bound of every query. */
-static inline double amp_box_xy_gap(amp_box3 a, amp_box3 b)
-{
-    double dx = a.min.x - b.max.x, dy = a.min.y - b.max.y, ex = b.min.x - a.max.x, ey = b.min.y - a.max.y;
-    dx = dx > ex ? dx : ex;
-    dy = dy > ey ? dy : ey;
-    dx = dx > 0.0 ? dx : 0.0;
-    dy = dy > 0.0 ? dy : 0.0;
-    return sqrt(dx * dx + dy * dy);
-}
 
 #endif

@@ -1,4 +1,4 @@
-/* Fragments (paper §5.1, Def. 5.3): every path cut into equal pieces shorter than z_offs. */
+/* Fragments ([P1 §5.1], Def. 5.3): every path cut into equal pieces shorter than z_offs. */
 #include <math.h>
 #include <string.h>
 

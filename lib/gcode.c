@@ -1,5 +1,5 @@
 /*
- * G-code writer (SPEC §5): an allocation-free line iterator over a path set.
+ * G-code writer (docs/interfaces.md §5): an allocation-free line iterator over a path set.
  *
  * The iterator is a small state machine (header, start sequence, set-up,
  * paths with their travels, teardown, end sequence). Init checks the job,
@@ -17,7 +17,6 @@
 #include "gcode_internal.h"
 
 #define GC_MAGIC 0x67636f64u
-#define GC_PI 3.14159265358979323846
 #define GC_MIN_SEG 1e-9      /* segments shorter than this (mm) are not printed */
 #define GC_COORD_MAX 99999.0 /* keeps every number short enough for AMP_GCODE_LINE_MAX */
 #define GC_FIT_TOL 5e-4      /* half the 0.001 mm resolution of the written coordinates */
@@ -49,7 +48,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->z_hop = 0.4;
     o->travel_corridor = 1.0;
     o->end_lift = 10.0;
-    o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* SPEC §5: Klipper uses M83 by default */
+    o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* docs/interfaces.md §5: Klipper uses M83 by default */
     o->hotend_temp = 210.0;
     o->bed_temp = 60.0;
     o->start_gcode = NULL;
@@ -59,7 +58,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->max_feed_xy = 200.0;
     o->max_feed_z = 10.0;
     o->max_feed_e = 60.0;
-    /* the generic printer of SPEC §5: 220 x 220 x 250 mm */
+    /* the generic printer of docs/interfaces.md §5: 220 x 220 x 250 mm */
     o->profile = "generic";
     o->place = AMP_PLACE_CENTER;
     o->bed_max_x = 220.0;
@@ -300,7 +299,7 @@ static size_t next_segment(const amp_pathset *ps, size_t i, size_t k)
     return n > 0 ? n - 1 : 0;
 }
 
-/* Depth of a bead below its vertex: h for a planar bead, r for a tube (SPEC §5). */
+/* Depth of a bead below its vertex: h for a planar bead, r for a tube (docs/interfaces.md §5). */
 static double bead_depth(const amp_path *p, double r) { return p->h > 0.0 ? p->h : r; }
 
 /* Does vertex @p i lie within the tolerances of the chord v[k] -> v[j] (position and radius)? */
@@ -313,13 +312,13 @@ static int chord_keeps(const amp_gcode_opts *o, const amp_pvert *v, size_t k, si
     foot = amp_v3_add(v[k].p, amp_v3_scale(d, t));
     if (amp_v3_dist(foot, v[i].p) > o->chord_tol)
         return 0;
-    /* the deposition radius must follow the chord too (MDR, paper §5.2); E stays exact either way */
+    /* the deposition radius must follow the chord too (MDR, [P1 §5.2]); E stays exact either way */
     return fabs(v[k].r + t * (v[j].r - v[k].r) - v[i].r) <= o->radius_tol;
 }
 
 /*
  * End vertex of the written segment that starts at vertex @p k of path @p i
- * (clean segments, SPEC §5): the farthest vertex whose chord keeps every
+ * (clean segments, docs/interfaces.md §5): the farthest vertex whose chord keeps every
  * vertex in between within the tolerances, extended while the chord is
  * shorter than min_segment; a short remainder joins the last segment.
  */
@@ -418,7 +417,7 @@ static amp_status fit_axis(const amp_gcode_opts *o, char axis, double lo, double
                     o->profile ? o->profile : "?", axis, lo, hi, b0, b1, over);
 }
 
-/* The placement offset (SPEC §5) and the check that the placed job fits the bed volume. */
+/* The placement offset (docs/interfaces.md §5) and the check that the placed job fits the bed volume. */
 static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *err)
 {
     const amp_gcode_opts *o = &it->o;
@@ -507,7 +506,7 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     if (js.bb.max.z + it->off.z + js.rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
         return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: the job rises beyond %g mm", GC_COORD_MAX);
     it->ps = ps;
-    it->fil_area = GC_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
+    it->fil_area = AMP_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
     /* the grid (model coordinates) covers every vertex with its radius and a travel corridor around it */
     margin = js.rmax + it->o.travel_corridor + 1.0;
     ext = fmax(js.bb.max.x - js.bb.min.x, js.bb.max.y - js.bb.min.y) + 2.0 * margin;
@@ -562,7 +561,7 @@ static void put_e(amp_gcode_iter *it, lb *l)
     it->e_units = u;
 }
 
-/* A model coordinate as written: placed on the bed (SPEC §5). */
+/* A model coordinate as written: placed on the bed (docs/interfaces.md §5). */
 static void put_coord(amp_gcode_iter *it, lb *l, char axis, double v)
 {
     double off = axis == 'X' ? it->off.x : axis == 'Y' ? it->off.y : it->off.z;
@@ -624,14 +623,14 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
     if (r > 0.0)
         grid_walk(it, it->grid, va->p, vb->p, r, top, 0);
-    /* the centre line, for the head cone of direct hops (the model of paper §5.1 and `ampath check`) */
+    /* the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
     grid_walk(it, it->grid_c, va->p, vb->p, 0.0, fmax(va->p.z, vb->p.z), 0);
     it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
     it->end_r = vb->r;
 }
 
 /*
- * The written segment from vertex k to vertex j of the current path (SPEC §5,
+ * The written segment from vertex k to vertex j of the current path (docs/interfaces.md §5,
  * clean segments): a straight G1, or with @p arc a G2/G3 along it.
  */
 static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_gc_arc *arc)
@@ -683,7 +682,7 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     it->pos = b;
     if (de > 0.0)
         it->printed_any = 1;
-    set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / GC_PI) : 0.0, len);
+    set_last(it, MOVE_PRINT, b, de, feed, len > 0.0 ? sqrt(area / AMP_PI) : 0.0, len);
 }
 
 static double rect_dist(double px, double py, double x0, double y0, double side)
@@ -694,8 +693,8 @@ static double rect_dist(double px, double py, double x0, double y0, double side)
 
 /*
  * The lowest nozzle height over the interval of half-width @p hh around
- * (@p px, @p py) whose head cone (SPEC §2: tip z_offs above the nozzle,
- * half-angle theta; paper §5.1) clears every printed centre line — the
+ * (@p px, @p py) whose head cone (docs/interfaces.md §2: tip z_offs above the nozzle,
+ * half-angle theta; [P1 §5.1]) clears every printed centre line — the
  * criterion Algorithm 2 and `ampath check` apply to printing points — at
  * least @p lo; the search stops once it passes @p stop. Each centre-line
  * point lies in a cell of grid_c holding at least its z and is no nearer than
@@ -704,7 +703,7 @@ static double rect_dist(double px, double py, double x0, double y0, double side)
  */
 static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
 {
-    double k = 1.0 / tan(it->o.head_theta * GC_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
+    double k = 1.0 / tan(it->o.head_theta * AMP_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
     double zo = it->o.head_z_offs;
     int bi, bj, i, j;
     if (it->zc_max - zo + k * hh <= lo)
@@ -734,7 +733,7 @@ static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, 
 }
 
 /*
- * The travel polyline from it->pos to it->travel_to (SPEC §5: gouge-free,
+ * The travel polyline from it->pos to it->travel_to (docs/interfaces.md §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
  * of the start and end lifted by z_hop and of the material tops + z_hop
  * sampled along the line within the corridor. Each sample's box covers half
@@ -770,7 +769,7 @@ static void travel_hull(amp_gcode_iter *it)
                 cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
                                 fmin(a.z, b.z) + hop, HUGE_VAL);
             }
-            /* beyond the corridor: the head cone (SPEC §2) clear of every printed centre line */
+            /* beyond the corridor: the head cone (docs/interfaces.md §2) clear of every printed centre line */
             z = fmax(z, cf);
             if (s == 0)
                 zs = fmax(zs, z);
@@ -1029,7 +1028,7 @@ static int setup_line(amp_gcode_iter *it, lb *l, size_t k)
 /* ---------------------------------------------------------------- the state machine */
 
 /*
- * Classify the path that starts (SPEC §5 first layer): first-layer or not,
+ * Classify the path that starts (docs/interfaces.md §5 first layer): first-layer or not,
  * and its layer for the fan. Planar jobs know their layers from the bead z;
  * tubes count layers of first_layer_height from the bed.
  */
@@ -1131,32 +1130,33 @@ static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
 }
 
 /* One line (or none) of a path: the per-path sub-steps in order. */
-static int step_path(amp_gcode_iter *it, lb *l)
+/* The comment that opens a path; a path without a segment of non-zero length is skipped. */
+static int path_comment(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_pvert *v)
 {
-    const amp_pathset *ps = it->ps;
-    const amp_path *p = &ps->paths[it->path];
-    const amp_pvert *v = amp_pathset_path_verts(ps, it->path);
-    const amp_gcode_opts *o = &it->o;
-    switch (it->sub) {
-    case PS_COMMENT: {
-        int skip;
-        it->seg = next_segment(ps, it->path, 0);
-        skip = it->seg + 1 >= p->n;
-        lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
-               p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
-               skip ? " (skipped: no segment of non-zero length)" : "");
-        if (skip) {
-            it->stats.paths_skipped++;
-            it->path++;
-            return 1;
-        }
-        it->seg = 0;
-        it->stats.paths++;
-        begin_path(it, p, v);
-        it->sub = PS_HOTEND;
+    int skip;
+    it->seg = next_segment(it->ps, it->path, 0);
+    skip = it->seg + 1 >= p->n;
+    lb_fmt(l, "; path %u %s %u vertices%s", (unsigned long)it->path,
+           p->role == AMP_ROLE_SUPPORT ? "support" : "object", (unsigned long)p->n,
+           skip ? " (skipped: no segment of non-zero length)" : "");
+    if (skip) {
+        it->stats.paths_skipped++;
+        it->path++;
         return 1;
     }
-    case PS_HOTEND: /* above the first layer: the other layers' temperatures, once */
+    it->seg = 0;
+    it->stats.paths++;
+    begin_path(it, p, v);
+    it->sub = PS_HOTEND;
+    return 1;
+}
+
+/* Above the first layer: the other layers' temperatures, once; the part-cooling fan from its layer on. */
+static int layer_settings(amp_gcode_iter *it, lb *l)
+{
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
+    case PS_HOTEND:
         it->sub = PS_BED;
         if (!it->path_first && !it->first_done && o->hotend_temp > 0.0 && o->hotend_temp != o->first_layer_hotend_temp)
             return temp_line(l, "M104", o->hotend_temp, " ; hot end after the first layer");
@@ -1169,7 +1169,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
                 return temp_line(l, "M140", o->bed_temp, " ; bed after the first layer");
         }
         return 0;
-    case PS_FAN:
+    default: /* PS_FAN */
         it->sub = PS_PLAN;
         if (!it->fan_on && o->fan_speed > 0.0 && it->layer >= o->fan_off_layers) {
             it->fan_on = 1;
@@ -1179,6 +1179,14 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
+    }
+}
+
+/* The travel to the path's start: plan, retract, lift, the hull's hops, descend, unretract. */
+static int travel_step(amp_gcode_iter *it, lb *l, const amp_pvert *v)
+{
+    const amp_gcode_opts *o = &it->o;
+    switch (it->sub) {
     case PS_PLAN:
         it->sub = plan_travel(it, v) ? PS_RETRACT : PS_SEGS;
         return 0;
@@ -1217,7 +1225,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
-    case PS_UNRETRACT:
+    default: /* PS_UNRETRACT */
         it->sub = PS_SEGS;
         if (!it->direct) /* the head stops where it lands (an unretract usually sits there); a direct hop flows on */
             amp_gc_plan_flush(it);
@@ -1226,21 +1234,49 @@ static int step_path(amp_gcode_iter *it, lb *l)
             return 1;
         }
         return 0;
-    default: /* PS_SEGS: it->seg is the vertex the head is at */
-        if (it->seg + 1 < p->n && next_segment(ps, it->path, it->seg) + 1 < p->n) {
-            amp_gc_arc arc;
-            int use_arc;
-            it->nxt = next_vertex(it, it->path, it->seg);
-            use_arc = o->arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, o, &arc);
-            if (use_arc)
-                it->nxt = arc.end;
-            move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
-            it->seg = it->nxt;
-            return 1;
-        }
-        it->path++;
-        it->sub = PS_COMMENT;
-        return 0;
+    }
+}
+
+/* One printing move (a segment, or a fitted arc over several); at the path's end, on to the next path. */
+static int print_step(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_pvert *v)
+{
+    /* it->seg is the vertex the head is at */
+    if (it->seg + 1 < p->n && next_segment(it->ps, it->path, it->seg) + 1 < p->n) {
+        amp_gc_arc arc;
+        int use_arc;
+        it->nxt = next_vertex(it, it->path, it->seg);
+        use_arc = it->o.arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, &it->o, &arc);
+        if (use_arc)
+            it->nxt = arc.end;
+        move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
+        it->seg = it->nxt;
+        return 1;
+    }
+    it->path++;
+    it->sub = PS_COMMENT;
+    return 0;
+}
+
+static int step_path(amp_gcode_iter *it, lb *l)
+{
+    const amp_path *p = &it->ps->paths[it->path];
+    const amp_pvert *v = amp_pathset_path_verts(it->ps, it->path);
+    switch (it->sub) {
+    case PS_COMMENT:
+        return path_comment(it, l, p, v);
+    case PS_HOTEND:
+    case PS_BED:
+    case PS_FAN:
+        return layer_settings(it, l);
+    case PS_PLAN:
+    case PS_RETRACT:
+    case PS_LIFT:
+    case PS_HULL:
+    case PS_DESCEND:
+    case PS_UNRETRACT:
+        return travel_step(it, l, v);
+    default:
+        return print_step(it, l, p, v);
     }
 }
 

@@ -1,5 +1,5 @@
 /*
- * Arc fitting for the G-code writer (SPEC §5 clean segments, `--arcs`): the
+ * Arc fitting for the G-code writer (docs/interfaces.md §5 clean segments, `--arcs`): the
  * longest run of path vertices that lies on one circle in XY, with z and the
  * deposition radius linear in the swept angle (helical arcs, as Marlin's and
  * Klipper's G2/G3 take them), within the writer's tolerances.
@@ -11,7 +11,6 @@
 #define ARC_MAX 512           /* input vertices per arc at most */
 #define ARC_MIN_R 0.5         /* mm: smaller circles are left to lines */
 #define ARC_MAX_R 1000.0      /* mm: flatter ones are lines */
-#define ARC_PI 3.14159265358979323846
 
 /* Circle through the XY projections of a, b, c; 0 when they are (nearly) collinear. */
 static int circumcircle(amp_vec3 a, amp_vec3 b, amp_vec3 c, double *cx, double *cy, double *R)
@@ -36,8 +35,8 @@ static int arc_ok(const amp_pvert *v, size_t k, size_t m, double tol, double rto
     prev = atan2(v[k].p.y - cy, v[k].p.x - cx);
     for (i = k + 1; i <= m; i++) {
         double ang = atan2(v[i].p.y - cy, v[i].p.x - cx), d = ang - prev, L;
-        d -= 2.0 * ARC_PI * floor((d + ARC_PI) / (2.0 * ARC_PI)); /* into [-pi, pi) */
-        if (fabs(hypot(v[i].p.x - cx, v[i].p.y - cy) - R) > tol || fabs(d) > 0.5 * ARC_PI)
+        d -= 2.0 * AMP_PI * floor((d + AMP_PI) / (2.0 * AMP_PI)); /* into [-pi, pi) */
+        if (fabs(hypot(v[i].p.x - cx, v[i].p.y - cy) - R) > tol || fabs(d) > 0.5 * AMP_PI)
             return 0;
         if (d != 0.0) {
             if (s == 0.0)
@@ -52,13 +51,13 @@ static int arc_ok(const amp_pvert *v, size_t k, size_t m, double tol, double rto
         sweep += d;
         prev = ang;
     }
-    if (s == 0.0 || fabs(sweep) >= 2.0 * ARC_PI - 0.1)
+    if (s == 0.0 || fabs(sweep) >= 2.0 * AMP_PI - 0.1)
         return 0;
     /* z and the deposition radius follow the swept angle linearly (a helical arc with a linear bead) */
     prev = atan2(v[k].p.y - cy, v[k].p.x - cx);
     for (i = k + 1, s = 0.0; i < m; i++) {
         double ang = atan2(v[i].p.y - cy, v[i].p.x - cx), d = ang - prev, f;
-        d -= 2.0 * ARC_PI * floor((d + ARC_PI) / (2.0 * ARC_PI));
+        d -= 2.0 * AMP_PI * floor((d + AMP_PI) / (2.0 * AMP_PI));
         s += d;
         prev = ang;
         f = s / sweep;

@@ -1,5 +1,5 @@
 /*
- * Print-time estimate of the G-code writer (SPEC §5): a look-ahead planner
+ * Print-time estimate of the G-code writer (docs/interfaces.md §5): a look-ahead planner
  * of AMP_GCODE_LOOKAHEAD blocks like the firmware's block buffer, with
  * trapezoidal speed profiles and the junction-deviation rule of Grbl/Marlin.
  * Split out of gcode.c; it only reads the options and adds to it->stats.

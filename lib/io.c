@@ -75,7 +75,7 @@ amp_status amp_file_sink(void *user, const char *data, size_t len)
 }
 
 /* Refuse a regular file larger than @p max_len before reading a byte of it: a 2 GB sparse
- * file must not be read into memory only to be rejected afterwards (issue 21). */
+ * file must not be read into memory only to be rejected afterwards. */
 static amp_status check_size(FILE *f, const char *path, size_t max_len, amp_error *err)
 {
 #if AMP_IO_POSIX

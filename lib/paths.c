@@ -1,4 +1,4 @@
-/* Print paths in memory and the `.amp` text format (SPEC §3). */
+/* Print paths in memory and the `.amp` text format (docs/interfaces.md §3). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -118,12 +118,11 @@ double amp_pathset_length(const amp_pathset *ps, int role)
 
 double amp_bead_area(double r, double h)
 {
-    const double pi = 3.14159265358979323846;
     double w = 2.0 * r;
-    /* SPEC §5: a slicer's rounded rectangle; narrower than high it is a tube */
+    /* docs/interfaces.md §5: a slicer's rounded rectangle; narrower than high it is a tube */
     if (h > 0.0 && w >= h)
-        return (w - h) * h + pi * 0.25 * h * h;
-    return pi * r * r;
+        return (w - h) * h + AMP_PI * 0.25 * h * h;
+    return AMP_PI * r * r;
 }
 
 double amp_pathset_volume(const amp_pathset *ps, int role)

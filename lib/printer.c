@@ -1,5 +1,5 @@
 /*
- * Printer profiles (SPEC §5): the built-in machines, range checks, the
+ * Printer profiles (docs/interfaces.md §5): the built-in machines, range checks, the
  * placeholder expansion of start/end G-code, and the mapping onto the G-code
  * writer's options. The `.ini` reader is in printer_ini.c.
  */

@@ -1,6 +1,6 @@
 /*
  * Reader of the printer/filament/print `.ini` files that PrusaSlicer,
- * SuperSlicer and OrcaSlicer export (SPEC §5): `key = value` lines, the
+ * SuperSlicer and OrcaSlicer export (docs/interfaces.md §5): `key = value` lines, the
  * slicers' own key names (OrcaSlicer's as aliases), the first value of a
  * multi-extruder list, C-style escapes in the G-code strings. Unknown keys
  * are collected, not fatal: a full slicer export has hundreds of keys that

@@ -498,6 +498,42 @@ amp_status amp_spline_eval_partial(const amp_spline *s, const double *par, const
 /* ---- batched evaluation ---- */
 
 /*
+ * A point of a cubic curve at t in span u[0] <= t < u[1] from its four control points @p p (x y z w each):
+ * the recurrence of NURBS Book A2.2 written out (compilers at -O2 do not unroll it), with the span's
+ * reciprocal knot differences i<j><r> = 1 / (u[1 + r] - u[1 + r - j]) given, so no division per point.
+ */
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+static inline amp_vec3 cubic_point(const double *p, const double *u, double t, double i10, double i20, double i21,
+                                   double i30, double i31, double i32)
+{
+    double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
+    double n0, n1, n2, tmp, sv, Nb[4];
+    tmp = i10;
+    n0 = r1 * tmp;
+    n1 = l1 * tmp;
+    tmp = n0 * i20;
+    n0 = r1 * tmp;
+    sv = l2 * tmp;
+    tmp = n1 * i21;
+    n1 = sv + r2 * tmp;
+    n2 = l1 * tmp;
+    tmp = n0 * i30;
+    Nb[0] = r1 * tmp;
+    sv = l3 * tmp;
+    tmp = n1 * i31;
+    Nb[1] = sv + r2 * tmp;
+    sv = l2 * tmp;
+    tmp = n2 * i32;
+    Nb[2] = sv + r3 * tmp;
+    Nb[3] = l1 * tmp;
+    return amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
+                  Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
+                  Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+}
+
+/*
  * Points of a polynomial curve at a list of parameters. The reciprocals of the
  * knot differences of Cox-de Boor (NURBS Book A2.2) depend only on the span, so
  * they are computed once per span and the per-point basis needs no division:
@@ -537,32 +573,11 @@ static inline int curve_block(const amp_spline *s, const double *par, size_t n, 
                 }
             }
             if (k == 4) {
-                /* the cubic recurrence written out (compilers at -O2 do not unroll it) */
-                const double *I = inv, *u = U + cur;
-                double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
-                double n0, n1, n2, tmp, sv;
-                tmp = I[AMP_SPLINE_MAX_ORDER];
-                n0 = r1 * tmp;
-                n1 = l1 * tmp;
-                tmp = n0 * I[2 * AMP_SPLINE_MAX_ORDER];
-                n0 = r1 * tmp;
-                sv = l2 * tmp;
-                tmp = n1 * I[2 * AMP_SPLINE_MAX_ORDER + 1];
-                n1 = sv + r2 * tmp;
-                n2 = l1 * tmp;
-                tmp = n0 * I[3 * AMP_SPLINE_MAX_ORDER];
-                Nb[0] = r1 * tmp;
-                sv = l3 * tmp;
-                tmp = n1 * I[3 * AMP_SPLINE_MAX_ORDER + 1];
-                Nb[1] = sv + r2 * tmp;
-                sv = l2 * tmp;
-                tmp = n2 * I[3 * AMP_SPLINE_MAX_ORDER + 2];
-                Nb[2] = sv + r3 * tmp;
-                Nb[3] = l1 * tmp;
-                p = s->cp + 4 * (cur - 3);
-                out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
-                                Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
-                                Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+                const double *I = inv;
+                out[i] = cubic_point(s->cp + 4 * (cur - 3), U + cur, t, I[AMP_SPLINE_MAX_ORDER],
+                                     I[2 * AMP_SPLINE_MAX_ORDER], I[2 * AMP_SPLINE_MAX_ORDER + 1],
+                                     I[3 * AMP_SPLINE_MAX_ORDER], I[3 * AMP_SPLINE_MAX_ORDER + 1],
+                                     I[3 * AMP_SPLINE_MAX_ORDER + 2]);
                 continue;
             }
             basis_inv(U, cur, k, t, inv, Nb);
@@ -668,32 +683,7 @@ static inline int curve_block_indexed(const amp_spline *s, const span_index *x, 
             cur = span_index_find(x, U, t);
         I = x->inv + cur * x->ntri;
         if (k == 4) {
-            /* the cubic recurrence written out, as curve_block */
-            const double *u = U + cur;
-            double l1 = t - u[0], l2 = t - u[-1], l3 = t - u[-2], r1 = u[1] - t, r2 = u[2] - t, r3 = u[3] - t;
-            double n0, n1, n2, tmp, sv;
-            tmp = I[0];
-            n0 = r1 * tmp;
-            n1 = l1 * tmp;
-            tmp = n0 * I[1];
-            n0 = r1 * tmp;
-            sv = l2 * tmp;
-            tmp = n1 * I[2];
-            n1 = sv + r2 * tmp;
-            n2 = l1 * tmp;
-            tmp = n0 * I[3];
-            Nb[0] = r1 * tmp;
-            sv = l3 * tmp;
-            tmp = n1 * I[4];
-            Nb[1] = sv + r2 * tmp;
-            sv = l2 * tmp;
-            tmp = n2 * I[5];
-            Nb[2] = sv + r3 * tmp;
-            Nb[3] = l1 * tmp;
-            p = s->cp + 4 * (cur - 3);
-            out[i] = amp_v3(Nb[0] * p[0] + Nb[1] * p[4] + Nb[2] * p[8] + Nb[3] * p[12],
-                            Nb[0] * p[1] + Nb[1] * p[5] + Nb[2] * p[9] + Nb[3] * p[13],
-                            Nb[0] * p[2] + Nb[1] * p[6] + Nb[2] * p[10] + Nb[3] * p[14]);
+            out[i] = cubic_point(s->cp + 4 * (cur - 3), U + cur, t, I[0], I[1], I[2], I[3], I[4], I[5]);
             continue;
         }
         /* NURBS Book A2.2 with the span's reciprocals (basis_inv's recurrence) */
@@ -798,108 +788,115 @@ amp_status amp_spline_eval_list(const amp_spline *s, const double *par, size_t n
     return AMP_OK;
 }
 
+/* Each grid line's span and basis, once: shared by every point on it. */
+typedef struct grid_basis {
+    size_t ng[AMP_SPLINE_MAX_DIM];    /* grid lines per direction (1 beyond dim) */
+    size_t *span[AMP_SPLINE_MAX_DIM]; /* knot span per grid line */
+    double *bas[AMP_SPLINE_MAX_DIM];  /* order non-zero basis functions per grid line */
+} grid_basis;
+
+static amp_status grid_bases(const amp_spline *s, const double *const *params, const size_t *n, grid_basis *g,
+                             amp_error *err)
+{
+    int d;
+    for (d = 0; d < s->dim; d++) {
+        size_t i;
+        int k = s->order[d];
+        g->ng[d] = n[d];
+        g->span[d] = amp_calloc(s->alloc, g->ng[d] ? g->ng[d] : 1, sizeof(size_t));
+        g->bas[d] = amp_calloc(s->alloc, g->ng[d] ? g->ng[d] : 1, (size_t)k * sizeof(double));
+        if (!g->span[d] || !g->bas[d])
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for grid basis");
+        for (i = 0; i < g->ng[d]; i++) {
+            double t = params[d][i];
+            if (isnan(t))
+                return amp_fail(err, AMP_ERR_RANGE, 0, "NaN parameter in grid direction %d", d + 1);
+            t = amp_spl_clamp(s, d, t);
+            g->span[d][i] = amp_spl_span(s->knots[d], k, s->count[d], t, i ? g->span[d][i - 1] : 0);
+            amp_spl_basis(s->knots[d], g->span[d][i], k, t, g->bas[d] + i * (size_t)k);
+        }
+    }
+    return AMP_OK;
+}
+
+/* Row o of the grid (one (v, w) grid point, every u): the net contracted over v and w into Q for the u columns
+ * cmin..cmax that any grid point touches, then each point from its k0 columns of Q. */
+static void grid_row(const amp_spline *s, const grid_basis *g, long o, size_t cmin, size_t cmax, double *Q,
+                     amp_vec3 *out)
+{
+    int dim = s->dim, k0 = s->order[0], k1 = dim > 1 ? s->order[1] : 1, k2 = dim > 2 ? s->order[2] : 1, a, b, c;
+    size_t n0c = s->count[0], i1 = (size_t)o % g->ng[1], i2 = (size_t)o / g->ng[1], i0, col;
+    size_t f1 = dim > 1 ? g->span[1][i1] + 1 - (size_t)k1 : 0, f2 = dim > 2 ? g->span[2][i2] + 1 - (size_t)k2 : 0;
+    const double *N1 = dim > 1 ? g->bas[1] + i1 * (size_t)k1 : NULL, *N2 = dim > 2 ? g->bas[2] + i2 * (size_t)k2 : NULL;
+    amp_vec3 *row = out + (size_t)o * g->ng[0];
+    for (col = cmin; col <= cmax; col++) {
+        double *q = Q + 4 * col;
+        q[0] = q[1] = q[2] = q[3] = 0.0;
+        for (c = 0; c < k2; c++)
+            for (b = 0; b < k1; b++) {
+                double f = (N1 ? N1[b] : 1.0) * (N2 ? N2[c] : 1.0);
+                const double *p = s->cp + 4 * (col + n0c * (f1 + (size_t)b + s->count[1] * (f2 + (size_t)c)));
+                q[0] += f * p[0];
+                q[1] += f * p[1];
+                q[2] += f * p[2];
+                q[3] += f * p[3];
+            }
+    }
+    for (i0 = 0; i0 < g->ng[0]; i0++) {
+        const double *N0 = g->bas[0] + i0 * (size_t)k0, *q = Q + 4 * (g->span[0][i0] + 1 - (size_t)k0);
+        double h[4] = {0, 0, 0, 0};
+        for (a = 0; a < k0; a++, q += 4) {
+            h[0] += N0[a] * q[0];
+            h[1] += N0[a] * q[1];
+            h[2] += N0[a] * q[2];
+            h[3] += N0[a] * q[3];
+        }
+        row[i0] = project(s, h);
+    }
+}
+
 amp_status amp_spline_eval_grid(const amp_spline *s, const double *const *params, const size_t *n, amp_vec3 *out,
                                 amp_error *err)
 {
-    size_t ng[AMP_SPLINE_MAX_DIM] = {1, 1, 1}, *span[AMP_SPLINE_MAX_DIM] = {NULL, NULL, NULL};
-    double *bas[AMP_SPLINE_MAX_DIM] = {NULL, NULL, NULL}, *scratch = NULL;
-    int d, nthreads = 1, dim = s->dim;
+    grid_basis g = {{1, 1, 1}, {NULL, NULL, NULL}, {NULL, NULL, NULL}};
+    double *scratch = NULL;
+    int d, nthreads = 1, empty = 0;
     long outer, o;
-    amp_status st = AMP_OK;
-    size_t n0c = s->count[0], cmin = 0, cmax = 0;
+    amp_status st;
+    size_t n0c = s->count[0], cmin = 0, cmax = 0, i;
 #ifdef _OPENMP
     nthreads = omp_get_max_threads();
 #endif
-    for (d = 0; d < dim; d++) {
-        size_t i;
-        int k = s->order[d];
-        ng[d] = n[d];
-        span[d] = amp_calloc(s->alloc, ng[d] ? ng[d] : 1, sizeof(size_t));
-        bas[d] = amp_calloc(s->alloc, ng[d] ? ng[d] : 1, (size_t)k * sizeof(double));
-        if (!span[d] || !bas[d]) {
-            st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for grid basis");
-            goto done;
-        }
-        /* each grid line's span and basis once: shared by every point on it */
-        for (i = 0; i < ng[d]; i++) {
-            double t = params[d][i];
-            if (isnan(t)) {
-                st = amp_fail(err, AMP_ERR_RANGE, 0, "NaN parameter in grid direction %d", d + 1);
-                goto done;
-            }
-            t = amp_spl_clamp(s, d, t);
-            span[d][i] = amp_spl_span(s->knots[d], k, s->count[d], t, i ? span[d][i - 1] : 0);
-            amp_spl_basis(s->knots[d], span[d][i], k, t, bas[d] + i * (size_t)k);
-        }
-    }
+    st = grid_bases(s, params, n, &g, err);
     /* per thread: the u-column of the net contracted over v and w for one (v, w) grid point */
-    scratch = amp_calloc(s->alloc, (size_t)nthreads * n0c, 4 * sizeof(double));
-    if (!scratch) {
+    if (st == AMP_OK && !(scratch = amp_calloc(s->alloc, (size_t)nthreads * n0c, 4 * sizeof(double))))
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for grid scratch");
-        goto done;
-    }
-    for (d = 0; d < dim; d++)
-        if (ng[d] == 0)
-            goto done;
-    {
+    for (d = 0; d < s->dim; d++)
+        empty |= g.ng[d] == 0;
+    if (st == AMP_OK && !empty) {
         /* the u columns any grid point touches (parameters need not be sorted) */
-        size_t i;
-        cmin = span[0][0];
-        cmax = span[0][0];
-        for (i = 1; i < ng[0]; i++) {
-            cmin = span[0][i] < cmin ? span[0][i] : cmin;
-            cmax = span[0][i] > cmax ? span[0][i] : cmax;
+        cmin = cmax = g.span[0][0];
+        for (i = 1; i < g.ng[0]; i++) {
+            cmin = g.span[0][i] < cmin ? g.span[0][i] : cmin;
+            cmax = g.span[0][i] > cmax ? g.span[0][i] : cmax;
         }
         cmin = cmin + 1 - (size_t)s->order[0];
-    }
-    outer = (long)(ng[1] * ng[2]);
+        outer = (long)(g.ng[1] * g.ng[2]);
 #ifdef _OPENMP
-#pragma omp parallel for schedule(static) if (outer > 1 && ng[0] * (size_t)outer > 4096)
+#pragma omp parallel for schedule(static) if (outer > 1 && g.ng[0] * (size_t)outer > 4096)
 #endif
-    for (o = 0; o < outer; o++) {
-        int tid = 0, k0 = s->order[0], k1 = dim > 1 ? s->order[1] : 1, k2 = dim > 2 ? s->order[2] : 1, a, b, c;
-        size_t i1 = (size_t)o % ng[1], i2 = (size_t)o / ng[1], i0, col;
-        size_t f1 = dim > 1 ? span[1][i1] + 1 - (size_t)k1 : 0, f2 = dim > 2 ? span[2][i2] + 1 - (size_t)k2 : 0;
-        const double *N1 = dim > 1 ? bas[1] + i1 * (size_t)k1 : NULL, *N2 = dim > 2 ? bas[2] + i2 * (size_t)k2 : NULL;
-        double *Q;
-        amp_vec3 *row = out + (size_t)o * ng[0];
+        for (o = 0; o < outer; o++) {
+            int tid = 0;
 #ifdef _OPENMP
-        tid = omp_get_thread_num();
+            tid = omp_get_thread_num();
 #endif
-        Q = scratch + (size_t)tid * n0c * 4;
-        /* contract over v and w once for the u columns this row touches */
-        {
-            for (col = cmin; col <= cmax; col++) {
-                double *q = Q + 4 * col;
-                q[0] = q[1] = q[2] = q[3] = 0.0;
-                for (c = 0; c < k2; c++)
-                    for (b = 0; b < k1; b++) {
-                        double f = (N1 ? N1[b] : 1.0) * (N2 ? N2[c] : 1.0);
-                        const double *p = s->cp + 4 * (col + n0c * (f1 + (size_t)b + s->count[1] * (f2 + (size_t)c)));
-                        q[0] += f * p[0];
-                        q[1] += f * p[1];
-                        q[2] += f * p[2];
-                        q[3] += f * p[3];
-                    }
-            }
-        }
-        for (i0 = 0; i0 < ng[0]; i0++) {
-            const double *N0 = bas[0] + i0 * (size_t)k0, *q = Q + 4 * (span[0][i0] + 1 - (size_t)k0);
-            double h[4] = {0, 0, 0, 0};
-            for (a = 0; a < k0; a++, q += 4) {
-                h[0] += N0[a] * q[0];
-                h[1] += N0[a] * q[1];
-                h[2] += N0[a] * q[2];
-                h[3] += N0[a] * q[3];
-            }
-            row[i0] = project(s, h);
+            grid_row(s, &g, o, cmin, cmax, scratch + (size_t)tid * n0c * 4, out);
         }
     }
-done:
     amp_free(s->alloc, scratch);
     for (d = 0; d < AMP_SPLINE_MAX_DIM; d++) {
-        amp_free(s->alloc, span[d]);
-        amp_free(s->alloc, bas[d]);
+        amp_free(s->alloc, g.span[d]);
+        amp_free(s->alloc, g.bas[d]);
     }
     return st;
 }

@@ -1,4 +1,4 @@
-/* The .spl text format (SPEC §4): reader with line-numbered errors, full-precision writer. */
+/* The .spl text format (docs/interfaces.md §4): reader with line-numbered errors, full-precision writer. */
 #include <errno.h>
 #include <limits.h>
 #include <math.h>

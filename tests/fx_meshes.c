@@ -4,7 +4,6 @@
 
 #include "fx_meshes.h"
 
-#define FX_PI 3.14159265358979323846
 
 /* Add triangle (a, b, c) turned so that its normal points along @p out. */
 static amp_status tri_out(amp_mesh *m, uint32_t a, uint32_t b, uint32_t c, amp_vec3 out)
@@ -28,7 +27,7 @@ amp_status fx_sphere(amp_mesh *m, amp_vec3 c, double r, int nu, int nv)
     /* latitude rings 1..nv-1, then the two poles */
     for (j = 1; j < nv; j++)
         for (i = 0; i < nu; i++) {
-            double th = FX_PI * j / nv, ph = 2 * FX_PI * i / nu;
+            double th = AMP_PI * j / nv, ph = 2 * AMP_PI * i / nu;
             if ((st = amp_mesh_add_vertex(m, amp_v3(c.x + r * sin(th) * cos(ph), c.y + r * sin(th) * sin(ph),
                                                     c.z + r * cos(th)),
                                           NULL, NULL)) != AMP_OK)
@@ -68,7 +67,7 @@ amp_status fx_torus(amp_mesh *m, amp_vec3 c, double R, double r, int nu, int nv)
     amp_status st;
     for (i = 0; i < nu; i++)
         for (j = 0; j < nv; j++) {
-            double u = 2 * FX_PI * i / nu, v = 2 * FX_PI * j / nv, rho = R + r * cos(v);
+            double u = 2 * AMP_PI * i / nu, v = 2 * AMP_PI * j / nv, rho = R + r * cos(v);
             if ((st = amp_mesh_add_vertex(m, amp_v3(c.x + rho * cos(u), c.y + rho * sin(u), c.z + r * sin(v)), NULL,
                                           NULL)) != AMP_OK)
                 return st;
@@ -77,7 +76,7 @@ amp_status fx_torus(amp_mesh *m, amp_vec3 c, double R, double r, int nu, int nv)
     for (i = 0; i < nu; i++)
         for (j = 0; j < nv; j++) {
             uint32_t a = TV(i, j), b = TV(i + 1, j), d = TV(i, j + 1), e = TV(i + 1, j + 1);
-            double u = 2 * FX_PI * (i + 0.5) / nu;
+            double u = 2 * AMP_PI * (i + 0.5) / nu;
             amp_vec3 axis = amp_v3(c.x + R * cos(u), c.y + R * sin(u), c.z);
             if ((st = tri_out(m, a, b, e, amp_v3_sub(centroid(m, a, b, e), axis))) != AMP_OK ||
                 (st = tri_out(m, a, e, d, amp_v3_sub(centroid(m, a, e, d), axis))) != AMP_OK)

@@ -10,7 +10,8 @@
 
 /** UV sphere of radius @p r at @p c with @p nu longitudes and @p nv latitude bands. */
 amp_status fx_sphere(amp_mesh *m, amp_vec3 c, double r, int nu, int nv);
-/** Torus around the z axis through @p c: ring radius @p R, tube radius @p r, @p nu x @p nv quads. */
+/** Torus around the z axis through @p c: ring radius @p R, tube radius @p r, @p nu x @p nv quads each split in
+ *  two, outward: real non-convex geometry with a through hole. Vertex (i, j) is the (i * nv + j)-th added. */
 amp_status fx_torus(amp_mesh *m, amp_vec3 c, double R, double r, int nu, int nv);
 /** Voxel solid: cell (i,j,k) of size @p s filled when filled(i,j,k,user); boundary faces only. */
 amp_status fx_voxels(amp_mesh *m, int nx, int ny, int nz, double s, int (*filled)(int, int, int, void *),

@@ -6,7 +6,6 @@
 
 #include "fx_parts.h"
 
-#define FX_PI 3.14159265358979323846
 
 /* crossing point of grid edge (i, j): one vertex per edge, found by hashing */
 typedef struct edge_map {

@@ -7,32 +7,8 @@
 
 #include "meshfix.h"
 
-#define PI 3.14159265358979323846
 
-amp_status amp_fix_torus(amp_mesh *m, double R, double r, int nu, int nv)
-{
-    int i, j;
-    uint32_t base = (uint32_t)m->nverts;
-    amp_status st = AMP_OK;
-    for (i = 0; i < nu && st == AMP_OK; i++)
-        for (j = 0; j < nv && st == AMP_OK; j++) {
-            double u = 2 * PI * i / nu, v = 2 * PI * j / nv;
-            st = amp_mesh_add_vertex(m, amp_v3((R + r * cos(v)) * cos(u), (R + r * cos(v)) * sin(u), r * sin(v)),
-                                     NULL, NULL);
-        }
-    for (i = 0; i < nu && st == AMP_OK; i++)
-        for (j = 0; j < nv && st == AMP_OK; j++) {
-            uint32_t a = base + (uint32_t)(i * nv + j), b = base + (uint32_t)(((i + 1) % nu) * nv + j),
-                     c = base + (uint32_t)(((i + 1) % nu) * nv + (j + 1) % nv),
-                     d = base + (uint32_t)(i * nv + (j + 1) % nv);
-            st = amp_mesh_add_tri(m, a, b, c, NULL);
-            if (st == AMP_OK)
-                st = amp_mesh_add_tri(m, a, c, d, NULL);
-        }
-    return st;
-}
-
-amp_status amp_fix_box(amp_mesh *m, amp_vec3 lo, amp_vec3 hi, int inward)
+amp_status fx_box(amp_mesh *m, amp_vec3 lo, amp_vec3 hi, int inward)
 {
     /* corners: bit 0 = x, bit 1 = y, bit 2 = z; faces listed counter-clockwise from outside */
     static const int f[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
@@ -48,7 +24,7 @@ amp_status amp_fix_box(amp_mesh *m, amp_vec3 lo, amp_vec3 hi, int inward)
     return st;
 }
 
-double amp_fix_rand(unsigned long long *s)
+double fx_rand(unsigned long long *s)
 {
     unsigned long long x = *s;
     x ^= x >> 12;
@@ -58,13 +34,13 @@ double amp_fix_rand(unsigned long long *s)
     return (double)((x * 0x2545F4914F6CDD1DULL) >> 11) / 9007199254740992.0;
 }
 
-double amp_fix_torus_sdf(amp_vec3 p, double R, double r)
+double fx_torus_sdf(amp_vec3 p, double R, double r)
 {
     double q = sqrt(p.x * p.x + p.y * p.y) - R;
     return sqrt(q * q + p.z * p.z) - r;
 }
 
-double amp_fix_mesh_dist(const amp_mesh *m, amp_vec3 p)
+double fx_mesh_dist(const amp_mesh *m, amp_vec3 p)
 {
     double best = HUGE_VAL;
     size_t i;
@@ -89,20 +65,20 @@ double amp_fix_mesh_dist(const amp_mesh *m, amp_vec3 p)
 
 static amp_vec3 helix_c(double t)
 {
-    double z0 = 5 * PI / sqrt(PI * PI + 1);
-    return amp_v3(20 * cos(2 * PI * t), 20 * sin(2 * PI * t), z0 + 40 * t);
+    double z0 = 5 * AMP_PI / sqrt(AMP_PI * AMP_PI + 1);
+    return amp_v3(20 * cos(2 * AMP_PI * t), 20 * sin(2 * AMP_PI * t), z0 + 40 * t);
 }
 
-amp_vec3 amp_fix_helix_point(double t, double u, double v)
+amp_vec3 fx_helix_point(double t, double u, double v)
 {
     /* frame from derivatives: T = c'/|c'|, N = -(horizontal radial), B = T x N */
-    amp_vec3 d1 = amp_v3(-40 * PI * sin(2 * PI * t), 40 * PI * cos(2 * PI * t), 40);
-    amp_vec3 T = amp_v3_normalize(d1), N = amp_v3(-cos(2 * PI * t), -sin(2 * PI * t), 0);
+    amp_vec3 d1 = amp_v3(-40 * AMP_PI * sin(2 * AMP_PI * t), 40 * AMP_PI * cos(2 * AMP_PI * t), 40);
+    amp_vec3 T = amp_v3_normalize(d1), N = amp_v3(-cos(2 * AMP_PI * t), -sin(2 * AMP_PI * t), 0);
     amp_vec3 B = amp_v3_cross(T, N);
     return amp_v3_add(helix_c(t), amp_v3_add(amp_v3_scale(N, u), amp_v3_scale(B, v)));
 }
 
-double amp_fix_helix_axis_dist(amp_vec3 p, double *tc)
+double fx_helix_axis_dist(amp_vec3 p, double *tc)
 {
     /* coarse scan then golden-section refinement of |p - c(t)|² */
     double best = HUGE_VAL, bt = 0, lo, hi;
@@ -138,7 +114,7 @@ static size_t uf_find(size_t *par, size_t x)
     return x;
 }
 
-size_t amp_fix_components(const amp_mesh *m)
+size_t fx_components(const amp_mesh *m)
 {
     size_t *par = calloc(m->nverts ? m->nverts : 1, sizeof *par), i, n = 0;
     unsigned char *used = calloc(m->nverts ? m->nverts : 1, 1);

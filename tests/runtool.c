@@ -7,14 +7,14 @@
 
 #include "runtool.h"
 
-int amp_test_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap)
+int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap)
 {
     char cmd[4096], errfile[256], infile[256];
     const char *tool = getenv("AMP_TOOL");
     FILE *p;
     size_t n = 0;
     int c;
-    /* per-process scratch names, not amp_test_tmp(): it recycles static buffers the caller may still hold */
+    /* per-process scratch names, not fx_tmp(): it recycles static buffers the caller may still hold */
     snprintf(errfile, sizeof errfile, "/tmp/ampath-test-%ld-tool-stderr.txt", (long)getpid());
     snprintf(infile, sizeof infile, "/tmp/ampath-test-%ld-tool-stdin.txt", (long)getpid());
     if (stdin_text) {
@@ -41,7 +41,7 @@ int amp_test_run_tool_ex(const char *args, const char *stdin_text, int with_stde
     return WIFEXITED(c) ? WEXITSTATUS(c) : -1;
 }
 
-int amp_test_run_tool(const char *args, char *out, size_t cap)
+int fx_run_tool(const char *args, char *out, size_t cap)
 {
-    return amp_test_run_tool_ex(args, NULL, 0, out, cap);
+    return fx_run_tool_ex(args, NULL, 0, out, cap);
 }

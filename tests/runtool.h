@@ -10,12 +10,12 @@
  * cap - 1 bytes; @p out may be NULL with cap 0; stderr is discarded) and
  * return its exit status (-1 if it did not exit).
  */
-int amp_test_run_tool(const char *args, char *out, size_t cap);
+int fx_run_tool(const char *args, char *out, size_t cap);
 
 /**
- * As amp_test_run_tool() but feeding @p stdin_text (NULL: nothing) on stdin,
+ * As fx_run_tool() but feeding @p stdin_text (NULL: nothing) on stdin,
  * and with @p with_stderr non-zero capturing stderr after stdout into @p out.
  */
-int amp_test_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap);
+int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap);
 
 #endif

@@ -19,8 +19,8 @@ static amp_bvh *build(const amp_mesh *m)
 
 static amp_vec3 rand_point(unsigned long long *s, double half)
 {
-    return amp_v3((2 * amp_fix_rand(s) - 1) * half, (2 * amp_fix_rand(s) - 1) * half,
-                  (2 * amp_fix_rand(s) - 1) * half * 0.4);
+    return amp_v3((2 * fx_rand(s) - 1) * half, (2 * fx_rand(s) - 1) * half,
+                  (2 * fx_rand(s) - 1) * half * 0.4);
 }
 
 START_TEST(ray_through_torus_hits_four_times_alternating)
@@ -39,7 +39,7 @@ START_TEST(ray_through_torus_hits_four_times_alternating)
     xs[2] = -xs[1];
     xs[3] = -xs[0];
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     b = build(&m);
     ck_assert_uint_eq(amp_bvh_triangles(b), m.ntris);
     ck_assert_uint_eq(amp_bvh_flipped(b), 0);
@@ -66,7 +66,7 @@ START_TEST(ray_through_torus_hits_four_times_alternating)
 }
 END_TEST
 
-static double brute_dist(const amp_mesh *m, amp_vec3 p) { return amp_fix_mesh_dist(m, p); }
+static double brute_dist(const amp_mesh *m, amp_vec3 p) { return fx_mesh_dist(m, p); }
 
 START_TEST(closest_point_matches_brute_force)
 {
@@ -75,7 +75,7 @@ START_TEST(closest_point_matches_brute_force)
     unsigned long long s = 12345;
     int k;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 48, 24), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 48, 24), AMP_OK);
     b = build(&m);
     for (k = 0; k < 300; k++) {
         amp_vec3 p = rand_point(&s, 35), q;
@@ -85,7 +85,7 @@ START_TEST(closest_point_matches_brute_force)
         ck_assert_near(amp_v3_dist(p, q), d, 1e-9);
         ck_assert_uint_lt(t, m.ntris);
         /* inscribed tessellation: tube chord 5(1-cos(pi/24)) + ring chord 25(1-cos(pi/48)) < 0.1 mm */
-        ck_assert_near(d, fabs(amp_fix_torus_sdf(p, TR, Tr)), 0.1);
+        ck_assert_near(d, fabs(fx_torus_sdf(p, TR, Tr)), 0.1);
     }
     amp_bvh_free(b);
     amp_mesh_free(&m);
@@ -100,7 +100,7 @@ START_TEST(hierarchical_winding_number_matches_exact)
     double maxerr = 0;
     int k;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     b = build(&m);
     for (k = 0; k < 400; k++) {
         amp_vec3 p = rand_point(&s, 40);
@@ -125,7 +125,7 @@ static void classify_against_torus(const amp_mesh *m, double margin, size_t *wro
     *wrong = *tested = 0;
     for (k = 0; k < 3000; k++) {
         amp_vec3 p = rand_point(&s, 30);
-        double sd = amp_fix_torus_sdf(p, TR, Tr);
+        double sd = fx_torus_sdf(p, TR, Tr);
         if (fabs(sd) < margin)
             continue;
         (*tested)++;
@@ -141,7 +141,7 @@ START_TEST(inside_test_is_right_on_torus_with_holes_and_flips)
     amp_error err;
     amp_mesh_edge_report er;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     classify_against_torus(&m, 0.1, &wrong, &tested);
     ck_assert_uint_gt(tested, 2000);
     ck_assert_uint_eq(wrong, 0);
@@ -171,8 +171,8 @@ START_TEST(inward_inner_shell_is_a_cavity_not_flipped)
     amp_mesh m;
     amp_bvh *b;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_box(&m, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
-    ck_assert_int_eq(amp_fix_box(&m, amp_v3(3, 3, 3), amp_v3(7, 7, 7), 1), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(3, 3, 3), amp_v3(7, 7, 7), 1), AMP_OK);
     ck_assert_near(amp_mesh_volume(&m), 1000 - 64, 1e-9);
     b = build(&m);
     ck_assert_uint_eq(amp_bvh_flipped(b), 0);
@@ -191,7 +191,7 @@ START_TEST(concurrent_queries_match_serial)
     amp_bvh *b;
     int in[2000], k, bad = 0;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     b = build(&m);
 #pragma omp parallel for
     for (k = 0; k < 2000; k++) {
@@ -220,7 +220,7 @@ static int clip_ok(const amp_pathset *ps, const amp_mesh *m, const amp_pvert *in
         const amp_pvert *v = amp_pathset_path_verts(ps, i);
         size_t n = ps->paths[i].n;
         for (k = 0; k < n; k++)
-            if (amp_fix_torus_sdf(v[k].p, TR, Tr) > tol)
+            if (fx_torus_sdf(v[k].p, TR, Tr) > tol)
                 return 0;
         for (k = 0; k < n; k += n - 1) {
             if (!(amp_v3_dist(v[k].p, in[0].p) == 0 || amp_v3_dist(v[k].p, in[nin - 1].p) == 0) &&
@@ -244,7 +244,7 @@ START_TEST(clip_straight_line_through_torus_gives_two_exact_pieces)
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&whole, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     b = build(&m);
     for (k = 0; k < 7; k++) {
         line[k].p = amp_v3(-40 + 80 * k / 6.0, 0.21, 0.37);
@@ -285,11 +285,11 @@ START_TEST(clip_circle_in_torus_with_missing_triangle_stays_whole)
     int k;
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
-    ck_assert_int_eq(amp_fix_torus(&m, TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
     m.tris[100] = m.tris[--m.ntris];
     b = build(&m);
     for (k = 0; k <= 200; k++) {
-        double u = 2 * 3.14159265358979323846 * k / 200;
+        double u = 2 * AMP_PI * k / 200;
         c[k].p = amp_v3((TR + 3) * cos(u), (TR + 3) * sin(u), 1.0);
         c[k].r = 0.4;
     }
@@ -324,9 +324,9 @@ START_TEST(clip_helix_field_curve_to_helix_mesh)
     b = build(&m);
     c = malloc(n * sizeof *c);
     for (i = 0; i < n; i++) {
-        double t = -0.05 + 1.1 * (double)i / (double)(n - 1), u = 7 * sin(5 * 3.14159265358979323846 * t);
+        double t = -0.05 + 1.1 * (double)i / (double)(n - 1), u = 7 * sin(5 * AMP_PI * t);
         int in = t >= 0 && t <= 1 && u * u + 1 < 25;
-        c[i].p = amp_fix_helix_point(t, u, 1);
+        c[i].p = fx_helix_point(t, u, 1);
         c[i].r = 0.5;
         expect += in && !was_in;
         was_in = in;
@@ -340,15 +340,15 @@ START_TEST(clip_helix_field_curve_to_helix_mesh)
         for (k = 0; k < nv; k++) {
             double t;
             /* inside the mesh, hence inside the exact solid up to the mesh tolerance (0.05 mm, test_mesh.c) */
-            ck_assert_msg(amp_bvh_winding_exact(b, v[k].p) > 0.5 || amp_fix_mesh_dist(&m, v[k].p) < 1e-9,
+            ck_assert_msg(amp_bvh_winding_exact(b, v[k].p) > 0.5 || fx_mesh_dist(&m, v[k].p) < 1e-9,
                           "vertex outside the mesh");
-            ck_assert_msg(amp_fix_helix_axis_dist(v[k].p, &t) <= 5 + 0.05, "vertex %g outside the helix solid",
-                          amp_fix_helix_axis_dist(v[k].p, &t) - 5);
+            ck_assert_msg(fx_helix_axis_dist(v[k].p, &t) <= 5 + 0.05, "vertex %g outside the helix solid",
+                          fx_helix_axis_dist(v[k].p, &t) - 5);
         }
         /* both ends are cut points on the surface */
-        ck_assert_msg(amp_fix_mesh_dist(&m, v[0].p) <= 1e-9, "start %g from the surface", amp_fix_mesh_dist(&m, v[0].p));
-        ck_assert_msg(amp_fix_mesh_dist(&m, v[nv - 1].p) <= 1e-9, "end %g from the surface",
-                      amp_fix_mesh_dist(&m, v[nv - 1].p));
+        ck_assert_msg(fx_mesh_dist(&m, v[0].p) <= 1e-9, "start %g from the surface", fx_mesh_dist(&m, v[0].p));
+        ck_assert_msg(fx_mesh_dist(&m, v[nv - 1].p) <= 1e-9, "end %g from the surface",
+                      fx_mesh_dist(&m, v[nv - 1].p));
     }
     free(c);
     amp_bvh_free(b);
@@ -380,18 +380,18 @@ static Suite *bvh_suite(void)
 {
     Suite *s = suite_create("bvh");
     TCase *tc = tcase_create("bvh");
-    AMP_ADD_TEST(tc, ray_through_torus_hits_four_times_alternating);
-    AMP_ADD_TEST(tc, closest_point_matches_brute_force);
-    AMP_ADD_TEST(tc, hierarchical_winding_number_matches_exact);
-    AMP_ADD_TEST(tc, inside_test_is_right_on_torus_with_holes_and_flips);
-    AMP_ADD_TEST(tc, inward_inner_shell_is_a_cavity_not_flipped);
-    AMP_ADD_TEST(tc, concurrent_queries_match_serial);
-    AMP_ADD_TEST(tc, clip_straight_line_through_torus_gives_two_exact_pieces);
-    AMP_ADD_TEST(tc, clip_circle_in_torus_with_missing_triangle_stays_whole);
-    AMP_ADD_TEST(tc, clip_helix_field_curve_to_helix_mesh);
-    AMP_ADD_TEST(tc, bvh_rejects_empty_and_degenerate_meshes);
+    tcase_add_test(tc, ray_through_torus_hits_four_times_alternating);
+    tcase_add_test(tc, closest_point_matches_brute_force);
+    tcase_add_test(tc, hierarchical_winding_number_matches_exact);
+    tcase_add_test(tc, inside_test_is_right_on_torus_with_holes_and_flips);
+    tcase_add_test(tc, inward_inner_shell_is_a_cavity_not_flipped);
+    tcase_add_test(tc, concurrent_queries_match_serial);
+    tcase_add_test(tc, clip_straight_line_through_torus_gives_two_exact_pieces);
+    tcase_add_test(tc, clip_circle_in_torus_with_missing_triangle_stays_whole);
+    tcase_add_test(tc, clip_helix_field_curve_to_helix_mesh);
+    tcase_add_test(tc, bvh_rejects_empty_and_degenerate_meshes);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(bvh_suite)
+FX_TEST_MAIN(bvh_suite)

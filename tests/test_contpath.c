@@ -182,12 +182,12 @@ static void check_section_fig(const amp_mesh *m, double z, double r, amp_grid_ki
             ck_assert_msg(amp_contpath_region(&khat, &reg, z, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
             ck_assert_uint_eq(st.strokes - strokes_before, 1); /* exactly one stroke per region */
             ck_assert_uint_eq(ps.npaths - before, 1);
-            ck_assert_msg(amp_pathset_stroke_check(&ps, before, &isl, 1e-9, &rep, &err) == AMP_OK, "z %g: %s", z,
+            ck_assert_msg(amp_check_path_stroke(&ps, before, &isl, 1e-9, &rep, &err) == AMP_OK, "z %g: %s", z,
                           err.msg);
             ck_assert(rep.closed);
             ck_assert_uint_gt(rep.segments, 10);
             /* and within the clipping region R̃ itself */
-            ck_assert_msg(amp_pathset_stroke_check(&ps, before, &reg, 1e-7, &rep, &err) == AMP_OK, "%s", err.msg);
+            ck_assert_msg(amp_check_path_stroke(&ps, before, &reg, 1e-7, &rep, &err) == AMP_OK, "%s", err.msg);
             if (fig) {
                 fig->overlap = fmax(fig->overlap, patch_bead_overlap(&ps, before, &reg, r));
                 fig->missed += lattice_samples_missed(&khat, &reg, &ps, before);
@@ -437,7 +437,7 @@ START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
                       st.pseudo_length, st.infill_length);
         ck_assert_near(st.printed_length + st.pseudo_length, amp_pathset_length(&ps, AMP_ROLE_OBJECT), 1e-6);
         for (i = 0; i < ps.npaths; i++)
-            ck_assert_msg(amp_pathset_stroke_check(&ps, i, NULL, 0, NULL, &err) == AMP_OK, "%s path %lu: %s", names[n],
+            ck_assert_msg(amp_check_path_stroke(&ps, i, NULL, 0, NULL, &err) == AMP_OK, "%s path %lu: %s", names[n],
                           (unsigned long)i, err.msg);
         amp_pathset_free(&ps);
         amp_slices_free(&sl);
@@ -467,30 +467,30 @@ START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
     double escape_r[4] = {0.4, 0, 0, 0.4};
     amp_polyset_init(&sq, NULL);
     ck_assert_int_eq(amp_polyset_add(&sq, box, 4, NULL), AMP_OK);
-    ck_assert_int_eq(amp_stroke_check(bowtie, 5, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke(bowtie, 5, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_eq(rep.crossings, 1);
-    ck_assert_int_eq(amp_stroke_check(twice, 6, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke(twice, 6, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(rep.repeated_edges, 0);
-    ck_assert_int_eq(amp_stroke_check(escape, 4, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke(escape, 4, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(rep.outside, 0);
-    ck_assert_int_eq(amp_stroke_check(eight, 7, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke(eight, 7, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_eq(rep.crossings, 1);
-    ck_assert_msg(amp_stroke_check(touch, 7, &sq, 0, &rep, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_check_stroke(touch, 7, &sq, 0, &rep, &err) == AMP_OK, "%s", err.msg);
     ck_assert(rep.closed);
     /* a printed stretch run back as a pseudo edge (radius 0, with the vertex
      * written twice where the radius changes): no material twice */
-    ck_assert_int_eq(amp_stroke_check(back, 8, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke(back, 8, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(rep.repeated_edges, 0);
-    ck_assert_msg(amp_stroke_check_radii(back, back_r, 8, &sq, 0, &rep, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_check_stroke_radii(back, back_r, 8, &sq, 0, &rep, &err) == AMP_OK, "%s", err.msg);
     ck_assert_uint_eq(rep.pseudo, 1);
     ck_assert_uint_eq(rep.repeated_edges, 0);
     /* ... but printed twice it fails, and a pseudo edge must not cross */
-    ck_assert_int_eq(amp_stroke_check_radii(back, twice_r, 8, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke_radii(back, twice_r, 8, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(rep.repeated_edges, 0);
-    ck_assert_int_eq(amp_stroke_check_radii(bowtie, bowtie_r, 5, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke_radii(bowtie, bowtie_r, 5, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_eq(rep.crossings, 1);
     /* and it must stay inside the region */
-    ck_assert_int_eq(amp_stroke_check_radii(escape, escape_r, 4, &sq, 0, &rep, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_stroke_radii(escape, escape_r, 4, &sq, 0, &rep, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(rep.outside, 0);
     amp_polyset_free(&sq);
 }
@@ -787,7 +787,7 @@ START_TEST(cycle_tree_and_merging_trace_the_same_edges_once_without_crossing)
     ck_assert_double_eq_tol(sa.infill_length, sb.infill_length, 1e-6 * sa.infill_length);
     ck_assert_uint_eq(a.npaths, sa.islands);
     for (i = 0; i < a.npaths; i++)
-        ck_assert_msg(amp_pathset_stroke_check(&a, i, NULL, 0, NULL, &err) == AMP_OK, "path %lu: %s", (unsigned long)i,
+        ck_assert_msg(amp_check_path_stroke(&a, i, NULL, 0, NULL, &err) == AMP_OK, "path %lu: %s", (unsigned long)i,
                       err.msg);
     amp_pathset_free(&a);
     amp_pathset_free(&b);

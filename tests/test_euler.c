@@ -1,10 +1,9 @@
-/* 2-complexes and the Euler transformation (paper 2 §1.3, §3). */
+/* 2-complexes and the Euler transformation ([P2 §1.3], §3). */
 #include <math.h>
 #include <string.h>
 
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 /* Add neighbour o of v (given edge a-b) to nb[] once. */
 static void add_nb(uint32_t *nb, size_t *n, uint32_t v, uint32_t a, uint32_t b)
@@ -179,7 +178,7 @@ static void polar_rings(amp_cx2 *k, int nseg, int nring, double jitter, int scal
     ck_assert_int_eq(amp_cx2_add_vertex(k, amp_v2(0, 0), NULL, NULL), AMP_OK);
     for (r = 1; r <= nring; r++)
         for (s = 0; s < nseg; s++) {
-            double t = 2 * PI * s / nseg, jx, jy, amp = scaled ? jitter * fmin(1.0, r * 2 * PI / nseg) : jitter;
+            double t = 2 * AMP_PI * s / nseg, jx, jy, amp = scaled ? jitter * fmin(1.0, r * 2 * AMP_PI / nseg) : jitter;
             *seed = *seed * 1103515245u + 12345u;
             jx = ((*seed >> 8) % 1000 / 1000.0 - 0.5) * amp;
             *seed = *seed * 1103515245u + 12345u;
@@ -262,7 +261,7 @@ START_TEST(generalized_transform_makes_square_tri_and_hex_grids_euler)
     size_t n = 0, nh, i;
     amp_grid_kind kinds[3] = {AMP_GRID_SQUARE, AMP_GRID_TRI, AMP_GRID_HEX};
     for (i = 0; i < 64; i++) {
-        double t = 2 * PI * i / 64;
+        double t = 2 * AMP_PI * i / 64;
         pts[n++] = amp_v2(30 + 20 * cos(t), -5 + 12 * sin(t));
     }
     ck_assert_int_eq(amp_convex_hull(pts, n, NULL, hull, &nh, NULL), AMP_OK);
@@ -313,7 +312,7 @@ START_TEST(single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two)
     amp_cx2_init(&k2, NULL);
     /* a pentagon: every pair of adjacent edges is on the boundary */
     for (v = 0; v < 5; v++)
-        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(3 * cos(2 * PI * v / 5), 3 * sin(2 * PI * v / 5)), &idx[v], NULL),
+        ck_assert_int_eq(amp_cx2_add_vertex(&k, amp_v2(3 * cos(2 * AMP_PI * v / 5), 3 * sin(2 * AMP_PI * v / 5)), &idx[v], NULL),
                          AMP_OK);
     ck_assert_int_eq(amp_cx2_add_face(&k, idx, 5, 0, NULL), AMP_OK);
     ck_assert_int_eq(amp_cx2_build(&k, NULL), AMP_OK);
@@ -730,7 +729,7 @@ START_TEST(generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim
     amp_euler_stats st;
     amp_error err;
     for (n = 0; n < 48; n++)
-        pts[n] = amp_v2(4 + 14 * cos(2 * PI * n / 48), 2 + 9 * sin(2 * PI * n / 48));
+        pts[n] = amp_v2(4 + 14 * cos(2 * AMP_PI * n / 48), 2 + 9 * sin(2 * AMP_PI * n / 48));
     ck_assert_int_eq(amp_convex_hull(pts, n, NULL, hull, &nh, NULL), AMP_OK);
     amp_cx2_init(&k, NULL);
     amp_cx2_init(&kh, NULL);
@@ -787,7 +786,7 @@ START_TEST(offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_p
         for (j = 0; j < 12; j++) {
             double t, rr;
             seed = seed * 1103515245u + 12345u;
-            t = 2 * PI * ((seed >> 8) % 10000) / 10000.0;
+            t = 2 * AMP_PI * ((seed >> 8) % 10000) / 10000.0;
             seed = seed * 1103515245u + 12345u;
             rr = 1 + 0.4 * ((seed >> 8) % 1000) / 1000.0;
             pts[j] = amp_v2(rr * 3 * cos(t), rr * 2 * sin(t));
@@ -837,7 +836,7 @@ START_TEST(offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topologic
         for (j = 0; j < n; j++) {
             double t, rr;
             seed = seed * 1103515245u + 12345u;
-            t = 2 * PI * (j + 0.95 * ((seed >> 8) % 1000) / 1000.0) / n;
+            t = 2 * AMP_PI * (j + 0.95 * ((seed >> 8) % 1000) / 1000.0) / n;
             seed = seed * 1103515245u + 12345u;
             rr = 1 + 2 * ((seed >> 8) % 1000) / 1000.0;
             pts[j] = amp_v2(rr * cos(t), rr * sin(t));
@@ -1043,23 +1042,23 @@ static Suite *euler_suite(void)
 {
     Suite *s = suite_create("euler");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, euler_transform_of_a_random_triangulation_has_degree_four_everywhere);
-    AMP_ADD_TEST(tc, generalized_transform_makes_square_tri_and_hex_grids_euler);
-    AMP_ADD_TEST(tc, single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two);
-    AMP_ADD_TEST(tc, single_cell_with_a_short_edge_drops_it_and_is_euler_after_the_generalized_transform);
-    AMP_ADD_TEST(tc, interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two);
-    AMP_ADD_TEST(tc, checkers_fail_on_broken_complexes);
-    AMP_ADD_TEST(tc, combinatorial_changes_follow_lemma_3_1_degrees);
-    AMP_ADD_TEST(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
-    AMP_ADD_TEST(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
-    AMP_ADD_TEST(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
-    AMP_ADD_TEST(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
-    AMP_ADD_TEST(tc, offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes);
-    AMP_ADD_TEST(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
-    AMP_ADD_TEST(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
-    AMP_ADD_TEST(tc, bad_inputs_are_rejected_with_reasons);
+    tcase_add_test(tc, euler_transform_of_a_random_triangulation_has_degree_four_everywhere);
+    tcase_add_test(tc, generalized_transform_makes_square_tri_and_hex_grids_euler);
+    tcase_add_test(tc, single_cell_of_fig11_is_odd_after_one_pass_and_even_after_two);
+    tcase_add_test(tc, single_cell_with_a_short_edge_drops_it_and_is_euler_after_the_generalized_transform);
+    tcase_add_test(tc, interior_vertex_of_degree_two_is_odd_after_one_pass_and_even_after_two);
+    tcase_add_test(tc, checkers_fail_on_broken_complexes);
+    tcase_add_test(tc, combinatorial_changes_follow_lemma_3_1_degrees);
+    tcase_add_test(tc, lemma_3_3_repairs_the_collapsed_class2_cell_of_fig9);
+    tcase_add_test(tc, lemma_3_3_makes_random_quad_meshes_with_short_edges_euler);
+    tcase_add_test(tc, generalized_transform_is_euler_on_a_hex_grid_with_short_edges_and_rim_cells);
+    tcase_add_test(tc, offsets_of_random_convex_cells_are_the_intersection_of_shifted_half_planes);
+    tcase_add_test(tc, offsets_of_random_star_shaped_cells_are_valid_or_refused_as_topological_changes);
+    tcase_add_test(tc, combinatorial_changes_in_non_convex_cells_give_true_offsets_and_euler_after_repair);
+    tcase_add_test(tc, a_reflex_corner_running_into_an_edge_is_a_rejected_topological_change);
+    tcase_add_test(tc, bad_inputs_are_rejected_with_reasons);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(euler_suite)
+FX_TEST_MAIN(euler_suite)

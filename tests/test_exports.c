@@ -100,4 +100,4 @@ static Suite *exports_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(exports_suite)
+FX_TEST_MAIN(exports_suite)

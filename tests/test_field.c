@@ -1,4 +1,4 @@
-/* Direction-field covering of meshes (paper §4.2): spacing, clipping, coverage gap. */
+/* Direction-field covering of meshes ([P1 §4.2]): spacing, clipping, coverage gap. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -14,6 +14,21 @@ typedef struct cover_run {
     amp_pathset ps;
     amp_field_stats st;
 } cover_run;
+
+/* Largest sampled distance from the solid of @p b (margin @p margin inside) to the paths: amp_check_coverage. */
+static amp_status mesh_gap(const amp_pathset *ps, const amp_bvh *b, size_t n, unsigned long seed, double margin,
+                           double *gap, amp_error *err)
+{
+    amp_coverage c;
+    amp_coverage_domain d = {NULL, NULL, 0.0};
+    amp_status st;
+    d.mesh = b;
+    d.margin = margin;
+    st = amp_check_coverage(ps, &d, n, seed, &c, err);
+    if (st == AMP_OK)
+        *gap = c.gap;
+    return st;
+}
 
 static void cover(cover_run *r, const char *model, const char *field, double S, amp_pattern pat, int hole)
 {
@@ -44,7 +59,7 @@ static double gap(const cover_run *r, double margin)
 {
     double g;
     amp_error err;
-    ck_assert_int_eq(amp_coverage_gap(&r->ps, r->b, 2500, 7, margin, &g, NULL, &err), AMP_OK);
+    ck_assert_int_eq(mesh_gap(&r->ps, r->b, 2500, 7, margin, &g, &err), AMP_OK);
     return g;
 }
 
@@ -68,7 +83,7 @@ START_TEST(helix_square_grid_covers_helix_within_half_diagonal)
         amp_vec3 p = r.ps.verts[i].p;
         ck_assert_msg(amp_bvh_inside(r.b, p) || amp_bvh_closest(r.b, p, NULL, NULL) <= 0.01, "vertex %lu outside",
                       (unsigned long)i);
-        ck_assert(amp_fix_helix_axis_dist(p, NULL) <= 5.06);
+        ck_assert(fx_helix_axis_dist(p, NULL) <= 5.06);
     }
     /* coverage: S sqrt(2)/2 over the whole solid, the surface included (the plain lattice left 0.89 mm there) */
     g_in = gap(&r, 1.0);
@@ -100,7 +115,7 @@ START_TEST(mesh_with_missing_triangle_still_clips_correctly)
     ck_assert_uint_eq(b.st.pieces, a.st.pieces);
     ck_assert_near(b.st.length_after, a.st.length_after, 1e-6 * a.st.length_after);
     for (i = 0; i < b.ps.nverts; i++)
-        ck_assert(amp_fix_helix_axis_dist(b.ps.verts[i].p, NULL) <= 5.06);
+        ck_assert(fx_helix_axis_dist(b.ps.verts[i].p, NULL) <= 5.06);
     release(&a);
     release(&b);
 }
@@ -175,7 +190,7 @@ START_TEST(field_errors_are_reported)
     ck_assert_uint_eq(ps.npaths, 0);
     {
         double g;
-        ck_assert_int_eq(amp_coverage_gap(&ps, b, 10, 1, 0, &g, NULL, &err), AMP_ERR_ARG);
+        ck_assert_int_eq(mesh_gap(&ps, b, 10, 1, 0, &g, &err), AMP_ERR_ARG);
     }
     amp_bvh_free(b);
     amp_mesh_free(&m);
@@ -197,7 +212,7 @@ static double nearest_path(const amp_pathset *ps, amp_vec3 p)
     return sqrt(best);
 }
 
-/* The crocodile's front leg (hip, knee, foot; radius 2.6 -> 1.9 mm, lib/meshmodels.c). */
+/* The crocodile's front leg (hip, knee, foot; radius 2.6 -> 1.9 mm, lib/mesh_models.c). */
 static const amp_vec3 croc_leg[3] = {{16, 6, 9}, {19, 15, 6}, {17, 17, 1.9}};
 
 /* Largest distance to the paths over 216 points of the leg's core (within 1.5 mm of its axis). */
@@ -282,7 +297,7 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
     amp_error err;
     amp_pathset ps;
     char out[4096], args[700];
-    const char *stl = amp_test_tmp("field-helix.stl"), *amp = amp_test_tmp("field-helix.amp");
+    const char *stl = fx_tmp("field-helix.stl"), *amp = fx_tmp("field-helix.amp");
     if (!getenv("AMP_TOOL"))
         return; /* run through make check, which sets AMP_TOOL */
     amp_mesh_init(&m, NULL);
@@ -290,7 +305,7 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
     ck_assert_int_eq(amp_mesh_model("helix", 0, &m, &err), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "field '%s' --field helix-square --spacing 2 --samples 500 --json -o '%s'", stl, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"route\":\"adaptive\"") && strstr(out, "\"coverage_gap_mm\":") &&
                       strstr(out, "\"grid\":[6,6]") && strstr(out, "\"bound_met\":true"),
                   "unexpected: %s", out);
@@ -299,10 +314,10 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
     /* the independent checker: passes with eps 1.25 S, fails with eps 0.5 S; the covering is not ordered
      * yet, so no gouge check */
     snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 2.5 --samples 2000 --no-gouge --json", amp, stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"vertices_outside\":0") && strstr(out, "\"ok\":true"), "unexpected: %s", out);
     snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 1 --samples 2000 --no-gouge", amp, stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     /* ... and fails on a path that leaves the mesh */
     {
         amp_pvert out_path[2];
@@ -313,14 +328,14 @@ START_TEST(cli_field_reports_figures_and_writes_paths)
         ck_assert_int_eq(amp_pathset_write_file(&ps, amp, NULL, &err), AMP_OK);
     }
     snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 2.5 --samples 2000 --no-gouge --json", amp, stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     ck_assert_msg(strstr(out, "\"vertices_outside\":1"), "unexpected: %s", out);
     snprintf(args, sizeof args, "field '%s' --field helix-square --pattern spiral", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "field '%s' --field sweep --spacing 1", stl); /* no --along */
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "field '%s' --field nothing", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     remove(stl);
     remove(amp);
     amp_pathset_free(&ps);
@@ -331,7 +346,7 @@ END_TEST
 
 START_TEST(trivariate_field_is_covered_by_algorithm_1_within_its_bound)
 {
-    /* the helix trivariate (SPEC §4) as the field over the helix mesh: its curves lie inside the solid */
+    /* the helix trivariate (docs/interfaces.md §4) as the field over the helix mesh: its curves lie inside the solid */
     amp_mesh m;
     amp_bvh *b;
     amp_spline sp;
@@ -357,7 +372,7 @@ START_TEST(trivariate_field_is_covered_by_algorithm_1_within_its_bound)
     ck_assert_msg(st.length_after >= 0.8 * st.length_before, "%g of %g mm kept", st.length_after, st.length_before);
     {
         double g;
-        ck_assert_int_eq(amp_coverage_gap(&ps, b, 2500, 7, 0.0, &g, NULL, &err), AMP_OK);
+        ck_assert_int_eq(mesh_gap(&ps, b, 2500, 7, 0.0, &g, &err), AMP_OK);
         ck_assert_msg(g <= sqrt(2.0) / 2 + 0.01, "gap %g", g);
     }
     /* a surface is not a field */
@@ -401,7 +416,7 @@ START_TEST(field_route_and_trivariate_route_both_cover_the_helix)
     co.radius = eps;
     ck_assert_int_eq(amp_cover_trivariate(&sp, &co, &pt, &cs, &err), AMP_OK);
     g_field = gap(&r, 1.0);
-    ck_assert_int_eq(amp_coverage_gap(&pt, r.b, 2500, 7, 0.0, &g_tri, NULL, &err), AMP_OK);
+    ck_assert_int_eq(mesh_gap(&pt, r.b, 2500, 7, 0.0, &g_tri, &err), AMP_OK);
     ck_assert_msg(g_field <= eps + 0.01, "field route gap %g", g_field);
     ck_assert_msg(g_tri <= eps + 0.01, "trivariate route gap %g", g_tri);
     ck_assert_msg(r.st.length_after < amp_pathset_length(&pt, -1), "field %g mm vs trivariate %g mm",
@@ -427,7 +442,7 @@ static void write_box_stl(const char *path, double lo, double hi)
     amp_mesh m;
     amp_error err;
     amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_fix_box(&m, amp_v3(lo, lo, lo), amp_v3(hi, hi, hi), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(lo, lo, lo), amp_v3(hi, hi, hi), 0), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, path, 1, &err), AMP_OK);
     amp_mesh_free(&m);
 }
@@ -452,8 +467,8 @@ static double json_num(const char *js, const char *key)
 START_TEST(cubic_box_field_meets_the_covering_radius_by_algorithm_1)
 {
     char args[1024], out[4096];
-    const char *spl = amp_test_tmp("cubic.spl"), *in9 = amp_test_tmp("box9.stl"), *in12 = amp_test_tmp("box12.stl"),
-               *amp = amp_test_tmp("cubic.amp");
+    const char *spl = fx_tmp("cubic.spl"), *in9 = fx_tmp("box9.stl"), *in12 = fx_tmp("box12.stl"),
+               *amp = fx_tmp("cubic.amp");
     static const char *const dirs[3] = {"u", "v", "w"};
     FILE *fp;
     int d;
@@ -468,17 +483,17 @@ START_TEST(cubic_box_field_meets_the_covering_radius_by_algorithm_1)
     for (d = 0; d < 3; d++) {
         snprintf(args, sizeof args, "field '%s' --field '%s' --dir %s --spacing 1 --samples 4000 --json -o '%s'", in9,
                  spl, dirs[d], amp);
-        ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+        ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
         ck_assert_msg(strstr(out, "\"route\":\"algorithm1\"") != NULL, "%s", out);
         ck_assert_msg(json_num(out, "coverage_gap_mm") <= sqrt(2.0) / 2, "dir %s: %s", dirs[d], out);
         snprintf(args, sizeof args, "check '%s' --mesh '%s' --samples 4000 --no-gouge", amp, in9);
-        ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+        ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     }
     snprintf(args, sizeof args, "field '%s' --field '%s' --spacing 1 --samples 4000 --json -o '%s'", in12, spl, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     ck_assert_msg(json_num(out, "coverage_gap_mm") > 1.0, "%s", out);
     snprintf(args, sizeof args, "check '%s' --mesh '%s' --samples 4000 --no-gouge", amp, in12);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     remove(spl);
     remove(in9);
     remove(in12);
@@ -513,7 +528,7 @@ START_TEST(adaptive_seeding_inserts_curves_where_neighbours_drift_apart)
     double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, g;
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
-    ck_assert_int_eq(amp_fix_box(&m, amp_v3(0.5, 0.5, 0.5), amp_v3(9.5, 9.5, 9.5), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0.5, 0.5, 0.5), amp_v3(9.5, 9.5, 9.5), 0), AMP_OK);
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
     ck_assert_int_eq(amp_field_custom(&f, eval_power, NULL, lo, hi, 2, &err), AMP_OK);
     f.p[0] = 3.0;
@@ -523,7 +538,7 @@ START_TEST(adaptive_seeding_inserts_curves_where_neighbours_drift_apart)
     ck_assert_uint_eq(st.grid_a, 10);
     ck_assert_uint_gt(st.inserted, 10);
     ck_assert_int_eq(st.bound_met, 1);
-    ck_assert_int_eq(amp_coverage_gap(&ps, b, 4000, 3, 0.0, &g, NULL, &err), AMP_OK);
+    ck_assert_int_eq(mesh_gap(&ps, b, 4000, 3, 0.0, &g, &err), AMP_OK);
     ck_assert_msg(g <= sqrt(2.0) / 2 + 1e-6, "gap %g (bound %g)", g, st.bound);
     amp_pathset_free(&ps);
     amp_pathset_init(&ps, NULL);
@@ -573,7 +588,7 @@ START_TEST(surface_layer_follows_the_surface_half_a_spacing_inside)
         bad += !amp_bvh_inside(b, p) || d < 0.45 || d > 0.55;
     }
     ck_assert_msg(bad == 0, "%lu shell vertices not 0.5 mm inside", (unsigned long)bad);
-    ck_assert_int_eq(amp_coverage_gap(&ps, b, 4000, 5, 0.0, &g, NULL, &err), AMP_OK);
+    ck_assert_int_eq(mesh_gap(&ps, b, 4000, 5, 0.0, &g, &err), AMP_OK);
     ck_assert_msg(g <= sqrt(2.0) / 2 + 0.01, "gap %g", g);
     o.shells = -1;
     ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_ERR_ARG);
@@ -615,7 +630,7 @@ static double zone_gap(const amp_pathset *ps, const amp_bvh *b, amp_vec3 lo, amp
 }
 
 /*
- * Several fields in one model (paper §4.2, Fig. 6): the crocodile's front leg
+ * Several fields in one model ([P1 §4.2], Fig. 6): the crocodile's front leg
  * gets a sweep field along it, restricted to a region box around the leg
  * below the belly; the body gets the box field everywhere else. Each field's
  * adaptive lattice treats the region's boundary like the surface, so the
@@ -644,7 +659,7 @@ START_TEST(two_fields_meet_at_a_seam_without_gap_or_double_cover)
     amp_pathset_init(&ps, NULL);
     ck_assert_int_eq(amp_mesh_model("crocodile-like", 0.125, &m, &err), AMP_OK);
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
-    ck_assert_int_eq(amp_fix_box(&rm, rlo, rhi, 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&rm, rlo, rhi, 0), AMP_OK);
     ck_assert_int_eq(amp_bvh_build(&rb, &rm, &err), AMP_OK);
     ck_assert_int_eq(amp_field_sweep(&leg, sw, spine, 4, 7.0, &err), AMP_OK);
     ck_assert_int_eq(amp_field_builtin(&body, "box", amp_mesh_bbox(&m), &err), AMP_OK);
@@ -671,7 +686,7 @@ START_TEST(two_fields_meet_at_a_seam_without_gap_or_double_cover)
         bad += i < nleg ? out : in;
     }
     ck_assert_msg(bad == 0, "%lu vertices on the other field's side", (unsigned long)bad);
-    ck_assert_int_eq(amp_coverage_gap(&ps, b, 3000, 11, 0.0, &g, NULL, &err), AMP_OK);
+    ck_assert_int_eq(mesh_gap(&ps, b, 3000, 11, 0.0, &g, &err), AMP_OK);
     ck_assert_msg(g <= target / 2 + 0.01, "whole-solid gap %g > %g", g, target / 2);
     fprintf(stderr, "crocodile S=2: leg %lu paths %.0f mm, body %lu paths %.0f mm, whole-solid gap %.3f", (unsigned long)sl.pieces,
             sl.length_after, (unsigned long)sb.pieces, sb.length_after, g);
@@ -693,22 +708,22 @@ static Suite *field_suite(void)
     Suite *s = suite_create("field");
     TCase *tc = tcase_create("field");
     tcase_set_timeout(tc, 300);
-    AMP_ADD_TEST(tc, helix_square_grid_covers_helix_within_half_diagonal);
-    AMP_ADD_TEST(tc, honeycomb_has_the_smaller_covering_radius);
-    AMP_ADD_TEST(tc, mesh_with_missing_triangle_still_clips_correctly);
-    AMP_ADD_TEST(tc, sweep_field_along_a_leg_covers_the_leg);
-    AMP_ADD_TEST(tc, gap_checker_fails_when_paths_are_missing);
-    AMP_ADD_TEST(tc, box_field_gives_straight_x_lines_inside_the_bridge);
-    AMP_ADD_TEST(tc, field_errors_are_reported);
-    AMP_ADD_TEST(tc, cli_field_reports_figures_and_writes_paths);
-    AMP_ADD_TEST(tc, trivariate_field_is_covered_by_algorithm_1_within_its_bound);
-    AMP_ADD_TEST(tc, cubic_box_field_meets_the_covering_radius_by_algorithm_1);
-    AMP_ADD_TEST(tc, adaptive_seeding_inserts_curves_where_neighbours_drift_apart);
-    AMP_ADD_TEST(tc, surface_layer_follows_the_surface_half_a_spacing_inside);
-    AMP_ADD_TEST(tc, two_fields_meet_at_a_seam_without_gap_or_double_cover);
-    AMP_ADD_TEST(tc, field_route_and_trivariate_route_both_cover_the_helix);
+    tcase_add_test(tc, helix_square_grid_covers_helix_within_half_diagonal);
+    tcase_add_test(tc, honeycomb_has_the_smaller_covering_radius);
+    tcase_add_test(tc, mesh_with_missing_triangle_still_clips_correctly);
+    tcase_add_test(tc, sweep_field_along_a_leg_covers_the_leg);
+    tcase_add_test(tc, gap_checker_fails_when_paths_are_missing);
+    tcase_add_test(tc, box_field_gives_straight_x_lines_inside_the_bridge);
+    tcase_add_test(tc, field_errors_are_reported);
+    tcase_add_test(tc, cli_field_reports_figures_and_writes_paths);
+    tcase_add_test(tc, trivariate_field_is_covered_by_algorithm_1_within_its_bound);
+    tcase_add_test(tc, cubic_box_field_meets_the_covering_radius_by_algorithm_1);
+    tcase_add_test(tc, adaptive_seeding_inserts_curves_where_neighbours_drift_apart);
+    tcase_add_test(tc, surface_layer_follows_the_surface_half_a_spacing_inside);
+    tcase_add_test(tc, two_fields_meet_at_a_seam_without_gap_or_double_cover);
+    tcase_add_test(tc, field_route_and_trivariate_route_both_cover_the_helix);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(field_suite)
+FX_TEST_MAIN(field_suite)

@@ -1,4 +1,4 @@
-/* G-code writer (SPEC §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
+/* G-code writer (docs/interfaces.md §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -8,7 +8,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------------ a small G-code reader */
 
@@ -387,8 +386,8 @@ static void raw_opts(amp_gcode_opts *o, int flavor)
 static void demo_like(amp_pathset *ps)
 {
     amp_pathset_init(ps, NULL);
-    amp_fixture_rings(ps, 0, 0, 4, 3, 48, 0.25);
-    amp_fixture_helix(ps, 12, 120);
+    fx_rings(ps, 0, 0, 4, 3, 48, 0.25);
+    fx_helix(ps, 12, 120);
 }
 
 /* Expected E of segment k of path i: flow * (pi r^2 L) / (pi (d/2)^2), r the mean of the end radii. */
@@ -396,7 +395,7 @@ static double formula_e(const amp_pathset *ps, size_t i, size_t k, const amp_gco
 {
     const amp_pvert *v = amp_pathset_path_verts(ps, i);
     double r = 0.5 * (v[k].r + v[k + 1].r), L = amp_v3_dist(v[k].p, v[k + 1].p);
-    return o->flow * (PI * r * r * L) / (PI * (o->filament_diameter / 2) * (o->filament_diameter / 2));
+    return o->flow * (AMP_PI * r * r * L) / (AMP_PI * (o->filament_diameter / 2) * (o->filament_diameter / 2));
 }
 
 /* ------------------------------------------------------------------ tests */
@@ -438,7 +437,7 @@ START_TEST(e_per_segment_matches_formula_for_constant_and_varying_radius)
     ck_assert_uint_gt(checked - varying, 500); /* the rings: constant radius */
     /* total filament = flow * deposited volume / filament area */
     ck_assert_near(it.stats.filament_length,
-                   o.flow * amp_pathset_volume(&ps, -1) / (PI * 2.85 * 2.85 / 4), 1e-9 * it.stats.filament_length);
+                   o.flow * amp_pathset_volume(&ps, -1) / (AMP_PI * 2.85 * 2.85 / 4), 1e-9 * it.stats.filament_length);
     amp_pathset_free(&ps);
 }
 END_TEST
@@ -465,7 +464,7 @@ START_TEST(volumetric_cap_lowers_feed_exactly_where_needed)
     ck_assert_uint_eq(s.nsegs, (size_t)n);
     for (k = 0; k < s.nsegs; k++) {
         const amp_pvert *v = ps.verts;
-        double r = 0.5 * (v[k].r + v[k + 1].r), area = PI * r * r;
+        double r = 0.5 * (v[k].r + v[k + 1].r), area = AMP_PI * r * r;
         if (area * o.print_feed > o.max_volumetric_flow) {
             ck_assert_msg(area * s.segs[k].feed <= o.max_volumetric_flow * (1 + 1e-12), "segment %lu over the cap",
                           (unsigned long)k);
@@ -522,7 +521,7 @@ START_TEST(gouge_checker_catches_a_travel_without_lift)
     char *text, *p, *q;
     size_t near;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 2, 3, 48, 0.25);
+    fx_rings(&ps, 0, 0, 2, 3, 48, 0.25);
     raw_opts(&o, AMP_FLAVOR_MARLIN);
     o.retract_length = 0;
     text = gen(&ps, &o, NULL);
@@ -696,7 +695,7 @@ START_TEST(caller_start_and_end_sequences_replace_the_built_in_ones)
     char *text;
     gsim s;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 1, 12, 0.3);
     amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
     o.start_gcode = "G28\r\n\nM109 S215 ; mine\n";
     o.end_gcode = "M84 ; my end";
@@ -771,7 +770,7 @@ START_TEST(bad_input_gives_clear_errors)
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&empty, NULL);
     amp_buf_init(&b, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 1, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 1, 12, 0.3);
     amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
 
     ck_assert_int_eq(amp_gcode_iter_init(&it, NULL, &o, &err), AMP_ERR_ARG);
@@ -836,7 +835,7 @@ START_TEST(sink_failure_stops_the_writer)
     amp_error err;
     int n = 20;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 1, 2, 12, 0.3);
+    fx_rings(&ps, 0, 0, 1, 2, 12, 0.3);
     ck_assert_int_eq(amp_gcode_write(&ps, NULL, failing_sink, &n, NULL, &err), AMP_ERR_IO);
     ck_assert_ptr_nonnull(strstr(err.msg, "line 21"));
     amp_pathset_free(&ps);
@@ -846,7 +845,7 @@ END_TEST
 START_TEST(gcode_command_writes_file_and_reports_json)
 {
     amp_pathset ps;
-    const char *in = amp_test_tmp("cli.amp"), *out = amp_test_tmp("cli.gcode"), *start = amp_test_tmp("start.gcode");
+    const char *in = fx_tmp("cli.amp"), *out = fx_tmp("cli.gcode"), *start = fx_tmp("start.gcode");
     char args[2048], json[4096];
     FILE *f;
     gsim s;
@@ -854,7 +853,7 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     char *text;
     int rc;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 2, 2, 24, 0.3);
+    fx_rings(&ps, 0, 0, 2, 2, 24, 0.3);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     f = fopen(start, "w");
     fputs("G28\nM109 S199\n", f);
@@ -862,7 +861,7 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     snprintf(args, sizeof args,
              "gcode %s --flavor klipper --feed 25 --first-layer-feed 25 --chord-tol 0 --min-segment 0 --start %s "
              "--json -o %s", in, start, out);
-    rc = amp_test_run_tool(args, json, sizeof json);
+    rc = fx_run_tool(args, json, sizeof json);
     ck_assert_msg(rc != -2, "AMP_TOOL not set");
     ck_assert_int_eq(rc, 0);
     ck_assert_ptr_nonnull(strstr(json, "\"flavor\":\"klipper\""));
@@ -885,13 +884,13 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     /* bad usage and bad input: exit 2, no output written */
     remove(out);
     snprintf(args, sizeof args, "gcode %s --flavor reprap -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     snprintf(args, sizeof args, "gcode %s --filament 0 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, amp_test_tmp("nope"), out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "gcode %s -o %s", amp_test_tmp("nope.amp"), out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s --start %s -o %s", in, fx_tmp("nope"), out);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    snprintf(args, sizeof args, "gcode %s -o %s", fx_tmp("nope.amp"), out);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     remove(in);
     remove(start);
@@ -912,7 +911,7 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
         "order %s-c.amp -o %s-o.amp",
         "mdr %s-o.amp --nominal 0.5 -o %s-m.amp",
         "support %s-m.amp --mesh %s-helix.stl -o %s-h.amp",
-        /* eps 3 leaves more than 1 mm of air between beads: not held (issue 17), beside the point here */
+        /* eps 3 leaves more than 1 mm of air between beads: not held (ampath check's support section), beside the point here */
         "check %s-h.amp --trivariate %s-helix.spl --no-support",
         "gcode %s-h.amp -o %s-h.gcode",
     };
@@ -920,17 +919,17 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
     size_t i, len;
     gsim s;
     const char *d;
-    snprintf(dir, sizeof dir, "%s", amp_test_tmp("demo"));
+    snprintf(dir, sizeof dir, "%s", fx_tmp("demo"));
     d = dir;
     for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
         snprintf(args, sizeof args, steps[i], d, d, d);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
     }
     snprintf(args, sizeof args, "%s-h.gcode", d);
     ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
     ck_assert_uint_gt(len, 100000);
     {
-        /* issue 14: on the default printer's bed, the lowest bead resting on it (curved: at its radius) */
+        /* print-ready jobs: on the default printer's bed, the lowest bead resting on it (curved: at its radius) */
         amp_gcode_opts o;
         double lowest = HUGE_VAL;
         size_t k;
@@ -958,7 +957,7 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
 END_TEST
 
 
-/* ------------------------------------------------------------------ issue 14: print-ready jobs */
+/* ------------------------------------------------------------------ print-ready jobs (docs/interfaces.md §5) */
 
 /*
  * @p layers planar layers of height @p h filling the square [x0, x0+S] x [y0, y0+S]:
@@ -1006,7 +1005,7 @@ START_TEST(planar_beads_extrude_the_rounded_rectangle)
     amp_gcode_opts o;
     gsim s;
     char *text;
-    const double S = 20, h = 0.2, r = 0.225, fil = PI * 1.75 * 1.75 / 4;
+    const double S = 20, h = 0.2, r = 0.225, fil = AMP_PI * 1.75 * 1.75 / 4;
     double part = S * S * 5 * h, vol, ext;
     size_t i;
     amp_pathset_init(&ps, NULL);
@@ -1120,7 +1119,7 @@ START_TEST(a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow)
     amp_gcode_opts o;
     amp_gcode_iter it;
     amp_error err;
-    const char *in = amp_test_tmp("big.amp"), *out = amp_test_tmp("big.gcode");
+    const char *in = fx_tmp("big.amp"), *out = fx_tmp("big.gcode");
     char args[1024], tmp[1024];
     FILE *f;
     amp_pathset_init(&ps, NULL);
@@ -1149,20 +1148,20 @@ START_TEST(a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow)
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     remove(out);
     snprintf(args, sizeof args, "gcode %s -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     snprintf(tmp, sizeof tmp, "%s.tmp", out);
     ck_assert_ptr_null(fopen(tmp, "rb"));
     snprintf(args, sizeof args, "gcode %s --printer prusa-mk3s --place 125,208 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
     snprintf(args, sizeof args, "gcode %s --printer voron-350 -o %s", in, out); /* fits a 350 mm bed */
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     f = fopen(out, "rb");
     ck_assert_ptr_nonnull(f);
     fclose(f);
     snprintf(args, sizeof args, "gcode %s --place 1,2,3 -o %s", in, out);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     remove(out);
     remove(in);
     amp_pathset_free(&ps);
@@ -1187,7 +1186,7 @@ START_TEST(simplified_paths_stay_within_tolerance_without_micro_segments)
     gsim s;
     char *text;
     size_t k, n = 6000, shortest_at = 0;
-    double shortest = HUGE_VAL, worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    double shortest = HUGE_VAL, worst = 0, fil = AMP_PI * 1.75 * 1.75 / 4;
     amp_pathset_init(&ps, NULL);
     /* a 30 mm arc of radius 10 sampled every 5 um (below a motor step), radius 0.3 +- 0.05 slowly */
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
@@ -1391,7 +1390,7 @@ static double json_num(const char *json, const char *key)
 /*
  * Issue 14 proof for planar jobs: `slice --continuous` of each built-in mesh, then `gcode`: every coordinate on the
  * generic bed, the first extrusion at the first-layer height, plastic within 3 % of the beads and at most
- * 1.05 x (part + support). Until slice writes bead heights itself (issue 14, another branch), the test gives
+ * 1.05 x (part + support). Where a path carries no bead height, the test gives
  * its paths h = the layer height, which is what that change writes.
  */
 START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
@@ -1406,11 +1405,11 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
         gsim s;
         int planar = 0;
         double part, sup, ext, beads;
-        snprintf(base, sizeof base, "%s", amp_test_tmp(meshes[i]));
+        snprintf(base, sizeof base, "%s", fx_tmp(meshes[i]));
         snprintf(args, sizeof args, "model %s -o %s.stl", meshes[i], base);
-        ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+        ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
         snprintf(args, sizeof args, "slice %s.stl --layer 0.2 --continuous --radius 0.225 -o %s.amp", base, base);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "%s", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "%s", args);
         amp_pathset_init(&ps, NULL);
         snprintf(args, sizeof args, "%s.amp", base);
         ck_assert_int_eq(amp_pathset_read_file(&ps, args, NULL), AMP_OK);
@@ -1422,7 +1421,7 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
             ck_assert_int_eq(amp_pathset_write_file(&ps, args, NULL, NULL), AMP_OK);
         }
         snprintf(args, sizeof args, "gcode %s.amp --mesh %s.stl --json -o %s.gcode", base, base, base);
-        ck_assert_msg(amp_test_run_tool(args, json, sizeof json) == 0, "%s", args);
+        ck_assert_msg(fx_run_tool(args, json, sizeof json) == 0, "%s", args);
         snprintf(args, sizeof args, "%s.gcode", base);
         ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
         amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
@@ -1459,7 +1458,7 @@ END_TEST
 /* Distance from p to written move k: a chord, or a helical arc (radial and z error, p's angle inside the sweep). */
 static double dist_to_move(const seg *m, amp_vec3 p)
 {
-    double t, R, a0, a1, ap, sweep, f, twopi = 2 * PI;
+    double t, R, a0, a1, ap, sweep, f, twopi = 2 * AMP_PI;
     if (!m->arc)
         return sqrt(amp_v3_seg_dist2(p, m->a, m->b, &t));
     R = hypot(m->a.x - m->cx, m->a.y - m->cy);
@@ -1483,13 +1482,13 @@ START_TEST(arcs_follow_the_input_within_tolerance)
     gsim s;
     char *text;
     size_t k, i, n = 4000, arcs = 0;
-    double worst = 0, fil = PI * 1.75 * 1.75 / 4;
+    double worst = 0, fil = AMP_PI * 1.75 * 1.75 / 4;
     amp_pathset_init(&ps, NULL);
     /* one and a half turns of a helix of radius 12 (pitch 2 mm), sampled every 0.03 mm, then a straight line */
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
     for (k = 0; k <= n; k++) {
-        double a = 3 * PI * k / n;
-        amp_pathset_push(&ps, amp_v3(12 * cos(a), 12 * sin(a), 0.3 + a / PI), 0.3 + 0.02 * sin(a), NULL);
+        double a = 3 * AMP_PI * k / n;
+        amp_pathset_push(&ps, amp_v3(12 * cos(a), 12 * sin(a), 0.3 + a / AMP_PI), 0.3 + 0.02 * sin(a), NULL);
     }
     for (k = 1; k <= 50; k++)
         amp_pathset_push(&ps, amp_v3(-12 - 0.1 * k, 0, 3.3), 0.3, NULL);
@@ -1527,7 +1526,7 @@ START_TEST(arcs_follow_the_input_within_tolerance)
 }
 END_TEST
 
-/* ------------------------------------------------------------------ direct hops (issue 14 item 4) */
+/* ------------------------------------------------------------------ direct hops */
 
 /* Highest q.z - k |q.xy - p.xy| over the segment g (concave in the parameter: ternary search). */
 static double cone_reach(const seg *g, amp_vec3 p, double k)
@@ -1556,7 +1555,7 @@ static int is_direct(const gsim *s, const seg *tr)
 }
 
 /*
- * Independent head-cone checker of the direct hops (SPEC §2, paper §5.1): at
+ * Independent head-cone checker of the direct hops (docs/interfaces.md §2, [P1 §5.1]): at
  * every point p of such a travel (sampled every 0.05 mm) no earlier extrusion
  * centre line rises above the cone, tip z_offs above p, half-angle theta:
  * q.z - cot(theta) |q.xy - p.xy| <= p.z + z_offs (1e-3 for the written
@@ -1564,7 +1563,7 @@ static int is_direct(const gsim *s, const seg *tr)
  */
 static int count_cone_gouges(const gsim *s, double z_offs, double theta_deg, size_t *hops)
 {
-    double k = 1.0 / tan(theta_deg * 3.14159265358979323846 / 180.0);
+    double k = 1.0 / tan(theta_deg * AMP_PI / 180.0);
     size_t t, g;
     int bad = 0;
     *hops = 0;
@@ -1666,16 +1665,16 @@ START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
     amp_gcode_opts o;
     gsim s;
     const char *d;
-    snprintf(dir, sizeof dir, "%s", amp_test_tmp("hops"));
+    snprintf(dir, sizeof dir, "%s", fx_tmp("hops"));
     d = dir;
     for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
         snprintf(args, sizeof args, steps[i], d, d, d);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
     }
     snprintf(args, sizeof args, "gcode %s-h.amp --direct-hop 0 --json -o %s-off.gcode", d, d);
-    ck_assert_int_eq(amp_test_run_tool(args, off, sizeof off), 0);
+    ck_assert_int_eq(fx_run_tool(args, off, sizeof off), 0);
     snprintf(args, sizeof args, "gcode %s-h.amp --json -o %s-on.gcode", d, d);
-    ck_assert_int_eq(amp_test_run_tool(args, on, sizeof on), 0);
+    ck_assert_int_eq(fx_run_tool(args, on, sizeof on), 0);
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), json_num(off, "travel_time_fraction") - 0.07);
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), 0.45);
     ck_assert_double_lt(json_num(on, "retractions"), 0.5 * json_num(off, "retractions"));
@@ -1742,4 +1741,4 @@ static Suite *gcode_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(gcode_suite)
+FX_TEST_MAIN(gcode_suite)

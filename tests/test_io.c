@@ -1,5 +1,5 @@
 /*
- * Tests of lib/io.c and the tool's file handling (issue 21): the one safe
+ * Tests of lib/io.c and the tool's file handling: the one safe
  * writer (symlinks, devices, FIFOs, unique temporaries, permissions, a full or
  * size-limited disk), size checks before reading, the lexer's line limit, no
  * leak on a parse error, and the work estimates that refuse runaway requests.
@@ -332,7 +332,7 @@ START_TEST(a_full_disk_reports_the_reason_and_keeps_the_old_file)
 }
 END_TEST
 
-static int tool_under_limit(const void *args) { return amp_test_run_tool(args, NULL, 0); }
+static int tool_under_limit(const void *args) { return fx_run_tool(args, NULL, 0); }
 
 START_TEST(tool_writers_keep_the_old_file_on_a_full_disk)
 {
@@ -344,12 +344,12 @@ START_TEST(tool_writers_keep_the_old_file_on_a_full_disk)
     const char *name[] = {"out.spl", "out.svg", "out.svg", "out.stl"};
     size_t i;
     snprintf(stl, sizeof stl, "model twisted-bridge -o %s/m.stl", dir);
-    ck_assert_int_eq(amp_test_run_tool(stl, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(stl, NULL, 0), 0);
     for (i = 0; i < sizeof fmt / sizeof fmt[0]; i++) {
         snprintf(args, sizeof args, fmt[i], dir, dir);
         snprintf(out, sizeof out, "%s/%s", dir, name[i]);
         put_file(out, "old content");
-        ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0); /* the command works without the limit */
+        ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0); /* the command works without the limit */
         put_file(out, "old content");
         ck_assert_msg(with_file_size_limit(1024, tool_under_limit, args) == 2, "%s", args);
         ck_assert_msg(strcmp(file_text(out), "old content") == 0, "%s replaced %s", args, out);
@@ -363,9 +363,9 @@ END_TEST
 START_TEST(tool_writes_dev_full_with_enospc_and_dev_null_fine)
 {
     char out[4096];
-    ck_assert_int_eq(amp_test_run_tool_ex("model helix -o /dev/full", NULL, 1, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool_ex("model helix -o /dev/full", NULL, 1, out, sizeof out), 2);
     ck_assert_msg(strstr(out, strerror(ENOSPC)) != NULL, "output: %s", out);
-    ck_assert_int_eq(amp_test_run_tool("model helix -o /dev/null", NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool("model helix -o /dev/null", NULL, 0), 0);
 }
 END_TEST
 
@@ -373,7 +373,7 @@ END_TEST
 
 START_TEST(an_oversized_sparse_file_is_refused_from_its_size)
 {
-    const char *path = amp_test_tmp("sparse.stl");
+    const char *path = fx_tmp("sparse.stl");
     char *data = NULL;
     size_t len = 0;
     amp_mesh m;
@@ -397,7 +397,7 @@ END_TEST
 
 START_TEST(a_file_at_the_size_limit_is_read)
 {
-    const char *path = amp_test_tmp("exact.txt");
+    const char *path = fx_tmp("exact.txt");
     char *data = NULL;
     size_t len = 0;
     amp_error err;
@@ -450,7 +450,7 @@ END_TEST
 
 START_TEST(commands_exit_2_on_a_bad_path_file)
 {
-    const char *bad = amp_test_tmp("bad.amp");
+    const char *bad = fx_tmp("bad.amp");
     const char *cmds[] = {"info %s", "order %s -o /dev/null", "mdr %s -o /dev/null", "preview %s -o %s.svg",
                           "check %s", "support %s -o /dev/null"};
     char args[600];
@@ -460,7 +460,7 @@ START_TEST(commands_exit_2_on_a_bad_path_file)
                   "path object 3\n0 2 0 0.2\nnot a vertex\n");
     for (i = 0; i < sizeof cmds / sizeof cmds[0]; i++) {
         snprintf(args, sizeof args, cmds[i], bad, bad);
-        ck_assert_msg(amp_test_run_tool(args, NULL, 0) == 2, "ampath %s", args);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 2, "ampath %s", args);
     }
     remove(bad);
 }
@@ -472,7 +472,7 @@ END_TEST
 static void expect_tool(const char *args, int rc, const char *needle)
 {
     char out[8192];
-    int got = amp_test_run_tool_ex(args, NULL, 1, out, sizeof out);
+    int got = fx_run_tool_ex(args, NULL, 1, out, sizeof out);
     ck_assert_msg(got == rc, "ampath %s: exit %d, expected %d; output: %.300s", args, got, rc, out);
     if (needle)
         ck_assert_msg(strstr(out, needle) != NULL, "ampath %s: no '%s' in: %.300s", args, needle, out);
@@ -578,7 +578,7 @@ END_TEST
 
 START_TEST(an_oversized_mesh_is_refused_by_the_tool_at_once)
 {
-    const char *path = amp_test_tmp("sparse2.stl");
+    const char *path = fx_tmp("sparse2.stl");
     char args[600];
     int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC, 0600);
     ck_assert_int_ge(fd, 0);
@@ -595,30 +595,30 @@ Suite *io_suite(void)
 {
     Suite *s = suite_create("io");
     TCase *w = tcase_create("writer"), *r = tcase_create("reader"), *t = tcase_create("tool");
-    AMP_ADD_TEST(w, writing_through_a_symlink_replaces_the_target_and_keeps_link_and_mode);
-    AMP_ADD_TEST(w, a_dangling_symlink_creates_its_target);
-    AMP_ADD_TEST(w, dev_null_is_written_directly_and_stays_a_device);
-    AMP_ADD_TEST(w, dev_full_reports_no_space_and_stays_a_device);
-    AMP_ADD_TEST(w, a_fifo_is_written_directly_and_stays_a_fifo);
-    AMP_ADD_TEST(w, a_planted_fixed_tmp_name_is_never_followed);
-    AMP_ADD_TEST(w, two_open_outputs_of_one_file_use_distinct_temporaries);
-    AMP_ADD_TEST(w, a_failing_writer_leaves_the_old_file_and_no_temporary);
-    AMP_ADD_TEST(w, a_directory_is_refused);
-    AMP_ADD_TEST(w, a_full_disk_reports_the_reason_and_keeps_the_old_file);
-    AMP_ADD_TEST(r, an_oversized_sparse_file_is_refused_from_its_size);
-    AMP_ADD_TEST(r, a_file_at_the_size_limit_is_read);
-    AMP_ADD_TEST(r, a_comment_line_over_4096_bytes_is_rejected);
-    AMP_ADD_TEST(t, tool_writers_keep_the_old_file_on_a_full_disk);
-    AMP_ADD_TEST(t, tool_writes_dev_full_with_enospc_and_dev_null_fine);
-    AMP_ADD_TEST(t, commands_exit_2_on_a_bad_path_file);
-    AMP_ADD_TEST(t, nonsense_numbers_are_refused_by_the_option_parser);
-    AMP_ADD_TEST(t, cover_refuses_beyond_its_curve_estimate);
-    AMP_ADD_TEST(t, slicing_refuses_beyond_its_segment_estimate);
-    AMP_ADD_TEST(t, an_oversized_mesh_is_refused_by_the_tool_at_once);
+    tcase_add_test(w, writing_through_a_symlink_replaces_the_target_and_keeps_link_and_mode);
+    tcase_add_test(w, a_dangling_symlink_creates_its_target);
+    tcase_add_test(w, dev_null_is_written_directly_and_stays_a_device);
+    tcase_add_test(w, dev_full_reports_no_space_and_stays_a_device);
+    tcase_add_test(w, a_fifo_is_written_directly_and_stays_a_fifo);
+    tcase_add_test(w, a_planted_fixed_tmp_name_is_never_followed);
+    tcase_add_test(w, two_open_outputs_of_one_file_use_distinct_temporaries);
+    tcase_add_test(w, a_failing_writer_leaves_the_old_file_and_no_temporary);
+    tcase_add_test(w, a_directory_is_refused);
+    tcase_add_test(w, a_full_disk_reports_the_reason_and_keeps_the_old_file);
+    tcase_add_test(r, an_oversized_sparse_file_is_refused_from_its_size);
+    tcase_add_test(r, a_file_at_the_size_limit_is_read);
+    tcase_add_test(r, a_comment_line_over_4096_bytes_is_rejected);
+    tcase_add_test(t, tool_writers_keep_the_old_file_on_a_full_disk);
+    tcase_add_test(t, tool_writes_dev_full_with_enospc_and_dev_null_fine);
+    tcase_add_test(t, commands_exit_2_on_a_bad_path_file);
+    tcase_add_test(t, nonsense_numbers_are_refused_by_the_option_parser);
+    tcase_add_test(t, cover_refuses_beyond_its_curve_estimate);
+    tcase_add_test(t, slicing_refuses_beyond_its_segment_estimate);
+    tcase_add_test(t, an_oversized_mesh_is_refused_by_the_tool_at_once);
     suite_add_tcase(s, w);
     suite_add_tcase(s, r);
     suite_add_tcase(s, t);
     return s;
 }
 
-AMP_TEST_MAIN(io_suite)
+FX_TEST_MAIN(io_suite)

@@ -9,11 +9,10 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 static void make_torus(amp_mesh *m, double R, double r, int nu, int nv)
 {
-    ck_assert_int_eq(amp_fix_torus(m, R, r, nu, nv), AMP_OK);
+    ck_assert_int_eq(fx_torus(m, amp_v3(0, 0, 0), R, r, nu, nv), AMP_OK);
 }
 
 /* Binary STL bytes of n triangles given as 9 floats each, with an optional header prefix. */
@@ -224,14 +223,14 @@ START_TEST(stl_roundtrip_binary_and_ascii_preserves_torus)
         amp_buf_free(&buf);
     }
     /* the analytic torus volume 2 pi^2 R r^2 within the tessellation error */
-    ck_assert_near(amp_mesh_volume(&m), 2 * PI * PI * 20 * 25, 0.03 * 2 * PI * PI * 20 * 25);
-    ck_assert_int_eq(amp_mesh_write_stl_file(&m, amp_test_tmp("torus.stl"), 1, &err), AMP_OK);
+    ck_assert_near(amp_mesh_volume(&m), 2 * AMP_PI * AMP_PI * 20 * 25, 0.03 * 2 * AMP_PI * AMP_PI * 20 * 25);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, fx_tmp("torus.stl"), 1, &err), AMP_OK);
     amp_mesh_init(&back, NULL);
-    ck_assert_int_eq(amp_mesh_read_stl_file(&back, amp_test_tmp("torus.stl"), &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_read_stl_file(&back, fx_tmp("torus.stl"), &err), AMP_OK);
     ck_assert_uint_eq(back.ntris, m.ntris);
     amp_mesh_free(&back);
-    remove(amp_test_tmp("torus.stl"));
-    ck_assert_int_eq(amp_mesh_read_stl_file(&back, amp_test_tmp("missing.stl"), &err), AMP_ERR_IO);
+    remove(fx_tmp("torus.stl"));
+    ck_assert_int_eq(amp_mesh_read_stl_file(&back, fx_tmp("missing.stl"), &err), AMP_ERR_IO);
     amp_mesh_free(&m);
 }
 END_TEST
@@ -322,9 +321,9 @@ START_TEST(stl_reader_survives_allocation_failures)
     make_torus(&src, 20, 5, 24, 12);
     ck_assert_int_eq(amp_mesh_write_stl(&src, 1, amp_buf_sink, &buf, &err), AMP_OK);
     for (budget = 0; budget < 40; budget++) {
-        amp_test_failalloc fa;
+        fx_failalloc fa;
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         amp_mesh_init(&m, &fa.a);
         st = amp_mesh_read_stl(&m, buf.data, buf.len, &err);
         ck_assert_msg(st == AMP_OK || st == AMP_ERR_NOMEM, "status %d", st);
@@ -358,7 +357,7 @@ START_TEST(every_model_is_closed_outward_single_and_on_the_plate)
                       amp_mesh_model_name(i), (unsigned long)er.boundary, (unsigned long)er.nonmanifold,
                       (unsigned long)er.misoriented, (unsigned long)er.degenerate);
         ck_assert_msg(amp_mesh_volume(&m) > 0, "%s has negative volume", amp_mesh_model_name(i));
-        ck_assert_uint_eq(amp_fix_components(&m), 1);
+        ck_assert_uint_eq(fx_components(&m), 1);
         b = amp_mesh_bbox(&m);
         ck_assert_near(b.min.z, 0, 1e-12);
         amp_mesh_free(&m);
@@ -402,22 +401,22 @@ static double helix_deviation(const amp_mesh *m)
         int c, on_cap = 0;
         for (c = 0; c < 3; c++) {
             p[c] = m->verts[m->tris[i].v[c]];
-            on_cap += amp_fix_helix_axis_dist(p[c], NULL) < 1e-6; /* a cap centre */
+            on_cap += fx_helix_axis_dist(p[c], NULL) < 1e-6; /* a cap centre */
         }
         if (on_cap)
             continue;
         for (k = 0; k < 7; k++) {
             amp_vec3 q = amp_v3_add(amp_v3_scale(p[0], w[k][0]), amp_v3_add(amp_v3_scale(p[1], w[k][1]), amp_v3_scale(p[2], w[k][2])));
-            worst = fmax(worst, fabs(amp_fix_helix_axis_dist(q, NULL) - 5));
+            worst = fmax(worst, fabs(fx_helix_axis_dist(q, NULL) - 5));
         }
     }
     ck_assert_int_eq(amp_bvh_build(&b, m, &err), AMP_OK);
     for (k = 0; k < 4000; k++) {
-        double t = amp_fix_rand(&s), th = 2 * PI * amp_fix_rand(&s), rho = k % 4 == 0 ? 5 * sqrt(amp_fix_rand(&s)) : 5;
+        double t = fx_rand(&s), th = 2 * AMP_PI * fx_rand(&s), rho = k % 4 == 0 ? 5 * sqrt(fx_rand(&s)) : 5;
         amp_vec3 q;
         if (k % 4 == 0)
             t = k % 8 == 0 ? 0 : 1; /* a cap point */
-        q = amp_fix_helix_point(t, rho * cos(th), rho * sin(th));
+        q = fx_helix_point(t, rho * cos(th), rho * sin(th));
         worst = fmax(worst, amp_bvh_closest(b, q, NULL, NULL));
     }
     amp_bvh_free(b);
@@ -428,7 +427,7 @@ START_TEST(helix_mesh_is_within_0_05_mm_of_the_exact_solid)
 {
     amp_mesh m, coarse;
     amp_error err;
-    double arc = 40 * sqrt(PI * PI + 1), dev;
+    double arc = 40 * sqrt(AMP_PI * AMP_PI + 1), dev;
     amp_box3 b;
     amp_mesh_init(&m, NULL);
     amp_mesh_init(&coarse, NULL);
@@ -440,10 +439,10 @@ START_TEST(helix_mesh_is_within_0_05_mm_of_the_exact_solid)
     ck_assert_int_eq(amp_mesh_model("helix", 1.0, &coarse, &err), AMP_OK);
     ck_assert_msg(helix_deviation(&coarse) > 0.05, "coarse helix deviates only %g", helix_deviation(&coarse));
     /* volume of a disc swept along a curve = area x arc length (no self-overlap) */
-    ck_assert_near(amp_mesh_volume(&m), PI * 25 * arc, 0.01 * PI * 25 * arc);
-    ck_assert_msg(amp_mesh_volume(&m) < PI * 25 * arc, "inscribed mesh must be smaller");
+    ck_assert_near(amp_mesh_volume(&m), AMP_PI * 25 * arc, 0.01 * AMP_PI * 25 * arc);
+    ck_assert_msg(amp_mesh_volume(&m) < AMP_PI * 25 * arc, "inscribed mesh must be smaller");
     b = amp_mesh_bbox(&m);
-    ck_assert_near(b.max.z, 40 + 2 * 5 * PI / sqrt(PI * PI + 1), 0.05);
+    ck_assert_near(b.max.z, 40 + 2 * 5 * AMP_PI / sqrt(AMP_PI * AMP_PI + 1), 0.05);
     ck_assert_near(b.max.x, 25, 0.05);
     amp_mesh_free(&m);
     amp_mesh_free(&coarse);
@@ -473,7 +472,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     amp_mesh m;
     amp_error err;
     char out[4096], args[600];
-    const char *f = amp_test_tmp("info-torus.stl");
+    const char *f = fx_tmp("info-torus.stl");
     if (!getenv("AMP_TOOL"))
         return; /* run through make check, which sets AMP_TOOL */
     amp_mesh_init(&m, NULL);
@@ -481,7 +480,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     m.tris[0] = m.tris[--m.ntris]; /* one hole: not closed */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 0, &err), AMP_OK);
     snprintf(args, sizeof args, "info '%s' --json", f);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"kind\":\"mesh\"") && strstr(out, "\"format\":\"ascii\"") &&
                       strstr(out, "\"triangles\":575") && strstr(out, "\"closed\":false") &&
                       strstr(out, "\"boundary_edges\":3"),
@@ -489,7 +488,7 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
     /* a truncated binary STL: exit status 2 */
     ck_assert_int_eq(truncate(f, 84 + 50 * 10), 0);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     remove(f);
     amp_mesh_free(&m);
 }
@@ -520,7 +519,7 @@ START_TEST(trivariate_boundary_mesh_is_closed_with_the_solid_volume)
         ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
         ck_assert_msg(er.closed, "%s: boundary %lu nonmanifold %lu misoriented %lu", cases[i].name,
                       (unsigned long)er.boundary, (unsigned long)er.nonmanifold, (unsigned long)er.misoriented);
-        ck_assert_uint_eq(amp_fix_components(&m), 1);
+        ck_assert_uint_eq(fx_components(&m), 1);
         if (cases[i].volume > 0)
             ck_assert_msg(fabs(amp_mesh_volume(&m) / cases[i].volume - 1) < cases[i].rel, "%s: volume %g, want %g",
                           cases[i].name, amp_mesh_volume(&m), cases[i].volume);
@@ -540,27 +539,27 @@ static Suite *mesh_suite(void)
 {
     Suite *s = suite_create("mesh");
     TCase *tc = tcase_create("stl");
-    AMP_ADD_TEST(tc, binary_stl_is_welded_and_closed);
-    AMP_ADD_TEST(tc, binary_stl_starting_with_solid_is_read_as_binary);
-    AMP_ADD_TEST(tc, ascii_stl_with_crlf_and_uppercase_is_read);
-    AMP_ADD_TEST(tc, degenerate_triangles_are_dropped_and_counted);
-    AMP_ADD_TEST(tc, malformed_binary_stl_is_rejected_with_offsets);
-    AMP_ADD_TEST(tc, malformed_ascii_stl_is_rejected_with_lines);
-    AMP_ADD_TEST(tc, stl_roundtrip_binary_and_ascii_preserves_torus);
-    AMP_ADD_TEST(tc, weld_with_tolerance_merges_near_vertices_and_drops_collapsed);
-    AMP_ADD_TEST(tc, edge_checker_flags_holes_and_flipped_triangles);
-    AMP_ADD_TEST(tc, stl_reader_survives_allocation_failures);
-    AMP_ADD_TEST(tc, cli_info_reports_mesh_closedness_and_volume);
+    tcase_add_test(tc, binary_stl_is_welded_and_closed);
+    tcase_add_test(tc, binary_stl_starting_with_solid_is_read_as_binary);
+    tcase_add_test(tc, ascii_stl_with_crlf_and_uppercase_is_read);
+    tcase_add_test(tc, degenerate_triangles_are_dropped_and_counted);
+    tcase_add_test(tc, malformed_binary_stl_is_rejected_with_offsets);
+    tcase_add_test(tc, malformed_ascii_stl_is_rejected_with_lines);
+    tcase_add_test(tc, stl_roundtrip_binary_and_ascii_preserves_torus);
+    tcase_add_test(tc, weld_with_tolerance_merges_near_vertices_and_drops_collapsed);
+    tcase_add_test(tc, edge_checker_flags_holes_and_flipped_triangles);
+    tcase_add_test(tc, stl_reader_survives_allocation_failures);
+    tcase_add_test(tc, cli_info_reports_mesh_closedness_and_volume);
     suite_add_tcase(s, tc);
     tc = tcase_create("models");
     tcase_set_timeout(tc, 120);
-    AMP_ADD_TEST(tc, every_model_is_closed_outward_single_and_on_the_plate);
-    AMP_ADD_TEST(tc, model_errors_are_reported);
-    AMP_ADD_TEST(tc, helix_mesh_is_within_0_05_mm_of_the_exact_solid);
-    AMP_ADD_TEST(tc, twisted_bridge_has_the_documented_size_and_volume);
-    AMP_ADD_TEST(tc, trivariate_boundary_mesh_is_closed_with_the_solid_volume);
+    tcase_add_test(tc, every_model_is_closed_outward_single_and_on_the_plate);
+    tcase_add_test(tc, model_errors_are_reported);
+    tcase_add_test(tc, helix_mesh_is_within_0_05_mm_of_the_exact_solid);
+    tcase_add_test(tc, twisted_bridge_has_the_documented_size_and_volume);
+    tcase_add_test(tc, trivariate_boundary_mesh_is_closed_with_the_solid_volume);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(mesh_suite)
+FX_TEST_MAIN(mesh_suite)

@@ -301,9 +301,9 @@ START_TEST(crossing_curves_of_fig8_are_split_into_blue_red_green)
         ck_assert_near(amp_pathset_path_verts(&out, 0)[0].p.z, 0, 1e-9);
         ck_assert_near(path_zmax(&out, 2), 3, 1e-9);
         ck_assert_near(amp_pathset_path_verts(&out, 2)[out.paths[2].n - 1].p.y, -10, 1e-9);
-        ck_assert_int_eq(amp_gouge_check(&out, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+        ck_assert_int_eq(amp_check_gouge(&out, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
         /* the input order gouges: red is printed after green passed over it */
-        ck_assert_int_eq(amp_gouge_check(&ps, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_CHECK);
+        ck_assert_int_eq(amp_check_gouge(&ps, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_CHECK);
         amp_pathset_free(&ps);
         amp_pathset_free(&out);
     }
@@ -340,10 +340,10 @@ START_TEST(helix_covering_orders_without_gouges_and_reversed_order_fails)
     ck_assert_uint_le(s1.subdivisions, s0.subdivisions);
     ck_assert_near(amp_pathset_length(&better, -1), amp_pathset_length(&ps, -1), 1e-6);
     ck_assert_near(amp_pathset_length(&plain, -1), amp_pathset_length(&ps, -1), 1e-6);
-    ck_assert_int_eq(amp_gouge_check(&plain, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
-    ck_assert_int_eq(amp_gouge_check(&better, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&plain, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&better, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
     reverse_paths(&better, &rev);
-    ck_assert_int_eq(amp_gouge_check(&rev, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_gouge(&rev, &o.head, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_ERR_CHECK);
     ck_assert_uint_gt(v.later_path, v.earlier_path);
     ck_assert_msg(v.earlier_point.z > v.later_point.z + o.head.z_offs, "violation %s", err.msg);
     ck_assert_ptr_nonnull(strstr(err.msg, "gouge"));
@@ -371,12 +371,12 @@ START_TEST(twisted_bridge_needs_no_subdivision_at_45_degrees)
     ck_assert_uint_eq(out.npaths, ps.npaths);
     /* uncut paths come out with their own vertices, not one per fragment */
     ck_assert_uint_eq(out.nverts, ps.nverts);
-    ck_assert_int_eq(amp_gouge_check(&out, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&out, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     /* the default 72 degree cone is flatter than the arch: every arch must be cut near its crest */
     o.head = head(0.5, 72);
     ck_assert_int_eq(amp_order(&ps, &o, &wide, &st, &err), AMP_OK);
     ck_assert_uint_ge(st.subdivisions, ps.npaths);
-    ck_assert_int_eq(amp_gouge_check(&wide, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&wide, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_free(&ps);
     amp_pathset_free(&out);
     amp_pathset_free(&wide);
@@ -400,8 +400,8 @@ START_TEST(improvements_reduce_subdivisions_of_plain_greedy)
     ck_assert_int_eq(amp_order(&ps, &o, &b, &s1, &err), AMP_OK);
     ck_assert_msg(s1.subdivisions < s0.subdivisions, "improved %lu, greedy %lu", (unsigned long)s1.subdivisions,
                   (unsigned long)s0.subdivisions);
-    ck_assert_int_eq(amp_gouge_check(&a, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
-    ck_assert_int_eq(amp_gouge_check(&b, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&a, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&b, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_free(&ps);
     amp_pathset_free(&a);
     amp_pathset_free(&b);
@@ -494,7 +494,7 @@ START_TEST(nearest_choice_shortens_travel_on_helix_covering)
     ck_assert_msg(tn < 0.8 * tf, "travel with the nearest choice %g mm, without %g mm", tn, tf);
     ck_assert_uint_le(sn.subdivisions, sp.subdivisions);
     ck_assert_near(amp_pathset_length(&near, -1), amp_pathset_length(&ps, -1), 1e-6);
-    ck_assert_int_eq(amp_gouge_check(&near, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&near, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_free(&ps);
     amp_pathset_free(&near);
     amp_pathset_free(&far);
@@ -527,8 +527,8 @@ START_TEST(pairwise_and_grid_checkers_agree_on_random_inputs)
                     p.z = 0.25 * rnd(); /* flatter than z_offs: no violation possible */
             }
         }
-        s1 = amp_gouge_check(&ps, &h, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, &v1, &e1);
-        s2 = amp_gouge_check(&ps, &h, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v2, &e2);
+        s1 = amp_check_gouge(&ps, &h, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, &v1, &e1);
+        s2 = amp_check_gouge(&ps, &h, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v2, &e2);
         ck_assert_int_eq(s1, s2);
         if (s1 == AMP_ERR_CHECK) {
             fails++;
@@ -570,7 +570,7 @@ START_TEST(gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge)
         ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
         ck_assert_int_eq(amp_pathset_push(&ps, l0, 0.5, NULL), AMP_OK);
         ck_assert_int_eq(amp_pathset_push(&ps, l1, 0.5, NULL), AMP_OK);
-        st = amp_gouge_check(&ps, &h, trial % 2 ? AMP_GOUGE_GRID : AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, NULL);
+        st = amp_check_gouge(&ps, &h, trial % 2 ? AMP_GOUGE_GRID : AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, NULL);
         ck_assert_msg((st == AMP_ERR_CHECK) == (c > AMP_GOUGE_TOL), "trial %d: status %d, clearance %.9g", trial,
                       (int)st, c);
         fails += st == AMP_ERR_CHECK;
@@ -592,13 +592,13 @@ START_TEST(checker_finds_a_steep_descent_and_accepts_a_climb)
     const char *up = "ampath-paths 1\npath object 2\n0 0 1 0.5\n0.1 0 5 0.5\n";
     amp_pathset_init(&ps, NULL);
     ck_assert_int_eq(amp_pathset_parse(&ps, down, strlen(down), &err), AMP_OK);
-    ck_assert_int_eq(amp_gouge_check(&ps, &h, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, &v, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_gouge(&ps, &h, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, &v, &err), AMP_ERR_CHECK);
     ck_assert_uint_eq(v.earlier_path, 0);
     ck_assert_uint_eq(v.later_path, 0);
     ck_assert_near(v.earlier_point.z, 5, 1e-12);
     amp_pathset_clear(&ps);
     ck_assert_int_eq(amp_pathset_parse(&ps, up, strlen(up), &err), AMP_OK);
-    ck_assert_int_eq(amp_gouge_check(&ps, &h, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&ps, &h, AMP_GOUGE_GRID, AMP_GOUGE_TOL, &v, &err), AMP_OK);
     amp_pathset_free(&ps);
 }
 END_TEST
@@ -621,7 +621,7 @@ START_TEST(bad_head_geometry_is_rejected_with_a_clear_error)
     o.head = head(0.5, 0);
     ck_assert_int_eq(amp_order(&ps, &o, &out, NULL, &err), AMP_ERR_RANGE);
     o.head.theta = NAN;
-    ck_assert_int_eq(amp_gouge_check(&ps, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_RANGE);
+    ck_assert_int_eq(amp_check_gouge(&ps, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_RANGE);
     ck_assert_uint_eq(out.npaths, 0);
     amp_pathset_free(&ps);
     amp_pathset_free(&out);

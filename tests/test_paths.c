@@ -1,4 +1,4 @@
-/* .amp format and in-memory paths (SPEC §3). */
+/* .amp format and in-memory paths (docs/interfaces.md §3). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -23,7 +23,7 @@ START_TEST(roundtrip_preserves_paths_roles_and_radii)
     ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err), AMP_OK);
     for (k = 0; k < 200; k++) {
         double t = k / 199.0;
-        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20 * cos(6.283185307179586 * t), 20 * sin(6.283185307179586 * t),
+        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20 * cos(2 * AMP_PI * t), 20 * sin(2 * AMP_PI * t),
                                                       5 + 40 * t),
                                           0.3 + 0.2 * t, &err),
                          AMP_OK);
@@ -50,7 +50,6 @@ END_TEST
 
 START_TEST(bead_height_roundtrips_and_sets_the_planar_cross_section)
 {
-    const double pi = 3.14159265358979323846;
     amp_pathset ps, back, copy;
     amp_buf buf;
     amp_error err;
@@ -74,9 +73,9 @@ START_TEST(bead_height_roundtrips_and_sets_the_planar_cross_section)
     ck_assert_int_eq(amp_pathset_append(&copy, &back, &err), AMP_OK);
     ck_assert_double_eq(copy.paths[0].h, 0.2);
     /* rounded rectangle (w - h) h + pi (h/2)^2, against pi r^2 for the tube */
-    ck_assert_near(amp_bead_area(0.225, 0.2), 0.25 * 0.2 + pi * 0.01, 1e-15);
-    ck_assert_near(amp_bead_area(0.05, 0.2), pi * 0.0025, 1e-15);
-    ck_assert_near(amp_pathset_volume(&copy, -1), 10 * (0.25 * 0.2 + pi * 0.01) + 10 * pi * 0.225 * 0.225, 1e-12);
+    ck_assert_near(amp_bead_area(0.225, 0.2), 0.25 * 0.2 + AMP_PI * 0.01, 1e-15);
+    ck_assert_near(amp_bead_area(0.05, 0.2), AMP_PI * 0.0025, 1e-15);
+    ck_assert_near(amp_pathset_volume(&copy, -1), 10 * (0.25 * 0.2 + AMP_PI * 0.01) + 10 * AMP_PI * 0.225 * 0.225, 1e-12);
     amp_buf_free(&buf);
     amp_pathset_free(&ps);
     amp_pathset_free(&back);
@@ -176,14 +175,14 @@ END_TEST
 
 START_TEST(out_of_memory_is_reported_and_leaves_set_consistent)
 {
-    amp_test_failalloc fa;
+    fx_failalloc fa;
     amp_pathset ps;
     amp_error err;
     long budget;
     const char *text = "ampath-paths 1\npath object 3\n0 0 0 1\n1 0 0 1\n2 0 0 1\npath support 1\n5 5 5 0\n";
     for (budget = 0; budget < 6; budget++) {
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         amp_pathset_init(&ps, &fa.a);
         st = parse(&ps, text, &err);
         ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
@@ -201,14 +200,14 @@ START_TEST(file_write_is_atomic_and_reads_back)
 {
     amp_pathset ps, back;
     amp_error err;
-    const char *file = amp_test_tmp("rt.amp");
+    const char *file = fx_tmp("rt.amp");
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&back, NULL);
     ck_assert_int_eq(parse(&ps, "ampath-paths 1\npath object 2\n0 0 0 1\n3 4 0 1\n", &err), AMP_OK);
     ck_assert_int_eq(amp_pathset_write_file(&ps, file, NULL, &err), AMP_OK);
     ck_assert_int_eq(amp_pathset_read_file(&back, file, &err), AMP_OK);
     ck_assert_near(amp_pathset_length(&back, -1), 5.0, 1e-12);
-    ck_assert_near(amp_pathset_volume(&back, -1), 5.0 * 3.14159265358979323846, 1e-9);
+    ck_assert_near(amp_pathset_volume(&back, -1), 5.0 * AMP_PI, 1e-9);
     remove(file);
     ck_assert_int_eq(amp_pathset_read_file(&back, file, &err), AMP_ERR_IO);
     ck_assert_ptr_nonnull(strstr(err.msg, file));
@@ -234,4 +233,4 @@ static Suite *paths_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(paths_suite)
+FX_TEST_MAIN(paths_suite)

@@ -12,7 +12,7 @@
 
 static int run(const char *args, char *out, size_t cap)
 {
-    int rc = amp_test_run_tool(args, out, cap);
+    int rc = fx_run_tool(args, out, cap);
     ck_assert_msg(rc != -2, "AMP_TOOL not set (run through make check)");
     return rc;
 }
@@ -37,10 +37,10 @@ static unsigned char *slurp(const char *file, size_t *len)
 static const char *fixture_file(void)
 {
     amp_pathset ps;
-    const char *file = amp_test_tmp("preview.amp");
+    const char *file = fx_tmp("preview.amp");
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 4, 3, 48, 0.25);
-    amp_fixture_helix(&ps, 12, 150);
+    fx_rings(&ps, 0, 0, 4, 3, 48, 0.25);
+    fx_helix(&ps, 12, 150);
     ck_assert_int_eq(amp_pathset_write_file(&ps, file, NULL, NULL), AMP_OK);
     amp_pathset_free(&ps);
     return file;
@@ -292,7 +292,7 @@ static int png_read(const unsigned char *d, size_t n, png *img)
 
 START_TEST(png_is_valid_with_requested_size_and_coloured_paths)
 {
-    const char *in = fixture_file(), *out = amp_test_tmp("preview.png");
+    const char *in = fixture_file(), *out = fx_tmp("preview.png");
     char args[1024], json[4096];
     unsigned char *d;
     size_t n, i, ink = 0, grey = 0, blue = 0, red = 0;
@@ -330,7 +330,7 @@ END_TEST
 
 START_TEST(png_reader_rejects_corrupted_files)
 {
-    const char *in = fixture_file(), *out = amp_test_tmp("corrupt.png");
+    const char *in = fixture_file(), *out = fx_tmp("corrupt.png");
     char args[1024];
     unsigned char *d;
     size_t n;
@@ -353,7 +353,7 @@ END_TEST
 
 START_TEST(svg_is_well_formed_with_one_group_of_polylines_per_view)
 {
-    const char *in = fixture_file(), *out = amp_test_tmp("preview.svg");
+    const char *in = fixture_file(), *out = fx_tmp("preview.svg");
     char args[1024];
     char *d, *p;
     size_t n, lt = 0, gt = 0, polylines = 0, i;
@@ -390,23 +390,23 @@ START_TEST(preview_bad_usage_exits_2)
     FILE *f;
     snprintf(args, sizeof args, "preview %s", in);
     ck_assert_int_eq(run(args, NULL, 0), 2); /* no -o */
-    snprintf(args, sizeof args, "preview %s -o %s", in, amp_test_tmp("x.jpg"));
+    snprintf(args, sizeof args, "preview %s -o %s", in, fx_tmp("x.jpg"));
     ck_assert_int_eq(run(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "preview %s -o %s --width 10", in, amp_test_tmp("x.png"));
+    snprintf(args, sizeof args, "preview %s -o %s --width 10", in, fx_tmp("x.png"));
     ck_assert_int_eq(run(args, NULL, 0), 2);
-    snprintf(args, sizeof args, "preview %s -o %s", amp_test_tmp("missing.amp"), amp_test_tmp("x.png"));
+    snprintf(args, sizeof args, "preview %s -o %s", fx_tmp("missing.amp"), fx_tmp("x.png"));
     ck_assert_int_eq(run(args, NULL, 0), 2);
-    f = fopen(amp_test_tmp("empty.amp"), "w");
+    f = fopen(fx_tmp("empty.amp"), "w");
     fputs("ampath-paths 1\n", f);
     fclose(f);
-    snprintf(args, sizeof args, "preview %s -o %s", amp_test_tmp("empty.amp"), amp_test_tmp("x.png"));
+    snprintf(args, sizeof args, "preview %s -o %s", fx_tmp("empty.amp"), fx_tmp("x.png"));
     ck_assert_int_eq(run(args, NULL, 0), 2);
-    remove(amp_test_tmp("empty.amp"));
+    remove(fx_tmp("empty.amp"));
     remove(in);
 }
 END_TEST
 
-/* The renderer lives in the library (issue 20): the library's pictures written into memory are the
+/* The renderer lives in the library: the library's pictures written into memory are the
  * tool's files byte for byte, PNG and SVG, at a legend size of each kind. */
 START_TEST(library_pictures_are_the_tool_files_byte_for_byte)
 {
@@ -420,7 +420,7 @@ START_TEST(library_pictures_are_the_tool_files_byte_for_byte)
     ck_assert_int_eq(amp_pathset_read_file(&ps, in, NULL), AMP_OK);
     for (w = 0; w < 3; w++)
         for (fmt = 0; fmt < 2; fmt++) {
-            const char *out = amp_test_tmp(fmt ? "lib.svg" : "lib.png");
+            const char *out = fx_tmp(fmt ? "lib.svg" : "lib.png");
             char args[1024];
             unsigned char *d;
             amp_buf b;
@@ -463,13 +463,13 @@ static amp_status fail_sink(void *user, const char *data, size_t len)
 START_TEST(library_preview_reports_sink_memory_and_argument_errors)
 {
     amp_pathset ps, empty;
-    amp_test_failalloc fa;
+    fx_failalloc fa;
     amp_error err;
     failsink fs;
     amp_buf b;
     amp_preview_stats st;
     amp_pathset_init(&ps, NULL);
-    amp_fixture_rings(&ps, 0, 0, 4, 3, 48, 0.25);
+    fx_rings(&ps, 0, 0, 4, 3, 48, 0.25);
     fs.left = 5000;
     amp_error_clear(&err);
     ck_assert_int_eq(amp_preview_png(&ps, 400, fail_sink, &fs, &st, &err), AMP_ERR_IO);
@@ -484,7 +484,7 @@ START_TEST(library_preview_reports_sink_memory_and_argument_errors)
     ck_assert_int_eq(amp_preview_svg(&empty, 400, amp_buf_sink, &b, NULL, &err), AMP_ERR_ARG);
     ck_assert_uint_eq(b.len, 0);
     /* memory through the path set's allocator: a failing one gives AMP_ERR_NOMEM and writes nothing */
-    amp_test_failalloc_init(&fa, 0);
+    fx_failalloc_init(&fa, 0);
     ps.alloc = &fa.a;
     ck_assert_int_eq(amp_preview_png(&ps, 400, amp_buf_sink, &b, NULL, &err), AMP_ERR_NOMEM);
     ck_assert_uint_eq(b.len, 0);
@@ -507,4 +507,4 @@ static Suite *preview_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(preview_suite)
+FX_TEST_MAIN(preview_suite)

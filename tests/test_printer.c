@@ -1,4 +1,4 @@
-/* Printer profiles (SPEC §5): built-ins, the PrusaSlicer/OrcaSlicer .ini reader, placeholders, the CLI. */
+/* Printer profiles (docs/interfaces.md §5): built-ins, the PrusaSlicer/OrcaSlicer .ini reader, placeholders, the CLI. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -94,7 +94,7 @@ START_TEST(prusaslicer_ini_is_read_with_unknown_keys_listed)
     static amp_printer p;
     amp_gcode_opts o;
     amp_error err;
-    const char *path = amp_test_tmp("myprinter.ini");
+    const char *path = fx_tmp("myprinter.ini");
     write_text(path, prusa_ini);
     ck_assert_msg(amp_printer_load(&p, path, &err) == AMP_OK, "%s", err.msg);
     ck_assert_msg(strlen(p.name) >= 9 && strcmp(p.name + strlen(p.name) - 9, "myprinter") == 0, "%s", p.name);
@@ -199,27 +199,27 @@ END_TEST
 
 START_TEST(printer_command_lists_and_shows_profiles)
 {
-    const char *path = amp_test_tmp("cli-printer.ini");
+    const char *path = fx_tmp("cli-printer.ini");
     char args[1024], out[16384];
     write_text(path, prusa_ini);
-    ck_assert_int_eq(amp_test_run_tool("printer list --json", out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool("printer list --json", out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"name\":\"prusa-mk3s\""));
     ck_assert_ptr_nonnull(strstr(out, "\"name\":\"voron-350\""));
-    ck_assert_int_eq(amp_test_run_tool("printer show ender3 --json", out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool("printer show ender3 --json", out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"max_feed_z_mm_s\":5"));
     snprintf(args, sizeof args, "printer show %s --json", path);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"unknown_keys\":[\"thumbnails\",\"wipe_tower_x\"]"));
     ck_assert_ptr_nonnull(strstr(out, "\"bed_mm\":[0,0,0,300,280,320]"));
-    ck_assert_int_eq(amp_test_run_tool("printer show nosuchprinter", NULL, 0), 2);
-    ck_assert_int_eq(amp_test_run_tool("printer frobnicate", NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool("printer show nosuchprinter", NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool("printer frobnicate", NULL, 0), 2);
     remove(path);
 }
 END_TEST
 
 START_TEST(gcode_with_an_ini_profile_uses_its_bed_temperatures_and_start)
 {
-    const char *ini = amp_test_tmp("gc.ini"), *in = amp_test_tmp("gc.amp"), *outf = amp_test_tmp("gc.gcode");
+    const char *ini = fx_tmp("gc.ini"), *in = fx_tmp("gc.amp"), *outf = fx_tmp("gc.gcode");
     char args[2048], json[8192], *text = NULL;
     size_t len;
     amp_pathset ps;
@@ -232,7 +232,7 @@ START_TEST(gcode_with_an_ini_profile_uses_its_bed_temperatures_and_start)
         amp_pathset_push(&ps, amp_v3(20 * cos(k * 0.157), 20 * sin(k * 0.157), 0.25), 0.3375, NULL);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     snprintf(args, sizeof args, "gcode %s --printer %s --json -o %s", in, ini, outf);
-    ck_assert_int_eq(amp_test_run_tool(args, json, sizeof json), 0);
+    ck_assert_int_eq(fx_run_tool(args, json, sizeof json), 0);
     ck_assert_ptr_nonnull(strstr(json, "gc\",\"flavor\":\"marlin\"")); /* named after the file */
     ck_assert_ptr_nonnull(strstr(json, "\"printer_unknown_keys\":[\"thumbnails\",\"wipe_tower_x\"]"));
     ck_assert_ptr_nonnull(strstr(json, "\"first_layer_z_mm\":0.25"));
@@ -266,4 +266,4 @@ static Suite *printer_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(printer_suite)
+FX_TEST_MAIN(printer_suite)

@@ -8,7 +8,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
 
 static unsigned long rng_state = 12345;
 static int dbl_cmp(const void *a, const void *b)
@@ -667,11 +666,11 @@ START_TEST(bad_arguments_get_errors_not_undefined_behaviour)
     }
     amp_spline_free(&s);
     {
-        amp_test_failalloc fa;
+        fx_failalloc fa;
         long budget;
         for (budget = 0; budget < 4; budget++) {
             amp_status st;
-            amp_test_failalloc_init(&fa, budget);
+            fx_failalloc_init(&fa, budget);
             st = amp_trivariate_model("helix", &fa.a, &s, &err);
             ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
             amp_spline_free(&s);
@@ -682,10 +681,10 @@ START_TEST(bad_arguments_get_errors_not_undefined_behaviour)
 }
 END_TEST
 
-/* Distance from p to the exact helix solid of SPEC §4: min over t of the distance to the disc at c(t). */
+/* Distance from p to the exact helix solid of docs/interfaces.md §4: min over t of the distance to the disc at c(t). */
 static double helix_solid_dist(amp_vec3 p, double *tbest)
 {
-    const double R = 20, H = 40, RD = 5, L = sqrt(4 * PI * PI * R * R + H * H), z0 = RD * 2 * PI * R / L;
+    const double R = 20, H = 40, RD = 5, L = sqrt(4 * AMP_PI * AMP_PI * R * R + H * H), z0 = RD * 2 * AMP_PI * R / L;
     double best = HUGE_VAL, bt = 0, lo, hi;
     int i, pass;
     lo = 0;
@@ -693,9 +692,9 @@ static double helix_solid_dist(amp_vec3 p, double *tbest)
     for (pass = 0; pass < 4; pass++) {
         double step = (hi - lo) / 200, t0 = bt;
         for (i = 0; i <= 200; i++) {
-            double t = lo + step * i, ph = 2 * PI * t, dist;
+            double t = lo + step * i, ph = 2 * AMP_PI * t, dist;
             amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), z0 + H * t);
-            amp_vec3 T = amp_v3_scale(amp_v3(-2 * PI * R * sin(ph), 2 * PI * R * cos(ph), H), 1 / L);
+            amp_vec3 T = amp_v3_scale(amp_v3(-2 * AMP_PI * R * sin(ph), 2 * AMP_PI * R * cos(ph), H), 1 / L);
             amp_vec3 q = amp_v3_sub(p, c);
             double hn = amp_v3_dot(q, T), rr = sqrt(fmax(0, amp_v3_len2(q) - hn * hn));
             dist = rr <= RD ? fabs(hn) : hypot(hn, rr - RD);
@@ -720,7 +719,7 @@ START_TEST(helix_model_is_within_0_05_mm_of_the_swept_disc)
     amp_spline s;
     int i, j, l;
     double worst = 0, worst_boundary = 0, zmin = HUGE_VAL;
-    const double R = 20, H = 40, L = sqrt(4 * PI * PI * R * R + H * H);
+    const double R = 20, H = 40, L = sqrt(4 * AMP_PI * AMP_PI * R * R + H * H);
     ck_assert_int_eq(amp_trivariate_model("helix", NULL, &s, NULL), AMP_OK);
     for (l = 0; l <= 64; l++)
         for (j = 0; j <= 8; j++)
@@ -731,8 +730,8 @@ START_TEST(helix_model_is_within_0_05_mm_of_the_swept_disc)
                 zmin = fmin(zmin, p.z);
                 if (i == 0 || i == 8 || j == 0 || j == 8) {
                     /* the spline's side boundary lies on the tube of radius 5 around the helix */
-                    double ph = 2 * PI * t;
-                    amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), 5 * 2 * PI * R / L + H * t);
+                    double ph = 2 * AMP_PI * t;
+                    amp_vec3 c = amp_v3(R * cos(ph), R * sin(ph), 5 * 2 * AMP_PI * R / L + H * t);
                     worst_boundary = fmax(worst_boundary, fabs(amp_v3_dist(p, c) - 5.0));
                 }
             }
@@ -775,7 +774,7 @@ START_TEST(torus_quarter_and_vase_are_exact_revolutions)
     {
         /* the wall's cross-section area changes substantially along the height */
         amp_vec3 i0 = ev(&s, 0, 0, 0.45), o0 = ev(&s, 1, 0, 0.45), i1 = ev(&s, 0, 0, 0.8), o1 = ev(&s, 1, 0, 0.8);
-        double a0 = PI * (o0.x * o0.x - i0.x * i0.x), a1 = PI * (o1.x * o1.x - i1.x * i1.x);
+        double a0 = AMP_PI * (o0.x * o0.x - i0.x * i0.x), a1 = AMP_PI * (o1.x * o1.x - i1.x * i1.x);
         ck_assert_double_gt(fmax(a0, a1) / fmin(a0, a1), 2.0);
     }
     amp_spline_free(&s);
@@ -785,13 +784,13 @@ END_TEST
 /* ---- the CLI ---- */
 static int run_tool(const char *args, const char *stdin_text, char *out, size_t cap)
 {
-    return amp_test_run_tool_ex(args, stdin_text ? stdin_text : "", 1, out, cap);
+    return fx_run_tool_ex(args, stdin_text ? stdin_text : "", 1, out, cap);
 }
 
 START_TEST(cli_model_and_eval_print_full_precision_points)
 {
     char args[512], out[4096];
-    const char *spl = amp_test_tmp("helix.spl");
+    const char *spl = fx_tmp("helix.spl");
     amp_spline s;
     double x, y, z;
     amp_vec3 e, d;
@@ -823,13 +822,13 @@ START_TEST(cli_model_and_eval_print_full_precision_points)
     snprintf(args, sizeof args, "eval %s --derivative q", spl);
     ck_assert_int_eq(run_tool(args, "0.5 0.5 0.5\n", out, sizeof out), 2);
     /* .stl output gives the mesh of the model; a trivariate-only model gives its tessellated boundary */
-    snprintf(args, sizeof args, "model helix -o %s --json", amp_test_tmp("helix.stl"));
+    snprintf(args, sizeof args, "model helix -o %s --json", fx_tmp("helix.stl"));
     ck_assert_int_eq(run_tool(args, NULL, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"kind\":\"mesh\""));
-    remove(amp_test_tmp("helix.stl"));
-    snprintf(args, sizeof args, "model vase -o %s", amp_test_tmp("vase.stl"));
+    remove(fx_tmp("helix.stl"));
+    snprintf(args, sizeof args, "model vase -o %s", fx_tmp("vase.stl"));
     ck_assert_int_eq(run_tool(args, NULL, out, sizeof out), 0);
-    remove(amp_test_tmp("vase.stl"));
+    remove(fx_tmp("vase.stl"));
     ck_assert_int_eq(run_tool("model teapot -o /tmp/teapot.stl", NULL, out, sizeof out), 2);
     ck_assert_ptr_nonnull(strstr(out, "unknown mesh model"));
     ck_assert_int_eq(run_tool("model teapot -o /tmp/x.spl", NULL, out, sizeof out), 2);
@@ -840,7 +839,7 @@ END_TEST
 
 START_TEST(parser_out_of_memory_is_reported_without_leaks)
 {
-    amp_test_failalloc fa;
+    fx_failalloc fa;
     amp_spline v, *list;
     amp_buf buf;
     size_t n;
@@ -851,7 +850,7 @@ START_TEST(parser_out_of_memory_is_reported_without_leaks)
     ck_assert_int_eq(amp_spline_write(&v, 0, amp_buf_sink, &buf, NULL), AMP_OK);
     for (budget = 0; budget < 12; budget++) {
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         st = amp_spline_parse(buf.data, buf.len, &fa.a, &list, &n, NULL);
         ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
         if (st == AMP_OK) {
@@ -893,4 +892,4 @@ static Suite *spline_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(spline_suite)
+FX_TEST_MAIN(spline_suite)

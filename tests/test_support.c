@@ -76,13 +76,13 @@ START_TEST(floating_slab_gets_support_printed_before_the_paths_above)
     ck_assert_uint_eq(nsup, st.paths);
     ck_assert_uint_gt(first_obj, 0); /* the lowest support comes first */
     /* the interleaved order never gouges; support appended after the object does */
-    ck_assert_msg(amp_gouge_check(&out, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_check_gouge(&out, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err) == AMP_OK, "%s", err.msg);
     ck_assert_int_eq(amp_pathset_append(&late, &ps, &err), AMP_OK);
     for (i = 0; i < out.npaths; i++)
         if (out.paths[i].role == AMP_ROLE_SUPPORT)
             ck_assert_int_eq(amp_pathset_add(&late, AMP_ROLE_SUPPORT, amp_pathset_path_verts(&out, i), out.paths[i].n, &err),
                              AMP_OK);
-    ck_assert_int_eq(amp_gouge_check(&late, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_CHECK);
+    ck_assert_int_eq(amp_check_gouge(&late, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_CHECK);
     ck_assert_uint_eq(st.conflicts, 0);
     amp_bvh_free(b);
     amp_mesh_free(&m);
@@ -285,7 +285,7 @@ static amp_hold_report hold(const amp_pathset *ps)
     amp_hold_report r;
     amp_error err;
     amp_hold_opts_default(&o);
-    ck_assert_msg(amp_hold_check(ps, &o, &r, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_check_hold(ps, &o, &r, &err) == AMP_OK, "%s", err.msg);
     return r;
 }
 

@@ -9,14 +9,14 @@
 
 #include "testutil.h"
 
-const char *amp_test_prog(const char *env)
+const char *fx_prog(const char *env)
 {
     const char *p = getenv(env);
     ck_assert_msg(p != NULL, "%s not set (run through make check)", env);
     return p;
 }
 
-void amp_test_msleep(int ms)
+void fx_msleep(int ms)
 {
     struct timespec ts;
     ts.tv_sec = ms / 1000;
@@ -24,10 +24,10 @@ void amp_test_msleep(int ms)
     nanosleep(&ts, NULL);
 }
 
-int amp_test_split(char *s, char **argv, int n)
+int fx_split(char *s, char **argv, int n)
 {
     char *tok = strtok(s, " ");
-    while (tok && n < AMP_TEST_MAXARGS - 1) {
+    while (tok && n < FX_MAXARGS - 1) {
         argv[n++] = tok;
         tok = strtok(NULL, " ");
     }
@@ -35,7 +35,7 @@ int amp_test_split(char *s, char **argv, int n)
     return n;
 }
 
-const char *amp_test_tmp(const char *name)
+const char *fx_tmp(const char *name)
 {
     static char buf[8][256];
     static int next;
@@ -46,7 +46,7 @@ const char *amp_test_tmp(const char *name)
 
 static void *fa_alloc(void *user, size_t size)
 {
-    amp_test_failalloc *f = user;
+    fx_failalloc *f = user;
     if (f->count >= f->budget)
         return NULL;
     f->count++;
@@ -55,7 +55,7 @@ static void *fa_alloc(void *user, size_t size)
 
 static void *fa_realloc(void *user, void *ptr, size_t size)
 {
-    amp_test_failalloc *f = user;
+    fx_failalloc *f = user;
     if (f->count >= f->budget)
         return NULL;
     f->count++;
@@ -68,7 +68,7 @@ static void fa_free(void *user, void *ptr)
     free(ptr);
 }
 
-void amp_test_failalloc_init(amp_test_failalloc *f, long budget)
+void fx_failalloc_init(fx_failalloc *f, long budget)
 {
     f->a.alloc = fa_alloc;
     f->a.realloc = fa_realloc;

@@ -1,4 +1,4 @@
-/* ampath — command-line front end of libampath (SPEC §4). */
+/* ampath — command-line front end of libampath (docs/interfaces.md §4). */
 #include <stdio.h>
 #include <string.h>
 

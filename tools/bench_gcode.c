@@ -13,7 +13,7 @@ static void bench_rings(amp_pathset *ps, int layers, int rings, int nper)
         for (j = 0; j < rings; j++) {
             amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
             for (k = 0; k <= nper; k++) {
-                double w = 6.283185307179586 * (double)k / nper, rad = 5.0 + 0.9 * j;
+                double w = 2.0 * AMP_PI * (double)k / nper, rad = 5.0 + 0.9 * j;
                 amp_pathset_push(ps, amp_v3(rad * cos(w), rad * sin(w), 0.3 * (i + 1)),
                                  0.25 + 0.15 * sin(3 * w) * sin(3 * w), NULL);
             }
@@ -61,17 +61,17 @@ int bench_gcode(cli_json *j, int quick)
         cli_json_int(j, "segments", (long long)it.stats.segments);
         cli_json_num(j, "init_s", t_init);
         cli_json_num(j, "iterate_s", t_iter);
-        cli_json_num(j, "lines_per_s", lines / (t_iter > 0 ? t_iter : 1e-9));
-        cli_json_num(j, "snprintf_lines_per_s", base_lines / (t_base > 0 ? t_base : 1e-9));
-        cli_json_num(j, "iterator_over_snprintf", (lines / (t_iter > 0 ? t_iter : 1e-9)) /
-                                                      (base_lines / (t_base > 0 ? t_base : 1e-9)));
-        cli_json_num(j, "mbytes_per_s", bytes / 1e6 / (t_iter > 0 ? t_iter : 1e-9));
+        cli_json_num(j, "lines_per_s", lines / cli_positive(t_iter));
+        cli_json_num(j, "snprintf_lines_per_s", base_lines / cli_positive(t_base));
+        cli_json_num(j, "iterator_over_snprintf", (lines / cli_positive(t_iter)) /
+                                                      (base_lines / cli_positive(t_base)));
+        cli_json_num(j, "mbytes_per_s", bytes / 1e6 / cli_positive(t_iter));
     } else {
         printf("%lu lines (%.1f MB): init (estimate pass) %.3f s, lines %.3f s = %.2f M lines/s\n",
-               (unsigned long)lines, bytes / 1e6, t_init, t_iter, lines / 1e6 / (t_iter > 0 ? t_iter : 1e-9));
+               (unsigned long)lines, bytes / 1e6, t_init, t_iter, lines / 1e6 / cli_positive(t_iter));
         printf("plain snprintf baseline: %.2f M lines/s; iterator speed = %.2fx the baseline\n",
-               base_lines / 1e6 / (t_base > 0 ? t_base : 1e-9),
-               (lines / (t_iter > 0 ? t_iter : 1e-9)) / (base_lines / (t_base > 0 ? t_base : 1e-9)));
+               base_lines / 1e6 / cli_positive(t_base),
+               (lines / cli_positive(t_iter)) / (base_lines / cli_positive(t_base)));
     }
     (void)base_bytes;
     amp_pathset_free(&ps);

@@ -50,8 +50,8 @@ int bench_mesh(cli_json *j, int quick)
             disagree++;
     }
     t_brute = cli_now() - t0; /* includes nbrute fast queries: negligible next to the brute force */
-    rate_fast = nfast / (t_fast > 0 ? t_fast : 1e-9);
-    rate_brute = nbrute / (t_brute > 0 ? t_brute : 1e-9);
+    rate_fast = nfast / cli_positive(t_fast);
+    rate_brute = nbrute / cli_positive(t_brute);
     if (disagree)
         rc = CLI_FAILED;
     if (j) {

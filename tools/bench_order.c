@@ -102,22 +102,22 @@ int bench_order(cli_json *j, int quick)
             cli_json_int(j, "subdivisions_greedy", (long long)sg.subdivisions);
             cli_json_num(j, "order_s", t_order);
             cli_json_num(j, "greedy_s", t_greedy);
-            cli_json_num(j, "fragments_per_s", (double)st.fragments / (t_order > 0 ? t_order : 1e-9));
+            cli_json_num(j, "fragments_per_s", (double)st.fragments / cli_positive(t_order));
             if (t_pair >= 0) {
                 cli_json_num(j, "pairwise_s", t_pair);
                 cli_json_int(j, "pairwise_edges", (long long)edges);
-                cli_json_num(j, "speedup_over_pairwise", t_pair / (t_order > 0 ? t_order : 1e-9));
+                cli_json_num(j, "speedup_over_pairwise", t_pair / cli_positive(t_order));
             }
             cli_json_close(j);
         } else {
             printf("%8lu fragments (%lu paths): order %.3f s (%.0f fragments/s, %lu subdivisions); plain greedy %.3f s, "
                    "%lu subdivisions",
                    (unsigned long)st.fragments, (unsigned long)st.paths_in, t_order,
-                   (double)st.fragments / (t_order > 0 ? t_order : 1e-9), (unsigned long)st.subdivisions, t_greedy,
+                   (double)st.fragments / cli_positive(t_order), (unsigned long)st.subdivisions, t_greedy,
                    (unsigned long)sg.subdivisions);
             if (t_pair >= 0)
                 printf("; pairwise baseline %.3f s (%lu edges): %.1fx faster", t_pair, (unsigned long)edges,
-                       t_pair / (t_order > 0 ? t_order : 1e-9));
+                       t_pair / cli_positive(t_order));
             printf("\n");
             fflush(stdout);
         }

@@ -53,10 +53,10 @@ int bench_paths(cli_json *j, int quick)
         cli_json_num(j, "write_s", t_write);
         cli_json_num(j, "parse_s", t_parse);
         cli_json_num(j, "strtod_baseline_s", t_base);
-        cli_json_num(j, "parse_over_baseline", t_parse / (t_base > 0 ? t_base : 1e-9));
+        cli_json_num(j, "parse_over_baseline", t_parse / cli_positive(t_base));
     } else {
         printf("%lu vertices, %.1f MB: write %.3f s, parse %.3f s (%.2fx the bare strtod baseline %.3f s)\n",
-               (unsigned long)ps.nverts, buf.len / 1e6, t_write, t_parse, t_parse / (t_base > 0 ? t_base : 1e-9),
+               (unsigned long)ps.nverts, buf.len / 1e6, t_write, t_parse, t_parse / cli_positive(t_base),
                t_base);
     }
     amp_buf_free(&buf);

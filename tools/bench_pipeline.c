@@ -1,9 +1,9 @@
 /*
- * Benchmark (SPEC §7, issue 18): the full helix pipeline of `make demo` in one process —
- * cover (paper 1 §4.1) → order (§5.1) → MDR (§5.2) → support (§5.3) → G-code
- * (SPEC §5), then `check` — stage by stage with time and peak memory, at eps 1
+ * Benchmark (docs/interfaces.md §7): the full helix pipeline of `make demo` in one process —
+ * cover ([P1 §4.1]) → order (§5.1) → MDR (§5.2) → support (§5.3) → G-code
+ * (docs/interfaces.md §5), then `check` — stage by stage with time and peak memory, at eps 1
  * (the demo) and eps 0.5, on 1 and 2 threads; the travel figures of the G-code
- * (issue 14 item 4) with and without the nearest choice of the ordering; and the
+ * with and without the nearest choice of the ordering; and the
  * planar pipeline on the same solid (slice → continuous strokes → G-code) as the
  * baseline of what a layer-based job of the same part costs. Every target of
  * issue 18 is printed with its figure and "met" / "not met".

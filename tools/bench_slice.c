@@ -1,4 +1,4 @@
-/* Benchmark (SPEC §7): slicing + continuous paths on a ~100k-triangle mesh,
+/* Benchmark (docs/interfaces.md §7): slicing + continuous paths on a ~100k-triangle mesh,
  * against a plain per-layer rectilinear infill made by the same tool
  * (extrusion starts, travel). */
 #include <math.h>
@@ -13,7 +13,7 @@
 static int make_mesh(amp_mesh *m, int nu, int nv)
 {
     int i, j;
-    const double tau = 6.283185307179586;
+    const double tau = 2.0 * AMP_PI;
     for (i = 0; i < nu; i++)
         for (j = 0; j < nv; j++) {
             double u = tau * i / nu, v = tau * j / nv, rr = 9 + 1.5 * sin(5 * u), rho = 30 + rr * cos(v);
@@ -78,7 +78,7 @@ static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *hav
     }
 }
 
-/* Scaling series (issue 16: linear cost): the bumpy torus scaled by s in x
+/* Scaling series (the cost must grow linearly): the bumpy torus scaled by s in x
  * and y (a quarter size at s = 1), 1 mm layers, default continuous paths;
  * the time per printed millimetre should stay flat as the part grows. */
 static int scaling(cli_json *j, int quick)
@@ -136,7 +136,7 @@ static int scaling(cli_json *j, int quick)
     return rc;
 }
 
-/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
+/* Side by side with PrusaSlicer (target: slice --continuous +
  * gcode in at most half its wall time), when `prusa-slicer` is installed:
  * the same mesh, 0.2 mm layers, 0.4 mm nozzle, headless --export-gcode.
  * Skipped with a message otherwise. */
@@ -253,7 +253,7 @@ int bench_slice(cli_json *j, int quick)
             cli_json_num(j, "rectilinear_infill_mm", rs.length);
             cli_json_num(j, "rectilinear_spacing_mm", spacing);
             cli_json_num(j, "continuous_travel_mm", travel_c);
-            cli_json_num(j, "travel_ratio", travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+            cli_json_num(j, "travel_ratio", travel_c / cli_positive(rs.travel));
             cli_json_num(j, "rectilinear_travel_mm", rs.travel);
             cli_json_num(j, "rectilinear_s", t_rect);
         } else {
@@ -265,7 +265,7 @@ int bench_slice(cli_json *j, int quick)
                    (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
                    st.infill_length, rs.length, spacing);
             printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, rs.travel,
-                   travel_c / (rs.travel > 0 ? rs.travel : 1e-9));
+                   travel_c / cli_positive(rs.travel));
         }
     }
     if (rc == CLI_OK)

@@ -1,9 +1,9 @@
 /*
- * Benchmark: batched spline evaluation (SPEC §7) — cubic curve (parameter list),
+ * Benchmark: batched spline evaluation (docs/interfaces.md §7) — cubic curve (parameter list),
  * bicubic surface and tricubic trivariate (tensor grids) in points per second,
  * against a plain per-point de Boor evaluation compiled here (binary span search
  * and de Boor's triangle per direction, nothing reused between points).
- * Target (issue 3): at most 20 ns per point for a cubic 3-D curve on one thread.
+ * Target: at most 20 ns per point for a cubic 3-D curve on one thread.
  */
 #include <math.h>
 #include <stdlib.h>

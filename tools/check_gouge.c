@@ -1,4 +1,4 @@
-/* `ampath check` gouge checker (paper 5.1): calls the independent amp_gouge_check. */
+/* `ampath check` gouge checker (paper 5.1): calls the independent amp_check_gouge. */
 #include "checkers.h"
 
 int check_gouge(const check_ctx *c, cli_json *j)
@@ -24,7 +24,7 @@ int check_gouge(const check_ctx *c, cli_json *j)
     amp_error_clear(&err);
     t0 = cli_now();
     /* every path counts, support included: the head must not hit support printed earlier either */
-    st = amp_gouge_check(c->ps, &c->head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, &v, &err);
+    st = amp_check_gouge(c->ps, &c->head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, &v, &err);
     if (st != AMP_OK && st != AMP_ERR_CHECK)
         return cli_fail_err("check", &err);
     if (j) {

@@ -1,6 +1,6 @@
 /*
- * ampath check --mesh: coverage of a mesh's solid by paths (issue 5, paper
- * §4.2): samples points inside the mesh (winding-number test), measures the
+ * ampath check --mesh: coverage of a mesh's solid by paths
+ * ([P1 §4.2]): samples points inside the mesh (winding-number test), measures the
  * largest distance to the nearest path (the coverage gap), and checks that no
  * path vertex lies outside the mesh by more than 0.01 mm.
  */
@@ -8,7 +8,7 @@
 
 #include "checkers.h"
 
-/* Vertices farther than this outside the mesh fail the check (issue 5); --tol above it widens it, for
+/* Vertices farther than this outside the mesh fail the check; --tol above it widens it, for
  * paths made on the exact model and checked against its tessellation. */
 #define OUTSIDE_TOL 0.01
 
@@ -18,6 +18,8 @@ int check_mesh(const check_ctx *c, cli_json *j)
     amp_bvh *b = NULL;
     const amp_pathset *ps = c->ps;
     amp_error err;
+    amp_coverage cov;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     double gap = 0, mean = 0, worst_out = 0, rmax = 0, eps = c->eps;
     size_t i, outside = 0;
     int rc;
@@ -38,9 +40,12 @@ int check_mesh(const check_ctx *c, cli_json *j)
     }
     if (!c->eps_given)
         eps = rmax; /* the paths claim to cover their radius */
-    if (amp_coverage_gap(ps, b, (size_t)c->samples, c->seed, 0.0, &gap, &mean, &err) != AMP_OK) {
+    dom.mesh = b;
+    if (amp_check_coverage(ps, &dom, (size_t)c->samples, c->seed, &cov, &err) != AMP_OK) {
         rc = cli_fail_err("check", &err);
     } else {
+        gap = cov.gap;
+        mean = cov.mean;
         rc = gap <= eps && outside == 0 ? CLI_OK : CLI_FAILED;
         if (j) {
             cli_json_bool(j, "ran", 1);

@@ -1,5 +1,5 @@
-/* ampath check for continuous strokes (paper 2 §4): independent verification
- * with amp_stroke_check(). */
+/* ampath check for continuous strokes ([P2 §4]): independent verification
+ * with amp_check_stroke(). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -64,7 +64,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
             else
                 region = &sl.layers[li].polys;
         }
-        st = amp_pathset_stroke_check(ps, i, region, c->tol, &rep, NULL);
+        st = amp_check_path_stroke(ps, i, region, c->tol, &rep, NULL);
         if (st == AMP_ERR_NOMEM) {
             rc = cli_fail("check", CLI_USAGE, "out of memory");
             break;

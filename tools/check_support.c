@@ -1,4 +1,4 @@
-/* `ampath check` support checker (paper 1 §5.3): every object bead held by earlier material or the bed. */
+/* `ampath check` support checker ([P1 §5.3]): every object bead held by earlier material or the bed. */
 #include "checkers.h"
 
 #define DEG 57.295779513082320876
@@ -67,7 +67,7 @@ int check_support(const check_ctx *c, cli_json *j)
     o.bridge = c->bridge;
     amp_error_clear(&err);
     t0 = cli_now();
-    if (amp_hold_check(c->ps, &o, &r, &err) != AMP_OK) {
+    if (amp_check_hold(c->ps, &o, &r, &err) != AMP_OK) {
         amp_hold_report_free(&r);
         return cli_fail_err("check", &err);
     }

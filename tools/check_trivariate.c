@@ -1,35 +1,8 @@
-/* ampath check --trivariate: independent ε-coverage measurement of a volumetric covering (issue 4). */
+/* ampath check --trivariate: independent ε-coverage measurement of a volumetric covering ([P1 §4.1]). */
 #include <stdlib.h>
 #include <string.h>
 
 #include "checkers.h"
-
-int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
-{
-    amp_error err;
-    amp_spline *list;
-    size_t n, i;
-    const char *const *names = amp_trivariate_model_names();
-    amp_error_clear(&err);
-    for (i = 0; names[i]; i++)
-        if (strcmp(names[i], what) == 0) {
-            if (amp_trivariate_model(what, NULL, out, &err) != AMP_OK)
-                return cli_fail_err(cmd, &err);
-            return CLI_OK;
-        }
-    if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
-        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
-    for (i = 0; i < n && list[i].dim != 3; i++)
-        ;
-    if (i == n) {
-        amp_spline_list_free(NULL, list, n);
-        return cli_fail(cmd, CLI_USAGE, "%s: no trivariate in the file", what);
-    }
-    *out = list[i];
-    amp_spline_init(&list[i]);
-    amp_spline_list_free(NULL, list, n);
-    return CLI_OK;
-}
 
 /* The eps recorded by `ampath cover` in a comment of the path file, or 0. */
 static double eps_from_comment(const char *file)
@@ -53,7 +26,8 @@ static double eps_from_comment(const char *file)
 int check_trivariate(const check_ctx *c, cli_json *j)
 {
     amp_spline v;
-    amp_cover_gap g;
+    amp_coverage g;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     amp_error err;
     int rc;
     double eps = c->eps;
@@ -72,7 +46,8 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         }
     }
     amp_error_clear(&err);
-    if (amp_cover_measure_gap(&v, c->ps, (size_t)c->samples, c->seed, &g, &err) != AMP_OK) {
+    dom.trivariate = &v;
+    if (amp_check_coverage(c->ps, &dom, (size_t)c->samples, c->seed, &g, &err) != AMP_OK) {
         amp_spline_free(&v);
         return cli_fail_err("check", &err);
     }

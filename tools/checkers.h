@@ -1,5 +1,5 @@
 /*
- * checkers.h — the independent checkers behind `ampath check` (SPEC §4).
+ * checkers.h — the independent checkers behind `ampath check` (docs/interfaces.md §4).
  *
  * tools/cmd_check.c parses the common options once, loads the paths, and
  * calls every checker of its table. A checker lives in tools/check_NAME.c and
@@ -63,14 +63,12 @@ int check_mesh(const check_ctx *c, cli_json *j);
 int check_stroke(const check_ctx *c, cli_json *j);
 
 /*
- * Support (paper 1 §5.3): every extruded point of an object path is printed
+ * Support ([P1 §5.3]): every extruded point of an object path is printed
  * over material printed earlier or the bed, within the overhang rule, bridges
- * allowed (lib amp_hold_check, tools/check_support.c). Runs when the file has
+ * allowed (lib amp_check_hold, tools/check_support.c). Runs when the file has
  * support paths, or on request (--support).
  */
 int check_support(const check_ctx *c, cli_json *j);
 
-/** Load the first trivariate of a .spl file, or a built-in model by name; prints its own error. */
-int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out);
 
 #endif

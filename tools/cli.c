@@ -28,7 +28,7 @@ int cli_fail_err(const char *cmd, const amp_error *err)
 
 /*
  * Accepted ranges of the numeric options, by name (and command where one name means
- * different things), checked once here for every command (issue 21): a value outside is
+ * different things), checked once here for every command: a value outside is
  * refused with exit 2 before any work, instead of `--feed 1e-300` writing F0 or
  * `--layer 1e308` giving 0 layers. The bounds are physical plausibility for an FDM printer
  * and its geometry (mm, mm/s, degrees, C), generous on both sides; the first match wins.
@@ -116,18 +116,39 @@ static int check_range(const char *cmd, const cli_opt *o, double v, const char *
     return CLI_OK;
 }
 
-static int set_value(const char *cmd, cli_opt *o, const char *val)
+int cli_number(const char *s, double *out)
 {
     char *end;
+    double d;
+    errno = 0;
+    d = strtod(s, &end);
+    if (end == s || *end || !isfinite(d))
+        return -1;
+    *out = d;
+    return 0;
+}
+
+int cli_integer(const char *s, long *out)
+{
+    char *end;
+    long l;
+    errno = 0;
+    l = strtol(s, &end, 10);
+    if (end == s || *end || errno)
+        return -1;
+    *out = l;
+    return 0;
+}
+
+static int set_value(const char *cmd, cli_opt *o, const char *val)
+{
     switch (o->kind) {
     case CLI_STR:
         *(const char **)o->dst = val;
         return CLI_OK;
     case CLI_DOUBLE: {
         double d;
-        errno = 0;
-        d = strtod(val, &end);
-        if (end == val || *end || !isfinite(d))
+        if (cli_number(val, &d) != 0)
             return cli_fail(cmd, CLI_USAGE, "--%s expects a number, got '%s'", o->name, val);
         if (check_range(cmd, o, d, val) != CLI_OK)
             return CLI_USAGE;
@@ -136,9 +157,7 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
     }
     case CLI_LONG: {
         long l;
-        errno = 0;
-        l = strtol(val, &end, 10);
-        if (end == val || *end || errno)
+        if (cli_integer(val, &l) != 0)
             return cli_fail(cmd, CLI_USAGE, "--%s expects an integer, got '%s'", o->name, val);
         if (check_range(cmd, o, (double)l, val) != CLI_OK)
             return CLI_USAGE;
@@ -151,7 +170,7 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
     return cli_fail(cmd, CLI_USAGE, "--%s takes no value", o->name);
 }
 
-/* ---- work limits (issue 21): estimated before the work, overridable per run ---- */
+/* ---- work limits: estimated before the work, overridable per run ---- */
 cli_limits cli_work = {CLI_DEFAULT_MAX_CURVES, CLI_DEFAULT_MAX_SEGMENTS};
 
 /* The --max-... options of the commands that estimate their work: accepted next to the
@@ -409,7 +428,7 @@ int cli_load_paths(const char *cmd, const char *file, amp_pathset *ps)
     amp_error_clear(&err);
     if (amp_pathset_read_file(ps, file, &err) != AMP_OK) {
         /* the parser keeps what it had grown: release it here, once for every command,
-         * so that a bad input exits 2 and not 1 with a leak report under ASan (issue 21) */
+         * so that a bad input exits 2 and not 1 with a leak report under ASan */
         amp_pathset_free(ps);
         return cli_fail_err(cmd, &err);
     }
@@ -449,5 +468,42 @@ int cli_save_paths(const char *cmd, const char *file, const amp_pathset *ps, con
     amp_error_clear(&err);
     if (amp_pathset_write_file(ps, file, comment, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
+    return CLI_OK;
+}
+
+void cli_progress_fn(void *user, double fraction) { cli_progress_update((cli_progress *)user, fraction); }
+
+int cli_ends_with(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcmp(s + n - m, suffix) == 0;
+}
+
+double cli_positive(double seconds) { return seconds > 0 ? seconds : 1e-9; }
+
+int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
+{
+    amp_error err;
+    amp_spline *list;
+    size_t n, i;
+    const char *const *names = amp_trivariate_model_names();
+    amp_error_clear(&err);
+    for (i = 0; names[i]; i++)
+        if (strcmp(names[i], what) == 0) {
+            if (amp_trivariate_model(what, NULL, out, &err) != AMP_OK)
+                return cli_fail_err(cmd, &err);
+            return CLI_OK;
+        }
+    if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
+        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
+    for (i = 0; i < n && list[i].dim != 3; i++)
+        ;
+    if (i == n) {
+        amp_spline_list_free(NULL, list, n);
+        return cli_fail(cmd, CLI_USAGE, "%s: no trivariate in the file", what);
+    }
+    *out = list[i];
+    amp_spline_init(&list[i]);
+    amp_spline_list_free(NULL, list, n);
     return CLI_OK;
 }

@@ -1,4 +1,4 @@
-/* ampath bench — the benchmarks of SPEC §7, each printing ratios measured in the same run. */
+/* ampath bench — the benchmarks of docs/interfaces.md §7, each printing ratios measured in the same run. */
 #include <string.h>
 
 #include "cli.h"

@@ -1,4 +1,4 @@
-/* ampath cover TRIVARIATE — paper 1 §4.1: adaptive iso-surfaces (Algorithm 1), then iso-curves (SPEC §4). */
+/* ampath cover TRIVARIATE — [P1 §4.1]: adaptive iso-surfaces (Algorithm 1), then iso-curves (docs/interfaces.md §4). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -55,7 +55,7 @@ static double net_length(const amp_spline *v, int d)
 }
 
 /*
- * Work estimate before covering (issue 21): Algorithm 1 halves the covering direction
+ * Work estimate before covering: Algorithm 1 halves the covering direction
  * until neighbouring surfaces are within thr = eps - delta by the Lemma A.2 measure, and
  * each surface is covered the same way by curves, so about (L_d / thr + 1) surfaces of
  * (L_e0 / thr + 1) curves each. Measured on the built-in models it is within a factor of
@@ -68,7 +68,6 @@ static double estimate_curves(const amp_spline *v, int d, double eps, double cho
     return (ceil(net_length(v, d) / thr) + 1) * (ceil(net_length(v, e0) / thr) + 1);
 }
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 int cmd_cover(int argc, char **argv)
 {
@@ -78,7 +77,8 @@ int cmd_cover(int argc, char **argv)
     int json = 0, npos = 0, rc;
     amp_cover_opts o;
     amp_cover_stats st;
-    amp_cover_gap gap;
+    amp_coverage gap;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
     amp_spline v;
     amp_pathset ps;
     amp_error err;
@@ -124,7 +124,7 @@ int cmd_cover(int argc, char **argv)
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
     cli_progress_begin(&bar, "cover");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     t0 = cli_now();
     rc = amp_cover_trivariate(&v, &o, &ps, &st, &err);
@@ -145,7 +145,8 @@ int cmd_cover(int argc, char **argv)
         return CLI_USAGE;
     }
     memset(&gap, 0, sizeof gap);
-    if (json && samples > 0 && amp_cover_measure_gap(&v, &ps, (size_t)samples, 1, &gap, &err) != AMP_OK) {
+    dom.trivariate = &v;
+    if (json && samples > 0 && amp_check_coverage(&ps, &dom, (size_t)samples, 1, &gap, &err) != AMP_OK) {
         amp_spline_free(&v);
         amp_pathset_free(&ps);
         return cli_fail_err("cover", &err);

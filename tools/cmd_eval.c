@@ -1,4 +1,4 @@
-/* ampath eval SPLINE — points and derivatives of a .spl object at parameters read from stdin (SPEC §4). */
+/* ampath eval SPLINE — points and derivatives of a .spl object at parameters read from stdin (docs/interfaces.md §4). */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* ampath field MESH.stl --field NAME --spacing S — paper §4.2: direction-field curves clipped to a mesh. */
+/* ampath field MESH.stl --field NAME --spacing S — [P1 §4.2]: direction-field curves clipped to a mesh. */
 #include <stdlib.h>
 #include <string.h>
 
@@ -102,7 +102,6 @@ static void print_report(const report *r, int json)
     }
 }
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 /* The sweep field of --along SPINE.amp (its first path) and --side W; *sw is malloc'ed and must outlive f. */
 static int load_sweep(const char *along, double side, amp_field *f, amp_sweep **sw)
@@ -146,11 +145,16 @@ static int measure_gap(const amp_pathset *ps, const amp_bvh *b, long samples, do
                        double *gap_in, double *mean)
 {
     amp_error err;
+    amp_coverage g;
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
+    dom.mesh = b;
     amp_error_clear(&err);
-    if (amp_coverage_gap(ps, b, (size_t)samples, 1, 0.0, gap_all, mean, &err) != AMP_OK)
+    if (amp_check_coverage(ps, &dom, (size_t)samples, 1, &g, &err) != AMP_OK)
         return cli_fail_err("field", &err);
-    if (amp_coverage_gap(ps, b, (size_t)samples, 2, spacing, gap_in, NULL, &err) != AMP_OK)
-        *gap_in = -1;
+    *gap_all = g.gap;
+    *mean = g.mean;
+    dom.margin = spacing;
+    *gap_in = amp_check_coverage(ps, &dom, (size_t)samples, 2, &g, &err) == AMP_OK ? g.gap : -1;
     return CLI_OK;
 }
 
@@ -248,7 +252,7 @@ int cmd_field(int argc, char **argv)
     o.nwithout = rb[1] != NULL;
     t0 = cli_now();
     cli_progress_begin(&bar, "field");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
     cli_progress_end(&bar);

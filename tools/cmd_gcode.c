@@ -1,4 +1,4 @@
-/* ampath gcode PATHS.amp — MDR-modulated G-code, placed on a printer's bed (SPEC §4, §5). */
+/* ampath gcode PATHS.amp — MDR-modulated G-code, placed on a printer's bed (docs/interfaces.md §4, §5). */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -64,7 +64,7 @@ static int read_text(const char *file, char **text)
     return CLI_OK;
 }
 
-/* Through the one safe writer (issue 21): symlinks followed, devices written directly, a
+/* Through the one safe writer (io.h amp_out): symlinks followed, devices written directly, a
  * unique temporary renamed into place only after a complete, synced write. */
 static int write_gcode(const char *out, const amp_pathset *ps, const amp_gcode_opts *o, amp_gcode_stats *st)
 {

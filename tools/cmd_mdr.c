@@ -19,7 +19,6 @@ const char cmd_mdr_usage[] =
     "  -o FILE       write the paths with cut points inserted and r set per vertex (.amp)\n"
     "Over-coverage = sum(pi r^2 L) of the object paths / model volume: 1 = as much plastic as the part holds.\n";
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 /* Volume of the model: a trivariate (quadrature) or a closed mesh (divergence theorem). */
 static int model_volume(const char *tri, const char *mesh, double *volume)
@@ -91,7 +90,7 @@ int cmd_mdr(int argc, char **argv)
         return rc;
     t0 = cli_now();
     cli_progress_begin(&bar, "mdr");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     st_mdr = amp_mdr(&ps, &o, &out, &st, &err);
     cli_progress_end(&bar);

@@ -1,4 +1,4 @@
-/* ampath model NAME -o FILE — write a built-in model (SPEC §4). */
+/* ampath model NAME -o FILE — write a built-in model (docs/interfaces.md §4). */
 #include <stdio.h>
 #include <string.h>
 
@@ -65,12 +65,6 @@ static amp_status spline_writer(void *ctx, amp_sink_fn sink, void *user, amp_err
     return amp_spline_write(ctx, 1, sink, user, err);
 }
 
-static int ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcmp(s + n - m, suffix) == 0;
-}
-
 int cmd_model(int argc, char **argv)
 {
     const char *pos[1], *out = NULL;
@@ -84,7 +78,7 @@ int cmd_model(int argc, char **argv)
         return rc;
     if (!out)
         return cli_fail("model", CLI_USAGE, "-o FILE is required (.spl or .stl)");
-    if (ends_with(out, ".stl") || ends_with(out, ".STL"))
+    if (cli_ends_with(out, ".stl") || cli_ends_with(out, ".STL"))
         return write_mesh_model(pos[0], out, tol, json);
     amp_error_clear(&err);
     if (amp_trivariate_model(pos[0], NULL, &s, &err) != AMP_OK)

@@ -1,4 +1,4 @@
-/* ampath order — fragments and Algorithm 2 (paper §5.1): a gouge-free print order. */
+/* ampath order — fragments and Algorithm 2 ([P1 §5.1]): a gouge-free print order. */
 #include <string.h>
 
 #include "cli.h"
@@ -20,7 +20,6 @@ const char cmd_order_usage[] =
     "  -o FILE         write the ordered paths (.amp); cut points get interpolated radii\n"
     "Without --compare only the ordering written is computed.\n";
 
-static void progress_cb(void *user, double fraction) { cli_progress_update(user, fraction); }
 
 int cmd_order(int argc, char **argv)
 {
@@ -45,7 +44,7 @@ int cmd_order(int argc, char **argv)
         return rc;
     cli_progress bar;
     amp_order_opts_default(&o);
-    o.progress = progress_cb;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     if ((rc = headopt_make("order", z_offs, theta, &o.head)) != CLI_OK)
         return rc;

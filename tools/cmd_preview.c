@@ -1,4 +1,4 @@
-/* ampath preview PATHS.amp -o OUT.svg|OUT.png — a picture of the paths (SPEC §4). */
+/* ampath preview PATHS.amp -o OUT.svg|OUT.png — a picture of the paths (docs/interfaces.md §4). */
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
@@ -14,12 +14,6 @@ const char cmd_preview_usage[] =
     "                     drawn_segments, bytes, seconds)\n"
     "Support paths are grey; object paths run from blue (first printed) to red (last).\n"
     "The PNG encoder is ampath's own (no image library).\n";
-
-static int ends_with(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcmp(s + n - m, suffix) == 0;
-}
 
 int cmd_preview(int argc, char **argv)
 {
@@ -41,9 +35,9 @@ int cmd_preview(int argc, char **argv)
         return rc;
     if (!out)
         return cli_fail("preview", CLI_USAGE, "-o OUT.svg|OUT.png is required");
-    if (ends_with(out, ".png") || ends_with(out, ".PNG"))
+    if (cli_ends_with(out, ".png") || cli_ends_with(out, ".PNG"))
         png = 1;
-    else if (ends_with(out, ".svg") || ends_with(out, ".SVG"))
+    else if (cli_ends_with(out, ".svg") || cli_ends_with(out, ".SVG"))
         png = 0;
     else
         return cli_fail("preview", CLI_USAGE, "%s: the output must end in .png or .svg", out);

@@ -1,4 +1,4 @@
-/* ampath printer list|show — the printer profiles that gcode, slice and the bridge take (SPEC §5). */
+/* ampath printer list|show — the printer profiles that gcode, slice and the bridge take (docs/interfaces.md §5). */
 #include <stdio.h>
 #include <string.h>
 

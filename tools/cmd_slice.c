@@ -1,4 +1,4 @@
-/* ampath slice MESH.stl --layer H --polygons — planar layers (paper 2 §2.2 step 1, SPEC §4). */
+/* ampath slice MESH.stl --layer H --polygons — planar layers ([P2 §2.2] step 1, docs/interfaces.md §4). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,12 +48,6 @@ const char cmd_slice_usage[] =
     "(open_chains, per layer) with a warning on stderr. --continuous checks every path it writes\n"
     "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
-static int ends_with(const char *s, const char *suf)
-{
-    size_t n = strlen(s), m = strlen(suf);
-    return n >= m && strcmp(s + n - m, suf) == 0;
-}
-
 static int write_amp(const char *file, const amp_slices *sl, double radius, double layer)
 {
     amp_pathset ps;
@@ -70,7 +64,7 @@ static int write_amp(const char *file, const amp_slices *sl, double radius, doub
             size_t n = P->rings[r].n;
             if (amp_pathset_begin(&ps, AMP_ROLE_OBJECT, &err) != AMP_OK)
                 goto fail;
-            /* closed path: the last vertex repeats the first (SPEC §4) */
+            /* closed path: the last vertex repeats the first (docs/interfaces.md §4) */
             for (k = 0; k <= n; k++)
                 if (amp_pathset_push(&ps, amp_v3(p[k % n].x, p[k % n].y, sl->layers[i].z_cut), radius, &err) !=
                     AMP_OK)
@@ -325,7 +319,7 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         amp_stroke_report rep;
         amp_status cs;
         const amp_polyset *reg = ps.paths[i].n ? layer_region(sl, amp_pathset_path_verts(&ps, i)[0].p.z) : NULL;
-        cs = amp_pathset_stroke_check(&ps, i, reg, 1e-6, &rep, &err);
+        cs = amp_check_path_stroke(&ps, i, reg, 1e-6, &rep, &err);
         if (cs == AMP_ERR_NOMEM) {
             amp_pathset_free(&ps);
             free(per);
@@ -399,7 +393,7 @@ int cmd_slice(int argc, char **argv)
     if (!opts[0].seen)
         return cli_fail("slice", CLI_USAGE, "--layer H is required");
     if (printer && !opts[15].seen && !opts[6].seen) {
-        /* the profile's nozzle sets the bead (SPEC §4: 1.125 x the nozzle), as --nozzle does */
+        /* the profile's nozzle sets the bead (docs/interfaces.md §4: 1.125 x the nozzle), as --nozzle does */
         amp_printer *pr = malloc(sizeof *pr);
         amp_error err;
         if (!pr)
@@ -466,14 +460,14 @@ int cmd_slice(int argc, char **argv)
                 (unsigned long)sl.open_chains);
     if (rc == CLI_OK && continuous) {
         long li = -1;
-        if (out && ends_with(out, ".svg"))
+        if (out && cli_ends_with(out, ".svg"))
             li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
-        rc = li < -1 || (out && ends_with(out, ".svg") && li < 0) ? CLI_USAGE
+        rc = li < -1 || (out && cli_ends_with(out, ".svg") && li < 0) ? CLI_USAGE
                                                                    : run_continuous(pos[0], out, &sl, &co, json, t0, epsc, li);
         goto done;
     }
     if (rc == CLI_OK && out) {
-        if (ends_with(out, ".svg")) {
+        if (cli_ends_with(out, ".svg")) {
             long li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
             rc = li < 0 ? CLI_USAGE : write_svg(out, &sl, li, radius);
         } else

@@ -22,7 +22,6 @@ const char cmd_support_usage[] =
     "object path is split there when needed); object paths the support still leaves unheld (the check of\n"
     "'ampath check', 45-degree rule, air under a bead up to --min-gap) are named.\n";
 
-static void progress(void *user, double f) { cli_progress_update((cli_progress *)user, f); }
 
 static void print_json(const char *input, const char *tri, const char *mesh, const amp_support_opts *o,
                        const amp_support_stats *st, size_t paths_out, const amp_hold_report *hr, double t)
@@ -127,17 +126,17 @@ int cmd_support(int argc, char **argv)
         goto done;
     }
     cli_progress_begin(&bar, "support");
-    o.progress = progress;
+    o.progress = cli_progress_fn;
     o.progress_user = &bar;
     rc = amp_support(&ps, b, &o, &out, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("support", &err);
     cli_progress_end(&bar);
     if (rc != CLI_OK)
         goto done;
     rc = CLI_USAGE;
-    /* name what the support leaves unheld (the check of `ampath check`, paper 1 §5.3) */
+    /* name what the support leaves unheld (the check of `ampath check`, [P1 §5.3]) */
     amp_hold_opts_default(&ho);
     ho.max_gap = o.min_gap;
-    if (amp_hold_check(&out, &ho, &hr, &err) != AMP_OK) {
+    if (amp_check_hold(&out, &ho, &hr, &err) != AMP_OK) {
         rc = cli_fail_err("support", &err);
         goto done;
     }

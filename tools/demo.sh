@@ -1,7 +1,7 @@
 #!/bin/sh
-# make demo — SPEC §6: the main job on built-in defaults, end to end.
-#   helix model -> cover (paper 1 §4.1) -> order for the default head (§5.1) -> MDR (§5.2)
-#   -> support (§5.3) -> independent checks -> G-code (SPEC §5) -> pictures
+# make demo — docs/interfaces.md §6: the main job on built-in defaults, end to end.
+#   helix model -> cover ([P1 §4.1]) -> order for the default head (§5.1) -> MDR (§5.2)
+#   -> support (§5.3) -> independent checks -> G-code (docs/interfaces.md §5) -> pictures
 #   -> stream through ampath-bridge to the virtual printer, and compare what it executed.
 # Everything lands in demo/. Options through the environment:
 #   DEMO_EPS (default 1 mm), DEMO_DIR (default u: curves along the helix, as in paper Fig. 11),
@@ -58,7 +58,7 @@ echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, of which travel $
 echo "travels:         $(num $D/gcode.json travels) ($(num $D/gcode.json direct_hops) direct hops without retraction or lift, $(num $D/gcode.json retractions) retractions); issue 14 targets: <= 0.5 x, <= 30 %"
 echo
 
-# Stream the job to the virtual printer (SPEC §8) through a pseudo-terminal, then compare.
+# Stream the job to the virtual printer (docs/interfaces.md §8) through a pseudo-terminal, then compare.
 LINK=/tmp/ampath-demo-printer-$$
 $V --link $LINK --log $D/printer.log > /dev/null 2>&1 &
 VP=$!

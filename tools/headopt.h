@@ -1,4 +1,4 @@
-/* headopt.h — the print-head options shared by order, check, support and mdr (SPEC §2, §4). */
+/* headopt.h — the print-head options shared by order, check, support and mdr (docs/interfaces.md §2, §4). */
 #ifndef AMP_TOOLS_HEADOPT_H
 #define AMP_TOOLS_HEADOPT_H
 
@@ -15,7 +15,7 @@ static inline int headopt_make(const char *cmd, double z_offs, double theta_deg,
     amp_error err;
     amp_error_clear(&err);
     h->z_offs = z_offs;
-    h->theta = theta_deg * 3.14159265358979323846 / 180.0;
+    h->theta = theta_deg * AMP_PI / 180.0;
     if (amp_head_validate(h, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
     return CLI_OK;

@@ -3,7 +3,7 @@
 
 #include "slicetool.h"
 
-/* Work before slicing (issue 21): every triangle gives one section segment per layer plane
+/* Work before slicing: every triangle gives one section segment per layer plane
  * it spans, and every layer costs a little on its own, so layers + the sum over triangles of
  * (z extent / H + 1) bounds the segments the slicer will store. */
 double slicetool_estimate(const amp_mesh *m, double layer)

@@ -1,5 +1,5 @@
 #!/bin/sh
-# make soak — issue 10's soak test at full size, against the virtual printer:
+# make soak — the bridge's soak test at full size, against the virtual printer:
 #   1. SOAK_LINES (default 100000) moves with 1 % of the bytes corrupted in both directions;
 #   2. the same job with 0.5 % corrupted commands and three printer resets, resumed with
 #      --resume-from until done (printer-to-host corruption is left out here: an ok lost just

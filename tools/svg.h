@@ -11,7 +11,7 @@
 
 typedef struct svg_doc {
     FILE *f;       /* out.f while open */
-    amp_out out;   /* the safe writer (issue 21): no partial file ever replaces an old one */
+    amp_out out;   /* the safe writer (io.h): no partial file ever replaces an old one */
     amp_error err; /* why svg_open or svg_close failed */
     double x0, y1; /* left and top in mm (y is flipped) */
     double px;     /* nominal stroke unit: 1/500 of the larger side */

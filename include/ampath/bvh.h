@@ -1,7 +1,7 @@
 /*
  * ampath/bvh.h — a bounding volume hierarchy over a triangle mesh: ray and
  * segment intersection, closest point, robust inside tests (generalised
- * winding number) and clipping of polylines to the solid (paper §4.2: the
+ * winding number) and clipping of polylines to the solid ([P1 §4.2]: the
  * covering curves of a direction field are kept where they lie inside the mesh).
  *
  * An amp_bvh is built once from an amp_mesh and is immutable afterwards: it
@@ -111,7 +111,7 @@ int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
 
 /**
  * Clip the polyline @p v[0..n-1] to the solid and append its inside pieces to
- * @p out as paths of @p role (paper §4.2: "keep the parts inside the mesh").
+ * @p out as paths of @p role ([P1 §4.2]: "keep the parts inside the mesh").
  * Every segment is cut exactly where it crosses a triangle (segment–triangle
  * intersection through the BVH); each sub-segment is then classified by the
  * winding number at its midpoint, so that crossings through holes or flipped

@@ -142,47 +142,7 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);
 
-/** Findings of amp_stroke_check(). */
-typedef struct amp_stroke_report {
-    size_t segments;       /**< non-degenerate segments checked */
-    size_t pseudo;         /**< of which pseudo edges (radius 0 at both ends; only with radii) */
-    size_t crossings;      /**< pairs of segments crossing, and crossing passes through a shared vertex */
-    size_t repeated_edges; /**< printed segments printed more than once (same end points, either direction) */
-    size_t outside;        /**< vertices or segment midpoints outside the region (beyond tol) */
-    int closed;            /**< 1 when the last point equals the first */
-} amp_stroke_report;
-
-/**
- * Independent checker of one stroke (a polyline of @p n points): no two
- * segments cross (proper crossings, and at a vertex visited several times the
- * passes must not interleave in the cyclic order of their directions), no
- * segment is printed twice, and, if @p region is not NULL, every vertex and
- * segment midpoint lies in the region or within @p tol of it. Fills @p rep
- * (optional) and returns AMP_ERR_CHECK with a reason on any violation,
- * AMP_ERR_NOMEM, else AMP_OK. Shares no code with the stroke builder.
- * Every segment counts as printed (see amp_stroke_check_radii()).
- */
-amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
-                            amp_stroke_report *rep, amp_error *err);
-
-/**
- * amp_stroke_check() with the deposition radius @p rad of every point (NULL:
- * all printed). A segment whose two ends have radius 0 is a pseudo edge
- * (travel inside the stroke): it may run over printed segments (collinear
- * overlap and repetition are allowed for it, since it deposits nothing), but
- * it must still not properly cross any segment, its passes through shared
- * vertices must not interleave, and it must stay inside the region.
- */
-amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
-                                  double tol, amp_stroke_report *rep, amp_error *err);
-
-/**
- * amp_stroke_check_radii() on path @p i of @p ps (its x, y and radii; z is
- * ignored). A scratch copy is allocated with the set's allocator
- * (AMP_ERR_NOMEM).
- */
-amp_status amp_pathset_stroke_check(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
-                                    amp_stroke_report *rep, amp_error *err);
+/* The independent stroke checker (amp_check_stroke, amp_check_path_stroke): check.h. */
 
 #ifdef __cplusplus
 }

@@ -84,27 +84,7 @@ typedef struct amp_cover_stats {
 amp_status amp_cover_trivariate(const amp_spline *v, const amp_cover_opts *opts, amp_pathset *out,
                                 amp_cover_stats *stats, amp_error *err);
 
-/** Figures of an independent coverage measurement. */
-typedef struct amp_cover_gap {
-    double gap;         /**< largest distance from a sample of the volume to the nearest path (mm) */
-    amp_vec3 worst;     /**< the sample that attains it */
-    double worst_par[3];/**< its parameters */
-    size_t samples;     /**< samples taken */
-    double volume;      /**< volume of the trivariate (mm^3, Gauss quadrature of |det J|) */
-    double deposited;   /**< sum of pi r^2 L over the paths (mm^3) */
-} amp_cover_gap;
-
-/**
- * Measure how well the paths of @p ps cover the trivariate @p v, independently of
- * how they were made: @p samples points (at least 1000) are drawn, half uniformly in
- * parameter space and half uniformly in space (rejection sampling of parameters with
- * acceptance |det J| / max |det J|, which is uniform in space for a regular V), plus
- * the 8 corners; for each the exact distance to the nearest path segment is found
- * with a uniform grid. @p seed makes the sampling reproducible.
- * Errors: AMP_ERR_ARG (not a trivariate, no path), AMP_ERR_NOMEM.
- */
-amp_status amp_cover_measure_gap(const amp_spline *v, const amp_pathset *ps, size_t samples, unsigned long seed,
-                                 amp_cover_gap *out, amp_error *err);
+/* The independent coverage measure (amp_check_coverage): check.h. */
 
 /**
  * The over-coverage of a covering (paper 1 §3.1: material deposited more than
@@ -119,8 +99,7 @@ amp_status amp_cover_measure_gap(const amp_spline *v, const amp_pathset *ps, siz
  */
 double amp_over_coverage(const amp_pathset *ps, double model_volume);
 
-/** Volume of a trivariate: Gauss–Legendre quadrature (3 points per direction per cell of a 12^3 grid). */
-double amp_trivariate_volume(const amp_spline *v);
+/* amp_trivariate_volume(): spline.h. */
 
 #ifdef __cplusplus
 }

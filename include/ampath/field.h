@@ -1,6 +1,6 @@
 /*
  * ampath/field.h — covering a mesh with the curves of a direction field
- * (paper §4.2 and §5.4, Figs. 6, 7, 13, 15): a map F(u, v, w) -> R³ whose
+ * ([P1 §4.2] and §5.4, Figs. 6, 7, 13, 15): a map F(u, v, w) -> R³ whose
  * iso-curves in one parametric direction are the covering curves; they are
  * sampled on a grid or honeycomb of the other two parameters at a spacing S
  * in millimetres, cut to the mesh (amp_bvh_clip_polyline) and written as
@@ -41,7 +41,7 @@ typedef struct amp_field {
 /**
  * Built-in field @p name:
  * - "helix-square": a square cross-section of side 12 mm swept along the
- *   helix of SPEC §4 (radius 20, pitch 40, same z0 as the `helix` model) in
+ *   helix of docs/interfaces.md §4 (radius 20, pitch 40, same z0 as the `helix` model) in
  *   the plane normal to the helix; it contains the `helix` solid (paper
  *   Fig. 13b). Curves follow the helix (dir = 2, w in [-0.02, 1.02] so that
  *   they cross the end caps instead of ending on them).
@@ -63,7 +63,7 @@ amp_status amp_field_custom(amp_field *f, amp_field_eval_fn eval, const void *us
 #define AMP_SWEEP_MAX 256
 
 /**
- * A square cross-section swept along a polyline spine (paper §4.2, Fig. 6:
+ * A square cross-section swept along a polyline spine ([P1 §4.2], Fig. 6:
  * the crocodile's legs get their own field along each leg). Filled by
  * amp_field_sweep(); plain caller memory (about 15 KB), no allocation.
  */
@@ -93,7 +93,7 @@ amp_status amp_field_sweep(amp_field *f, amp_sweep *sw, const amp_vec3 *pts, siz
 struct amp_spline;
 
 /**
- * A trivariate spline (paper §4.2: "a trivariate that specifies the external
+ * A trivariate spline ([P1 §4.2]: "a trivariate that specifies the external
  * direction field") as a field over its parameter domain, curves along
  * @p dir (0 u, 1 v, 2 w). The spline is referenced, not copied: it must
  * outlive @p f. AMP_ERR_ARG when it is not a trivariate or dir is out of range.
@@ -186,18 +186,7 @@ typedef struct amp_field_stats {
 amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
                            amp_field_stats *stats, amp_error *err);
 
-/**
- * Coverage gap of @p ps in the solid of @p b: @p nsamples points drawn
- * uniformly (deterministic generator seeded by @p seed) in the solid and at
- * least @p margin mm (>= 0) from its surface; for each, the distance to the
- * nearest path segment. *gap receives the largest and *mean (may be NULL) the
- * mean distance. Inside (margin >= S) a lattice cover has gap <= its covering
- * radius; next to the surface the clipped-away curves leave up to about S.
- * Errors: AMP_ERR_ARG (no path segment, nsamples 0, negative margin),
- * AMP_ERR_GEOMETRY (no sample found in 100 nsamples tries), AMP_ERR_NOMEM.
- */
-amp_status amp_coverage_gap(const amp_pathset *ps, const amp_bvh *b, size_t nsamples, unsigned long seed,
-                            double margin, double *gap, double *mean, amp_error *err);
+/* The coverage of a field's paths is measured by amp_check_coverage() (check.h). */
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,5 @@
 /*
- * ampath/gcode.h — G-code from print paths with MDR-modulated extrusion (SPEC §5).
+ * ampath/gcode.h — G-code from print paths with MDR-modulated extrusion (docs/interfaces.md §5).
  *
  * The writer is an iterator over caller memory: amp_gcode_iter_init() checks
  * the options and the paths and computes the estimates, then each
@@ -30,7 +30,7 @@
  *      height), M107 if the fan was on, then the end sequence (caller's text
  *      or built-in: heaters off, fan off, motors off).
  *
- * Placement (SPEC §5): AMP_PLACE_CENTER (default) puts the centre of the
+ * Placement (docs/interfaces.md §5): AMP_PLACE_CENTER (default) puts the centre of the
  * job's XY bounding box at the centre of the bed, AMP_PLACE_AT at
  * (place_x, place_y); both shift z so that the job rests on the bed: the
  * lowest bead bottom (vertex z - h for planar beads, z - r for tubes) is at
@@ -40,7 +40,7 @@
  * [0, max_height]; init refuses a job that does not fit (AMP_ERR_RANGE, the
  * message names the axis and the overflow in mm).
  *
- * Extrusion (SPEC §5): a segment of length L whose end radii are r0, r1
+ * Extrusion (docs/interfaces.md §5): a segment of length L whose end radii are r0, r1
  * extrudes E = flow * A L / (pi (d/2)^2) mm of filament, r = (r0+r1)/2,
  * d = filament diameter, A = amp_bead_area(r, h): pi r^2 for a tube, the
  * rounded rectangle (2r - h) h + pi (h/2)^2 for a planar bead of height h.
@@ -79,10 +79,10 @@
  * segment raises the cells within its radius to its highest z (+ r for
  * tubes), so a travel can be higher than needed but never lower. Beyond the
  * corridor the head cone (tip head_z_offs above the nozzle, half-angle
- * head_theta; SPEC §2) must clear every printed centre line (a second grid
+ * head_theta; docs/interfaces.md §2) must clear every printed centre line (a second grid
  * holds the highest centre line per cell).
  *
- * Direct hops (issue 14 item 4): a travel of at most direct_hop in XY is one
+ * Direct hops: a travel of at most direct_hop in XY is one
  * straight G0 without retraction or lift, blended into the printing that
  * follows, when along it the head cone clears every printed centre line and,
  * away from its ends (bead radius + 2 cells), no printed material is above
@@ -175,7 +175,7 @@ typedef struct amp_gcode_opts {
     double max_feed_xy;         /**< mm/s limit of the XY speed in the estimate (200) */
     double max_feed_z;          /**< mm/s limit of the Z speed, also the feed of travel lifts (10) */
     double max_feed_e;          /**< mm/s limit of the filament speed in the estimate (60) */
-    /* printer and placement (SPEC §5); amp_printer_gcode_opts() fills these from a profile */
+    /* printer and placement (docs/interfaces.md §5); amp_printer_gcode_opts() fills these from a profile */
     const char *profile;        /**< printer name for the header ("generic"); not copied */
     int place;                  /**< AMP_PLACE_CENTER (default), AMP_PLACE_ORIGIN or AMP_PLACE_AT */
     double place_x, place_y;    /**< AMP_PLACE_AT: bed point of the centre of the job's XY box (mm) */
@@ -195,8 +195,8 @@ typedef struct amp_gcode_opts {
     int arcs;                   /**< 1: fit helical arcs, written as G2/G3 (0; needs firmware arc support) */
     double direct_hop;          /**< mm: XY travels up to this long go straight, without retraction or lift,
                                      when the head cone clears all printed material (3; 0 = never) */
-    double head_z_offs;         /**< mm, head cone tip above the nozzle point (SPEC §2; 0.5) */
-    double head_theta;          /**< degrees, head cone half-angle from the vertical (SPEC §2; 72) */
+    double head_z_offs;         /**< mm, head cone tip above the nozzle point (docs/interfaces.md §2; 0.5) */
+    double head_theta;          /**< degrees, head cone half-angle from the vertical (docs/interfaces.md §2; 72) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */
@@ -219,7 +219,7 @@ typedef struct amp_gcode_stats {
     size_t input_segments;        /**< segments of non-zero length in the input paths */
     size_t arcs;                  /**< G2/G3 moves (counted in segments too) */
     size_t travel_moves;          /**< G0 lines */
-    double bead_volume;           /**< sum of A L over the printed paths (SPEC §5), mm^3 */
+    double bead_volume;           /**< sum of A L over the printed paths (docs/interfaces.md §5), mm^3 */
     double first_layer_z;         /**< placed z of the first extrusion */
     amp_box3 bbox;                /**< placed bounding box of the printed vertices */
     size_t direct_hops;           /**< travels written as one straight move without retraction or lift */

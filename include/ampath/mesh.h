@@ -84,7 +84,7 @@ amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_erro
  */
 amp_status amp_mesh_orient(amp_mesh *m, size_t *flipped, amp_error *err);
 
-/* ---- STL (lib/stl.c) ---- */
+/* ---- STL (lib/mesh_stl.c) ---- */
 
 /** What the STL reader saw (amp_mesh_read_stl_ex()). */
 typedef struct amp_stl_stats {
@@ -148,13 +148,13 @@ amp_status amp_mesh_write_stl_file(const amp_mesh *m, const char *path, int bina
  */
 amp_status amp_mesh_weld(amp_mesh *m, double tol, amp_error *err);
 
-/* ---- built-in meshes (lib/meshmodels.c) ---- */
+/* ---- built-in meshes (lib/mesh_models.c) ---- */
 
-/** Default tolerance of amp_mesh_model(): the boundary is within 0.05 mm of the exact shape (SPEC §4). */
+/** Default tolerance of amp_mesh_model(): the boundary is within 0.05 mm of the exact shape (docs/interfaces.md §4). */
 #define AMP_MESH_MODEL_TOL 0.05
 
 /**
- * Build the built-in mesh @p name into the empty mesh @p m (SPEC §4
+ * Build the built-in mesh @p name into the empty mesh @p m (docs/interfaces.md §4
  * `ampath model NAME -o FILE.stl`):
  * - "helix": the boundary of the helix solid (a disc of radius 5 swept along
  *   c(t) = (20 cos 2πt, 20 sin 2πt, z0 + 40 t), t in [0, 1], in the plane

@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "alloc.h"
+#include "head.h"
 #include "paths.h"
 #include "status.h"
 #include "vec.h"
@@ -29,36 +30,7 @@
 extern "C" {
 #endif
 
-/** Paper defaults (SPEC §2): tip 0.5 mm above the printed point, half-angle 0.4*pi (72 degrees). */
-#define AMP_HEAD_DEFAULT_Z_OFFS 0.5
-#define AMP_HEAD_DEFAULT_THETA (0.4 * 3.14159265358979323846)
-
-/** Clearance (mm) above which the cone is considered to touch: contact at exactly 0 is allowed. */
-#define AMP_CONE_TOL 1e-9
-
-/** The print-head cone. Angles in radians. */
-typedef struct amp_head {
-    double z_offs; /**< tip height above the printed point, mm, > 0 */
-    double theta;  /**< half-angle from the vertical axis, radians, in (0, pi/2) */
-} amp_head;
-
-/** Fill @p h with the paper defaults. */
-void amp_head_default(amp_head *h);
-
-/**
- * Check a head: AMP_ERR_RANGE with a clear message when z_offs is not a
- * positive finite number or theta is not strictly between 0 and pi/2.
- */
-amp_status amp_head_validate(const amp_head *h, amp_error *err);
-
-/**
- * Exact clearance of two segments: the maximum over p in [a0,a1] and q in
- * [b0,b1] of (q.z - p.z - z_offs) - cot(theta) |q.xy - p.xy| (the function is
- * concave, the maximum is found in closed form). A value > AMP_CONE_TOL means
- * the cone swept along segment a (Fig. 10) contains part of segment b.
- * Degenerate segments (a0 == a1) are points. Pure function.
- */
-double amp_cone_clearance(const amp_head *h, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1);
+/* The print-head cone (amp_head, defaults, validation, clearance): head.h. */
 
 /** One fragment (Def. 5.3): a piece of a path shorter than z_offs. */
 typedef struct amp_fragment {

@@ -1,6 +1,6 @@
 /*
  * ampath/paths.h — print paths with a deposition radius per vertex, and the
- * `.amp` text format (SPEC §3).
+ * `.amp` text format (docs/interfaces.md §3).
  *
  * An amp_pathset is the in-memory form of a `.amp` file: paths in print order,
  * each a polyline whose vertices carry the material deposition radius (MDR) r.
@@ -109,13 +109,13 @@ double amp_pathset_length(const amp_pathset *ps, int role);
  * (w < h: π r²). Pseudo edges (r = 0) deposit nothing.
  */
 double amp_pathset_volume(const amp_pathset *ps, int role);
-/** Cross-section (mm²) of a bead of radius @p r: a tube (h = 0) or a planar bead of height @p h (SPEC §5). */
+/** Cross-section (mm²) of a bead of radius @p r: a tube (h = 0) or a planar bead of height @p h (docs/interfaces.md §5). */
 double amp_bead_area(double r, double h);
 /** Bounding box of all vertices (empty box when there are none). */
 amp_box3 amp_pathset_bbox(const amp_pathset *ps);
 
 /**
- * Parse `.amp` text (SPEC §3) of @p len bytes and append its paths to @p ps.
+ * Parse `.amp` text (docs/interfaces.md §3) of @p len bytes and append its paths to @p ps.
  * Accepts LF and CRLF, comments (`#` to end of line) anywhere, blank lines,
  * `path <role> <n>` and `path <role> <n> <h>` (planar bead height, > 0).
  * Errors (AMP_ERR_PARSE with the 1-based line in err->line): missing or wrong

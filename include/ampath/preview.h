@@ -1,5 +1,5 @@
 /*
- * ampath/preview.h — pictures of path sets (SPEC §4 `ampath preview`): an
+ * ampath/preview.h — pictures of path sets (docs/interfaces.md §4 `ampath preview`): an
  * isometric view and a top view side by side, paths drawn as tubes whose
  * width follows the deposition radius, coloured by print order (support in
  * grey), with a legend; height = width / 2 + 110 pixels.

@@ -1,5 +1,5 @@
 /*
- * ampath/printer.h — printer profiles (SPEC §5): the machine a job is written
+ * ampath/printer.h — printer profiles (docs/interfaces.md §5): the machine a job is written
  * for. Bed rectangle and height, nozzle and filament, temperatures, fan,
  * retraction and z-hop, speeds and accelerations, firmware flavour, start and
  * end G-code with placeholders.
@@ -127,7 +127,7 @@ amp_status amp_printer_expand(const amp_printer *p, const char *tmpl, char *out,
  */
 amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *err);
 
-/** Bead width of planar paths for this printer: 1.125 x the nozzle diameter (SPEC §4 slice). */
+/** Bead width of planar paths for this printer: 1.125 x the nozzle diameter (docs/interfaces.md §4 slice). */
 double amp_printer_bead_width(const amp_printer *p);
 
 #ifdef __cplusplus

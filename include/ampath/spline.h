@@ -202,7 +202,7 @@ amp_status amp_spline_derivative(const amp_spline *s, int d, amp_spline *out, am
  */
 double amp_spline_polygon_length_bound(const amp_spline *s, int d, double *seg);
 
-/* ---- the .spl text format (SPEC §4) ---- */
+/* ---- the .spl text format (docs/interfaces.md §4) ---- */
 
 /**
  * Parse every object of a .spl text (@p len bytes, NUL not required).
@@ -229,11 +229,11 @@ amp_status amp_spline_read_file(const char *path, const amp_allocator *a, amp_sp
  */
 amp_status amp_spline_write(const amp_spline *s, int header, amp_sink_fn sink, void *user, amp_error *err);
 
-/* ---- built-in trivariates (lib/splmodels.c) ---- */
+/* ---- built-in trivariates (lib/spline_models.c) ---- */
 
 /**
  * Build the built-in trivariate @p name into @p out (must not hold memory):
- *  - "helix": SPEC §4 / paper Fig. 2, disc of radius 5 mm swept along the helix
+ *  - "helix": docs/interfaces.md §4 / paper Fig. 2, disc of radius 5 mm swept along the helix
  *    of radius 20 mm and pitch 40 mm, lowest point at z = 0; (u, v) map the
  *    square onto the disc exactly (rational biquadratic), w follows the helix
  *    (16 rational quadratic arcs: x, y exact, z within 0.004 mm).
@@ -248,6 +248,10 @@ amp_status amp_trivariate_model(const char *name, const amp_allocator *a, amp_sp
 
 /** NULL-terminated list of the built-in trivariate names. */
 const char *const *amp_trivariate_model_names(void);
+
+/** Volume of a trivariate (mm^3): Gauss–Legendre quadrature of |det J| (3 points per direction per cell of a
+ * 12^3 grid). Pure function; 0 where evaluation fails. */
+double amp_trivariate_volume(const amp_spline *v);
 
 #ifdef __cplusplus
 }

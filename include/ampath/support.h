@@ -19,7 +19,7 @@
  * (amp_support_stats.splits). Pieces with nothing above them come last.
  * conflicts / trimmed count fragments left out all the same (rounding only;
  * 0 on every model tried). Whether the object is then actually held is the
- * separate check of support_check.h.
+ * separate check of check.h (amp_check_hold).
  * Thread-safe; the model's BVH is only read.
  */
 #ifndef AMPATH_SUPPORT_H

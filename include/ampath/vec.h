@@ -13,6 +13,9 @@
 extern "C" {
 #endif
 
+/** π to double precision: the one definition of the project (C99 has no M_PI). */
+#define AMP_PI 3.14159265358979323846
+
 typedef struct amp_vec3 {
     double x, y, z;
 } amp_vec3;

@@ -140,9 +140,13 @@ class amp_cover_stats(Structure):
                 ("depth_limited", c_int)]
 
 
-class amp_cover_gap(Structure):
-    _fields_ = [("gap", c_double), ("worst", amp_vec3), ("worst_par", c_double * 3), ("samples", c_size_t),
-                ("volume", c_double), ("deposited", c_double)]
+class amp_coverage(Structure):
+    _fields_ = [("gap", c_double), ("mean", c_double), ("worst", amp_vec3), ("worst_par", c_double * 3),
+                ("samples", c_size_t), ("volume", c_double), ("deposited", c_double)]
+
+
+class amp_coverage_domain(Structure):
+    _fields_ = [("trivariate", POINTER(amp_spline)), ("mesh", c_void_p), ("margin", c_double)]
 
 
 class amp_order_opts(Structure):
@@ -315,11 +319,11 @@ class amp_printer(Structure):
 # C name -> mirror, for python/tests/test_layout.py
 STRUCTS = {cls.__name__: cls for cls in (
     amp_error, amp_vec3, amp_box3, amp_vec2, amp_pvert, amp_path, amp_pathset, amp_buf, amp_out, amp_spline,
-    amp_tri, amp_mesh, amp_stl_stats, amp_head, amp_cover_opts, amp_cover_stats, amp_cover_gap, amp_order_opts,
+    amp_tri, amp_mesh, amp_stl_stats, amp_head, amp_cover_opts, amp_cover_stats, amp_coverage, amp_order_opts,
     amp_order_stats, amp_mdr_opts, amp_mdr_stats, amp_support_opts, amp_support_stats, amp_ring, amp_polyset,
     amp_slice_opts, amp_layer, amp_slices, amp_contpath_opts, amp_contpath_stats, amp_stroke_report,
-    amp_gouge_violation, amp_field, amp_field_opts, amp_field_stats, amp_sweep, amp_hold_opts, amp_hold_report,
-    amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
+    amp_gouge_violation, amp_coverage_domain, amp_field, amp_field_opts, amp_field_stats, amp_sweep, amp_hold_opts,
+    amp_hold_report, amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
     amp_printer)}
 
 # ---------------------------------------------------------------- prototypes
@@ -377,7 +381,7 @@ _PROTOS = {
     "amp_bvh_free": (None, [c_void_p]),
     "amp_cover_opts_default": (None, [P(amp_cover_opts)]),
     "amp_cover_trivariate": (c_int, [P(amp_spline), P(amp_cover_opts), P(amp_pathset), P(amp_cover_stats), E]),
-    "amp_cover_measure_gap": (c_int, [P(amp_spline), P(amp_pathset), c_size_t, c_ulong, P(amp_cover_gap), E]),
+    "amp_check_coverage": (c_int, [P(amp_pathset), P(amp_coverage_domain), c_size_t, c_ulong, P(amp_coverage), E]),
     "amp_head_default": (None, [P(amp_head)]),
     "amp_head_validate": (c_int, [P(amp_head), E]),
     "amp_order_opts_default": (None, [P(amp_order_opts)]),
@@ -393,13 +397,11 @@ _PROTOS = {
     "amp_field_sweep": (c_int, [P(amp_field), P(amp_sweep), P(amp_vec3), c_size_t, c_double, E]),
     "amp_field_opts_default": (None, [P(amp_field_opts)]),
     "amp_field_cover": (c_int, [P(amp_field), c_void_p, P(amp_field_opts), P(amp_pathset), P(amp_field_stats), E]),
-    "amp_coverage_gap": (c_int, [P(amp_pathset), c_void_p, c_size_t, c_ulong, c_double, P(c_double), P(c_double),
-                                 E]),
     "amp_over_coverage": (c_double, [P(amp_pathset), c_double]),
     "amp_bvh_inside": (c_int, [c_void_p, amp_vec3]),
     "amp_bvh_closest": (c_double, [c_void_p, amp_vec3, P(amp_vec3), P(c_size_t)]),
     "amp_hold_opts_default": (None, [P(amp_hold_opts)]),
-    "amp_hold_check": (c_int, [P(amp_pathset), P(amp_hold_opts), P(amp_hold_report), E]),
+    "amp_check_hold": (c_int, [P(amp_pathset), P(amp_hold_opts), P(amp_hold_report), E]),
     "amp_hold_report_free": (None, [P(amp_hold_report)]),
     "amp_slices_init": (None, [P(amp_slices), c_void_p]),
     "amp_slices_free": (None, [P(amp_slices)]),
@@ -409,9 +411,9 @@ _PROTOS = {
     "amp_contpath_opts_default": (None, [P(amp_contpath_opts), c_double]),
     "amp_contpath_layers": (c_int, [P(amp_slices), P(amp_contpath_opts), P(amp_pathset), P(amp_contpath_stats),
                                     E]),
-    "amp_pathset_stroke_check": (c_int, [P(amp_pathset), c_size_t, P(amp_polyset), c_double, P(amp_stroke_report),
-                                         E]),
-    "amp_gouge_check": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),
+    "amp_check_path_stroke": (c_int, [P(amp_pathset), c_size_t, P(amp_polyset), c_double, P(amp_stroke_report),
+                                      E]),
+    "amp_check_gouge": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),
     "amp_preview_png": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
     "amp_preview_svg": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
     "amp_printer_builtin_count": (c_size_t, []),

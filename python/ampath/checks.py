@@ -79,10 +79,18 @@ def _trivariate_eps(ps, obj, eps):
     return eps, eps_from
 
 
+def _coverage(obj, dom, samples, seed):
+    """amp_check_coverage of the object paths over @dom (a trivariate or a mesh BVH)."""
+    g, err = L.new(L.amp_coverage), _err()
+    _check(lib.amp_check_coverage(obj._ref, ctypes.byref(dom), samples, seed, ctypes.byref(g), ctypes.byref(err)),
+           err)
+    return g
+
+
 def _run_trivariate(ps, obj, v, eps, samples, seed):
     eps, eps_from = _trivariate_eps(ps, obj, eps)
-    g, err = L.new(L.amp_cover_gap), _err()
-    _check(lib.amp_cover_measure_gap(v._ref, obj._ref, samples, seed, ctypes.byref(g), ctypes.byref(err)), err)
+    v._live()
+    g = _coverage(obj, L.amp_coverage_domain(ctypes.pointer(v._s), None, 0.0), samples, seed)
     return {"ran": True, "ok": g.gap <= eps, "model": "trivariate", "eps": eps, "eps_from": eps_from,
             "coverage_gap_mm": g.gap, "samples": g.samples, "worst_point": _vec(g.worst),
             "worst_parameters": list(g.worst_par), "volume_mm3": g.volume,
@@ -103,12 +111,10 @@ def _run_mesh(obj, m, eps, samples, seed, tol):
             outside += d > max(_OUTSIDE_TOL, tol)
     if eps is None:
         eps = rmax  # the paths claim to cover their radius
-    gap, mean, err = ctypes.c_double(), ctypes.c_double(), _err()
-    _check(lib.amp_coverage_gap(obj._ref, b, samples, seed, 0.0, ctypes.byref(gap), ctypes.byref(mean),
-                                ctypes.byref(err)), err)
+    g = _coverage(obj, L.amp_coverage_domain(None, ctypes.cast(b, ctypes.c_void_p), 0.0), samples, seed)
     vol = lib.amp_mesh_volume(m._ref)
-    return {"ran": True, "ok": gap.value <= eps and outside == 0, "model": "mesh", "eps": eps,
-            "coverage_gap_mm": gap.value, "coverage_gap_mean_mm": mean.value, "samples": samples,
+    return {"ran": True, "ok": g.gap <= eps and outside == 0, "model": "mesh", "eps": eps,
+            "coverage_gap_mm": g.gap, "coverage_gap_mean_mm": g.mean, "samples": samples,
             "vertices_outside": outside, "worst_outside_mm": worst_out, "volume_mm3": vol,
             "deposited_mm3": lib.amp_pathset_volume(obj._ref, 0), "over_coverage": lib.amp_over_coverage(obj._ref, vol)}
 
@@ -134,11 +140,11 @@ def _gouge(ps, head):
     v, err = L.new(L.amp_gouge_violation), _err()
     t0 = time.perf_counter()
     # every path counts, support included: the head must not hit support printed earlier either
-    st = lib.amp_gouge_check(ps._ref, ctypes.byref(head), 0, _GOUGE_TOL, ctypes.byref(v), ctypes.byref(err))
+    st = lib.amp_check_gouge(ps._ref, ctypes.byref(head), 0, _GOUGE_TOL, ctypes.byref(v), ctypes.byref(err))
     if st not in (0, _ERR_CHECK):
         _check(st, err)
     if not L.intact(v):
-        raise L.stale(L.amp_gouge_violation, "amp_gouge_check")
+        raise L.stale(L.amp_gouge_violation, "amp_check_gouge")
     res = {"ran": True, "ok": st == 0, "paths": n, "segments": nseg, "method": "pairwise" if nseg < 2000 else "grid",
            "z_offs": head.z_offs, "theta_deg": head.theta * _DEG, "tolerance": _GOUGE_TOL}
     if st:
@@ -177,11 +183,11 @@ def _strokes(ps, sl, tol):
             region = _layer_at(sl, ps._ps.verts[ps._ps.paths[i].first].p.z)
             nolayer += region is None
         rep, err = L.new(L.amp_stroke_report), _err()
-        st = lib.amp_pathset_stroke_check(ps._ref, i, region, tol, ctypes.byref(rep), ctypes.byref(err))
+        st = lib.amp_check_path_stroke(ps._ref, i, region, tol, ctypes.byref(rep), ctypes.byref(err))
         if st == -2:  # AMP_ERR_NOMEM
             _check(st, err)
         if not L.intact(rep):
-            raise L.stale(L.amp_stroke_report, "amp_pathset_stroke_check")
+            raise L.stale(L.amp_stroke_report, "amp_check_path_stroke")
         failed += st != 0
         for k in tot:
             tot[k] += getattr(rep, k)
@@ -201,9 +207,9 @@ def _support(ps, required, overhang, max_gap, bridge):
     o.overhang, o.max_gap, o.bridge = overhang, max_gap, bridge
     t0 = time.perf_counter()
     try:
-        _check(lib.amp_hold_check(ps._ref, ctypes.byref(o), ctypes.byref(r), ctypes.byref(err)), err)
+        _check(lib.amp_check_hold(ps._ref, ctypes.byref(o), ctypes.byref(r), ctypes.byref(err)), err)
         if not (L.intact(r) and L.intact(o)):
-            raise L.stale(L.amp_hold_report, "amp_hold_check")
+            raise L.stale(L.amp_hold_report, "amp_check_hold")
         res = {"ran": True, "ok": r.failures == 0, "overhang_deg": o.overhang * _DEG, "max_gap_mm": o.max_gap,
                "bridge_mm": o.bridge, "step_mm": o.step, "samples": r.samples, "unheld_samples": r.unheld,
                "bridges": r.bridges, "bridged_mm": r.bridged_mm, "tips": r.tips, "failures": r.failures,

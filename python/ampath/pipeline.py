@@ -61,11 +61,13 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
 
 
 def coverage_gap(trivariate, paths, samples=20000, seed=1):
-    """Independent coverage measurement (amp_cover_measure_gap) as a dict."""
-    g, err = L.new(L.amp_cover_gap), _err()
+    """Independent coverage measurement (amp_check_coverage over a trivariate) as a dict."""
+    g, err = L.new(L.amp_coverage), _err()
     with _hold(trivariate, paths):
-        _check(lib.amp_cover_measure_gap(trivariate._ref, paths._ref, samples, seed, ctypes.byref(g),
-                                         ctypes.byref(err)), err)
+        trivariate._live()
+        dom = L.amp_coverage_domain(ctypes.pointer(trivariate._s), None, 0.0)
+        _check(lib.amp_check_coverage(paths._ref, ctypes.byref(dom), samples, seed, ctypes.byref(g),
+                                      ctypes.byref(err)), err)
     d = _todict(g)
     d["over_coverage"] = g.deposited / g.volume if g.volume > 0 else 0.0
     return d
@@ -337,9 +339,9 @@ class Slices(_Owner):
             path = ps._ps.paths[i]
             reg = self._region(ps._ps.verts[path.first].p.z) if path.n else None
             rep, err = L.new(L.amp_stroke_report), _err()
-            st = lib.amp_pathset_stroke_check(ps._ref, i, reg, 1e-6, ctypes.byref(rep), ctypes.byref(err))
+            st = lib.amp_check_path_stroke(ps._ref, i, reg, 1e-6, ctypes.byref(rep), ctypes.byref(err))
             if not L.intact(rep):
-                raise L.stale(L.amp_stroke_report, "amp_pathset_stroke_check")
+                raise L.stale(L.amp_stroke_report, "amp_check_path_stroke")
             if st == -2:  # AMP_ERR_NOMEM
                 _check(st, err)
             if st != 0:

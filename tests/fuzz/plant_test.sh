@@ -1,5 +1,5 @@
 #!/bin/sh
-# Proof that `make fuzz` fails on a finding (issue 21): build the targets with a planted
+# Proof that `make fuzz` fails on a finding: build the targets with a planted
 # defect and expect make to fail, once for a crash (trap) and once for undefined behaviour
 # (a signed overflow, reported by UBSan). Run by `make fuzz-selftest`.
 set -u

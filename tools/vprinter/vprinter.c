@@ -1,5 +1,5 @@
 /*
- * ampath-vprinter — a virtual 3-D printer on a pseudo-terminal (SPEC §8).
+ * ampath-vprinter — a virtual 3-D printer on a pseudo-terminal (docs/interfaces.md §8).
  *
  * Speaks Marlin (2.1 or 2.0 dialect, BUFSIZE, RX buffer, ADVANCED_OK, a planner
  * draining at a modelled speed, a modelled baud rate) or Klipper's pty protocol,
@@ -23,6 +23,9 @@
 #include <termios.h>
 #include <time.h>
 #include <unistd.h>
+
+#define CLI_NO_COMMANDS
+#include "../cli.h" /* cli_number, cli_integer: the numbers of ampath's option parser */
 
 #define MAX_CMD 96   /* Marlin MAX_CMD_SIZE */
 #define QMAX 64      /* command queue capacity upper bound */
@@ -832,6 +835,26 @@ static int parse_list(long *l, int *n, const char *s)
     return 0;
 }
 
+/* Option values, validated as ampath's are (tools/cli.c): -1 on anything but a whole number. */
+static int opt_int(const char *s, int *out)
+{
+    long l;
+    if (cli_integer(s, &l) != 0 || l < -2147483647L || l > 2147483647L)
+        return -1;
+    *out = (int)l;
+    return 0;
+}
+
+/* A number divided by @p div (1: as given; 1000: milliseconds to seconds). */
+static int opt_num(const char *s, double div, double *out)
+{
+    double d;
+    if (cli_number(s, &d) != 0)
+        return -1;
+    *out = d / div;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     static vp V;
@@ -877,31 +900,45 @@ int main(int argc, char **argv)
                 v->dialect = 2;
             else
                 goto bad;
-        } else if (OPT("--bufsize"))
-            v->bufsize = atoi(val);
-        else if (OPT("--rx-bytes"))
-            v->rx_bytes = atoi(val);
-        else if (OPT("--planner"))
-            v->planner = atoi(val);
-        else if (OPT("--speed"))
-            v->speed = atof(val);
-        else if (OPT("--baud"))
-            v->baud = atof(val);
-        else if (OPT("--turnaround"))
-            v->turnaround = atof(val) / 1000.0;
-        else if (OPT("--boot-ms"))
-            v->boot = atof(val) / 1000.0;
-        else if (OPT("--seed"))
-            v->rng = (unsigned long long)atoll(val) * 2654435761ULL + 1;
-        else if (OPT("--corrupt-in"))
-            v->corrupt_in = atof(val);
-        else if (OPT("--corrupt-out"))
-            v->corrupt_out = atof(val);
-        else if (OPT("--drop-in"))
-            v->drop_in = atof(val);
-        else if (OPT("--drop-out"))
-            v->drop_out = atof(val);
-        else if (OPT("--corrupt-line")) {
+        } else if (OPT("--bufsize")) {
+            if (opt_int(val, &v->bufsize))
+                goto bad;
+        } else if (OPT("--rx-bytes")) {
+            if (opt_int(val, &v->rx_bytes))
+                goto bad;
+        } else if (OPT("--planner")) {
+            if (opt_int(val, &v->planner))
+                goto bad;
+        } else if (OPT("--speed")) {
+            if (opt_num(val, 1.0, &v->speed))
+                goto bad;
+        } else if (OPT("--baud")) {
+            if (opt_num(val, 1.0, &v->baud))
+                goto bad;
+        } else if (OPT("--turnaround")) {
+            if (opt_num(val, 1000.0, &v->turnaround))
+                goto bad;
+        } else if (OPT("--boot-ms")) {
+            if (opt_num(val, 1000.0, &v->boot))
+                goto bad;
+        } else if (OPT("--seed")) {
+            long seed;
+            if (cli_integer(val, &seed))
+                goto bad;
+            v->rng = (unsigned long long)seed * 2654435761ULL + 1;
+        } else if (OPT("--corrupt-in")) {
+            if (opt_num(val, 1.0, &v->corrupt_in))
+                goto bad;
+        } else if (OPT("--corrupt-out")) {
+            if (opt_num(val, 1.0, &v->corrupt_out))
+                goto bad;
+        } else if (OPT("--drop-in")) {
+            if (opt_num(val, 1.0, &v->drop_in))
+                goto bad;
+        } else if (OPT("--drop-out")) {
+            if (opt_num(val, 1.0, &v->drop_out))
+                goto bad;
+        } else if (OPT("--corrupt-line")) {
             if (parse_list(v->corrupt_line, &v->n_corrupt_line, val))
                 goto bad;
         } else if (OPT("--lose-line")) {
@@ -913,31 +950,43 @@ int main(int argc, char **argv)
         } else if (OPT("--reset-after")) {
             if (parse_list(v->reset_after, &v->n_reset_after, val))
                 goto bad;
-        } else if (OPT("--busy-at"))
-            v->busy_at = atol(val);
-        else if (OPT("--busy-secs"))
-            v->busy_secs = atof(val);
-        else if (OPT("--busy-interval"))
-            v->busy_interval = atof(val);
-        else if (OPT("--heat-secs"))
-            v->heat_secs = atof(val);
-        else if (OPT("--wait-ms"))
-            v->wait_s = atof(val) / 1000.0;
-        else if (OPT("--hangup-after"))
-            v->hangup_after = atol(val);
-        else if (OPT("--hangup-secs"))
-            v->hangup_secs = atof(val);
-        else if (OPT("--error-at"))
-            v->error_at = atol(val);
-        else if (OPT("--shutdown-after"))
-            v->shutdown_after = atol(val);
-        else if (OPT("--ready-after-ms"))
-            v->ready_at = atof(val) / 1000.0;
-        else if (OPT("--halt-after"))
-            v->halt_after = atol(val);
-        else if (OPT("--action-at"))
-            v->action_at = atol(val);
-        else if (OPT("--action"))
+        } else if (OPT("--busy-at")) {
+            if (cli_integer(val, &v->busy_at))
+                goto bad;
+        } else if (OPT("--busy-secs")) {
+            if (opt_num(val, 1.0, &v->busy_secs))
+                goto bad;
+        } else if (OPT("--busy-interval")) {
+            if (opt_num(val, 1.0, &v->busy_interval))
+                goto bad;
+        } else if (OPT("--heat-secs")) {
+            if (opt_num(val, 1.0, &v->heat_secs))
+                goto bad;
+        } else if (OPT("--wait-ms")) {
+            if (opt_num(val, 1000.0, &v->wait_s))
+                goto bad;
+        } else if (OPT("--hangup-after")) {
+            if (cli_integer(val, &v->hangup_after))
+                goto bad;
+        } else if (OPT("--hangup-secs")) {
+            if (opt_num(val, 1.0, &v->hangup_secs))
+                goto bad;
+        } else if (OPT("--error-at")) {
+            if (cli_integer(val, &v->error_at))
+                goto bad;
+        } else if (OPT("--shutdown-after")) {
+            if (cli_integer(val, &v->shutdown_after))
+                goto bad;
+        } else if (OPT("--ready-after-ms")) {
+            if (opt_num(val, 1000.0, &v->ready_at))
+                goto bad;
+        } else if (OPT("--halt-after")) {
+            if (cli_integer(val, &v->halt_after))
+                goto bad;
+        } else if (OPT("--action-at")) {
+            if (cli_integer(val, &v->action_at))
+                goto bad;
+        } else if (OPT("--action"))
             v->action = val;
         else if (OPT("--bed")) {
             if (sscanf(val, "%lf,%lf,%lf", &v->bed[0], &v->bed[1], &v->bed[2]) != 3 || v->bed[0] <= 0 ||

@@ -1,10 +1,10 @@
-/* Independent checker of continuous strokes (paper 2 §4: no crossovers,
+/* Independent checker of continuous strokes ([P2 §4]: no crossovers,
  * every edge once, inside the polygon). Shares no code with lib/contpath.c. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "ampath/contpath.h"
+#include "ampath/check.h"
 
 typedef struct vkey {
     double x, y;
@@ -76,7 +76,7 @@ static int seg_conflict(const seg2 *s, const seg2 *t)
 /* Is angle c strictly inside the CCW arc from a to b? */
 static int in_arc(double a, double b, double c)
 {
-    double w = 6.283185307179586;
+    double w = 2.0 * AMP_PI;
     double ab = fmod(b - a + 2 * w, w), ac = fmod(c - a + 2 * w, w);
     return ac > 0 && ac < ab;
 }
@@ -193,55 +193,54 @@ static int yrows_contains(const yrows *y, amp_vec2 q, double tol)
     return in;
 }
 
-amp_status amp_stroke_check(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
+amp_status amp_check_stroke(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err)
 {
-    return amp_stroke_check_radii(pts, NULL, n, region, tol, rep, err);
+    return amp_check_stroke_radii(pts, NULL, n, region, tol, rep, err);
 }
 
-amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
-                                  double tol, amp_stroke_report *rep, amp_error *err)
-{
-    size_t ne = 0;
-    const amp_allocator *al = region ? region->alloc : NULL;
+/* One stroke under check: its points, vertex ids (identical coordinates = the same vertex), the findings. */
+typedef struct stroke_scan {
+    const amp_vec2 *pts;
+    const double *rad;
+    size_t n;
+    size_t *id;
     amp_stroke_report r;
-    vkey *vk = NULL;
-    size_t *id = NULL, i, j, ns = 0, np = 0, nid = 0;
-    seg2 *sg = NULL;
-    ekey2 *ek = NULL;
-    pass *ps = NULL;
-    amp_status st = AMP_OK;
-    amp_vec2 where = amp_v2(0, 0); /* first violation, for the message */
-    int found = 0;
-    yrows yr;
-    memset(&r, 0, sizeof r);
-    memset(&yr, 0, sizeof yr);
-    if (n == 0)
-        goto report;
-    vk = amp_alloc(al, n * sizeof *vk);
-    id = amp_alloc(al, n * sizeof *id);
-    sg = amp_alloc(al, n * sizeof *sg);
-    ek = amp_alloc(al, n * sizeof *ek);
-    ps = amp_alloc(al, n * sizeof *ps);
-    if (!vk || !id || !sg || !ek || !ps) {
-        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
-        goto out;
-    }
-    r.closed = n > 1 && pts[0].x == pts[n - 1].x && pts[0].y == pts[n - 1].y;
-    /* identical coordinates = the same vertex */
-    for (i = 0; i < n; i++) {
-        vk[i].x = pts[i].x;
-        vk[i].y = pts[i].y;
+    amp_vec2 where; /* first violation, for the message */
+    int found;
+} stroke_scan;
+
+static void note(stroke_scan *s, amp_vec2 at)
+{
+    if (!s->found++)
+        s->where = at;
+}
+
+/* id[i]: the same number for points with identical coordinates. */
+static void vertex_ids(stroke_scan *s, vkey *vk)
+{
+    size_t i, nid = 0;
+    for (i = 0; i < s->n; i++) {
+        vk[i].x = s->pts[i].x;
+        vk[i].y = s->pts[i].y;
         vk[i].i = i;
     }
-    if (n > 1)
-        qsort(vk, n, sizeof *vk, cmp_vkey);
-    for (i = 0; i < n; i++) {
+    if (s->n > 1)
+        qsort(vk, s->n, sizeof *vk, cmp_vkey);
+    for (i = 0; i < s->n; i++) {
         if (i && (vk[i].x != vk[i - 1].x || vk[i].y != vk[i - 1].y))
             nid++;
-        id[vk[i].i] = nid;
+        s->id[vk[i].i] = nid;
     }
-    for (i = 0; i + 1 < n; i++) {
+}
+
+/* The non-degenerate segments into @p sg (returns their number); printed edges printed twice are counted. */
+static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek)
+{
+    const amp_vec2 *pts = s->pts;
+    const size_t *id = s->id;
+    size_t i, ns = 0, ne = 0;
+    for (i = 0; i + 1 < s->n; i++) {
         if (id[i] == id[i + 1])
             continue;
         sg[ns].a = pts[i];
@@ -249,9 +248,9 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         sg[ns].ia = id[i];
         sg[ns].ib = id[i + 1];
         sg[ns].xmin = fmin(pts[i].x, pts[i + 1].x);
-        sg[ns].pseudo = rad && rad[i] == 0 && rad[i + 1] == 0;
+        sg[ns].pseudo = s->rad && s->rad[i] == 0 && s->rad[i + 1] == 0;
         if (sg[ns].pseudo)
-            r.pseudo++;
+            s->r.pseudo++;
         else {
             /* only material counts as printed twice */
             ek[ne].a = id[i] < id[i + 1] ? id[i] : id[i + 1];
@@ -261,16 +260,21 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
         }
         ns++;
     }
-    r.segments = ns;
+    s->r.segments = ns;
     if (ne > 1)
         qsort(ek, ne, sizeof *ek, cmp_ekey2);
     for (i = 1; i < ne; i++)
         if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b) {
-            r.repeated_edges++;
-            if (!found++)
-                where = ek[i].at;
+            s->r.repeated_edges++;
+            note(s, ek[i].at);
         }
-    /* segment pairs, swept over x */
+    return ns;
+}
+
+/* Segment pairs without a shared vertex, swept over x. */
+static void count_crossings(stroke_scan *s, seg2 *sg, size_t ns)
+{
+    size_t i, j;
     if (ns > 1)
         qsort(sg, ns, sizeof *sg, cmp_seg2);
     for (i = 0; i < ns; i++) {
@@ -279,17 +283,23 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
             if (sg[i].ia == sg[j].ia || sg[i].ia == sg[j].ib || sg[i].ib == sg[j].ia || sg[i].ib == sg[j].ib)
                 continue;
             if (seg_conflict(&sg[i], &sg[j])) {
-                r.crossings++;
-                if (!found++)
-                    where = sg[i].a;
+                s->r.crossings++;
+                note(s, sg[i].a);
             }
         }
     }
-    /* passes through a vertex visited more than once must not interleave */
+}
+
+/* Passes through a vertex visited more than once must not interleave in the cyclic order of directions. */
+static void count_interleaved_passes(stroke_scan *s, pass *ps)
+{
+    const amp_vec2 *pts = s->pts;
+    const size_t *id = s->id;
+    size_t i, j, n = s->n, np = 0;
     for (i = 0; i < n; i++) {
         size_t a = i, b = i;
         if (i == 0 || i == n - 1) {
-            if (!r.closed || i == n - 1)
+            if (!s->r.closed || i == n - 1)
                 continue;
             a = n - 1;
         }
@@ -312,45 +322,102 @@ amp_status amp_stroke_check_radii(const amp_vec2 *pts, const double *rad, size_t
             int c1 = in_arc(ps[i].in, ps[i].out, ps[j].in), c2 = in_arc(ps[i].in, ps[i].out, ps[j].out);
             if (ps[j].in != ps[i].in && ps[j].in != ps[i].out && ps[j].out != ps[i].in && ps[j].out != ps[i].out &&
                 c1 != c2) {
-                r.crossings++;
-                if (!found++)
-                    where = ps[i].at;
+                s->r.crossings++;
+                note(s, ps[i].at);
             }
         }
-    if (region && region->npts && !yrows_build(&yr, region, al)) {
-        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
-        goto out;
+}
+
+/* Every vertex and segment midpoint inside the region or within tol of it. */
+static void count_outside(stroke_scan *s, const yrows *yr, double tol)
+{
+    const amp_vec2 *pts = s->pts;
+    size_t i;
+    for (i = 0; i < s->n; i++) {
+        if (yrows_contains(yr, pts[i], tol) == 0) {
+            s->r.outside++;
+            note(s, pts[i]);
+        }
+        if (i + 1 < s->n) {
+            amp_vec2 mid = amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y));
+            if (yrows_contains(yr, mid, tol) == 0) {
+                s->r.outside++;
+                note(s, mid);
+            }
+        }
     }
-    if (region && region->npts)
-        for (i = 0; i < n; i++) {
-            if (yrows_contains(&yr, pts[i], tol) == 0) {
-                r.outside++;
-                if (!found++)
-                    where = pts[i];
-            }
-            if (i + 1 < n) {
-                amp_vec2 mid = amp_v2(0.5 * (pts[i].x + pts[i + 1].x), 0.5 * (pts[i].y + pts[i + 1].y));
-                if (yrows_contains(&yr, mid, tol) == 0) {
-                    r.outside++;
-                    if (!found++)
-                        where = mid;
-                }
-            }
-        }
-report:
-    if (r.crossings || r.repeated_edges || r.outside)
+}
+
+amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
+                                  double tol, amp_stroke_report *rep, amp_error *err)
+{
+    const amp_allocator *al = region ? region->alloc : NULL;
+    stroke_scan s;
+    vkey *vk = NULL;
+    seg2 *sg = NULL;
+    ekey2 *ek = NULL;
+    pass *ps = NULL;
+    amp_status st = AMP_OK;
+    yrows yr;
+    memset(&s, 0, sizeof s);
+    memset(&yr, 0, sizeof yr);
+    s.pts = pts;
+    s.rad = rad;
+    s.n = n;
+    if (n > 0) {
+        vk = amp_alloc(al, n * sizeof *vk);
+        s.id = amp_alloc(al, n * sizeof *s.id);
+        sg = amp_alloc(al, n * sizeof *sg);
+        ek = amp_alloc(al, n * sizeof *ek);
+        ps = amp_alloc(al, n * sizeof *ps);
+        if (!vk || !s.id || !sg || !ek || !ps)
+            st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+    }
+    if (n > 0 && st == AMP_OK) {
+        s.r.closed = n > 1 && pts[0].x == pts[n - 1].x && pts[0].y == pts[n - 1].y;
+        vertex_ids(&s, vk);
+        count_crossings(&s, sg, segments_and_repeats(&s, sg, ek));
+        count_interleaved_passes(&s, ps);
+        if (region && region->npts && !yrows_build(&yr, region, al))
+            st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+        else if (region && region->npts)
+            count_outside(&s, &yr, tol);
+    }
+    if (st == AMP_OK && (s.r.crossings || s.r.repeated_edges || s.r.outside))
         st = amp_fail(err, AMP_ERR_CHECK, 0,
                       "stroke: %lu crossings, %lu edges printed twice, %lu points outside (first near %.6g, %.6g)",
-                      (unsigned long)r.crossings, (unsigned long)r.repeated_edges, (unsigned long)r.outside, where.x,
-                      where.y);
-out:
+                      (unsigned long)s.r.crossings, (unsigned long)s.r.repeated_edges, (unsigned long)s.r.outside,
+                      s.where.x, s.where.y);
     amp_free(al, vk);
-    amp_free(al, id);
+    amp_free(al, s.id);
     amp_free(al, sg);
     amp_free(al, ek);
     amp_free(al, ps);
     yrows_free(al, &yr);
     if (rep)
-        *rep = r;
+        *rep = s.r;
+    return st;
+}
+
+amp_status amp_check_path_stroke(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                 amp_stroke_report *rep, amp_error *err)
+{
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t n = ps->paths[i].n, k;
+    amp_vec2 *p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
+    double *r = amp_alloc(ps->alloc, (n + 1) * sizeof *r);
+    amp_status st;
+    if (!p || !r) {
+        amp_free(ps->alloc, p);
+        amp_free(ps->alloc, r);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+    }
+    for (k = 0; k < n; k++) {
+        p[k] = amp_v2(v[k].p.x, v[k].p.y);
+        r[k] = v[k].r;
+    }
+    st = amp_check_stroke_radii(p, r, n, region, tol, rep, err);
+    amp_free(ps->alloc, p);
+    amp_free(ps->alloc, r);
     return st;
 }

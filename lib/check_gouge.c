@@ -1,9 +1,9 @@
-/* Independent gouge checker (see gouge.h): numerical clearance, pairwise or with a column pyramid. */
+/* Independent gouge checker (see check.h): numerical clearance, pairwise or with a column pyramid. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#include "ampath/gouge.h"
+#include "ampath/check.h"
 
 /* One segment in print order: vertices a and b of the pathset (a == b for a one-vertex path). */
 typedef struct gseg {
@@ -238,130 +238,174 @@ typedef struct gentry {
     uint32_t seg, next;
 } gentry;
 
-static size_t check_grid(const gctx *c, amp_gouge_violation *out, amp_error *err, amp_status *st)
+/* The column grid over the earlier segments with its max-height pyramid. */
+typedef struct gpyramid {
+    const amp_allocator *a;
+    amp_box3 all;       /* box of every segment */
+    size_t P, L;        /* P x P columns at level 0; L levels, each halving the side */
+    size_t off[12];     /* start of level l in maxz */
+    double cw, ch;      /* column width and depth at level 0, mm */
+    double *maxz;       /* highest earlier point per cell of every level (-inf: none) */
+    uint32_t *head;     /* first entry per column (0xffffffff: none) */
+    uint32_t *stamp;    /* segment s was tested against segment i when stamp[s] == i + 1 */
+    gentry *ent;        /* column lists */
+    size_t nent, cap;
+} gpyramid;
+
+static amp_status pyramid_init(gpyramid *g, const gctx *c, amp_error *err)
 {
-    const amp_allocator *a = c->ps->alloc;
-    amp_box3 all = amp_box3_empty();
-    size_t P = 1, L = 1, i, total = 0, nent = 0, cap = 0, found = (size_t)-1;
-    size_t off[12];
-    double *maxz = NULL, cw, ch;
-    uint32_t *head = NULL, *stamp = NULL;
-    gentry *ent = NULL;
+    size_t i, total = 0;
+    g->all = amp_box3_empty();
+    g->P = 1;
     for (i = 0; i < c->n; i++)
-        all = amp_box3_union(all, c->seg[i].box);
-    while (P < 1024 && P * P * 4 < c->n)
-        P *= 2;
-    for (L = 0, i = P; i >= 1; i /= 2) {
-        off[L++] = total;
+        g->all = amp_box3_union(g->all, c->seg[i].box);
+    while (g->P < 1024 && g->P * g->P * 4 < c->n)
+        g->P *= 2;
+    for (g->L = 0, i = g->P; i >= 1; i /= 2) {
+        g->off[g->L++] = total;
         total += i * i;
     }
-    cw = fmax((all.max.x - all.min.x) / (double)P, 1e-9);
-    ch = fmax((all.max.y - all.min.y) / (double)P, 1e-9);
-    maxz = amp_calloc(a, total, sizeof *maxz);
-    head = amp_calloc(a, P * P, sizeof *head);
-    stamp = amp_calloc(a, c->n, sizeof *stamp);
-    if (!maxz || !head || !stamp) {
-        *st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
-        goto done;
-    }
+    g->cw = fmax((g->all.max.x - g->all.min.x) / (double)g->P, 1e-9);
+    g->ch = fmax((g->all.max.y - g->all.min.y) / (double)g->P, 1e-9);
+    g->maxz = amp_calloc(g->a, total, sizeof *g->maxz);
+    g->head = amp_calloc(g->a, g->P * g->P, sizeof *g->head);
+    g->stamp = amp_calloc(g->a, c->n, sizeof *g->stamp);
+    if (!g->maxz || !g->head || !g->stamp)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
     for (i = 0; i < total; i++)
-        maxz[i] = -HUGE_VAL;
-    for (i = 0; i < P * P; i++)
-        head[i] = 0xffffffffU;
-    for (i = 0; i < c->n; i++) {
-        const gseg *t = &c->seg[i];
-        size_t stk[3 * 64], top = 0, x0, x1, y0, y1, ix, iy;
-        amp_gouge_violation v;
-        size_t best = (size_t)-1;
-        if (test_pair(c, i, i, &v)) {
-            best = i;
-            *out = v;
-        }
-        /* query the earlier segments, coarse to fine */
-        stk[top++] = L - 1;
-        stk[top++] = 0;
-        stk[top++] = 0;
-        while (top) {
-            size_t y = stk[--top], x = stk[--top], l = stk[--top], side = P >> l;
-            double sz = (double)((size_t)1 << l), room = maxz[off[l] + y * side + x] - t->box.min.z - c->zo - c->tol;
-            double rx0, ry0, gx, gy, ex, ey;
-            /* the cell's highest earlier point against the cone over t's box, squared (no root per cell) */
-            if (room <= 0.0)
-                continue;
-            rx0 = all.min.x + (double)x * cw * sz;
-            ry0 = all.min.y + (double)y * ch * sz;
-            gx = rx0 - t->box.max.x;
-            ex = t->box.min.x - (rx0 + cw * sz);
-            gy = ry0 - t->box.max.y;
-            ey = t->box.min.y - (ry0 + ch * sz);
-            gx = gx > ex ? gx : ex;
-            gy = gy > ey ? gy : ey;
-            gx = gx > 0.0 ? gx : 0.0;
-            gy = gy > 0.0 ? gy : 0.0;
-            if (c->k * c->k * (gx * gx + gy * gy) >= room * room)
-                continue;
-            if (l == 0) {
-                uint32_t e;
-                for (e = head[y * P + x]; e != 0xffffffffU; e = ent[e].next) {
-                    uint32_t s = ent[e].seg;
-                    if (stamp[s] == i + 1 || s >= best)
-                        continue;
-                    stamp[s] = (uint32_t)(i + 1);
-                    if (test_pair(c, s, i, &v)) {
-                        best = s;
-                        *out = v;
-                    }
-                }
-                continue;
-            }
-            {
-                size_t dx, dy;
-                for (dy = 0; dy < 2; dy++)
-                    for (dx = 0; dx < 2; dx++) {
-                        stk[top++] = l - 1;
-                        stk[top++] = 2 * x + dx;
-                        stk[top++] = 2 * y + dy;
-                    }
-            }
-        }
-        if (best != (size_t)-1) {
-            found = i;
-            break;
-        }
-        /* insert t into the columns its box covers, and raise the pyramid */
-        x0 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.min.x - all.min.x) / cw)));
-        x1 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.max.x - all.min.x) / cw)));
-        y0 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.min.y - all.min.y) / ch)));
-        y1 = (size_t)fmax(0.0, fmin((double)P - 1, floor((t->box.max.y - all.min.y) / ch)));
-        for (iy = y0; iy <= y1; iy++)
-            for (ix = x0; ix <= x1; ix++) {
-                size_t l, cx = ix, cy = iy;
-                void *pe = ent;
-                if (amp_grow(a, &pe, &cap, nent + 1, sizeof *ent) != AMP_OK) {
-                    *st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
-                    goto done;
-                }
-                ent = pe;
-                ent[nent].seg = (uint32_t)i;
-                ent[nent].next = head[iy * P + ix];
-                head[iy * P + ix] = (uint32_t)nent++;
-                for (l = 0; l < L; l++, cx /= 2, cy /= 2) {
-                    double *m = &maxz[off[l] + cy * (P >> l) + cx];
-                    if (*m >= t->box.max.z)
-                        break;
-                    *m = t->box.max.z;
-                }
-            }
+        g->maxz[i] = -HUGE_VAL;
+    for (i = 0; i < g->P * g->P; i++)
+        g->head[i] = 0xffffffffU;
+    return AMP_OK;
+}
+
+static void pyramid_free(gpyramid *g)
+{
+    amp_free(g->a, g->maxz);
+    amp_free(g->a, g->head);
+    amp_free(g->a, g->stamp);
+    amp_free(g->a, g->ent);
+}
+
+/* May cell (x, y) of level l hold an earlier point inside the cone over segment t's box? Compares the cell's
+ * highest earlier point with the cone, squared (no root per cell). */
+static int cell_may_gouge(const gpyramid *g, const gctx *c, const gseg *t, size_t l, size_t x, size_t y)
+{
+    double sz = (double)((size_t)1 << l);
+    double room = g->maxz[g->off[l] + y * (g->P >> l) + x] - t->box.min.z - c->zo - c->tol;
+    double rx0, ry0, gx, gy, ex, ey;
+    if (room <= 0.0)
+        return 0;
+    rx0 = g->all.min.x + (double)x * g->cw * sz;
+    ry0 = g->all.min.y + (double)y * g->ch * sz;
+    gx = rx0 - t->box.max.x;
+    ex = t->box.min.x - (rx0 + g->cw * sz);
+    gy = ry0 - t->box.max.y;
+    ey = t->box.min.y - (ry0 + g->ch * sz);
+    gx = gx > ex ? gx : ex;
+    gy = gy > ey ? gy : ey;
+    gx = gx > 0.0 ? gx : 0.0;
+    gy = gy > 0.0 ? gy : 0.0;
+    return c->k * c->k * (gx * gx + gy * gy) < room * room;
+}
+
+/* The earliest segment (i itself included) that segment i gouges, (size_t)-1 if none; *out its violation.
+ * The earlier segments are queried coarse to fine. */
+static size_t earliest_gouged(gpyramid *g, const gctx *c, size_t i, amp_gouge_violation *out)
+{
+    const gseg *t = &c->seg[i];
+    size_t stk[3 * 64], top = 0, best = (size_t)-1;
+    amp_gouge_violation v;
+    if (test_pair(c, i, i, &v)) {
+        best = i;
+        *out = v;
     }
-done:
-    amp_free(a, maxz);
-    amp_free(a, head);
-    amp_free(a, stamp);
-    amp_free(a, ent);
+    stk[top++] = g->L - 1;
+    stk[top++] = 0;
+    stk[top++] = 0;
+    while (top) {
+        size_t y = stk[--top], x = stk[--top], l = stk[--top], dx, dy;
+        uint32_t e;
+        if (!cell_may_gouge(g, c, t, l, x, y))
+            continue;
+        if (l > 0) {
+            for (dy = 0; dy < 2; dy++)
+                for (dx = 0; dx < 2; dx++) {
+                    stk[top++] = l - 1;
+                    stk[top++] = 2 * x + dx;
+                    stk[top++] = 2 * y + dy;
+                }
+            continue;
+        }
+        for (e = g->head[y * g->P + x]; e != 0xffffffffU; e = g->ent[e].next) {
+            uint32_t s = g->ent[e].seg;
+            if (g->stamp[s] == i + 1 || s >= best)
+                continue;
+            g->stamp[s] = (uint32_t)(i + 1);
+            if (test_pair(c, s, i, &v)) {
+                best = s;
+                *out = v;
+            }
+        }
+    }
+    return best;
+}
+
+static size_t column_of(double v, double lo, double w, size_t P)
+{
+    return (size_t)fmax(0.0, fmin((double)P - 1, floor((v - lo) / w)));
+}
+
+/* Insert segment i into the columns its box covers, and raise the pyramid. */
+static amp_status pyramid_insert(gpyramid *g, const gctx *c, size_t i, amp_error *err)
+{
+    const gseg *t = &c->seg[i];
+    size_t x0 = column_of(t->box.min.x, g->all.min.x, g->cw, g->P);
+    size_t x1 = column_of(t->box.max.x, g->all.min.x, g->cw, g->P);
+    size_t y0 = column_of(t->box.min.y, g->all.min.y, g->ch, g->P);
+    size_t y1 = column_of(t->box.max.y, g->all.min.y, g->ch, g->P);
+    size_t ix, iy;
+    for (iy = y0; iy <= y1; iy++)
+        for (ix = x0; ix <= x1; ix++) {
+            size_t l, cx = ix, cy = iy;
+            void *pe = g->ent;
+            if (amp_grow(g->a, &pe, &g->cap, g->nent + 1, sizeof *g->ent) != AMP_OK)
+                return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
+            g->ent = pe;
+            g->ent[g->nent].seg = (uint32_t)i;
+            g->ent[g->nent].next = g->head[iy * g->P + ix];
+            g->head[iy * g->P + ix] = (uint32_t)g->nent++;
+            for (l = 0; l < g->L; l++, cx /= 2, cy /= 2) {
+                double *m = &g->maxz[g->off[l] + cy * (g->P >> l) + cx];
+                if (*m >= t->box.max.z)
+                    break;
+                *m = t->box.max.z;
+            }
+        }
+    return AMP_OK;
+}
+
+/* The first segment in print order that gouges an earlier one ((size_t)-1: none), its violation in *out. */
+static size_t check_grid(const gctx *c, amp_gouge_violation *out, amp_error *err, amp_status *st)
+{
+    gpyramid g;
+    size_t i, found = (size_t)-1;
+    memset(&g, 0, sizeof g);
+    g.a = c->ps->alloc;
+    if ((*st = pyramid_init(&g, c, err)) == AMP_OK)
+        for (i = 0; i < c->n; i++) {
+            if (earliest_gouged(&g, c, i, out) != (size_t)-1) {
+                found = i;
+                break;
+            }
+            if ((*st = pyramid_insert(&g, c, i, err)) != AMP_OK)
+                break;
+        }
+    pyramid_free(&g);
     return found;
 }
 
-amp_status amp_gouge_check(const amp_pathset *ps, const amp_head *h, amp_gouge_method m, double tol,
+amp_status amp_check_gouge(const amp_pathset *ps, const amp_head *h, amp_gouge_method m, double tol,
                            amp_gouge_violation *vout, amp_error *err)
 {
     gctx c;
@@ -369,9 +413,9 @@ amp_status amp_gouge_check(const amp_pathset *ps, const amp_head *h, amp_gouge_m
     amp_gouge_violation v;
     amp_status st = AMP_OK;
     if (!ps || !h)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_gouge_check: NULL argument");
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_gouge: NULL argument");
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0 || !isfinite(h->theta) || h->theta <= 0.0 ||
-        h->theta >= 1.57079632679489661923)
+        h->theta >= 0.5 * AMP_PI)
         return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",
                         h->z_offs, h->theta * 57.295779513082320876);
     if (!isfinite(tol) || tol < 0.0)

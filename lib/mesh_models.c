@@ -1,7 +1,7 @@
 /*
- * Built-in triangle meshes (SPEC §4 `ampath model NAME -o FILE.stl`):
+ * Built-in triangle meshes (docs/interfaces.md §4 `ampath model NAME -o FILE.stl`):
  *
- *  helix           the boundary of the helix solid of SPEC §4 / paper Fig. 2:
+ *  helix           the boundary of the helix solid of docs/interfaces.md §4 / paper Fig. 2:
  *                  a disc of radius 5 swept along c(t) = (20 cos 2πt,
  *                  20 sin 2πt, z0 + 40 t) in the plane normal to c'(t),
  *                  closed by two flat caps, lowest point at z = 0.
@@ -23,7 +23,6 @@
 #include "ampath/mesh.h"
 #include "mesh_internal.h"
 
-#define PI 3.14159265358979323846
 
 /* ------------------------------------------------------------ sweeps */
 
@@ -88,14 +87,14 @@ static void to_plate(amp_mesh *m)
 
 /* ------------------------------------------------------------- helix */
 
-/* SPEC §4: radius 20, pitch 40, disc radius 5; z0 puts the lowest point (on the t = 0 cap) at z = 0. */
+/* docs/interfaces.md §4: radius 20, pitch 40, disc radius 5; z0 puts the lowest point (on the t = 0 cap) at z = 0. */
 #define HX_R 20.0
 #define HX_P 40.0
 #define HX_A 5.0
 
 static void helix_ring(const void *ctx, double t, size_t nr, amp_vec3 *ring, amp_vec3 *centre)
 {
-    double w = 2 * PI * t, k = HX_P / (2 * PI);
+    double w = 2 * AMP_PI * t, k = HX_P / (2 * AMP_PI);
     double len = sqrt(HX_R * HX_R + k * k);
     /* Frenet frame of the helix: N points to the axis, B = T x N */
     amp_vec3 c = amp_v3(HX_R * cos(w), HX_R * sin(w), HX_P * t);
@@ -104,7 +103,7 @@ static void helix_ring(const void *ctx, double t, size_t nr, amp_vec3 *ring, amp
     size_t j;
     (void)ctx;
     for (j = 0; j < nr; j++) {
-        double th = 2 * PI * (double)j / (double)nr;
+        double th = 2 * AMP_PI * (double)j / (double)nr;
         ring[j] = amp_v3_add(c, amp_v3_add(amp_v3_scale(n, HX_A * cos(th)), amp_v3_scale(b, HX_A * sin(th))));
     }
     *centre = c;
@@ -119,9 +118,9 @@ static void helix_ring(const void *ctx, double t, size_t nr, amp_vec3 *ring, amp
  */
 static amp_status model_helix(amp_mesh *m, double tol, amp_error *err)
 {
-    double k = HX_P / (2 * PI), kappa = HX_R / (HX_R * HX_R + k * k);
-    double speed = 2 * PI * sqrt(HX_R * HX_R + k * k) * (1 + HX_A * kappa), rho = 1 / kappa - HX_A;
-    size_t nth = (size_t)ceil(PI / acos(1 - 0.5 * tol / HX_A));
+    double k = HX_P / (2 * AMP_PI), kappa = HX_R / (HX_R * HX_R + k * k);
+    double speed = 2 * AMP_PI * sqrt(HX_R * HX_R + k * k) * (1 + HX_A * kappa), rho = 1 / kappa - HX_A;
+    size_t nth = (size_t)ceil(AMP_PI / acos(1 - 0.5 * tol / HX_A));
     size_t nt = (size_t)ceil(speed / sqrt(8 * rho * 0.5 * tol));
     amp_status st;
     if (nth < 8)
@@ -152,7 +151,7 @@ typedef struct bridge_ctx {
 static void bridge_ring(const void *vctx, double s, size_t nr, amp_vec3 *ring, amp_vec3 *centre)
 {
     const bridge_ctx *ctx = vctx;
-    double x = BR_L * s, zc = BR_H * sin(PI * s), phi = 0.5 * PI * s, cp = cos(phi), sp = sin(phi);
+    double x = BR_L * s, zc = BR_H * sin(AMP_PI * s), phi = 0.5 * AMP_PI * s, cp = cos(phi), sp = sin(phi);
     size_t j = 0, q, i;
     /* rectangle corners counter-clockwise in (y, z), each side subdivided evenly */
     static const double cy[4] = {-0.5, 0.5, 0.5, -0.5}, cz[4] = {-0.5, -0.5, 0.5, 0.5};
@@ -172,7 +171,7 @@ static amp_status model_bridge(amp_mesh *m, double tol, amp_error *err)
 {
     bridge_ctx ctx;
     /* arch radius of curvature >= L²/(π² H) ≈ 46 mm; the chord sag L²/(8ρ) gets tol/2 */
-    double rho = BR_L * BR_L / (PI * PI * BR_H), seg = sqrt(8 * rho * 0.5 * tol);
+    double rho = BR_L * BR_L / (AMP_PI * AMP_PI * BR_H), seg = sqrt(8 * rho * 0.5 * tol);
     /* the twisted sides are saddles: stations 0.5 mm apart (at tol 0.05) keep the triangles close to them */
     double ns_twist = ceil(2 * BR_L * sqrt(0.05 / tol));
     size_t ns = (size_t)fmax(ceil(BR_L / seg), ns_twist);

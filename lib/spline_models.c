@@ -1,5 +1,5 @@
 /*
- * Built-in trivariates: helix (SPEC §4, paper Fig. 2), torus-quarter (paper
+ * Built-in trivariates: helix (docs/interfaces.md §4, paper Fig. 2), torus-quarter (paper
  * Fig. 4, ×50 to millimetres) and vase (paper Fig. 18). Circles are rational
  * quadratic arcs, so discs and revolutions are exact; only the helix's height
  * along its arc is approximated (16 arcs keep it within 0.004 mm).
@@ -9,7 +9,6 @@
 
 #include "ampath/spline.h"
 
-#define PI 3.14159265358979323846
 
 static const char *const model_names[] = {"helix", "torus-quarter", "vase", NULL};
 
@@ -56,8 +55,8 @@ static void disc_patch(double r, double a[9], double b[9], double w[9])
     memset(b, 0, 9 * sizeof(double));
     for (c = 0; c < 4; c++) {
         int idx = (int)corner_deg[c][0] + 3 * (int)corner_deg[c][1];
-        a[idx] = r * cos(corner_deg[c][2] * PI / 180);
-        b[idx] = r * sin(corner_deg[c][2] * PI / 180);
+        a[idx] = r * cos(corner_deg[c][2] * AMP_PI / 180);
+        b[idx] = r * sin(corner_deg[c][2] * AMP_PI / 180);
         w[idx] = 1.0;
     }
     b[1] = -q; /* (1,0) */
@@ -75,13 +74,13 @@ static amp_status helix(const amp_allocator *al, amp_spline *s, amp_error *err)
     const int order[3] = {3, 3, 3};
     const size_t count[3] = {3, 3, NW};
     double a[9], b[9], wd[9], xy[2 * NW], wa[NW], U[NW + 3];
-    double L = sqrt(4 * PI * PI * R * R + H * H), bz = 2 * PI * R / L, bxy = H / L, z0 = RD * bz;
+    double L = sqrt(4 * AMP_PI * AMP_PI * R * R + H * H), bz = 2 * AMP_PI * R / L, bxy = H / L, z0 = RD * bz;
     size_t i, k;
     amp_status st = amp_spline_create(s, al, 3, order, count, 1, err);
     if (st != AMP_OK)
         return st;
     disc_patch(RD, a, b, wd);
-    circle_arcs(ARCS, 0.0, 2 * PI, xy, wa, U);
+    circle_arcs(ARCS, 0.0, 2 * AMP_PI, xy, wa, U);
     memcpy(s->knots[2], U, sizeof U);
     /*
      * Swept disc: X = c(t) + a N(t) + b B(t) with the helix's Frenet frame
@@ -113,7 +112,7 @@ static amp_status torus_quarter(const amp_allocator *al, amp_spline *s, amp_erro
     if (st != AMP_OK)
         return st;
     disc_patch(r, a, b, wd);
-    circle_arcs(1, 0.0, PI / 2, xy, wa, U);
+    circle_arcs(1, 0.0, AMP_PI / 2, xy, wa, U);
     for (k = 0; k < 3; k++)
         for (i = 0; i < 9; i++)
             amp_spline_cp_set(s, i + 9 * k, amp_v3((R + a[i]) * xy[2 * k], (R + a[i]) * xy[2 * k + 1], r + b[i]),
@@ -134,7 +133,7 @@ static amp_status vase(const amp_allocator *al, amp_spline *s, amp_error *err)
     amp_status st = amp_spline_create(s, al, 3, order, count, 1, err);
     if (st != AMP_OK)
         return st;
-    circle_arcs(4, 0.0, 2 * PI, xy, wa, U);
+    circle_arcs(4, 0.0, 2 * AMP_PI, xy, wa, U);
     memcpy(s->knots[1], U, sizeof U);
     for (k = 0; k < 6; k++)
         for (j = 0; j < 9; j++)

@@ -1,13 +1,13 @@
-/* Held-path check (paper 1 §5.3): every object bead is printed over earlier material or the bed. */
+/* Held-path check ([P1 §5.3]): every object bead is printed over earlier material or the bed. */
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
-#include "ampath/support_check.h"
+#include "ampath/check.h"
 
 void amp_hold_opts_default(amp_hold_opts *o)
 {
-    o->overhang = 0.25 * 3.14159265358979323846;
+    o->overhang = 0.25 * AMP_PI;
     o->max_gap = 1.0;
     o->bridge = 5.0;
     o->cantilever = 1.0;
@@ -138,7 +138,7 @@ static amp_status build_grid(hctx *c, double reach, amp_error *err)
     return AMP_OK;
 }
 
-/* Is sample t held by the bed or by an earlier sample (see support_check.h)? */
+/* Is sample t held by the bed or by an earlier sample (see check.h)? */
 static int held(const hctx *c, const amp_hold_opts *o, size_t t)
 {
     const hsample *p = &c->sm[t];
@@ -219,17 +219,17 @@ static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hol
     return AMP_OK;
 }
 
-amp_status amp_hold_check(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_error *err)
+amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_error *err)
 {
     hctx c;
     unsigned char *ok = NULL;
     amp_status st;
     long t;
     if (!ps || !o || !rep)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_hold_check: NULL argument");
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_hold: NULL argument");
     memset(rep, 0, sizeof *rep);
     rep->alloc = ps->alloc;
-    if (!(o->overhang >= 0.0 && o->overhang < 0.5 * 3.14159265358979323846) || !(o->max_gap >= 0.0) ||
+    if (!(o->overhang >= 0.0 && o->overhang < 0.5 * AMP_PI) || !(o->max_gap >= 0.0) ||
         !(o->bridge >= 0.0) || !(o->cantilever >= 0.0) || !(o->step > 0.0) ||
         !isfinite(o->max_gap + o->bridge + o->cantilever + o->step))
         return amp_fail(err, AMP_ERR_RANGE, 0,

@@ -3,7 +3,7 @@
  *
  * STL stores every triangle with its own three corners, so a reader must weld
  * them back into a shared-vertex mesh before anything topological (closedness,
- * BVH inside tests, the clipping of issue 5) can work. Exact welding uses an
+ * BVH inside tests, the clipping of field covers) can work. Exact welding uses an
  * open-addressing hash over the coordinate bit patterns; tolerance welding a
  * uniform grid.
  */

@@ -1,0 +1,36 @@
+#!/bin/sh
+# tools/identity.sh [DIR] — the products of the demo pipeline, one sha256 a file.
+# A refactoring with no change of behaviour leaves every line of this output
+# unchanged: run it before and after and compare (diff) the two listings.
+#   helix trivariate and mesh -> cover -> order -> mdr -> support -> gcode (marlin
+#   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
+#   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
+# Only products are hashed (not the --json figures, which hold timings).
+# tools/identity.ref holds the listing of the tree before the issue-19 refactoring
+# (valid only until a change of behaviour lands; the plain build, OpenMP on). Uses ./tools/ampath of the
+# current build (AMP_TOOL overrides); DIR defaults to build/identity. Compare listings made in the same DIR:
+# the products' header comments name their input files. An OPENMP=0 build covers differently (but the
+# same before and after: compare it with an OPENMP=0 build of the old tree).
+set -e
+A=${AMP_TOOL:-./tools/ampath}
+D=${1:-build/identity}
+mkdir -p "$D"
+rm -f "$D"/*
+$A model helix -o "$D/helix.spl" > /dev/null
+$A model helix -o "$D/helix.stl" > /dev/null
+$A cover "$D/helix.spl" --eps 1 --dir u -o "$D/helix-cover.amp" > /dev/null
+$A order "$D/helix-cover.amp" -o "$D/helix-ordered.amp" > /dev/null
+$A mdr "$D/helix-ordered.amp" --nominal 0.5 --trivariate "$D/helix.spl" -o "$D/helix-mdr.amp" > /dev/null
+$A support "$D/helix-mdr.amp" --mesh "$D/helix.stl" -o "$D/helix.amp" > /dev/null
+$A gcode "$D/helix.amp" --printer generic -o "$D/helix.gcode" > /dev/null
+$A gcode "$D/helix.amp" --flavor klipper -o "$D/helix-klipper.gcode" > /dev/null
+$A preview "$D/helix.amp" -o "$D/helix.svg" > /dev/null
+$A preview "$D/helix.amp" -o "$D/helix.png" > /dev/null
+$A model twisted-bridge -o "$D/bridge.stl" > /dev/null
+$A slice "$D/bridge.stl" --layer 0.2 --polygons -o "$D/bridge-polygons.amp" > /dev/null
+$A slice "$D/bridge.stl" --layer 0.2 --continuous -o "$D/bridge-cont.amp" > /dev/null
+$A gcode "$D/bridge-cont.amp" -o "$D/bridge-cont.gcode" > /dev/null
+$A preview "$D/bridge-cont.amp" -o "$D/bridge-cont.svg" > /dev/null
+$A field "$D/helix.stl" --field helix-square --spacing 1 -o "$D/helix-field.amp" > /dev/null
+$A check "$D/helix.amp" --trivariate "$D/helix.spl" > /dev/null
+cd "$D" && sha256sum -- *
