@@ -79,7 +79,7 @@ def _trivariate_eps(ps, obj, eps):
     return eps, eps_from
 
 
-def _coverage(obj, dom, samples, seed):
+def _measure(obj, dom, samples, seed):
     """amp_check_coverage of the object paths over @dom (a trivariate or a mesh BVH)."""
     g, err = L.new(L.amp_coverage), _err()
     _check(lib.amp_check_coverage(obj._ref, ctypes.byref(dom), samples, seed, ctypes.byref(g), ctypes.byref(err)),
@@ -90,7 +90,7 @@ def _coverage(obj, dom, samples, seed):
 def _run_trivariate(ps, obj, v, eps, samples, seed):
     eps, eps_from = _trivariate_eps(ps, obj, eps)
     v._live()
-    g = _coverage(obj, L.amp_coverage_domain(ctypes.pointer(v._s), None, 0.0), samples, seed)
+    g = _measure(obj, L.amp_coverage_domain(ctypes.pointer(v._s), None, 0.0), samples, seed)
     return {"ran": True, "ok": g.gap <= eps, "model": "trivariate", "eps": eps, "eps_from": eps_from,
             "coverage_gap_mm": g.gap, "samples": g.samples, "worst_point": _vec(g.worst),
             "worst_parameters": list(g.worst_par), "volume_mm3": g.volume,
@@ -111,7 +111,7 @@ def _run_mesh(obj, m, eps, samples, seed, tol):
             outside += d > max(_OUTSIDE_TOL, tol)
     if eps is None:
         eps = rmax  # the paths claim to cover their radius
-    g = _coverage(obj, L.amp_coverage_domain(None, ctypes.cast(b, ctypes.c_void_p), 0.0), samples, seed)
+    g = _measure(obj, L.amp_coverage_domain(None, ctypes.cast(b, ctypes.c_void_p), 0.0), samples, seed)
     vol = lib.amp_mesh_volume(m._ref)
     return {"ran": True, "ok": g.gap <= eps and outside == 0, "model": "mesh", "eps": eps,
             "coverage_gap_mm": g.gap, "coverage_gap_mean_mm": g.mean, "samples": samples,
