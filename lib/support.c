@@ -152,47 +152,86 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
 #define LEFT_OUT (NOPATH - 1)
 
 /*
- * Over the object fragments (indices < nobj, which is the print order of the
- * object paths), the smallest index (want_min) of a fragment above s, or the
- * largest (!want_min) of a fragment below s. Branch and bound on per-node
- * index bounds; NOPATH when none.
+ * A tree over the object fragments in print order (indices < nf): leaf j holds
+ * fragments [j LEAF, (j + 1) LEAF), node i (heap order, root 1, leaves from
+ * npow) the box of the object fragments of its index range. The first object
+ * fragment above a support fragment is then the first hit of a search that
+ * goes left (earlier) first and prunes subtrees whose box no cone can reach;
+ * the last one below is its mirror image. Print order is spatially coherent
+ * (paths are curves, and the next path starts near the last one), so ranges
+ * have small boxes low in the tree.
  */
-static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_head *hd, const uint32_t *nmin,
-                       const uint32_t *nmax, size_t nobj, uint32_t s, int want_min)
+#define LEAF 8
+typedef struct otree {
+    amp_box3 *box;
+    size_t npow; /* leaves, a power of two */
+    uint32_t nf;  /* object fragments: [0, nf) */
+} otree;
+
+static int is_object(const amp_fragments *fs, uint32_t g)
 {
-    uint32_t stack[128], best = NOPATH;
-    size_t top = 0;
+    return fs->ps->paths[fs->frag[g].path].role == AMP_ROLE_OBJECT;
+}
+
+static amp_status otree_build(otree *t, const amp_fragments *fs, uint32_t nf, const amp_allocator *a, amp_error *err)
+{
+    size_t nleaf = ((size_t)nf + LEAF - 1) / LEAF, i;
+    t->nf = nf;
+    for (t->npow = 1; t->npow < nleaf; t->npow *= 2)
+        ;
+    t->box = amp_calloc(a, 2 * t->npow, sizeof *t->box);
+    if (!t->box)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+    for (i = 0; i < t->npow; i++) {
+        uint32_t g, g1 = (uint32_t)((i + 1) * LEAF < nf ? (i + 1) * LEAF : nf);
+        amp_box3 bx = amp_box3_empty();
+        for (g = (uint32_t)(i * LEAF); g < g1; g++)
+            if (is_object(fs, g))
+                bx = amp_box3_union(bx, fs->frag[g].box);
+        t->box[t->npow + i] = bx;
+    }
+    for (i = t->npow; i-- > 1;)
+        t->box[i] = amp_box3_union(t->box[2 * i], t->box[2 * i + 1]);
+    return AMP_OK;
+}
+
+/*
+ * The smallest index (want_min) of an object fragment above support fragment
+ * s, or the largest (!want_min) of one below it; NOPATH when none. Depth-first
+ * in index order (reverse order for the largest), so the first hit is the
+ * answer.
+ */
+static uint32_t search(const otree *t, const amp_fragments *fs, const amp_head *hd, uint32_t s, int want_min)
+{
+    size_t stack[64], top = 0;
     double k = 1.0 / tan(hd->theta);
     const amp_fragment *fr = &fs->frag[s];
-    stack[top++] = 0;
+    stack[top++] = 1;
     while (top) {
-        uint32_t id = stack[--top];
-        const amp_fbvh_node *nd = &b->node[id];
-        double gap = k * amp_box_xy_gap(nd->box, fr->box);
-        if (nmin[id] == NOPATH)
+        size_t id = stack[--top];
+        const amp_box3 *bx = &t->box[id];
+        double gap;
+        if (bx->min.x > bx->max.x)
             continue;
-        if (want_min ? (best != NOPATH && nmin[id] >= best) : (best != NOPATH && nmax[id] <= best))
+        gap = k * amp_box_xy_gap(*bx, fr->box);
+        if (want_min ? bx->max.z - fr->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL
+                     : fr->box.max.z - bx->min.z - hd->z_offs - gap <= AMP_CONE_TOL)
             continue;
-        if (want_min ? nd->box.max.z - fr->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL
-                     : fr->box.max.z - nd->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL)
-            continue;
-        if (nd->left == 0) {
-            uint32_t q;
-            for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t g = b->order[q];
-                if (g >= nobj || fs->ps->paths[fs->frag[g].path].role != AMP_ROLE_OBJECT ||
-                    (best != NOPATH && (want_min ? g >= best : g <= best)))
-                    continue;
-                if (want_min ? amp_fragment_below_k(fs, hd->z_offs, k, s, g)
-                             : amp_fragment_below_k(fs, hd->z_offs, k, g, s))
-                    best = g;
+        if (id >= t->npow) {
+            size_t j = id - t->npow, q;
+            uint32_t g0 = (uint32_t)(j * LEAF), g1 = (uint32_t)((j + 1) * LEAF < t->nf ? (j + 1) * LEAF : t->nf);
+            for (q = 0; q < (size_t)(g1 - g0); q++) {
+                uint32_t g = want_min ? g0 + (uint32_t)q : g1 - 1 - (uint32_t)q;
+                if (is_object(fs, g) && (want_min ? amp_fragment_below_k(fs, hd->z_offs, k, s, g)
+                                                  : amp_fragment_below_k(fs, hd->z_offs, k, g, s)))
+                    return g;
             }
-        } else if (top + 2 <= 128) {
-            stack[top++] = nd->left;
-            stack[top++] = nd->right;
+        } else {
+            stack[top++] = want_min ? 2 * id + 1 : 2 * id;
+            stack[top++] = want_min ? 2 * id : 2 * id + 1;
         }
     }
-    return best;
+    return NOPATH;
 }
 
 /* Support fragment f has no gouge-free slot: mark it left out and count it (Lemma 5.1 makes this not happen
@@ -467,31 +506,6 @@ done:
     return st;
 }
 
-/* Per BVH node: smallest and largest object fragment index under it (NOPATH / 0 when none). */
-static void node_bounds(const amp_fbvh *b, const amp_fragments *fs, const amp_pathset *in, size_t nobj_frag,
-                        uint32_t *nmin, uint32_t *nmax)
-{
-    size_t i;
-    for (i = b->nnodes; i-- > 0;) {
-        const amp_fbvh_node *nd = &b->node[i];
-        nmin[i] = NOPATH;
-        nmax[i] = 0;
-        if (nd->left == 0) {
-            uint32_t q;
-            for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t g = b->order[q];
-                if (g < nobj_frag && in->paths[fs->frag[g].path].role == AMP_ROLE_OBJECT) {
-                    nmin[i] = g < nmin[i] ? g : nmin[i];
-                    nmax[i] = g > nmax[i] ? g : nmax[i];
-                }
-            }
-        } else {
-            nmin[i] = nmin[nd->left] < nmin[nd->right] ? nmin[nd->left] : nmin[nd->right];
-            nmax[i] = nmax[nd->left] > nmax[nd->right] ? nmax[nd->left] : nmax[nd->right];
-        }
-    }
-}
-
 /* Reverse the vertices of paths [p0, out->npaths): a support row prints the same either way. */
 static void reverse_paths(amp_pathset *out, size_t p0)
 {
@@ -615,14 +629,14 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     amp_support_stats s;
     amp_pathset all;
     amp_fragments fs;
-    amp_fbvh b;
-    uint32_t *nmin = NULL, *nmax = NULL, *first = NULL, *late = NULL;
+    otree t;
+    uint32_t *first = NULL, *late = NULL;
     piece *pcs = NULL;
     size_t npc = 0, i, nobj;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
-    memset(&b, 0, sizeof b);
+    memset(&t, 0, sizeof t);
     memset(&fs, 0, sizeof fs);
     if (!in || !model || !o || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: NULL argument");
@@ -647,29 +661,26 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
      * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
     if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
-        (stt = amp_fbvh_build(&b, &fs, c.a, err)) != AMP_OK)
+        (stt = otree_build(&t, &fs, (uint32_t)fs.first[nobj], c.a, err)) != AMP_OK)
         goto done;
     if (fs.n >= LEFT_OUT) {
         stt = amp_fail(err, AMP_ERR_LIMIT, 0, "too many fragments for support");
         goto done;
     }
-    nmin = amp_calloc(c.a, b.nnodes + 1, sizeof *nmin);
-    nmax = amp_calloc(c.a, b.nnodes + 1, sizeof *nmax);
     first = amp_calloc(c.a, fs.n + 1, sizeof *first);
     late = amp_calloc(c.a, fs.n + 1, sizeof *late);
-    if (!nmin || !nmax || !first || !late) {
+    if (!first || !late) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
         goto done;
     }
-    node_bounds(&b, &fs, in, fs.first[nobj], nmin, nmax);
     /* per support fragment: the first object fragment above it (it must come before) and the last one below
      * it (it must come after) */
     {
         long f0 = (long)fs.first[nobj], f;
 #pragma omp parallel for schedule(dynamic, 64)
         for (f = f0; f < (long)fs.n; f++) {
-            first[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 1);
-            late[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 0);
+            first[f] = search(&t, &fs, &o->head, (uint32_t)f, 1);
+            late[f] = search(&t, &fs, &o->head, (uint32_t)f, 0);
         }
     }
     /* object before support above it, support before object and support above it (Def. 5.1) */
@@ -687,12 +698,10 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
 done:
     amp_free(c.a, c.col);
     amp_free(c.a, c.first);
-    amp_free(c.a, nmin);
-    amp_free(c.a, nmax);
+    amp_free(c.a, t.box);
     amp_free(c.a, first);
     amp_free(c.a, late);
     amp_free(c.a, pcs);
-    amp_fbvh_free(&b);
     amp_fragments_free(&fs);
     amp_pathset_free(&all);
     return stt;
