@@ -161,7 +161,7 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
  * (paths are curves, and the next path starts near the last one), so ranges
  * have small boxes low in the tree.
  */
-#define LEAF 8
+#define LEAF 4
 typedef struct otree {
     amp_box3 *box;
     size_t npow; /* leaves, a power of two */
@@ -197,14 +197,14 @@ static amp_status otree_build(otree *t, const amp_fragments *fs, uint32_t nf, co
 
 /*
  * The smallest index (want_min) of an object fragment above support fragment
- * s, or the largest (!want_min) of one below it; NOPATH when none. Depth-first
+ * s, or the largest (!want_min) of one below it (k = cot theta); NOPATH when none. Depth-first
  * in index order (reverse order for the largest), so the first hit is the
  * answer.
  */
-static uint32_t search(const otree *t, const amp_fragments *fs, const amp_head *hd, uint32_t s, int want_min)
+static uint32_t search(const otree *t, const amp_fragments *fs, const amp_head *hd, double k, uint32_t s,
+                       int want_min)
 {
     size_t stack[64], top = 0;
-    double k = 1.0 / tan(hd->theta);
     const amp_fragment *fr = &fs->frag[s];
     stack[top++] = 1;
     while (top) {
@@ -677,10 +677,11 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
      * it (it must come after) */
     {
         long f0 = (long)fs.first[nobj], f;
+        double k = 1.0 / tan(o->head.theta);
 #pragma omp parallel for schedule(dynamic, 64)
         for (f = f0; f < (long)fs.n; f++) {
-            first[f] = search(&t, &fs, &o->head, (uint32_t)f, 1);
-            late[f] = search(&t, &fs, &o->head, (uint32_t)f, 0);
+            first[f] = search(&t, &fs, &o->head, k, (uint32_t)f, 1);
+            late[f] = search(&t, &fs, &o->head, k, (uint32_t)f, 0);
         }
     }
     /* object before support above it, support before object and support above it (Def. 5.1) */
