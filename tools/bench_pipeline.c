@@ -341,6 +341,30 @@ static void json_run(cli_json *j, const char *key, double eps, const vrun *r)
     cli_json_close(j);
 }
 
+/* Per stage: how much faster 2 threads run it than 1 (the stages' share of the pipeline's thread speed-up). */
+static void stage_speedups(cli_json *j, const vrun *one, const vrun *two)
+{
+    int s;
+    char k[64];
+    if (j)
+        cli_json_obj(j, "stage_speedup_2_threads");
+    else
+        printf("  2 threads / 1 thread per stage:");
+    for (s = 0; s < ST_CHECK; s++) {
+        double r = one->t[s] / fmax(two->t[s], 1e-9);
+        if (j) {
+            snprintf(k, sizeof k, "%s", stage_name[s]);
+            cli_json_num(j, k, r);
+        } else {
+            printf("%s %s %.2fx", s ? "," : "", stage_name[s], r);
+        }
+    }
+    if (j)
+        cli_json_close(j);
+    else
+        printf("\n");
+}
+
 static void target(cli_json *j, const char *key, const char *text, double figure, double limit, int below, const char *unit)
 {
     int met = below ? figure <= limit : figure >= limit;
@@ -397,6 +421,7 @@ int bench_pipeline(cli_json *j, int quick)
         json_run(j, "demo_without_nearest", e1, &dn);
         json_run(j, "fine", e2, &f1);
         json_run(j, "fine_2_threads", e2, &f2);
+        stage_speedups(j, &f1, &f2);
         cli_json_int(j, "greedy_subdivisions_demo", (long long)g1);
         cli_json_int(j, "greedy_subdivisions_fine", (long long)g2);
         cli_json_num(j, "time_exponent", xt);
@@ -423,6 +448,7 @@ int bench_pipeline(cli_json *j, int quick)
                f1.gs.travel_length / fmax(f1.gs.print_length, 1e-9), 100.0 * f1.gs.travel_time / fmax(f1.gs.time, 1e-9),
                (unsigned long)f1.subdivisions, (unsigned long)g2);
         print_run("fine helix, 2 threads,", e2, &f2);
+        stage_speedups(NULL, &f1, &f2);
         printf("  eps %.1f -> %.1f: fragments x%.2f, pipeline time x%.2f (exponent %.2f), peak memory x%.2f (exponent "
                "%.2f); 2 threads %.2fx faster, G-code %s\n",
                e1, e2, ratio, pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9), xt,
