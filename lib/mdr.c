@@ -333,7 +333,8 @@ static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
 typedef struct nbrs {
     size_t *row, *rrow;
     uint32_t *other, *rother;
-    double *dist, *rdist;
+    double *dist;
+    uint32_t *ridx; /* dist[ridx[k]] is the distance of reverse entry k (not a copy: 4 bytes a pair less) */
     size_t n, cap;
 } nbrs;
 
@@ -368,9 +369,11 @@ static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
     size_t i, q, nf = c->fs->n, *fill;
     nb->rrow = amp_calloc(c->a, nf + 1, sizeof *nb->rrow);
     nb->rother = amp_calloc(c->a, nb->n + 1, sizeof *nb->rother);
-    nb->rdist = amp_calloc(c->a, nb->n + 1, sizeof *nb->rdist);
+    if (nb->n > UINT32_MAX) /* 48 GB of pairs: no allocation of that size succeeds here */
+        return AMP_ERR_NOMEM;
+    nb->ridx = amp_calloc(c->a, nb->n + 1, sizeof *nb->ridx);
     fill = amp_calloc(c->a, nf + 1, sizeof *fill);
-    if (!nb->rrow || !nb->rother || !nb->rdist || !fill) {
+    if (!nb->rrow || !nb->rother || !nb->ridx || !fill) {
         amp_free(c->a, fill);
         return AMP_ERR_NOMEM;
     }
@@ -383,7 +386,7 @@ static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
         for (q = nb->row[i]; q < nb->row[i + 1]; q++) {
             size_t at = fill[nb->other[q]]++;
             nb->rother[at] = (uint32_t)i;
-            nb->rdist[at] = nb->dist[q];
+            nb->ridx[at] = (uint32_t)q;
         }
     amp_free(c->a, fill);
     return AMP_OK;
@@ -444,6 +447,19 @@ static amp_status find_neighbours(mdr_ctx *c, nbrs *nb)
     amp_free(c->a, bo);
     amp_free(c->a, bd);
     amp_free(c->a, cnt);
+    if (st == AMP_OK && nb->n > 0 && nb->n < nb->cap) {
+        /* the lists grew by doubling: give the slack back before the reverse lists raise the peak (a failed
+         * shrink keeps the blocks) */
+        uint32_t *o = amp_realloc_array(c->a, nb->other, nb->n, sizeof *nb->other);
+        double *d;
+        if (o)
+            nb->other = o;
+        d = amp_realloc_array(c->a, nb->dist, nb->n, sizeof *nb->dist);
+        if (d)
+            nb->dist = d;
+        if (o && d)
+            nb->cap = nb->n;
+    }
     if (st == AMP_OK)
         st = nbrs_reverse(c, nb);
     return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
@@ -503,7 +519,7 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
         r[e.f] = fmin(fmax(key, o->r_min), o->r_max);
         for (q = nb->rrow[e.f]; q < nb->rrow[e.f + 1] && st == AMP_OK; q++) {
             uint32_t nbo = nb->rother[q];
-            double ev = fmax(0.0, nb->rdist[q] - r[e.f]);
+            double ev = fmax(0.0, nb->dist[nb->ridx[q]] - r[e.f]);
             if (!frozen[nbo] && ev < sched[nbo]) {
                 sched[nbo] = ev;
                 st = hpush(c->a, &heap, &nh, &caph, ev, nbo);
@@ -623,7 +639,7 @@ done:
     amp_free(a, nb.dist);
     amp_free(a, nb.rrow);
     amp_free(a, nb.rother);
-    amp_free(a, nb.rdist);
+    amp_free(a, nb.ridx);
     amp_free(a, r);
     amp_free(a, sched);
     amp_free(a, frozen);
