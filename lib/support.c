@@ -162,6 +162,8 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
  * have small boxes low in the tree.
  */
 #define LEAF 4
+/* support fragments searched together (consecutive along a row) */
+#define BLOCK 16
 typedef struct otree {
     amp_box3 *box;
     size_t npow; /* leaves, a power of two */
@@ -195,43 +197,73 @@ static amp_status otree_build(otree *t, const amp_fragments *fs, uint32_t nf, co
     return AMP_OK;
 }
 
-/*
- * The smallest index (want_min) of an object fragment above support fragment
- * s, or the largest (!want_min) of one below it (k = cot theta); NOPATH when none. Depth-first
- * in index order (reverse order for the largest), so the first hit is the
- * answer.
- */
-static uint32_t search(const otree *t, const amp_fragments *fs, const amp_head *hd, double k, uint32_t s,
-                       int want_min)
+/* May an object fragment in box @p bx be above (want_min) or below (!want_min) a fragment in box @p b? A
+ * bound of the cone test of Def. 5.1 (k = cot theta) that only grows when b grows. */
+static int may_reach(const amp_box3 *bx, const amp_box3 *b, double zo, double k, int want_min)
 {
-    size_t stack[64], top = 0;
-    const amp_fragment *fr = &fs->frag[s];
+    double gap = k * amp_box_xy_gap(*bx, *b);
+    return want_min ? bx->max.z - b->min.z - zo - gap > AMP_CONE_TOL : b->max.z - bx->min.z - zo - gap > AMP_CONE_TOL;
+}
+
+/* Box of the fragments of [f0, f1) still without an answer (out[f] == NOPATH). */
+static amp_box3 pending_box(const amp_fragments *fs, uint32_t f0, uint32_t f1, const uint32_t *out)
+{
+    amp_box3 u = amp_box3_empty();
+    uint32_t f;
+    for (f = f0; f < f1; f++)
+        if (out[f] == NOPATH)
+            u = amp_box3_union(u, fs->frag[f].box);
+    return u;
+}
+
+/*
+ * For each support fragment s of [f0, f1) (neighbours along a row: their boxes are close), out[s] = the
+ * smallest index (want_min) of an object fragment above s, or the largest (!want_min) of one below it
+ * (k = cot theta); NOPATH when none. One depth-first walk for the whole block, in index order (reverse
+ * order for the largest), pruned by the box of the fragments still open: every subtree a single
+ * fragment's walk would enter is entered, and a fragment's first hit is its answer, so each answer is
+ * the one of a walk per fragment, at a fraction of the node visits.
+ */
+static void search_block(const otree *t, const amp_fragments *fs, double zo, double k, uint32_t f0, uint32_t f1,
+                         int want_min, uint32_t *out)
+{
+    size_t stack[64], top = 0, open = f1 - f0;
+    amp_box3 u;
+    uint32_t f;
+    for (f = f0; f < f1; f++)
+        out[f] = NOPATH;
+    u = pending_box(fs, f0, f1, out);
     stack[top++] = 1;
-    while (top) {
+    while (top && open) {
         size_t id = stack[--top];
         const amp_box3 *bx = &t->box[id];
-        double gap;
-        if (bx->min.x > bx->max.x)
-            continue;
-        gap = k * amp_box_xy_gap(*bx, fr->box);
-        if (want_min ? bx->max.z - fr->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL
-                     : fr->box.max.z - bx->min.z - hd->z_offs - gap <= AMP_CONE_TOL)
+        if (bx->min.x > bx->max.x || !may_reach(bx, &u, zo, k, want_min))
             continue;
         if (id >= t->npow) {
-            size_t j = id - t->npow, q;
+            size_t j = id - t->npow, q, found = 0;
             uint32_t g0 = (uint32_t)(j * LEAF), g1 = (uint32_t)((j + 1) * LEAF < t->nf ? (j + 1) * LEAF : t->nf);
-            for (q = 0; q < (size_t)(g1 - g0); q++) {
-                uint32_t g = want_min ? g0 + (uint32_t)q : g1 - 1 - (uint32_t)q;
-                if (is_object(fs, g) && (want_min ? amp_fragment_below_k(fs, hd->z_offs, k, s, g)
-                                                  : amp_fragment_below_k(fs, hd->z_offs, k, g, s)))
-                    return g;
+            for (f = f0; f < f1; f++) {
+                if (out[f] != NOPATH || !may_reach(bx, &fs->frag[f].box, zo, k, want_min))
+                    continue;
+                for (q = 0; q < (size_t)(g1 - g0); q++) {
+                    uint32_t g = want_min ? g0 + (uint32_t)q : g1 - 1 - (uint32_t)q;
+                    if (is_object(fs, g) && (want_min ? amp_fragment_below_k(fs, zo, k, f, g)
+                                                      : amp_fragment_below_k(fs, zo, k, g, f))) {
+                        out[f] = g;
+                        found++;
+                        break;
+                    }
+                }
+            }
+            if (found) {
+                open -= found;
+                u = pending_box(fs, f0, f1, out);
             }
         } else {
             stack[top++] = want_min ? 2 * id + 1 : 2 * id;
             stack[top++] = want_min ? 2 * id : 2 * id + 1;
         }
     }
-    return NOPATH;
 }
 
 /* Support fragment f has no gouge-free slot: mark it left out and count it (Lemma 5.1 makes this not happen
@@ -676,12 +708,13 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     /* per support fragment: the first object fragment above it (it must come before) and the last one below
      * it (it must come after) */
     {
-        long f0 = (long)fs.first[nobj], f;
+        long f0 = (long)fs.first[nobj], nb = ((long)fs.n - f0 + BLOCK - 1) / BLOCK, q;
         double k = 1.0 / tan(o->head.theta);
-#pragma omp parallel for schedule(dynamic, 64)
-        for (f = f0; f < (long)fs.n; f++) {
-            first[f] = search(&t, &fs, &o->head, k, (uint32_t)f, 1);
-            late[f] = search(&t, &fs, &o->head, k, (uint32_t)f, 0);
+#pragma omp parallel for schedule(dynamic, 4)
+        for (q = 0; q < nb; q++) {
+            uint32_t b0 = (uint32_t)(f0 + q * BLOCK), b1 = (uint32_t)(f0 + q * BLOCK + BLOCK < (long)fs.n ? f0 + q * BLOCK + BLOCK : (long)fs.n);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 1, first);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 0, late);
         }
     }
     /* object before support above it, support before object and support above it (Def. 5.1) */
