@@ -350,25 +350,36 @@ static amp_status emit_frags(amp_pathset *out, const amp_fragments *fs, amp_role
 /* Cells per support grid spacing in the field of order_pieces (finer cells: less over-approximation). */
 #define SUB 4
 
-/* Running minimum over a window of 2k + 1 cells along @p lines lines of @p n cells (stride @p step). */
+/*
+ * Running minimum over a window of 2k + 1 cells along @p lines lines of @p n cells (stride @p step), cells
+ * outside the line counting as NOPATH. Van Herk / Gil-Werman: minima from each block start forwards (g) and
+ * from each block end backwards (e), blocks of the window's length, so that every window is one block end
+ * part plus one block start part: three comparisons a cell whatever k. Scratch g, e: n + 2k cells each.
+ */
 static void min_pass(const uint32_t *src, uint32_t *dst, size_t n, size_t step, size_t lines, size_t line_step,
-                     size_t k)
+                     size_t k, uint32_t *g, uint32_t *e)
 {
-    size_t l, i, t;
-    for (l = 0; l < lines; l++)
-        for (i = 0; i < n; i++) {
-            uint32_t m = NOPATH;
-            for (t = i > k ? i - k : 0; t <= i + k && t < n; t++)
-                m = src[l * line_step + t * step] < m ? src[l * line_step + t * step] : m;
-            dst[l * line_step + i * step] = m;
+    size_t l, i, w = 2 * k + 1, m = n + 2 * k;
+    for (l = 0; l < lines; l++) {
+        const uint32_t *sl = src + l * line_step;
+        for (i = 0; i < m; i++) {
+            uint32_t v = i < k || i >= n + k ? NOPATH : sl[(i - k) * step];
+            g[i] = i % w == 0 || v < g[i - 1] ? v : g[i - 1];
         }
+        for (i = m; i-- > 0;) {
+            uint32_t v = i < k || i >= n + k ? NOPATH : sl[(i - k) * step];
+            e[i] = i % w == w - 1 || i == m - 1 || v < e[i + 1] ? v : e[i + 1];
+        }
+        for (i = 0; i < n; i++)
+            dst[l * line_step + i * step] = e[i] < g[i + 2 * k] ? e[i] : g[i + 2 * k];
+    }
 }
 
-/* Chebyshev dilation of a min-field by k cells: rows, then columns, via scratch tmp. */
-static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k)
+/* Chebyshev dilation of a min-field by k cells: rows, then columns, via scratch tmp (and g, e of min_pass). */
+static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k, uint32_t *g, uint32_t *e)
 {
-    min_pass(d, tmp, nx, 1, ny, nx, k);
-    min_pass(tmp, d, ny, nx, nx, 1, k);
+    min_pass(d, tmp, nx, 1, ny, nx, k, g, e);
+    min_pass(tmp, d, ny, nx, nx, 1, k, g, e);
 }
 
 /* Cell range of a fragment's xy box grown by r cells, clamped to the field. */
@@ -489,7 +500,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, pcap = 0;
     size_t step = (size_t)ceil(h / cot / cs), lag = (size_t)floor(o->head.z_offs / h) + 1;
     size_t *rfirst, *pfirst;
-    uint32_t *d, *tmp, nf = (uint32_t)fs->first[nobj];
+    uint32_t *d, *tmp, *ge, nf = (uint32_t)fs->first[nobj];
     amp_status st = AMP_OK;
     long l;
     for (i = nobj; i < fs->npaths; i++)
@@ -498,9 +509,10 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
         return AMP_OK;
     d = amp_calloc(c->a, nx * ny, sizeof *d);
     tmp = amp_calloc(c->a, nx * ny, sizeof *tmp);
+    ge = amp_calloc(c->a, 2 * (nx + ny + 2 * step), sizeof *ge);
     rfirst = amp_calloc(c->a, nl + 2, sizeof *rfirst);
     pfirst = amp_calloc(c->a, 2 * nl + 2, sizeof *pfirst);
-    if (!d || !tmp || !rfirst || !pfirst) {
+    if (!d || !tmp || !ge || !rfirst || !pfirst) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering support pieces");
         goto done;
     }
@@ -514,7 +526,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     for (l = (long)nl - 1; st == AMP_OK && l >= 0; l--) {
         size_t m = (size_t)l + lag;
         if ((size_t)l + 1 < nl)
-            dilate_min(d, tmp, nx, ny, step);
+            dilate_min(d, tmp, nx, ny, step, ge, ge + nx + ny + 2 * step);
         if (m < nl) /* layer m is now more than z_offs above layer l; its pieces are [pfirst[2m], pfirst[2m+1]) */
             field_add(c, o, fs, *pcs, pfirst[2 * m], pfirst[2 * m + 1], (double)(m - (size_t)l) * h, d, nx, ny);
         pfirst[2 * (size_t)l] = *npc;
@@ -533,6 +545,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
 done:
     amp_free(c->a, d);
     amp_free(c->a, tmp);
+    amp_free(c->a, ge);
     amp_free(c->a, rfirst);
     amp_free(c->a, pfirst);
     return st;
