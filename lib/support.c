@@ -201,8 +201,9 @@ static amp_status otree_build(otree *t, const amp_fragments *fs, uint32_t nf, co
  * bound of the cone test of Def. 5.1 (k = cot theta) that only grows when b grows. */
 static int may_reach(const amp_box3 *bx, const amp_box3 *b, double zo, double k, int want_min)
 {
-    double gap = k * amp_box_xy_gap(*bx, *b);
-    return want_min ? bx->max.z - b->min.z - zo - gap > AMP_CONE_TOL : b->max.z - bx->min.z - zo - gap > AMP_CONE_TOL;
+    double room = want_min ? bx->max.z - b->min.z - zo : b->max.z - bx->min.z - zo;
+    /* room - gap <= room (gap >= 0): no room, no square root */
+    return room > AMP_CONE_TOL && room - k * amp_box_xy_gap(*bx, *b) > AMP_CONE_TOL;
 }
 
 /* Box of the fragments of [f0, f1) still without an answer (out[f] == NOPATH). */
