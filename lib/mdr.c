@@ -220,31 +220,6 @@ static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j)
     return 1;
 }
 
-/* Visit the fragments whose centres lie within @p R of fragment i's centre (cells nearest first in z-y-x order
- * of a box). Calls back with the centre distance; stops when the callback returns non-zero. */
-typedef int (*nb_visit)(mdr_ctx *c, uint32_t i, uint32_t j, double cdist, void *user);
-
-static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, nb_visit cb, void *user)
-{
-    const ugrid *g = &c->g;
-    amp_vec3 p = c->ctr[i];
-    size_t x0, y0, z0, x1, y1, z1, y, z;
-    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
-    cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
-    cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
-    for (z = z0; z <= z1; z++)
-        for (y = y0; y <= y1; y++) {
-            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
-            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
-            for (q = g->start[row + x0]; q < qe; q++) {
-                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 <= R2 && d2 > s2 && cb(c, i, g->item[q], sqrt(d2), user))
-                    return;
-            }
-        }
-}
-
 /* One tube's neighbour search: the bound U so far, the distance kept (max(2U, U + r_min)), the ball already
  * searched, and where the kept neighbours go (a caller's buffer; overflow is flagged, not grown, so that the
  * search may run on any thread without allocating). */
@@ -272,12 +247,15 @@ static double box_dist2(const amp_box3 *a, const amp_box3 *b)
     return gx * gx + gy * gy + gz * gz;
 }
 
-static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
+/* Candidate j of tube i at squared centre distance d2; returns 1 when the buffer overflowed. */
+static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double d2, scan_state *s)
 {
-    scan_state *s = user;
-    double d;
-    if (cd - c->rho[i] - c->rho[j] > s->cut || box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) >
-                                                                         s->cut * s->cut || !pair_allowed(c, i, j))
+    double d, far = s->cut + c->rho[i] + c->rho[j];
+    /* the centre bound sqrt(d2) - rho_i - rho_j > cut; its square root only near the bound (a margin of
+     * 2e-9 relative keeps the skipped cases far from rounding) */
+    if (!(d2 < far * far * (1.0 - 2e-9)) && sqrt(d2) - c->rho[i] - c->rho[j] > s->cut)
+        return 0;
+    if (box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) > s->cut * s->cut || !pair_allowed(c, i, j))
         return 0;
     d = frag_dist(c->fs, i, j);
     if (d >= c->reach)
@@ -297,6 +275,29 @@ static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
     return 0;
 }
 
+/* Call scan_visit for the fragments whose centres lie within @p R of fragment i's centre and beyond @p skip_r
+ * (cells in z-y-x order of a box, items in grid order); stops when it reports an overflow. */
+static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, scan_state *st)
+{
+    const ugrid *g = &c->g;
+    amp_vec3 p = c->ctr[i];
+    size_t x0, y0, z0, x1, y1, z1, y, z;
+    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
+    cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
+    cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
+    for (z = z0; z <= z1; z++)
+        for (y = y0; y <= y1; y++) {
+            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
+            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
+            for (q = g->start[row + x0]; q < qe; q++) {
+                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= R2 && d2 > s2 && scan_visit(c, i, g->item[q], d2, st))
+                    return;
+            }
+        }
+}
+
 /* The neighbours tube i keeps (d <= max(2U, U + r_min)), searched in growing balls: every fragment within
  * d of i has its centre within d + rho_i + rho_max, so the search ends once the ball reaches that for the
  * current distance kept. Returns 0 on buffer overflow. */
@@ -310,7 +311,7 @@ static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
     s->n = 0;
     s->overflow = 0;
     for (;;) {
-        for_near(c, i, R, s->done_r, scan_visit, s);
+        for_near(c, i, R, s->done_r, s);
         if (s->overflow)
             return 0;
         need = s->cut + c->rho[i] + c->rho_max;
