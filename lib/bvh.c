@@ -50,6 +50,7 @@ struct amp_bvh {
 typedef struct build_ctx {
     bvh_tri *tris;
     amp_vec3 *cent; /* triangle centroids, permuted with tris */
+    amp_box3 *tbox; /* triangle boxes (tri_box), permuted with tris: computed once, read at every level */
     bvh_node *nodes;
     size_t nnodes;
 } build_ctx;
@@ -60,6 +61,19 @@ static amp_box3 tri_box(const bvh_tri *t)
     b = amp_box3_add(b, t->p[0]);
     b = amp_box3_add(b, t->p[1]);
     return amp_box3_add(b, t->p[2]);
+}
+
+/* amp_box3_union by comparisons (no libm call): the same boxes for the finite, non-NaN coordinates a BVH
+ * holds (a -0 / +0 choice aside, which the node inflation and box_area do not see). */
+static amp_box3 box_join(amp_box3 a, const amp_box3 *b)
+{
+    a.min.x = b->min.x < a.min.x ? b->min.x : a.min.x;
+    a.min.y = b->min.y < a.min.y ? b->min.y : a.min.y;
+    a.min.z = b->min.z < a.min.z ? b->min.z : a.min.z;
+    a.max.x = b->max.x > a.max.x ? b->max.x : a.max.x;
+    a.max.y = b->max.y > a.max.y ? b->max.y : a.max.y;
+    a.max.z = b->max.z > a.max.z ? b->max.z : a.max.z;
+    return a;
 }
 
 static double box_area(amp_box3 b)
@@ -77,10 +91,13 @@ static void swap_tri(build_ctx *c, size_t i, size_t j)
 {
     bvh_tri t = c->tris[i];
     amp_vec3 p = c->cent[i];
+    amp_box3 bx = c->tbox[i];
     c->tris[i] = c->tris[j];
     c->tris[j] = t;
     c->cent[i] = c->cent[j];
     c->cent[j] = p;
+    c->tbox[i] = c->tbox[j];
+    c->tbox[j] = bx;
 }
 
 /* Fill the dipole data of a leaf from its triangles. */
@@ -116,7 +133,7 @@ static uint32_t build_node(build_ctx *c, size_t first, size_t count, int depth)
     double best_cost = HUGE_VAL;
     nd->box = amp_box3_empty();
     for (i = first; i < first + count; i++) {
-        nd->box = amp_box3_union(nd->box, tri_box(&c->tris[i]));
+        nd->box = box_join(nd->box, &c->tbox[i]);
         cb = amp_box3_add(cb, c->cent[i]);
     }
     {
@@ -147,7 +164,7 @@ static uint32_t build_node(build_ctx *c, size_t first, size_t count, int depth)
             for (i = first; i < first + count; i++) {
                 int bin = (int)((axis_of(c->cent[i], axis) - lo) * scale);
                 bin = bin < 0 ? 0 : (bin >= NBINS ? NBINS - 1 : bin);
-                bb[bin] = amp_box3_union(bb[bin], tri_box(&c->tris[i]));
+                bb[bin] = box_join(bb[bin], &c->tbox[i]);
                 bn[bin]++;
             }
             lb[0] = bb[0];
@@ -284,9 +301,11 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     b->tris = amp_calloc(m->alloc, n, sizeof *b->tris);
     b->nodes = amp_calloc(m->alloc, 2 * n, sizeof *b->nodes);
     c.cent = amp_calloc(m->alloc, n, sizeof *c.cent);
+    c.tbox = amp_calloc(m->alloc, n, sizeof *c.tbox);
     absarea = amp_calloc(m->alloc, 2 * n, sizeof *absarea);
-    if (!b->tris || !b->nodes || !c.cent || !absarea) {
+    if (!b->tris || !b->nodes || !c.cent || !c.tbox || !absarea) {
         amp_free(m->alloc, c.cent);
+        amp_free(m->alloc, c.tbox);
         amp_free(m->alloc, absarea);
         amp_free(m->alloc, tris);
         amp_bvh_free(b);
@@ -302,7 +321,8 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
         b->tris[n].p[2] = p2;
         b->tris[n].src = i;
         c.cent[n] = amp_v3_scale(amp_v3_add(amp_v3_add(p0, p1), p2), 1.0 / 3.0);
-        b->bbox = amp_box3_union(b->bbox, tri_box(&b->tris[n]));
+        c.tbox[n] = tri_box(&b->tris[n]);
+        b->bbox = amp_box3_union(b->bbox, c.tbox[n]);
         n++;
     }
     amp_free(m->alloc, tris);
@@ -314,6 +334,7 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     finish_moments(&c, absarea);
     b->nnodes = c.nnodes;
     amp_free(m->alloc, c.cent);
+    amp_free(m->alloc, c.tbox);
     amp_free(m->alloc, absarea);
     *out = b;
     return AMP_OK;

@@ -220,31 +220,6 @@ static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j)
     return 1;
 }
 
-/* Visit the fragments whose centres lie within @p R of fragment i's centre (cells nearest first in z-y-x order
- * of a box). Calls back with the centre distance; stops when the callback returns non-zero. */
-typedef int (*nb_visit)(mdr_ctx *c, uint32_t i, uint32_t j, double cdist, void *user);
-
-static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, nb_visit cb, void *user)
-{
-    const ugrid *g = &c->g;
-    amp_vec3 p = c->ctr[i];
-    size_t x0, y0, z0, x1, y1, z1, y, z;
-    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
-    cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
-    cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
-    for (z = z0; z <= z1; z++)
-        for (y = y0; y <= y1; y++) {
-            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
-            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
-            for (q = g->start[row + x0]; q < qe; q++) {
-                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
-                double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 <= R2 && d2 > s2 && cb(c, i, g->item[q], sqrt(d2), user))
-                    return;
-            }
-        }
-}
-
 /* One tube's neighbour search: the bound U so far, the distance kept (max(2U, U + r_min)), the ball already
  * searched, and where the kept neighbours go (a caller's buffer; overflow is flagged, not grown, so that the
  * search may run on any thread without allocating). */
@@ -272,12 +247,15 @@ static double box_dist2(const amp_box3 *a, const amp_box3 *b)
     return gx * gx + gy * gy + gz * gz;
 }
 
-static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
+/* Candidate j of tube i at squared centre distance d2; returns 1 when the buffer overflowed. */
+static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double d2, scan_state *s)
 {
-    scan_state *s = user;
-    double d;
-    if (cd - c->rho[i] - c->rho[j] > s->cut || box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) >
-                                                                         s->cut * s->cut || !pair_allowed(c, i, j))
+    double d, far = s->cut + c->rho[i] + c->rho[j];
+    /* the centre bound sqrt(d2) - rho_i - rho_j > cut; its square root only near the bound (a margin of
+     * 2e-9 relative keeps the skipped cases far from rounding) */
+    if (!(d2 < far * far * (1.0 - 2e-9)) && sqrt(d2) - c->rho[i] - c->rho[j] > s->cut)
+        return 0;
+    if (box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) > s->cut * s->cut || !pair_allowed(c, i, j))
         return 0;
     d = frag_dist(c->fs, i, j);
     if (d >= c->reach)
@@ -297,6 +275,29 @@ static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double cd, void *user)
     return 0;
 }
 
+/* Call scan_visit for the fragments whose centres lie within @p R of fragment i's centre and beyond @p skip_r
+ * (cells in z-y-x order of a box, items in grid order); stops when it reports an overflow. */
+static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, scan_state *st)
+{
+    const ugrid *g = &c->g;
+    amp_vec3 p = c->ctr[i];
+    size_t x0, y0, z0, x1, y1, z1, y, z;
+    double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
+    cell_of(g, amp_v3(p.x - R, p.y - R, p.z - R), &x0, &y0, &z0);
+    cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
+    for (z = z0; z <= z1; z++)
+        for (y = y0; y <= y1; y++) {
+            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
+            size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
+            for (q = g->start[row + x0]; q < qe; q++) {
+                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
+                double d2 = dx * dx + dy * dy + dz * dz;
+                if (d2 <= R2 && d2 > s2 && scan_visit(c, i, g->item[q], d2, st))
+                    return;
+            }
+        }
+}
+
 /* The neighbours tube i keeps (d <= max(2U, U + r_min)), searched in growing balls: every fragment within
  * d of i has its centre within d + rho_i + rho_max, so the search ends once the ball reaches that for the
  * current distance kept. Returns 0 on buffer overflow. */
@@ -310,7 +311,7 @@ static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
     s->n = 0;
     s->overflow = 0;
     for (;;) {
-        for_near(c, i, R, s->done_r, scan_visit, s);
+        for_near(c, i, R, s->done_r, s);
         if (s->overflow)
             return 0;
         need = s->cut + c->rho[i] + c->rho_max;
@@ -333,7 +334,8 @@ static int scan_tube(mdr_ctx *c, uint32_t i, scan_state *s)
 typedef struct nbrs {
     size_t *row, *rrow;
     uint32_t *other, *rother;
-    double *dist, *rdist;
+    double *dist;
+    uint32_t *ridx; /* dist[ridx[k]] is the distance of reverse entry k (not a copy: 4 bytes a pair less) */
     size_t n, cap;
 } nbrs;
 
@@ -368,9 +370,11 @@ static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
     size_t i, q, nf = c->fs->n, *fill;
     nb->rrow = amp_calloc(c->a, nf + 1, sizeof *nb->rrow);
     nb->rother = amp_calloc(c->a, nb->n + 1, sizeof *nb->rother);
-    nb->rdist = amp_calloc(c->a, nb->n + 1, sizeof *nb->rdist);
+    if (nb->n > UINT32_MAX) /* 48 GB of pairs: no allocation of that size succeeds here */
+        return AMP_ERR_NOMEM;
+    nb->ridx = amp_calloc(c->a, nb->n + 1, sizeof *nb->ridx);
     fill = amp_calloc(c->a, nf + 1, sizeof *fill);
-    if (!nb->rrow || !nb->rother || !nb->rdist || !fill) {
+    if (!nb->rrow || !nb->rother || !nb->ridx || !fill) {
         amp_free(c->a, fill);
         return AMP_ERR_NOMEM;
     }
@@ -383,7 +387,7 @@ static amp_status nbrs_reverse(mdr_ctx *c, nbrs *nb)
         for (q = nb->row[i]; q < nb->row[i + 1]; q++) {
             size_t at = fill[nb->other[q]]++;
             nb->rother[at] = (uint32_t)i;
-            nb->rdist[at] = nb->dist[q];
+            nb->ridx[at] = (uint32_t)q;
         }
     amp_free(c->a, fill);
     return AMP_OK;
@@ -444,6 +448,19 @@ static amp_status find_neighbours(mdr_ctx *c, nbrs *nb)
     amp_free(c->a, bo);
     amp_free(c->a, bd);
     amp_free(c->a, cnt);
+    if (st == AMP_OK && nb->n > 0 && nb->n < nb->cap) {
+        /* the lists grew by doubling: give the slack back before the reverse lists raise the peak (a failed
+         * shrink keeps the blocks) */
+        uint32_t *o = amp_realloc_array(c->a, nb->other, nb->n, sizeof *nb->other);
+        double *d;
+        if (o)
+            nb->other = o;
+        d = amp_realloc_array(c->a, nb->dist, nb->n, sizeof *nb->dist);
+        if (d)
+            nb->dist = d;
+        if (o && d)
+            nb->cap = nb->n;
+    }
     if (st == AMP_OK)
         st = nbrs_reverse(c, nb);
     return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for tube neighbours");
@@ -503,7 +520,7 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
         r[e.f] = fmin(fmax(key, o->r_min), o->r_max);
         for (q = nb->rrow[e.f]; q < nb->rrow[e.f + 1] && st == AMP_OK; q++) {
             uint32_t nbo = nb->rother[q];
-            double ev = fmax(0.0, nb->rdist[q] - r[e.f]);
+            double ev = fmax(0.0, nb->dist[nb->ridx[q]] - r[e.f]);
             if (!frozen[nbo] && ev < sched[nbo]) {
                 sched[nbo] = ev;
                 st = hpush(c->a, &heap, &nh, &caph, ev, nbo);
@@ -623,7 +640,7 @@ done:
     amp_free(a, nb.dist);
     amp_free(a, nb.rrow);
     amp_free(a, nb.rother);
-    amp_free(a, nb.rdist);
+    amp_free(a, nb.ridx);
     amp_free(a, r);
     amp_free(a, sched);
     amp_free(a, frozen);

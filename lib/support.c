@@ -152,47 +152,119 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
 #define LEFT_OUT (NOPATH - 1)
 
 /*
- * Over the object fragments (indices < nobj, which is the print order of the
- * object paths), the smallest index (want_min) of a fragment above s, or the
- * largest (!want_min) of a fragment below s. Branch and bound on per-node
- * index bounds; NOPATH when none.
+ * A tree over the object fragments in print order (indices < nf): leaf j holds
+ * fragments [j LEAF, (j + 1) LEAF), node i (heap order, root 1, leaves from
+ * npow) the box of the object fragments of its index range. The first object
+ * fragment above a support fragment is then the first hit of a search that
+ * goes left (earlier) first and prunes subtrees whose box no cone can reach;
+ * the last one below is its mirror image. Print order is spatially coherent
+ * (paths are curves, and the next path starts near the last one), so ranges
+ * have small boxes low in the tree.
  */
-static uint32_t search(const amp_fbvh *b, const amp_fragments *fs, const amp_head *hd, const uint32_t *nmin,
-                       const uint32_t *nmax, size_t nobj, uint32_t s, int want_min)
+#define LEAF 4
+/* support fragments searched together (consecutive along a row) */
+#define BLOCK 16
+typedef struct otree {
+    amp_box3 *box;
+    size_t npow; /* leaves, a power of two */
+    uint32_t nf;  /* object fragments: [0, nf) */
+} otree;
+
+static int is_object(const amp_fragments *fs, uint32_t g)
 {
-    uint32_t stack[128], best = NOPATH;
-    size_t top = 0;
-    double k = 1.0 / tan(hd->theta);
-    const amp_fragment *fr = &fs->frag[s];
-    stack[top++] = 0;
-    while (top) {
-        uint32_t id = stack[--top];
-        const amp_fbvh_node *nd = &b->node[id];
-        double gap = k * amp_box_xy_gap(nd->box, fr->box);
-        if (nmin[id] == NOPATH)
+    return fs->ps->paths[fs->frag[g].path].role == AMP_ROLE_OBJECT;
+}
+
+static amp_status otree_build(otree *t, const amp_fragments *fs, uint32_t nf, const amp_allocator *a, amp_error *err)
+{
+    size_t nleaf = ((size_t)nf + LEAF - 1) / LEAF, i;
+    t->nf = nf;
+    for (t->npow = 1; t->npow < nleaf; t->npow *= 2)
+        ;
+    t->box = amp_calloc(a, 2 * t->npow, sizeof *t->box);
+    if (!t->box)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+    for (i = 0; i < t->npow; i++) {
+        uint32_t g, g1 = (uint32_t)((i + 1) * LEAF < nf ? (i + 1) * LEAF : nf);
+        amp_box3 bx = amp_box3_empty();
+        for (g = (uint32_t)(i * LEAF); g < g1; g++)
+            if (is_object(fs, g))
+                bx = amp_box3_union(bx, fs->frag[g].box);
+        t->box[t->npow + i] = bx;
+    }
+    for (i = t->npow; i-- > 1;)
+        t->box[i] = amp_box3_union(t->box[2 * i], t->box[2 * i + 1]);
+    return AMP_OK;
+}
+
+/* May an object fragment in box @p bx be above (want_min) or below (!want_min) a fragment in box @p b? A
+ * bound of the cone test of Def. 5.1 (k = cot theta) that only grows when b grows. */
+static int may_reach(const amp_box3 *bx, const amp_box3 *b, double zo, double k, int want_min)
+{
+    double room = want_min ? bx->max.z - b->min.z - zo : b->max.z - bx->min.z - zo;
+    /* room - gap <= room (gap >= 0): no room, no square root */
+    return room > AMP_CONE_TOL && room - k * amp_box_xy_gap(*bx, *b) > AMP_CONE_TOL;
+}
+
+/* Box of the fragments of [f0, f1) still without an answer (out[f] == NOPATH). */
+static amp_box3 pending_box(const amp_fragments *fs, uint32_t f0, uint32_t f1, const uint32_t *out)
+{
+    amp_box3 u = amp_box3_empty();
+    uint32_t f;
+    for (f = f0; f < f1; f++)
+        if (out[f] == NOPATH)
+            u = amp_box3_union(u, fs->frag[f].box);
+    return u;
+}
+
+/*
+ * For each support fragment s of [f0, f1) (neighbours along a row: their boxes are close), out[s] = the
+ * smallest index (want_min) of an object fragment above s, or the largest (!want_min) of one below it
+ * (k = cot theta); NOPATH when none. One depth-first walk for the whole block, in index order (reverse
+ * order for the largest), pruned by the box of the fragments still open: every subtree a single
+ * fragment's walk would enter is entered, and a fragment's first hit is its answer, so each answer is
+ * the one of a walk per fragment, at a fraction of the node visits.
+ */
+static void search_block(const otree *t, const amp_fragments *fs, double zo, double k, uint32_t f0, uint32_t f1,
+                         int want_min, uint32_t *out)
+{
+    size_t stack[64], top = 0, open = f1 - f0;
+    amp_box3 u;
+    uint32_t f;
+    for (f = f0; f < f1; f++)
+        out[f] = NOPATH;
+    u = pending_box(fs, f0, f1, out);
+    stack[top++] = 1;
+    while (top && open) {
+        size_t id = stack[--top];
+        const amp_box3 *bx = &t->box[id];
+        if (bx->min.x > bx->max.x || !may_reach(bx, &u, zo, k, want_min))
             continue;
-        if (want_min ? (best != NOPATH && nmin[id] >= best) : (best != NOPATH && nmax[id] <= best))
-            continue;
-        if (want_min ? nd->box.max.z - fr->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL
-                     : fr->box.max.z - nd->box.min.z - hd->z_offs - gap <= AMP_CONE_TOL)
-            continue;
-        if (nd->left == 0) {
-            uint32_t q;
-            for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t g = b->order[q];
-                if (g >= nobj || fs->ps->paths[fs->frag[g].path].role != AMP_ROLE_OBJECT ||
-                    (best != NOPATH && (want_min ? g >= best : g <= best)))
+        if (id >= t->npow) {
+            size_t j = id - t->npow, q, found = 0;
+            uint32_t g0 = (uint32_t)(j * LEAF), g1 = (uint32_t)((j + 1) * LEAF < t->nf ? (j + 1) * LEAF : t->nf);
+            for (f = f0; f < f1; f++) {
+                if (out[f] != NOPATH || !may_reach(bx, &fs->frag[f].box, zo, k, want_min))
                     continue;
-                if (want_min ? amp_fragment_below_k(fs, hd->z_offs, k, s, g)
-                             : amp_fragment_below_k(fs, hd->z_offs, k, g, s))
-                    best = g;
+                for (q = 0; q < (size_t)(g1 - g0); q++) {
+                    uint32_t g = want_min ? g0 + (uint32_t)q : g1 - 1 - (uint32_t)q;
+                    if (is_object(fs, g) && (want_min ? amp_fragment_below_k(fs, zo, k, f, g)
+                                                      : amp_fragment_below_k(fs, zo, k, g, f))) {
+                        out[f] = g;
+                        found++;
+                        break;
+                    }
+                }
             }
-        } else if (top + 2 <= 128) {
-            stack[top++] = nd->left;
-            stack[top++] = nd->right;
+            if (found) {
+                open -= found;
+                u = pending_box(fs, f0, f1, out);
+            }
+        } else {
+            stack[top++] = want_min ? 2 * id + 1 : 2 * id;
+            stack[top++] = want_min ? 2 * id : 2 * id + 1;
         }
     }
-    return best;
 }
 
 /* Support fragment f has no gouge-free slot: mark it left out and count it (Lemma 5.1 makes this not happen
@@ -279,25 +351,36 @@ static amp_status emit_frags(amp_pathset *out, const amp_fragments *fs, amp_role
 /* Cells per support grid spacing in the field of order_pieces (finer cells: less over-approximation). */
 #define SUB 4
 
-/* Running minimum over a window of 2k + 1 cells along @p lines lines of @p n cells (stride @p step). */
+/*
+ * Running minimum over a window of 2k + 1 cells along @p lines lines of @p n cells (stride @p step), cells
+ * outside the line counting as NOPATH. Van Herk / Gil-Werman: minima from each block start forwards (g) and
+ * from each block end backwards (e), blocks of the window's length, so that every window is one block end
+ * part plus one block start part: three comparisons a cell whatever k. Scratch g, e: n + 2k cells each.
+ */
 static void min_pass(const uint32_t *src, uint32_t *dst, size_t n, size_t step, size_t lines, size_t line_step,
-                     size_t k)
+                     size_t k, uint32_t *g, uint32_t *e)
 {
-    size_t l, i, t;
-    for (l = 0; l < lines; l++)
-        for (i = 0; i < n; i++) {
-            uint32_t m = NOPATH;
-            for (t = i > k ? i - k : 0; t <= i + k && t < n; t++)
-                m = src[l * line_step + t * step] < m ? src[l * line_step + t * step] : m;
-            dst[l * line_step + i * step] = m;
+    size_t l, i, w = 2 * k + 1, m = n + 2 * k;
+    for (l = 0; l < lines; l++) {
+        const uint32_t *sl = src + l * line_step;
+        for (i = 0; i < m; i++) {
+            uint32_t v = i < k || i >= n + k ? NOPATH : sl[(i - k) * step];
+            g[i] = i % w == 0 || v < g[i - 1] ? v : g[i - 1];
         }
+        for (i = m; i-- > 0;) {
+            uint32_t v = i < k || i >= n + k ? NOPATH : sl[(i - k) * step];
+            e[i] = i % w == w - 1 || i == m - 1 || v < e[i + 1] ? v : e[i + 1];
+        }
+        for (i = 0; i < n; i++)
+            dst[l * line_step + i * step] = e[i] < g[i + 2 * k] ? e[i] : g[i + 2 * k];
+    }
 }
 
-/* Chebyshev dilation of a min-field by k cells: rows, then columns, via scratch tmp. */
-static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k)
+/* Chebyshev dilation of a min-field by k cells: rows, then columns, via scratch tmp (and g, e of min_pass). */
+static void dilate_min(uint32_t *d, uint32_t *tmp, size_t nx, size_t ny, size_t k, uint32_t *g, uint32_t *e)
 {
-    min_pass(d, tmp, nx, 1, ny, nx, k);
-    min_pass(tmp, d, ny, nx, nx, 1, k);
+    min_pass(d, tmp, nx, 1, ny, nx, k, g, e);
+    min_pass(tmp, d, ny, nx, nx, 1, k, g, e);
 }
 
 /* Cell range of a fragment's xy box grown by r cells, clamped to the field. */
@@ -418,7 +501,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, pcap = 0;
     size_t step = (size_t)ceil(h / cot / cs), lag = (size_t)floor(o->head.z_offs / h) + 1;
     size_t *rfirst, *pfirst;
-    uint32_t *d, *tmp, nf = (uint32_t)fs->first[nobj];
+    uint32_t *d, *tmp, *ge, nf = (uint32_t)fs->first[nobj];
     amp_status st = AMP_OK;
     long l;
     for (i = nobj; i < fs->npaths; i++)
@@ -427,9 +510,10 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
         return AMP_OK;
     d = amp_calloc(c->a, nx * ny, sizeof *d);
     tmp = amp_calloc(c->a, nx * ny, sizeof *tmp);
+    ge = amp_calloc(c->a, 2 * (nx + ny + 2 * step), sizeof *ge);
     rfirst = amp_calloc(c->a, nl + 2, sizeof *rfirst);
     pfirst = amp_calloc(c->a, 2 * nl + 2, sizeof *pfirst);
-    if (!d || !tmp || !rfirst || !pfirst) {
+    if (!d || !tmp || !ge || !rfirst || !pfirst) {
         st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory ordering support pieces");
         goto done;
     }
@@ -443,7 +527,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     for (l = (long)nl - 1; st == AMP_OK && l >= 0; l--) {
         size_t m = (size_t)l + lag;
         if ((size_t)l + 1 < nl)
-            dilate_min(d, tmp, nx, ny, step);
+            dilate_min(d, tmp, nx, ny, step, ge, ge + nx + ny + 2 * step);
         if (m < nl) /* layer m is now more than z_offs above layer l; its pieces are [pfirst[2m], pfirst[2m+1]) */
             field_add(c, o, fs, *pcs, pfirst[2 * m], pfirst[2 * m + 1], (double)(m - (size_t)l) * h, d, nx, ny);
         pfirst[2 * (size_t)l] = *npc;
@@ -462,34 +546,10 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
 done:
     amp_free(c->a, d);
     amp_free(c->a, tmp);
+    amp_free(c->a, ge);
     amp_free(c->a, rfirst);
     amp_free(c->a, pfirst);
     return st;
-}
-
-/* Per BVH node: smallest and largest object fragment index under it (NOPATH / 0 when none). */
-static void node_bounds(const amp_fbvh *b, const amp_fragments *fs, const amp_pathset *in, size_t nobj_frag,
-                        uint32_t *nmin, uint32_t *nmax)
-{
-    size_t i;
-    for (i = b->nnodes; i-- > 0;) {
-        const amp_fbvh_node *nd = &b->node[i];
-        nmin[i] = NOPATH;
-        nmax[i] = 0;
-        if (nd->left == 0) {
-            uint32_t q;
-            for (q = nd->lo; q < nd->hi; q++) {
-                uint32_t g = b->order[q];
-                if (g < nobj_frag && in->paths[fs->frag[g].path].role == AMP_ROLE_OBJECT) {
-                    nmin[i] = g < nmin[i] ? g : nmin[i];
-                    nmax[i] = g > nmax[i] ? g : nmax[i];
-                }
-            }
-        } else {
-            nmin[i] = nmin[nd->left] < nmin[nd->right] ? nmin[nd->left] : nmin[nd->right];
-            nmax[i] = nmax[nd->left] > nmax[nd->right] ? nmax[nd->left] : nmax[nd->right];
-        }
-    }
 }
 
 /* Reverse the vertices of paths [p0, out->npaths): a support row prints the same either way. */
@@ -615,14 +675,14 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     amp_support_stats s;
     amp_pathset all;
     amp_fragments fs;
-    amp_fbvh b;
-    uint32_t *nmin = NULL, *nmax = NULL, *first = NULL, *late = NULL;
+    otree t;
+    uint32_t *first = NULL, *late = NULL;
     piece *pcs = NULL;
     size_t npc = 0, i, nobj;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
-    memset(&b, 0, sizeof b);
+    memset(&t, 0, sizeof t);
     memset(&fs, 0, sizeof fs);
     if (!in || !model || !o || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: NULL argument");
@@ -647,29 +707,28 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
      * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
     if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
-        (stt = amp_fbvh_build(&b, &fs, c.a, err)) != AMP_OK)
+        (stt = otree_build(&t, &fs, (uint32_t)fs.first[nobj], c.a, err)) != AMP_OK)
         goto done;
     if (fs.n >= LEFT_OUT) {
         stt = amp_fail(err, AMP_ERR_LIMIT, 0, "too many fragments for support");
         goto done;
     }
-    nmin = amp_calloc(c.a, b.nnodes + 1, sizeof *nmin);
-    nmax = amp_calloc(c.a, b.nnodes + 1, sizeof *nmax);
     first = amp_calloc(c.a, fs.n + 1, sizeof *first);
     late = amp_calloc(c.a, fs.n + 1, sizeof *late);
-    if (!nmin || !nmax || !first || !late) {
+    if (!first || !late) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
         goto done;
     }
-    node_bounds(&b, &fs, in, fs.first[nobj], nmin, nmax);
     /* per support fragment: the first object fragment above it (it must come before) and the last one below
      * it (it must come after) */
     {
-        long f0 = (long)fs.first[nobj], f;
-#pragma omp parallel for schedule(dynamic, 64)
-        for (f = f0; f < (long)fs.n; f++) {
-            first[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 1);
-            late[f] = search(&b, &fs, &o->head, nmin, nmax, fs.first[nobj], (uint32_t)f, 0);
+        long f0 = (long)fs.first[nobj], nb = ((long)fs.n - f0 + BLOCK - 1) / BLOCK, q;
+        double k = 1.0 / tan(o->head.theta);
+#pragma omp parallel for schedule(dynamic, 4)
+        for (q = 0; q < nb; q++) {
+            uint32_t b0 = (uint32_t)(f0 + q * BLOCK), b1 = (uint32_t)(f0 + q * BLOCK + BLOCK < (long)fs.n ? f0 + q * BLOCK + BLOCK : (long)fs.n);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 1, first);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 0, late);
         }
     }
     /* object before support above it, support before object and support above it (Def. 5.1) */
@@ -687,12 +746,10 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
 done:
     amp_free(c.a, c.col);
     amp_free(c.a, c.first);
-    amp_free(c.a, nmin);
-    amp_free(c.a, nmax);
+    amp_free(c.a, t.box);
     amp_free(c.a, first);
     amp_free(c.a, late);
     amp_free(c.a, pcs);
-    amp_fbvh_free(&b);
     amp_fragments_free(&fs);
     amp_pathset_free(&all);
     return stt;

@@ -5,6 +5,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "runtool.h"
 #include "testutil.h"
 
@@ -392,6 +396,70 @@ START_TEST(hold_check_applies_the_overhang_rule)
 }
 END_TEST
 
+#ifdef _OPENMP
+/* Support of the ordered helix (coarse) on @p threads OpenMP threads. */
+static void helix_support(const amp_pathset *ord, const amp_bvh *bvh, int threads, amp_pathset *out)
+{
+    amp_support_opts so;
+    amp_support_stats st;
+    amp_error err;
+    omp_set_num_threads(threads);
+    amp_support_opts_default(&so);
+    ck_assert_msg(amp_support(ord, bvh, &so, out, &st, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_uint_gt(st.paths, 1000); /* thousands of support fragments: many blocks for the threads */
+    ck_assert_uint_eq(st.conflicts, 0);
+}
+
+/* Issue 18: the slot search runs blocks of support fragments on OpenMP threads; the answers, and so the
+ * support file, must not depend on the thread count. */
+START_TEST(support_on_the_helix_is_identical_on_one_and_two_threads)
+{
+    amp_spline v;
+    amp_cover_opts co;
+    amp_order_opts oo;
+    amp_pathset cov, ord, s1, s2;
+    amp_mesh m;
+    amp_bvh *bvh = NULL;
+    amp_error err;
+    size_t i;
+    int saved = omp_get_max_threads();
+    amp_spline_init(&v);
+    amp_pathset_init(&cov, NULL);
+    amp_pathset_init(&ord, NULL);
+    amp_pathset_init(&s1, NULL);
+    amp_pathset_init(&s2, NULL);
+    amp_mesh_init(&m, NULL);
+    amp_cover_opts_default(&co);
+    co.eps = 2.0;
+    co.dir = 0;
+    amp_order_opts_default(&oo);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &v, &err), AMP_OK);
+    ck_assert_int_eq(amp_cover_trivariate(&v, &co, &cov, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_order(&cov, &oo, &ord, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_mesh_from_trivariate(&m, &v, 0, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&bvh, &m, &err), AMP_OK);
+    helix_support(&ord, bvh, 1, &s1);
+    helix_support(&ord, bvh, 2, &s2);
+    omp_set_num_threads(saved);
+    ck_assert_uint_eq(s1.npaths, s2.npaths);
+    ck_assert_uint_eq(s1.nverts, s2.nverts);
+    for (i = 0; i < s1.npaths; i++)
+        ck_assert_msg(s1.paths[i].role == s2.paths[i].role && s1.paths[i].n == s2.paths[i].n, "path %lu differs",
+                      (unsigned long)i);
+    for (i = 0; i < s1.nverts; i++)
+        ck_assert_msg(memcmp(&s1.verts[i], &s2.verts[i], sizeof s1.verts[i]) == 0, "vertex %lu differs",
+                      (unsigned long)i);
+    amp_bvh_free(bvh);
+    amp_mesh_free(&m);
+    amp_pathset_free(&cov);
+    amp_pathset_free(&ord);
+    amp_pathset_free(&s1);
+    amp_pathset_free(&s2);
+    amp_spline_free(&v);
+}
+END_TEST
+#endif
+
 static Suite *support_suite(void)
 {
     Suite *s = suite_create("support");
@@ -405,6 +473,9 @@ static Suite *support_suite(void)
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
     tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);
     tcase_add_test(tc, hold_check_applies_the_overhang_rule);
+#ifdef _OPENMP
+    tcase_add_test(tc, support_on_the_helix_is_identical_on_one_and_two_threads);
+#endif
     suite_add_tcase(s, tc);
     return s;
 }

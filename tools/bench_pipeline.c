@@ -24,6 +24,7 @@
 
 typedef struct counter {
     size_t live, peak;
+    double cpu0; /* process CPU time at the stage's start (cpu_now) */
 } counter;
 
 typedef union hdr {
@@ -95,6 +96,7 @@ static const char *const stage_name[NSTAGES] = {"cover", "order", "mdr", "suppor
 
 typedef struct vrun {
     double t[NSTAGES];
+    double cpu[NSTAGES]; /* process CPU time of the stage: on one thread, its work whatever the load */
     size_t peak[NSTAGES]; /* bytes live at the stage's peak (what earlier stages left included) */
     size_t peak_all;      /* over the pipeline, check excluded */
     size_t fragments, subdivisions, paths;
@@ -134,15 +136,26 @@ static int run_check(const amp_pathset *ps, double eps)
     return ok;
 }
 
+/* User + system CPU time of the process, s. */
+static double cpu_now(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
+           1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
 static void stage_begin(counter *c, double *t0)
 {
     c->peak = c->live;
+    c->cpu0 = cpu_now();
     *t0 = cli_now();
 }
 
 static void stage_end(counter *c, vrun *r, int s, double t0)
 {
     r->t[s] = cli_now() - t0;
+    r->cpu[s] = cpu_now() - c->cpu0;
     r->peak[s] = c->peak;
     if (s != ST_CHECK && c->peak > r->peak_all)
         r->peak_all = c->peak;
@@ -151,7 +164,7 @@ static void stage_end(counter *c, vrun *r, int s, double t0)
 /* cover → order → mdr → support → gcode (→ check) of the helix at @p eps on @p threads threads. */
 static int volumetric(double eps, int nearest, int threads, int check, vrun *r)
 {
-    counter cnt = {0, 0};
+    counter cnt = {0, 0, 0.0};
     amp_allocator al = {cnt_alloc, cnt_realloc, cnt_free, NULL};
     amp_spline v;
     amp_cover_opts co;
@@ -341,6 +354,55 @@ static void json_run(cli_json *j, const char *key, double eps, const vrun *r)
     cli_json_close(j);
 }
 
+/* Per stage CPU time of a 1-thread run: on a loaded machine the wall clock also counts other jobs' time. */
+static double pipeline_cpu(const vrun *r) { return r->cpu[ST_COVER] + r->cpu[ST_ORDER] + r->cpu[ST_MDR] + r->cpu[ST_SUPPORT] + r->cpu[ST_GCODE]; }
+
+static void stage_cpu(cli_json *j, const char *key, const char *label, const vrun *r)
+{
+    int s;
+    char k[64];
+    if (j) {
+        cli_json_obj(j, key);
+        for (s = 0; s < NSTAGES; s++) {
+            snprintf(k, sizeof k, "%s_s", stage_name[s]);
+            cli_json_num(j, k, r->cpu[s]);
+        }
+        cli_json_num(j, "pipeline_s", pipeline_cpu(r));
+        cli_json_close(j);
+        return;
+    }
+    printf("  CPU time, %s: pipeline %.2f s =", label, pipeline_cpu(r));
+    for (s = 0; s < ST_CHECK; s++)
+        printf("%s %s %.2f s", s ? " +" : "", stage_name[s], r->cpu[s]);
+    if (r->t[ST_CHECK] > 0)
+        printf("; check %.2f s", r->cpu[ST_CHECK]);
+    printf("\n");
+}
+
+/* Per stage: how much faster 2 threads run it than 1 (the stages' share of the pipeline's thread speed-up). */
+static void stage_speedups(cli_json *j, const vrun *one, const vrun *two)
+{
+    int s;
+    char k[64];
+    if (j)
+        cli_json_obj(j, "stage_speedup_2_threads");
+    else
+        printf("  2 threads / 1 thread per stage:");
+    for (s = 0; s < ST_CHECK; s++) {
+        double r = one->t[s] / fmax(two->t[s], 1e-9);
+        if (j) {
+            snprintf(k, sizeof k, "%s", stage_name[s]);
+            cli_json_num(j, k, r);
+        } else {
+            printf("%s %s %.2fx", s ? "," : "", stage_name[s], r);
+        }
+    }
+    if (j)
+        cli_json_close(j);
+    else
+        printf("\n");
+}
+
 static void target(cli_json *j, const char *key, const char *text, double figure, double limit, int below, const char *unit)
 {
     int met = below ? figure <= limit : figure >= limit;
@@ -397,6 +459,9 @@ int bench_pipeline(cli_json *j, int quick)
         json_run(j, "demo_without_nearest", e1, &dn);
         json_run(j, "fine", e2, &f1);
         json_run(j, "fine_2_threads", e2, &f2);
+        stage_speedups(j, &f1, &f2);
+        stage_cpu(j, "demo_cpu", NULL, &d);
+        stage_cpu(j, "fine_cpu", NULL, &f1);
         cli_json_int(j, "greedy_subdivisions_demo", (long long)g1);
         cli_json_int(j, "greedy_subdivisions_fine", (long long)g2);
         cli_json_num(j, "time_exponent", xt);
@@ -423,6 +488,9 @@ int bench_pipeline(cli_json *j, int quick)
                f1.gs.travel_length / fmax(f1.gs.print_length, 1e-9), 100.0 * f1.gs.travel_time / fmax(f1.gs.time, 1e-9),
                (unsigned long)f1.subdivisions, (unsigned long)g2);
         print_run("fine helix, 2 threads,", e2, &f2);
+        stage_speedups(NULL, &f1, &f2);
+        stage_cpu(NULL, "", "demo, 1 thread", &d);
+        stage_cpu(NULL, "", "eps 0.5, 1 thread", &f1);
         printf("  eps %.1f -> %.1f: fragments x%.2f, pipeline time x%.2f (exponent %.2f), peak memory x%.2f (exponent "
                "%.2f); 2 threads %.2fx faster, G-code %s\n",
                e1, e2, ratio, pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9), xt,
@@ -435,7 +503,10 @@ int bench_pipeline(cli_json *j, int quick)
     }
     target(j, "demo_pipeline_s", "demo pipeline time (s), 1 thread", pipeline_s(&d), 1.0, 1, "s");
     target(j, "demo_check_s", "demo check time (s), 1 thread", d.t[ST_CHECK], 0.5, 1, "s");
+    target(j, "demo_pipeline_cpu_s", "demo pipeline CPU time (s), 1 thread", pipeline_cpu(&d), 1.0, 1, "s");
+    target(j, "demo_check_cpu_s", "demo check CPU time (s), 1 thread", d.cpu[ST_CHECK], 0.5, 1, "s");
     target(j, "fine_pipeline_s", "eps 0.5 pipeline time (s), 1 thread", pipeline_s(&f1), 8.0, 1, "s");
+    target(j, "fine_pipeline_cpu_s", "eps 0.5 pipeline CPU time (s), 1 thread", pipeline_cpu(&f1), 8.0, 1, "s");
     target(j, "fine_peak_mb", "eps 0.5 pipeline peak memory (MB)", (double)f1.peak_all / 1e6, 300.0, 1, "MB");
     target(j, "time_exponent", "time growth exponent eps 1 -> 0.5", xt, 1.1, 1, "");
     target(j, "memory_exponent", "memory growth exponent eps 1 -> 0.5", xm, 1.1, 1, "");
