@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "ampath/order.h"
-#include "fragbvh.h"
+#include "order_internal.h"
 
 #define NONE AMP_FBVH_NONE
 /* longest continuation simulated per candidate during look-ahead */
@@ -21,6 +21,7 @@ void amp_order_opts_default(amp_order_opts *o)
     o->lookahead = 16;
     o->merge_window = 2000;
     o->nearest = 1;
+    o->travel_z_weight = AMP_ORDER_TRAVEL_Z_WEIGHT;
     o->progress = NULL;
     o->progress_user = NULL;
 }
@@ -130,11 +131,7 @@ amp_status amp_below_graph_build(amp_below_graph *g, const amp_fragments *fs, co
 
 /* ---- ordering state ---- */
 
-typedef struct piece {
-    uint32_t path, lo, hi; /* fragment range */
-    int dir;               /* +1: printed lo..hi, -1: printed hi..lo */
-    amp_box3 box;
-} piece;
+typedef amp_order_piece piece; /* fragments lo..hi of one path, printed lo..hi (dir +1) or hi..lo (dir -1) */
 
 typedef struct runent {
     uint32_t cuts, len, s, e;
@@ -1030,6 +1027,14 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
             if (m == 0)
                 break;
         }
+    }
+    if (st == AMP_OK && opts->improve && opts->travel_z_weight > 0.0 && o.npc > 1) {
+        /* the sub-curves (and cuts) are final: re-sequence them for travel, on a hierarchy with all active */
+        amp_fbvh_free(&o.bvh);
+        st = amp_fbvh_build(&o.bvh, &fs, o.a, err);
+        if (st == AMP_OK)
+            st = amp_order_resequence(&fs, &o.bvh, opts->head.z_offs, o.k, opts->travel_z_weight, o.pc, o.npc, o.a,
+                                      err, &o.st.queries);
     }
     if (st == AMP_OK)
         st = emit(&o, in, out, err);
