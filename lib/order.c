@@ -855,6 +855,29 @@ static amp_status merge_pass(orderer *o, size_t *merged_out)
     return AMP_OK;
 }
 
+/* Consecutive sub-curves in print order that continue each other on their curve (the second starts at the
+ * fragment after the first one's last, in the same direction) are one sub-curve: the same fragments in the
+ * same order, one cut fewer. The re-sequencing makes such pairs (a curve continued as soon as its next
+ * sub-curve is admissible, at no travel). */
+static size_t join_contiguous(orderer *o)
+{
+    size_t i, m = 0, joined = 0;
+    for (i = 0; i < o->npc; i++) {
+        piece *p = m ? &o->pc[m - 1] : NULL, *q = &o->pc[i];
+        if (p && p->path == q->path && p->dir == q->dir &&
+            ((p->dir > 0 && q->lo == p->hi + 1) || (p->dir < 0 && q->hi + 1 == p->lo))) {
+            p->lo = p->lo < q->lo ? p->lo : q->lo;
+            p->hi = p->hi > q->hi ? p->hi : q->hi;
+            p->box = amp_box3_union(p->box, q->box);
+            joined++;
+            continue;
+        }
+        o->pc[m++] = *q;
+    }
+    o->npc = m;
+    return joined;
+}
+
 /* ---- output ---- */
 
 /* The cut point after fragment f of run p (in print direction) need not be written: it lies on a straight
@@ -1035,6 +1058,8 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
         if (st == AMP_OK)
             st = amp_order_resequence(&fs, &o.bvh, opts->head.z_offs, o.k, opts->travel_z_weight, o.pc, o.npc, o.a,
                                       err, &o.st.queries);
+        if (st == AMP_OK)
+            o.st.merges += join_contiguous(&o);
     }
     if (st == AMP_OK)
         st = emit(&o, in, out, err);
