@@ -354,6 +354,56 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
     return AMP_FBVH_NONE;
 }
 
+/* Is some fragment of the sub-curve [lo, hi] above unprinted fragment g (g outside it)? Box bound per fragment
+ * first (its own box against g's leaf-ordered box), then the exact test. */
+static int piece_over(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t lo, uint32_t hi,
+                      uint32_t q)
+{
+    uint32_t f, g = b->order[q];
+    double k2 = k * k;
+    for (f = lo; f <= hi; f++) {
+        const amp_box3 *fb = &fs->frag[f].box;
+        if (act_pass(&b->fbox[q], fb->max.z - zo - AMP_CONE_TOL, k2, fb) && amp_fragment_below_k(fs, zo, k, g, f))
+            return 1;
+    }
+    return 0;
+}
+
+uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *fs, double zo, double k,
+                                       uint32_t lo, uint32_t hi, amp_box3 box, const unsigned char *done)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0;
+    double reach = box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+    if (b->nnodes == 0 || !act_pass(&b->act[0].bx, reach, k2, &box))
+        return AMP_FBVH_NONE;
+    stack[top++] = 0;
+    while (top) {
+        const amp_fbvh_act *nd = &b->act[stack[--top]];
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if ((g < lo || g > hi) && !done[g] && act_pass(&b->fbox[q], reach, k2, &box) &&
+                    piece_over(b, fs, zo, k, lo, hi, q))
+                    return g;
+            }
+        } else if (top + 2 <= STACK_MAX) {
+            double sl = act_slack(&b->act[nd->left].bx, reach, k2, &box);
+            double sr = act_slack(&b->act[nd->right].bx, reach, k2, &box);
+            if (sl > 0.0 && sr > 0.0) {
+                stack[top++] = sl > sr ? nd->right : nd->left;
+                stack[top++] = sl > sr ? nd->left : nd->right;
+            } else if (sl > 0.0) {
+                stack[top++] = nd->left;
+            } else if (sr > 0.0) {
+                stack[top++] = nd->right;
+            }
+        }
+    }
+    return AMP_FBVH_NONE;
+}
+
 uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                  const unsigned char *done, uint32_t near, uint32_t *clear)
 {

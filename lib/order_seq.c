@@ -42,7 +42,7 @@ typedef struct seq {
     amp_order_piece *pc;
     size_t np, alive;
     unsigned char *st, *rev, *ing, *done;
-    uint32_t *pos, *pwnext, *whead, *clear;
+    uint32_t *pos, *last, *pwnext, *whead, *clear; /* last: the blocker p last waited on */
     uint32_t *cell, nx, ny, nz, freel;
     double x0, y0, z0, s;
     sent *ent;
@@ -239,24 +239,36 @@ static best search(seq *q, amp_vec3 at)
     return b;
 }
 
-/* Is sub-curve p admissible (no unprinted fragment of another sub-curve below it)? If not, it waits. */
+/* Is sub-curve p admissible (no unprinted fragment of another sub-curve below it)? If not, it waits on the
+ * blocker found. A flat sub-curve is tested in one traversal (amp_fbvh_find_any_below_piece: once it is
+ * admissible, proving that nothing is left below fragment by fragment costs a traversal each: at 10^6
+ * fragments of layered lines 1.0 M queries against 19 k); a steep one fragment by fragment, from the first
+ * one not yet proven free (printing only removes blockers) and near its last blocker (its whole box would
+ * reach down over too much: on the demo helix 2.5 x the time). Either way the answer is exact. */
 static int admissible(seq *q, uint32_t p)
 {
     const amp_order_piece *c = &q->pc[p];
-    uint32_t f;
-    for (f = c->lo + q->pos[p]; f <= c->hi; f++) {
-        uint32_t g = amp_fbvh_find_any_below_x(q->bvh, q->fs, q->zo, q->k, f, c->lo, c->hi, q->done, NONE,
-                                               &q->clear[f]);
+    uint32_t f, g = NONE;
+    if (c->box.max.z - c->box.min.z <= 2.0 * q->zo) {
+        g = amp_fbvh_find_any_below_piece(q->bvh, q->fs, q->zo, q->k, c->lo, c->hi, c->box, q->done);
         q->queries++;
-        if (g != NONE) {
-            q->pos[p] = f - c->lo;
-            q->st[p] = PS_WAITING;
-            q->pwnext[p] = q->whead[g];
-            q->whead[g] = p;
-            return 0;
+    } else
+        for (f = c->lo + q->pos[p]; f <= c->hi; f++) {
+            g = amp_fbvh_find_any_below_x(q->bvh, q->fs, q->zo, q->k, f, c->lo, c->hi, q->done, q->last[p],
+                                          &q->clear[f]);
+            q->queries++;
+            if (g != NONE) {
+                q->pos[p] = f - c->lo;
+                break;
+            }
         }
+    if (g != NONE) {
+        q->st[p] = PS_WAITING;
+        q->last[p] = g;
+        q->pwnext[p] = q->whead[g];
+        q->whead[g] = p;
+        return 0;
     }
-    q->pos[p] = c->hi - c->lo + 1;
     q->st[p] = PS_READY;
     return 1;
 }
@@ -291,6 +303,7 @@ static void seq_free(seq *q)
     amp_free(q->a, q->ing);
     amp_free(q->a, q->done);
     amp_free(q->a, q->pos);
+    amp_free(q->a, q->last);
     amp_free(q->a, q->pwnext);
     amp_free(q->a, q->whead);
     amp_free(q->a, q->clear);
@@ -352,12 +365,13 @@ amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double z
     q.rev = amp_calloc(a, npc, 1);
     q.ing = amp_calloc(a, npc, 1);
     q.pos = amp_calloc(a, npc, sizeof *q.pos);
+    q.last = amp_calloc(a, npc, sizeof *q.last);
     q.pwnext = amp_calloc(a, npc, sizeof *q.pwnext);
     q.done = amp_calloc(a, n, 1);
     q.whead = amp_calloc(a, n, sizeof *q.whead);
     q.clear = amp_calloc(a, n, sizeof *q.clear);
     outp = amp_calloc(a, npc, sizeof *outp);
-    if (!q.st || !q.rev || !q.ing || !q.pos || !q.pwnext || !q.done || !q.whead || !q.clear || !outp) {
+    if (!q.st || !q.rev || !q.ing || !q.pos || !q.last || !q.pwnext || !q.done || !q.whead || !q.clear || !outp) {
         amp_free(a, outp);
         seq_free(&q);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for re-sequencing %lu sub-curves",
@@ -365,8 +379,10 @@ amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double z
     }
     for (i = 0; i < n; i++)
         q.whead[i] = q.clear[i] = NONE;
-    for (i = 0; i < npc; i++)
+    for (i = 0; i < npc; i++) {
         q.rev[i] = (unsigned char)reversible(&q, &pc[i]);
+        q.last[i] = NONE;
+    }
     st = grid_init(&q);
     if (st == AMP_OK)
         st = seq_run(&q, outp);

@@ -559,6 +559,68 @@ START_TEST(resequencing_never_adds_cuts_and_shortens_z_weighted_travel)
 }
 END_TEST
 
+/* Wavy crossed layers of lines (as `ampath bench order`): flat sub-curves, tested whole by the re-sequencing. */
+static void wavy_layers(amp_pathset *ps, size_t nl, size_t nlines, double side)
+{
+    size_t l, i, k, nseg = (size_t)(side / 0.25) + 1;
+    for (l = 0; l < nl; l++)
+        for (i = 0; i < nlines; i++) {
+            amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+            for (k = 0; k <= nseg; k++) {
+                double u = side * (double)k / (double)nseg, v = 0.5 * (double)i;
+                double x = l % 2 ? v : u, y = l % 2 ? u : v;
+                amp_pathset_push(ps, amp_v3(x, y, 0.4 * (double)l + 0.3 * sin(x / 3.0) * cos(y / 4.0)), 0.25, NULL);
+            }
+        }
+}
+
+static void line(amp_pathset *ps, amp_vec3 a, amp_vec3 b)
+{
+    amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(ps, a, 0.25, NULL);
+    amp_pathset_push(ps, b, 0.25, NULL);
+}
+
+/* The same on flat sub-curves (each tested in one traversal): on wavy layers no more cuts, shorter Z-weighted
+ * travel, gouge-free; and a trap: after line A the cheapest start is a line over A's end that line B, 3 mm
+ * away, must precede. Gouge-free (it fails when the one-traversal test answers "admissible" unasked). */
+START_TEST(resequencing_flat_layers_is_gouge_free)
+{
+    amp_pathset ps, alg2, seq;
+    amp_order_opts o;
+    amp_order_stats sa, sq;
+    amp_error err;
+    double ta, tq;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&alg2, NULL);
+    amp_pathset_init(&seq, NULL);
+    wavy_layers(&ps, 6, 24, 12.0);
+    amp_order_opts_default(&o);
+    ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
+    o.travel_z_weight = 0.0;
+    ck_assert_int_eq(amp_order(&ps, &o, &alg2, &sa, &err), AMP_OK);
+    ck_assert_uint_le(sq.subdivisions, sa.subdivisions);
+    ck_assert_near(amp_pathset_length(&seq, -1), amp_pathset_length(&alg2, -1), 1e-6);
+    ta = travel_weighted(&alg2, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    tq = travel_weighted(&seq, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    ck_assert_msg(tq < ta, "Z-weighted travel re-sequenced %g, Algorithm 2's order %g", tq, ta);
+    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    amp_pathset_clear(&ps);
+    amp_pathset_clear(&seq);
+    line(&ps, amp_v3(0, 0, 0), amp_v3(10, 0, 0));      /* A */
+    line(&ps, amp_v3(0, 3, 0), amp_v3(10, 3, 0));      /* B */
+    line(&ps, amp_v3(10, -1, 0.6), amp_v3(10, 4, 0.6)); /* over both ends */
+    line(&ps, amp_v3(0, -1, 0.6), amp_v3(0, 4, 0.6));
+    amp_order_opts_default(&o);
+    ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
+    ck_assert_uint_eq(sq.subdivisions, 0);
+    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&alg2);
+    amp_pathset_free(&seq);
+}
+END_TEST
+
 /* ---- the gouge checker ---- */
 
 START_TEST(pairwise_and_grid_checkers_agree_on_random_inputs)
@@ -774,6 +836,7 @@ static Suite *order_suite(void)
     tcase_add_test(tc, improvements_reduce_subdivisions_of_plain_greedy);
     tcase_add_test(tc, nearest_choice_shortens_travel_on_helix_covering);
     tcase_add_test(tc, resequencing_never_adds_cuts_and_shortens_z_weighted_travel);
+    tcase_add_test(tc, resequencing_flat_layers_is_gouge_free);
     tcase_add_test(tc, ordering_is_identical_on_one_and_two_threads);
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
     tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);
