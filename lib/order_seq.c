@@ -25,8 +25,8 @@
 #define NONE AMP_FBVH_NONE
 /* most fragments of a sub-curve tested pairwise to decide that it may be printed the other way round */
 #define REV_MAX 64
-/* most grid cells */
-#define SEQ_CELLS_MAX (1u << 22)
+/* most grid cells per sub-curve end (empty cells cost a ring search time, not answers) */
+#define SEQ_CELLS_PER_END 4.0
 
 enum { PS_UNKNOWN, PS_WAITING, PS_READY, PS_PRINTED };
 
@@ -113,7 +113,7 @@ static amp_status grid_init(seq *q)
         q->nx = (uint32_t)(w / q->s) + 1;
         q->ny = (uint32_t)(h / q->s) + 1;
         q->nz = (uint32_t)(d / q->s) + 1;
-        if ((double)q->nx * q->ny * q->nz <= SEQ_CELLS_MAX)
+        if ((double)q->nx * q->ny * q->nz <= fmax(SEQ_CELLS_PER_END * 2.0 * (double)q->np, 4096.0))
             break;
         q->s *= 1.25;
     }
@@ -197,7 +197,7 @@ static best search(seq *q, amp_vec3 at)
     best b;
     long hx = (long)cidx(at.x, q->x0, 1.0 / q->s, q->nx), hy = (long)cidx(at.y, q->y0, 1.0 / q->s, q->ny);
     long hz = (long)cidx(at.z, q->z0, q->zw / q->s, q->nz), r, rmax = (long)q->nx, dx, dy, dz;
-    size_t visited = 0, budget = 8 * q->alive + 64, i;
+    size_t visited = 0, budget = 2 * q->alive + 64, i;
     b.d = HUGE_VAL;
     b.piece = b.end = NONE;
     if ((long)q->ny > rmax)
