@@ -878,6 +878,21 @@ static size_t join_contiguous(orderer *o)
     return joined;
 }
 
+/* Re-sequence the sub-curves for travel (lib/order_seq.c) on a hierarchy with every fragment active again,
+ * then join the ones that continue each other. */
+static amp_status travel_pass(orderer *o)
+{
+    amp_status st;
+    amp_fbvh_free(&o->bvh);
+    if ((st = amp_fbvh_build(&o->bvh, o->fs, o->a, o->err)) != AMP_OK)
+        return st;
+    st = amp_order_resequence(o->fs, &o->bvh, o->h->z_offs, o->k, o->o->travel_z_weight, o->pc, o->npc, o->a, o->err,
+                              &o->st.queries);
+    if (st == AMP_OK)
+        o->st.merges += join_contiguous(o);
+    return st;
+}
+
 /* ---- output ---- */
 
 /* The cut point after fragment f of run p (in print direction) need not be written: it lies on a straight
@@ -1052,14 +1067,20 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
         }
     }
     if (st == AMP_OK && opts->improve && opts->travel_z_weight > 0.0 && o.npc > 1) {
-        /* the sub-curves (and cuts) are final: re-sequence them for travel, on a hierarchy with all active */
-        amp_fbvh_free(&o.bvh);
-        st = amp_fbvh_build(&o.bvh, &fs, o.a, err);
-        if (st == AMP_OK)
-            st = amp_order_resequence(&fs, &o.bvh, opts->head.z_offs, o.k, opts->travel_z_weight, o.pc, o.npc, o.a,
-                                      err, &o.st.queries);
-        if (st == AMP_OK)
-            o.st.merges += join_contiguous(&o);
+        /* the sub-curves are final: print them in the cheapest admissible order. That order puts sub-curves of
+         * one curve next to each other that Algorithm 2's order kept apart: merging again finds more (demo
+         * helix: 4 531 -> 4 275 cuts), and the merged set is re-sequenced once more. */
+        size_t m = 0, merged = 0, pass;
+        st = travel_pass(&o);
+        for (pass = 0; pass < 4 && st == AMP_OK; pass++) {
+            st = merge_pass(&o, &m);
+            merged += m;
+            if (m == 0)
+                break;
+        }
+        o.st.merges += merged;
+        if (st == AMP_OK && merged)
+            st = travel_pass(&o);
     }
     if (st == AMP_OK)
         st = emit(&o, in, out, err);
