@@ -35,6 +35,11 @@ typedef struct sent {
     uint32_t end;         /* 0: start as stored, 1: the other end (printed reversed) */
 } sent;
 
+typedef struct best {
+    double d;
+    uint32_t piece, end;
+} best;
+
 typedef struct seq {
     const amp_fragments *fs;
     amp_fbvh *bvh;
@@ -43,10 +48,15 @@ typedef struct seq {
     size_t np, alive;
     unsigned char *st, *rev, *ing, *done;
     uint32_t *pos, *last, *pwnext, *whead, *clear; /* last: the blocker p last waited on */
+    uint32_t *live, *lpos; /* the unprinted sub-curves (live[0 .. alive-1]) and where each one is in live */
     uint32_t *cell, nx, ny, nz, freel;
     double x0, y0, z0, s;
     sent *ent;
     size_t nent, cap, queries;
+    struct best *cand; /* every start a search met, for testing in cost order without searching again */
+    size_t ncand, capcand;
+    double bound;      /* starts the search did not meet cost at least this much */
+    int oom;
     const amp_allocator *a;
     amp_error *err;
 } seq;
@@ -157,19 +167,32 @@ static amp_status grid_add(seq *q, uint32_t p)
     return AMP_OK;
 }
 
-typedef struct best {
-    double d;
-    uint32_t piece, end;
-} best;
-
-static void consider(const seq *q, amp_vec3 at, uint32_t p, uint32_t end, best *b)
+static int best_cmp(const void *x, const void *y)
 {
-    double d = cost(q, at, piece_start(q, p, end));
-    if (d < b->d || (d == b->d && (p < b->piece || (p == b->piece && end < b->end)))) {
-        b->d = d;
-        b->piece = p;
-        b->end = end;
+    const best *a = x, *b = y;
+    if (a->d != b->d)
+        return a->d < b->d ? -1 : 1;
+    if (a->piece != b->piece)
+        return a->piece < b->piece ? -1 : 1;
+    return a->end < b->end ? -1 : (a->end > b->end);
+}
+
+/* A start the search met: kept as a candidate, and the cheapest so far tracked (ties: lower sub-curve). */
+static void consider(seq *q, amp_vec3 at, uint32_t p, uint32_t end, best *b)
+{
+    best c;
+    void *m = q->cand;
+    c.d = cost(q, at, piece_start(q, p, end));
+    c.piece = p;
+    c.end = end;
+    if (best_cmp(&c, b) < 0)
+        *b = c;
+    if (amp_grow(q->a, &m, &q->capcand, q->ncand + 1, sizeof *q->cand) != AMP_OK) {
+        q->oom = 1;
+        return;
     }
+    q->cand = m;
+    q->cand[q->ncand++] = c;
 }
 
 /* One cell: unlink the entries of sub-curves printed or waiting, consider the others. */
@@ -191,7 +214,8 @@ static void scan_cell(seq *q, size_t c, amp_vec3 at, best *b)
     }
 }
 
-/* The cheapest sub-curve start from @p at among those not known to be blocked (piece NONE: none). */
+/* The cheapest sub-curve start from @p at among those not known to be blocked (piece NONE: none); every start
+ * met is in q->cand, and every start not met costs at least q->bound. */
 static best search(seq *q, amp_vec3 at)
 {
     best b;
@@ -200,14 +224,18 @@ static best search(seq *q, amp_vec3 at)
     size_t visited = 0, budget = 2 * q->alive + 64, i;
     b.d = HUGE_VAL;
     b.piece = b.end = NONE;
+    q->ncand = 0;
+    q->bound = HUGE_VAL;
     if ((long)q->ny > rmax)
         rmax = (long)q->ny;
     if ((long)q->nz > rmax)
         rmax = (long)q->nz;
     for (r = 0; r <= rmax; r++) {
         /* a cell r rings out is at least (r - 1) cells away in x, y or weighted z */
-        if (r > 0 && b.d <= (double)(r - 1) * q->s)
+        if (r > 0 && b.d <= (double)(r - 1) * q->s) {
+            q->bound = (double)(r - 1) * q->s;
             return b;
+        }
         if (visited > budget)
             break;
         for (dz = -r; dz <= r; dz++)
@@ -230,12 +258,15 @@ static best search(seq *q, amp_vec3 at)
     /* far from every candidate: a scan of all sub-curves is cheaper than more rings */
     b.d = HUGE_VAL;
     b.piece = b.end = NONE;
-    for (i = 0; i < q->np; i++)
-        if (q->st[i] == PS_UNKNOWN || q->st[i] == PS_READY) {
-            consider(q, at, (uint32_t)i, 0, &b);
-            if (q->rev[i])
-                consider(q, at, (uint32_t)i, 1, &b);
+    q->ncand = 0;
+    for (i = 0; i < q->alive; i++) {
+        uint32_t p = q->live[i];
+        if (q->st[p] == PS_UNKNOWN || q->st[p] == PS_READY) {
+            consider(q, at, p, 0, &b);
+            if (q->rev[p])
+                consider(q, at, p, 1, &b);
         }
+    }
     return b;
 }
 
@@ -281,6 +312,8 @@ static amp_status print_piece(seq *q, uint32_t p)
     amp_status st = AMP_OK;
     q->st[p] = PS_PRINTED;
     q->alive--;
+    q->live[q->lpos[p]] = q->live[q->alive]; /* order does not matter: ties go by sub-curve index */
+    q->lpos[q->live[q->alive]] = q->lpos[p];
     for (f = c->lo; f <= c->hi; f++) {
         q->done[f] = 1;
         amp_fbvh_deactivate(q->bvh, q->fs, q->done, f);
@@ -304,11 +337,14 @@ static void seq_free(seq *q)
     amp_free(q->a, q->done);
     amp_free(q->a, q->pos);
     amp_free(q->a, q->last);
+    amp_free(q->a, q->live);
+    amp_free(q->a, q->lpos);
     amp_free(q->a, q->pwnext);
     amp_free(q->a, q->whead);
     amp_free(q->a, q->clear);
     amp_free(q->a, q->cell);
     amp_free(q->a, q->ent);
+    amp_free(q->a, q->cand);
 }
 
 static amp_status seq_run(seq *q, amp_order_piece *outp)
@@ -320,17 +356,37 @@ static amp_status seq_run(seq *q, amp_order_piece *outp)
         st = grid_add(q, (uint32_t)i);
     while (st == AMP_OK && nout < q->np) {
         best b;
+        size_t c;
         if (nout == 0) { /* the first sub-curve of Algorithm 2's order is admissible: start where it did */
             b.piece = 0;
             b.end = 0;
-        } else
+            q->st[0] = PS_READY;
+        } else {
             b = search(q, head);
-        if (b.piece == NONE)
-            return amp_fail(q->err, AMP_ERR_GEOMETRY, 0,
-                            "re-sequencing: no admissible sub-curve among %lu (Lemma 5.1 violated numerically)",
-                            (unsigned long)q->alive);
-        if (q->st[b.piece] != PS_READY && !admissible(q, b.piece))
-            continue;
+            if (q->oom)
+                return amp_fail(q->err, AMP_ERR_NOMEM, 0, "out of memory for re-sequencing");
+            if (b.piece == NONE)
+                return amp_fail(q->err, AMP_ERR_GEOMETRY, 0,
+                                "re-sequencing: no admissible sub-curve among %lu (Lemma 5.1 violated numerically)",
+                                (unsigned long)q->alive);
+            /* the starts met, cheapest first: the first admissible one cheaper than any start not met is the
+             * cheapest admissible start; when every such one waits, search again */
+            qsort(q->cand, q->ncand, sizeof *q->cand, best_cmp);
+            b.piece = NONE;
+            for (c = 0; c < q->ncand && q->cand[c].d <= q->bound; c++) {
+                uint32_t p = q->cand[c].piece;
+                if (q->st[p] == PS_READY || (q->st[p] == PS_UNKNOWN && admissible(q, p))) {
+                    b = q->cand[c];
+                    break;
+                }
+            }
+            if (b.piece == NONE && q->bound == HUGE_VAL && c == q->ncand)
+                return amp_fail(q->err, AMP_ERR_GEOMETRY, 0,
+                                "re-sequencing: no admissible sub-curve among %lu (Lemma 5.1 violated numerically)",
+                                (unsigned long)q->alive);
+            if (b.piece == NONE)
+                continue;
+        }
         outp[nout] = q->pc[b.piece];
         if (b.end)
             outp[nout].dir = -outp[nout].dir;
@@ -366,12 +422,14 @@ amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double z
     q.ing = amp_calloc(a, npc, 1);
     q.pos = amp_calloc(a, npc, sizeof *q.pos);
     q.last = amp_calloc(a, npc, sizeof *q.last);
+    q.live = amp_calloc(a, npc, sizeof *q.live);
+    q.lpos = amp_calloc(a, npc, sizeof *q.lpos);
     q.pwnext = amp_calloc(a, npc, sizeof *q.pwnext);
     q.done = amp_calloc(a, n, 1);
     q.whead = amp_calloc(a, n, sizeof *q.whead);
     q.clear = amp_calloc(a, n, sizeof *q.clear);
     outp = amp_calloc(a, npc, sizeof *outp);
-    if (!q.st || !q.rev || !q.ing || !q.pos || !q.last || !q.pwnext || !q.done || !q.whead || !q.clear || !outp) {
+    if (!q.st || !q.rev || !q.ing || !q.pos || !q.last || !q.live || !q.lpos || !q.pwnext || !q.done || !q.whead || !q.clear || !outp) {
         amp_free(a, outp);
         seq_free(&q);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for re-sequencing %lu sub-curves",
@@ -382,6 +440,7 @@ amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double z
     for (i = 0; i < npc; i++) {
         q.rev[i] = (unsigned char)reversible(&q, &pc[i]);
         q.last[i] = NONE;
+        q.live[i] = q.lpos[i] = (uint32_t)i;
     }
     st = grid_init(&q);
     if (st == AMP_OK)
