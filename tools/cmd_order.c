@@ -15,7 +15,7 @@ const char cmd_order_usage[] =
     "  --compare       compute both orderings and report both (the plain greedy one is the baseline of the\n"
     "                  improvements; it is computed only on request)\n"
     "  --nearest M     1 (default): among equally good runs start the one nearest to the head; 0: off\n"
-    "  --travel-z W    re-sequence the sub-curves for travel, a mm of Z costing W mm of XY (default 12; 0: off,\n"
+    "  --travel-z W    re-sequence the sub-curves for travel, a mm of Z costing W mm of XY (default 3; 0: off,\n"
     "                  Algorithm 2's own order); same sub-curves and cuts, each still after everything below it\n"
     "  --lookahead K   candidate runs simulated per step when improving (default 16, 1..16)\n"
     "  --max-edges N   also list the below graph up to N edges, for the report (default 0: skip; slow, ordering never needs it)\n"
