@@ -285,7 +285,8 @@ static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2,
  * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
  * most often. */
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                  const unsigned char *done, uint32_t root, uint32_t skip, uint32_t clear)
+                                  uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t root, uint32_t skip,
+                                  uint32_t clear)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
@@ -302,7 +303,7 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                 uint32_t g = b->order[q];
                 /* the box bound from the leaf-ordered copy first: most candidates end here, without touching
                  * the fragment itself */
-                if (g != f && !done[g] && act_pass(&b->fbox[q], reach, k2, &fr->box) &&
+                if ((g < xlo || g > xhi) && !done[g] && act_pass(&b->fbox[q], reach, k2, &fr->box) &&
                     amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
@@ -328,8 +329,9 @@ static uint32_t range_of(const amp_fbvh *b, uint32_t id)
     return id == AMP_FBVH_NONE ? 0 : b->act[id].hi - b->act[id].lo;
 }
 
-uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                 const unsigned char *done, uint32_t near, uint32_t *clear)
+uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                   uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t near,
+                                   uint32_t *clear)
 {
     uint32_t id, prev = AMP_FBVH_NONE, cl = clear ? *clear : AMP_FBVH_NONE;
     if (b->nnodes == 0)
@@ -340,7 +342,7 @@ uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, dou
         uint32_t g;
         if (id == cl)
             continue; /* proven clear by an earlier query of f */
-        g = subtree_any_below(b, fs, zo, k, f, done, id, prev, cl);
+        g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
         if (g != AMP_FBVH_NONE) {
             /* every level below this one held no blocker of f: printing only ever removes blockers, so that
              * subtree stays clear for f's later queries (the larger of the two clear subtrees is kept) */
@@ -350,6 +352,62 @@ uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, dou
         }
     }
     return AMP_FBVH_NONE;
+}
+
+/* Is some fragment of the sub-curve [lo, hi] above unprinted fragment g (g outside it)? Box bound per fragment
+ * first (its own box against g's leaf-ordered box), then the exact test. */
+static int piece_over(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t lo, uint32_t hi,
+                      uint32_t q)
+{
+    uint32_t f, g = b->order[q];
+    double k2 = k * k;
+    for (f = lo; f <= hi; f++) {
+        const amp_box3 *fb = &fs->frag[f].box;
+        if (act_pass(&b->fbox[q], fb->max.z - zo - AMP_CONE_TOL, k2, fb) && amp_fragment_below_k(fs, zo, k, g, f))
+            return 1;
+    }
+    return 0;
+}
+
+uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *fs, double zo, double k,
+                                       uint32_t lo, uint32_t hi, amp_box3 box, const unsigned char *done)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0;
+    double reach = box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+    if (b->nnodes == 0 || !act_pass(&b->act[0].bx, reach, k2, &box))
+        return AMP_FBVH_NONE;
+    stack[top++] = 0;
+    while (top) {
+        const amp_fbvh_act *nd = &b->act[stack[--top]];
+        if (nd->left == 0) {
+            uint32_t q;
+            for (q = nd->lo; q < nd->hi; q++) {
+                uint32_t g = b->order[q];
+                if ((g < lo || g > hi) && !done[g] && act_pass(&b->fbox[q], reach, k2, &box) &&
+                    piece_over(b, fs, zo, k, lo, hi, q))
+                    return g;
+            }
+        } else if (top + 2 <= STACK_MAX) {
+            double sl = act_slack(&b->act[nd->left].bx, reach, k2, &box);
+            double sr = act_slack(&b->act[nd->right].bx, reach, k2, &box);
+            if (sl > 0.0 && sr > 0.0) {
+                stack[top++] = sl > sr ? nd->right : nd->left;
+                stack[top++] = sl > sr ? nd->left : nd->right;
+            } else if (sl > 0.0) {
+                stack[top++] = nd->left;
+            } else if (sr > 0.0) {
+                stack[top++] = nd->right;
+            }
+        }
+    }
+    return AMP_FBVH_NONE;
+}
+
+uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                 const unsigned char *done, uint32_t near, uint32_t *clear)
+{
+    return amp_fbvh_find_any_below_x(b, fs, zo, k, f, f, f, done, near, clear);
 }
 
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,

@@ -69,6 +69,17 @@ uint32_t amp_fbvh_find_below(const amp_fbvh *b, const amp_fragments *fs, const a
 uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                  const unsigned char *done, uint32_t near, uint32_t *clear);
 
+/* amp_fbvh_find_any_below with the fragments [xlo, xhi] (f among them) counted as printed: the blockers of f
+ * outside the sub-curve it belongs to (the re-sequencing of whole sub-curves, lib/order_seq.c). */
+uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
+                                   uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t near,
+                                   uint32_t *clear);
+
+/* Some fragment g outside [lo, hi], not done, below any fragment of the sub-curve [lo, hi] (whose fragments'
+ * boxes are inside @p box), AMP_FBVH_NONE if none: one traversal for the whole sub-curve. */
+uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *fs, double zo, double k,
+                                       uint32_t lo, uint32_t hi, amp_box3 box, const unsigned char *done);
+
 /* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
  * Returns the number of fragments reported. */
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,

@@ -484,6 +484,7 @@ START_TEST(nearest_choice_shortens_travel_on_helix_covering)
     ck_assert_int_eq(amp_cover_trivariate(&v, &co, &ps, NULL, &err), AMP_OK);
     amp_order_opts_default(&o);
     ck_assert_int_eq(o.nearest, 1);
+    o.travel_z_weight = 0.0; /* Algorithm 2's own order: the re-sequencing has its own test */
     ck_assert_int_eq(amp_order(&ps, &o, &near, &sn, &err), AMP_OK);
     o.nearest = 0;
     ck_assert_int_eq(amp_order(&ps, &o, &far, &sf, &err), AMP_OK);
@@ -500,6 +501,123 @@ START_TEST(nearest_choice_shortens_travel_on_helix_covering)
     amp_pathset_free(&far);
     amp_pathset_free(&plain);
     amp_spline_free(&v);
+}
+END_TEST
+
+/* Z-weighted straight travel between consecutive paths (a mm of Z counts w mm of XY). */
+static double travel_weighted(const amp_pathset *ps, double w)
+{
+    double t = 0.0;
+    size_t i;
+    for (i = 0; i + 1 < ps->npaths; i++) {
+        const amp_pvert *a = amp_pathset_path_verts(ps, i), *b = amp_pathset_path_verts(ps, i + 1);
+        amp_vec3 p = a[ps->paths[i].n - 1].p, q = b[0].p;
+        t += sqrt((q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y) + w * w * (q.z - p.z) * (q.z - p.z));
+    }
+    return t;
+}
+
+/* Issue 14 item 4: once Algorithm 2 has cut the curves, its sub-curves are printed in the admissible order
+ * that always takes the cheapest start to reach (Z weighted), and sub-curves that then continue each other
+ * are joined. Never more cuts, the same material, still gouge-free (it fails with the admissibility test
+ * skipped), and the Z-weighted travel between paths falls by far more than noise against Algorithm 2's own
+ * order (it fails with the re-sequencing off). */
+START_TEST(resequencing_never_adds_cuts_and_shortens_z_weighted_travel)
+{
+    amp_spline v;
+    amp_cover_opts co;
+    amp_pathset ps, alg2, seq;
+    amp_order_opts o;
+    amp_order_stats sa, sq;
+    amp_error err;
+    double ta, tq;
+    amp_spline_init(&v);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&alg2, NULL);
+    amp_pathset_init(&seq, NULL);
+    ck_assert_int_eq(amp_trivariate_model("helix", NULL, &v, &err), AMP_OK);
+    amp_cover_opts_default(&co);
+    co.eps = 2.0; /* enough sub-curves (936) for the order to matter */
+    co.dir = 0;
+    ck_assert_int_eq(amp_cover_trivariate(&v, &co, &ps, NULL, &err), AMP_OK);
+    amp_order_opts_default(&o);
+    ck_assert(o.travel_z_weight > 0.0);
+    ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
+    o.travel_z_weight = 0.0;
+    ck_assert_int_eq(amp_order(&ps, &o, &alg2, &sa, &err), AMP_OK);
+    ck_assert_uint_le(sq.subdivisions, sa.subdivisions);
+    ck_assert_uint_eq(seq.npaths + sa.subdivisions - sq.subdivisions, alg2.npaths);
+    ck_assert_near(amp_pathset_length(&seq, -1), amp_pathset_length(&alg2, -1), 1e-6);
+    ta = travel_weighted(&alg2, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    tq = travel_weighted(&seq, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    ck_assert_msg(tq < 0.7 * ta, "Z-weighted travel re-sequenced %g, Algorithm 2's order %g", tq, ta);
+    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&alg2);
+    amp_pathset_free(&seq);
+    amp_spline_free(&v);
+}
+END_TEST
+
+/* Wavy crossed layers of lines (as `ampath bench order`): flat sub-curves, tested whole by the re-sequencing. */
+static void wavy_layers(amp_pathset *ps, size_t nl, size_t nlines, double side)
+{
+    size_t l, i, k, nseg = (size_t)(side / 0.25) + 1;
+    for (l = 0; l < nl; l++)
+        for (i = 0; i < nlines; i++) {
+            amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+            for (k = 0; k <= nseg; k++) {
+                double u = side * (double)k / (double)nseg, v = 0.5 * (double)i;
+                double x = l % 2 ? v : u, y = l % 2 ? u : v;
+                amp_pathset_push(ps, amp_v3(x, y, 0.4 * (double)l + 0.3 * sin(x / 3.0) * cos(y / 4.0)), 0.25, NULL);
+            }
+        }
+}
+
+static void line(amp_pathset *ps, amp_vec3 a, amp_vec3 b)
+{
+    amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(ps, a, 0.25, NULL);
+    amp_pathset_push(ps, b, 0.25, NULL);
+}
+
+/* The same on flat sub-curves (each tested in one traversal): on wavy layers no more cuts, shorter Z-weighted
+ * travel, gouge-free; and a trap: after line A the cheapest start is a line over A's end that line B, 3 mm
+ * away, must precede. Gouge-free (it fails when the one-traversal test answers "admissible" unasked). */
+START_TEST(resequencing_flat_layers_is_gouge_free)
+{
+    amp_pathset ps, alg2, seq;
+    amp_order_opts o;
+    amp_order_stats sa, sq;
+    amp_error err;
+    double ta, tq;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&alg2, NULL);
+    amp_pathset_init(&seq, NULL);
+    wavy_layers(&ps, 6, 24, 12.0);
+    amp_order_opts_default(&o);
+    ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
+    o.travel_z_weight = 0.0;
+    ck_assert_int_eq(amp_order(&ps, &o, &alg2, &sa, &err), AMP_OK);
+    ck_assert_uint_le(sq.subdivisions, sa.subdivisions);
+    ck_assert_near(amp_pathset_length(&seq, -1), amp_pathset_length(&alg2, -1), 1e-6);
+    ta = travel_weighted(&alg2, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    tq = travel_weighted(&seq, AMP_ORDER_TRAVEL_Z_WEIGHT);
+    ck_assert_msg(tq < ta, "Z-weighted travel re-sequenced %g, Algorithm 2's order %g", tq, ta);
+    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    amp_pathset_clear(&ps);
+    amp_pathset_clear(&seq);
+    line(&ps, amp_v3(0, 0, 0), amp_v3(10, 0, 0));      /* A */
+    line(&ps, amp_v3(0, 3, 0), amp_v3(10, 3, 0));      /* B */
+    line(&ps, amp_v3(10, -1, 0.6), amp_v3(10, 4, 0.6)); /* over both ends */
+    line(&ps, amp_v3(0, -1, 0.6), amp_v3(0, 4, 0.6));
+    amp_order_opts_default(&o);
+    ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
+    ck_assert_uint_eq(sq.subdivisions, 0);
+    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&alg2);
+    amp_pathset_free(&seq);
 }
 END_TEST
 
@@ -717,6 +835,8 @@ static Suite *order_suite(void)
     tcase_add_test(tc, twisted_bridge_needs_no_subdivision_at_45_degrees);
     tcase_add_test(tc, improvements_reduce_subdivisions_of_plain_greedy);
     tcase_add_test(tc, nearest_choice_shortens_travel_on_helix_covering);
+    tcase_add_test(tc, resequencing_never_adds_cuts_and_shortens_z_weighted_travel);
+    tcase_add_test(tc, resequencing_flat_layers_is_gouge_free);
     tcase_add_test(tc, ordering_is_identical_on_one_and_two_threads);
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
     tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);

@@ -6,7 +6,8 @@
 
 const char cmd_order_usage[] =
     "order paths for printing without gouging (paper 5.1: fragments, below graph, Algorithm 2)\n"
-    "usage: ampath order PATHS.amp [--z-offs Z] [--theta DEG] [--greedy] [--compare] [--nearest 0|1] [--max-edges N] [--json]\n"
+    "usage: ampath order PATHS.amp [--z-offs Z] [--theta DEG] [--greedy] [--compare] [--nearest 0|1] [--travel-z W]\n"
+    "                   [--max-edges N] [--json]\n"
     "                   -o ORDERED.amp\n"
     HEADOPT_HELP
     "  --greedy        write the plain greedy order of Algorithm 2 instead of the improved one\n"
@@ -14,6 +15,8 @@ const char cmd_order_usage[] =
     "  --compare       compute both orderings and report both (the plain greedy one is the baseline of the\n"
     "                  improvements; it is computed only on request)\n"
     "  --nearest M     1 (default): among equally good runs start the one nearest to the head; 0: off\n"
+    "  --travel-z W    re-sequence the sub-curves for travel, a mm of Z costing W mm of XY (default 3; 0: off,\n"
+    "                  Algorithm 2's own order); same sub-curves and cuts, each still after everything below it\n"
     "  --lookahead K   candidate runs simulated per step when improving (default 16, 1..16)\n"
     "  --max-edges N   also list the below graph up to N edges, for the report (default 0: skip; slow, ordering never needs it)\n"
     "  --json          print one JSON object: fragments, below-graph edges, subdivisions greedy vs improved, times\n"
@@ -24,7 +27,7 @@ const char cmd_order_usage[] =
 int cmd_order(int argc, char **argv)
 {
     const char *pos[1], *output = NULL;
-    double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, t0, t_greedy = 0.0, t_improved = 0.0, t_graph = 0.0;
+    double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, travel_z = AMP_ORDER_TRAVEL_Z_WEIGHT, t0, t_greedy = 0.0, t_improved = 0.0, t_graph = 0.0;
     long max_edges = 0, lookahead = 16, nearest = 1;
     int json = 0, greedy = 0, compare = 0, npos = 0, rc, graph_done = 0, do_g, do_i;
     amp_pathset ps, out_g, out_i;
@@ -38,6 +41,7 @@ int cmd_order(int argc, char **argv)
                       {"greedy", CLI_FLAG, &greedy, 0},   {"max-edges", CLI_LONG, &max_edges, 0},
                       {"lookahead", CLI_LONG, &lookahead, 0}, {"json", CLI_FLAG, &json, 0},
                       {"compare", CLI_FLAG, &compare, 0},  {"nearest", CLI_LONG, &nearest, 0},
+                      {"travel-z", CLI_DOUBLE, &travel_z, 0},
                       {"output", CLI_STR, &output, 0},    {NULL, CLI_FLAG, NULL, 0}};
     rc = cli_parse("order", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
@@ -56,6 +60,9 @@ int cmd_order(int argc, char **argv)
     if (nearest < 0 || nearest > 1)
         return cli_fail("order", CLI_USAGE, "--nearest must be 0 or 1");
     o.nearest = (int)nearest;
+    if (!(travel_z >= 0.0 && travel_z <= 1e6))
+        return cli_fail("order", CLI_USAGE, "--travel-z must be between 0 and 1e6");
+    o.travel_z_weight = travel_z;
     do_g = greedy || compare;
     do_i = !greedy || compare;
     memset(&sg, 0, sizeof sg);
@@ -132,6 +139,7 @@ int cmd_order(int argc, char **argv)
         cli_json_int(&j, "queries", (long long)(greedy ? sg : si).queries);
         cli_json_str(&j, "written", greedy ? "greedy" : "improved");
         cli_json_bool(&j, "nearest", nearest != 0);
+        cli_json_num(&j, "travel_z", travel_z);
         if (do_g)
             cli_json_num(&j, "time_greedy_s", t_greedy);
         if (do_i)

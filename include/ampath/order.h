@@ -104,6 +104,11 @@ amp_status amp_below_graph_build(amp_below_graph *g, const amp_fragments *fs, co
 /** Free the graph. NULL accepted. */
 void amp_below_graph_free(amp_below_graph *g);
 
+/** Default amp_order_opts.travel_z_weight. The generic printer's Z is 12x slower than its XY travel, but
+ *  weighting Z that much sends the head far in XY to stay at one height: 3 gave the shortest travel time on
+ *  the demo helix (docs/order.md, step 6). */
+#define AMP_ORDER_TRAVEL_Z_WEIGHT 3.0
+
 /** Options of amp_order(). Initialise with amp_order_opts_default(). */
 typedef struct amp_order_opts {
     amp_head head;
@@ -114,6 +119,12 @@ typedef struct amp_order_opts {
      *  long after continuation) start the one nearest to where the head stands, and let the nearest run with
      *  as few cuts compete with the heap's best; 0: ties go to the lower run, then curve order. */
     int nearest;
+    /** When improving (default AMP_ORDER_TRAVEL_Z_WEIGHT): once the sub-curves are fixed, print them in the
+     *  admissible order (each after every sub-curve below it, §5.1) that always takes next the sub-curve whose
+     *  start (either end when it may be reversed) is cheapest to reach, a mm of Z counting this many mm of XY;
+     *  sub-curves that then continue each other are joined and the merging runs again (then one more
+     *  re-sequencing). Never more cuts than without it, shorter travel. 0: off. */
+    double travel_z_weight;
     /** Optional progress report, called from the calling thread with the fraction of fragments
      *  printed so far (0..1), a few hundred times per run at most; NULL (default) for none. */
     void (*progress)(void *user, double fraction);

@@ -151,7 +151,8 @@ class amp_coverage_domain(Structure):
 
 class amp_order_opts(Structure):
     _fields_ = [("head", amp_head), ("improve", c_int), ("lookahead", c_size_t), ("merge_window", c_size_t),
-                ("nearest", c_int), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
+                ("nearest", c_int), ("travel_z_weight", c_double), ("progress", PROGRESS_FN),
+                ("progress_user", c_void_p)]
 
 
 class amp_order_stats(Structure):
