@@ -551,7 +551,7 @@ START_TEST(resequencing_never_adds_cuts_and_shortens_z_weighted_travel)
     ta = travel_weighted(&alg2, AMP_ORDER_TRAVEL_Z_WEIGHT);
     tq = travel_weighted(&seq, AMP_ORDER_TRAVEL_Z_WEIGHT);
     ck_assert_msg(tq < 0.7 * ta, "Z-weighted travel re-sequenced %g, Algorithm 2's order %g", tq, ta);
-    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_free(&ps);
     amp_pathset_free(&alg2);
     amp_pathset_free(&seq);
@@ -604,7 +604,7 @@ START_TEST(resequencing_flat_layers_is_gouge_free)
     ta = travel_weighted(&alg2, AMP_ORDER_TRAVEL_Z_WEIGHT);
     tq = travel_weighted(&seq, AMP_ORDER_TRAVEL_Z_WEIGHT);
     ck_assert_msg(tq < ta, "Z-weighted travel re-sequenced %g, Algorithm 2's order %g", tq, ta);
-    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_clear(&ps);
     amp_pathset_clear(&seq);
     line(&ps, amp_v3(0, 0, 0), amp_v3(10, 0, 0));      /* A */
@@ -614,7 +614,7 @@ START_TEST(resequencing_flat_layers_is_gouge_free)
     amp_order_opts_default(&o);
     ck_assert_int_eq(amp_order(&ps, &o, &seq, &sq, &err), AMP_OK);
     ck_assert_uint_eq(sq.subdivisions, 0);
-    ck_assert_int_eq(amp_gouge_check(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
+    ck_assert_int_eq(amp_check_gouge(&seq, &o.head, AMP_GOUGE_AUTO, AMP_GOUGE_TOL, NULL, &err), AMP_OK);
     amp_pathset_free(&ps);
     amp_pathset_free(&alg2);
     amp_pathset_free(&seq);
