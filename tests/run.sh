@@ -1,6 +1,10 @@
 #!/bin/sh
 # Run every test program given on the command line, show Check's output, and
 # finish with one summary line "checks: N passed, N failed" (exit 1 on failure).
+# One fresh scratch directory per run (fx_tmpdir()): a run never reads an earlier run's files.
+AMP_TEST_TMP=$(mktemp -d "${TMPDIR:-/tmp}/ampath-check.XXXXXX") || exit 1
+export AMP_TEST_TMP
+trap 'rm -rf "$AMP_TEST_TMP"' EXIT
 passed=0; failed=0; broken=""
 for t in "$@"; do
     out=$("$t" 2>&1); rc=$?

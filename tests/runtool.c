@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include "runtool.h"
+#include "testutil.h"
 
 int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap)
 {
@@ -15,8 +16,8 @@ int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, ch
     size_t n = 0;
     int c;
     /* per-process scratch names, not fx_tmp(): it recycles static buffers the caller may still hold */
-    snprintf(errfile, sizeof errfile, "/tmp/ampath-test-%ld-tool-stderr.txt", (long)getpid());
-    snprintf(infile, sizeof infile, "/tmp/ampath-test-%ld-tool-stdin.txt", (long)getpid());
+    snprintf(errfile, sizeof errfile, "%s/ampath-test-%ld-tool-stderr.txt", fx_tmpdir(), (long)getpid());
+    snprintf(infile, sizeof infile, "%s/ampath-test-%ld-tool-stdin.txt", fx_tmpdir(), (long)getpid());
     if (stdin_text) {
         FILE *f = fopen(infile, "w");
         if (!f)

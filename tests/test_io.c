@@ -26,7 +26,7 @@ static const char *scratch_dir(const char *name)
 {
     static char dir[200];
     char cmd[600];
-    snprintf(dir, sizeof dir, "/tmp/ampath-test-%ld-%s", (long)getpid(), name);
+    snprintf(dir, sizeof dir, "%s/ampath-test-%ld-%s", fx_tmpdir(), (long)getpid(), name);
     snprintf(cmd, sizeof cmd, "rm -rf '%s' && mkdir -p '%s'", dir, dir);
     ck_assert_int_eq(system(cmd), 0);
     return dir;

@@ -35,12 +35,20 @@ int fx_split(char *s, char **argv, int n)
     return n;
 }
 
+const char *fx_tmpdir(void)
+{
+    /* tests/run.sh makes one fresh directory per run: pids wrap at 32,768, and a file left in /tmp by an
+     * earlier run under the same pid was once read as this run's (a stale daemon banner) */
+    const char *d = getenv("AMP_TEST_TMP");
+    return d && *d ? d : "/tmp";
+}
+
 const char *fx_tmp(const char *name)
 {
     static char buf[8][256];
     static int next;
     char *b = buf[next++ & 7];
-    snprintf(b, sizeof buf[0], "/tmp/ampath-test-%ld-%s", (long)getpid(), name);
+    snprintf(b, sizeof buf[0], "%s/ampath-test-%ld-%s", fx_tmpdir(), (long)getpid(), name);
     return b;
 }
 

@@ -33,7 +33,11 @@
     ck_assert_msg(fabs((double)(a) - (double)(b)) <= (tol), "%s = %.17g, %s = %.17g, tolerance %g", #a, (double)(a), \
                   #b, (double)(b), (double)(tol))
 
-/** A scratch file path unique to this process: "/tmp/ampath-test-<pid>-<name>". Static buffer per call site. */
+/** The scratch directory of this test run: $AMP_TEST_TMP (a fresh directory made by tests/run.sh), else /tmp. */
+const char *fx_tmpdir(void);
+
+/** A scratch file path unique to this process: "<fx_tmpdir()>/ampath-test-<pid>-<name>". One of 8 static
+ *  buffers used in turn. */
 const char *fx_tmp(const char *name);
 
 /** Most arguments fx_split() fills, the terminating NULL included. */
