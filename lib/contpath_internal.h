@@ -29,6 +29,8 @@ typedef struct amp_cp_graph {
     unsigned char *ep; /* 1: pseudo edge (travel inside the stroke, no material) */
     size_t ne, cap_eu, cap_ev, cap_ep;
     size_t nlat; /* edges [0, nlat) are the clipped lattice pieces */
+    size_t *mate; /* per node < nlatv: the other end of its last lattice edge (NONE: none) */
+    size_t nlatv;
     amp_cp_fend *fe;
     size_t nfe, cap_fe;
     /* scratch of amp_cp_patch_points(): the patch polyline and its segment kinds */

@@ -71,7 +71,11 @@ static double as_written(double v)
  * splices and swallowtail remnants, below a motor step, would be written as
  * moves without extrusion. A radius change (a pseudo edge's doubled vertex)
  * stays; the last vertex of a path stays (closure); a needle A-B-A left by
- * the merging loses its tip. Paths left without
+ * the merging loses its tip. Where a pseudo run ends, the joint (the vertex
+ * doubled with the printed radius) is kept rather than the vertex before
+ * it: the run back over a printed edge must end on the very vertex the
+ * printed copy kept, or the two copies interleave there (a crossing found
+ * on the helix with --no-join). Paths left without
  * length are removed. */
 static void compact_tail(amp_pathset *ps, size_t first, double tol)
 {
@@ -86,8 +90,11 @@ static void compact_tail(amp_pathset *ps, size_t first, double tol)
                 amp_pvert *last = &ps->verts[w - 1];
                 double d = amp_v3_dist(x.p, last->p);
                 if (d < tol && x.r == last->r) {
-                    if (k + 1 == n && m > 1)
-                        *last = x; /* keep the closing vertex itself */
+                    int joint = k + 1 < n && v[k + 1].r != x.r, last_joint = m > 1 && ps->verts[w - 2].r != last->r;
+                    if ((k + 1 == n && m > 1) || (joint && !last_joint))
+                        *last = x; /* keep the closing vertex, or the joint where printing resumes */
+                    else if (joint)
+                        goto keep; /* a pseudo run shorter than tol keeps both its joints */
                     continue;
                 }
                 if (m > 1 && k + 1 < n && amp_v3_dist(x.p, ps->verts[w - 2].p) < tol && x.r == ps->verts[w - 2].r &&
@@ -96,6 +103,7 @@ static void compact_tail(amp_pathset *ps, size_t first, double tol)
                     m--;
                     continue;
                 }
+            keep:
                 len += d;
             }
             ps->verts[w++] = x;

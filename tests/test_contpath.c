@@ -1071,6 +1071,34 @@ START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
 }
 END_TEST
 
+/* Issue 16: with --no-join (or --no-perimeter) the components of a region are
+ * joined by Fig. 6's doubled ring paths, printed once and run back as a
+ * pseudo edge. On the helix at 0.3 mm a ring vertex lies within 1 µm of a
+ * free end; the layer code merged it on one copy and kept it on the other,
+ * so the two copies interleaved at the free end: 30 crossings, exit 1. */
+START_TEST(fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end)
+{
+    static const char *const modes[] = {"--no-join", "--no-perimeter", "--no-join --pseudo"};
+    char args[1024], out[8192];
+    const char *stl = amp_test_tmp("helix_j.stl"), *amp = amp_test_tmp("helix_j.amp");
+    size_t k;
+    snprintf(args, sizeof args, "model helix -o %s", stl);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    for (k = 0; k < 3; k++) {
+        snprintf(args, sizeof args, "slice %s --layer 0.3 --continuous %s -o %s --json", stl, modes[k], amp);
+        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+        ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL,
+                      "%s: %s", modes[k], out);
+        /* the joins are there: the case is exercised, not avoided */
+        ck_assert_msg(strstr(out, "\"joins\":0,") == NULL, "%s: %s", modes[k], out);
+        snprintf(args, sizeof args, "check %s --mesh %s --layer 0.3 --json", amp, stl);
+        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+    }
+    remove(stl);
+    remove(amp);
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -1094,6 +1122,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
     AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
     AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
+    AMP_ADD_TEST(tc, fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end);
     suite_add_tcase(s, tc);
     return s;
 }
