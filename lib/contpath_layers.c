@@ -138,6 +138,37 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
     return rc;
 }
 
+/* An island with infill whose inset by r falls apart into lobes joined by
+ * necks narrower than a bead (issue 16: a lobe each would be a stroke
+ * each, and the neck would stay bare). Its perimeter is taken at the
+ * largest offset d < r (bisection between r/32 and r, to 1/64 r) at which the
+ * inset holds it in the fewest pieces; the loop then runs up one side of
+ * the neck and back down the other, printing it, and joins the lobes in one
+ * stroke. The whole island's paths move out by r - d (R̃ at d + 2r, so the
+ * perimeter keeps its bead's distance to the infill); the bead overhangs the
+ * section by r - d on that island only. c->ins receives the inset at d.
+ * *dp = r when no smaller offset has fewer pieces. */
+static amp_status neck_offset(lctx *c, double *dp, amp_error *err)
+{
+    double r = c->o->radius, lo = r / 32, hi = r;
+    size_t n_r = c->ins.nislands, n_lo, k;
+    amp_status rc = amp_polyset_inset(&c->isl, lo, 0, &c->ins, err);
+    *dp = r;
+    if (rc != AMP_OK || c->ins.nrings == 0 || (n_lo = c->ins.nislands) >= n_r)
+        return rc == AMP_OK ? amp_polyset_inset(&c->isl, r, 0, &c->ins, err) : rc;
+    for (k = 0; k < 6 && rc == AMP_OK; k++) {
+        double mid = 0.5 * (lo + hi);
+        rc = amp_polyset_inset(&c->isl, mid, 0, &c->ins, err);
+        if (rc == AMP_OK && c->ins.nrings && c->ins.nislands <= n_lo)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (rc == AMP_OK && (rc = amp_polyset_inset(&c->isl, lo, 0, &c->ins, err)) == AMP_OK)
+        *dp = lo;
+    return rc;
+}
+
 /* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
  * for an island narrower than 2r, at the deepest smaller inset that exists:
  * every island with area is printed) and the strokes of its regions. */
@@ -145,7 +176,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
 {
     const amp_layer *L = &c->sl->layers[li];
     const amp_contpath_opts *o = c->o;
-    double d;
+    double d, dp = o->radius;
     size_t q, nperim = 0;
     amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
     int thin = rc == AMP_OK && c->ins.nrings == 0;
@@ -155,6 +186,8 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * so that a smaller inset may hold it in one piece */
         rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->reg, err);
         thin = rc == AMP_OK && c->reg.nrings == 0;
+        if (rc == AMP_OK && !thin && o->perimeters && (rc = neck_offset(c, &dp, err)) == AMP_OK)
+            s0->neck_islands += dp < o->radius;
     }
     if (thin) {
         /* thin island: the bead (2r wide) is wider than the part here; its
@@ -185,7 +218,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
     amp_pathset_clear(&c->bare);
     /* R̃: inside the perimeter bead (2r) and one bead radius more */
     if (rc == AMP_OK)
-        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
+        rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius, 0, &c->ins, err);
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
         int skin;
         if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)

@@ -244,6 +244,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
     cli_json_int(&j, "islands", (long long)st->islands);
     cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
+    cli_json_int(&j, "neck_islands", (long long)st->neck_islands);
     cli_json_int(&j, "dropped_islands", (long long)st->dropped_islands);
     cli_json_int(&j, "island_strokes", (long long)st->island_strokes);
     cli_json_int(&j, "specks", (long long)st->specks);
