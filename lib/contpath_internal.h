@@ -116,10 +116,11 @@ amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pa
  * 1 when a sample of region @p R of layer @p li (ring vertices, a grid of
  * spacing @p step inside) is not covered by every section within @p below
  * mm under and @p above mm over the layer (the part's ends count as
- * uncovered): the region is printed solid.
+ * uncovered): the region is printed solid. @p ix: row indexes of the
+ * layers' sections (one per layer; NULL: plain scans).
  */
-int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R, double below, double above,
-                          double step);
+int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R, double below,
+                          double above, double step);
 
 /* ---- step 6, support corners (contpath_support.c) ---- */
 /* While an island is assembled, a corner's tip carries this radius (r less

@@ -17,6 +17,7 @@ typedef struct lctx {
     uint64_t *ke, *kse[2];
     size_t nke, nkse[2];
     int skins;
+    amp_polyindex *lix; /* row index of every layer's section (skin tests) */
     amp_polyset isl, ins, reg;
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
@@ -230,7 +231,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
         /* a solid region needs no support corners (step 6): its strips lie
          * at most one bead from every point of R̃'s unprinted stretches, and
          * corners over them would print that plastic twice */
-        skin = c->skins && amp_cp_region_is_skin(c->sl, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
+        skin = c->skins && amp_cp_region_is_skin(c->sl, c->lix, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
         s0->skin_regions += (size_t)skin;
         rc = amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
                                skin ? c->nkse[li & 1] : c->nke, &c->reg,
@@ -359,6 +360,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin[li], al, &c.kse[li], &c.nkse[li]) != AMP_OK)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     }
+    if (rc == AMP_OK && c.skins) {
+        c.lix = amp_calloc(al, sl->nlayers + 1, sizeof *c.lix);
+        for (li = 0; li < sl->nlayers && rc == AMP_OK && c.lix; li++)
+            rc = amp_polyindex_build(&c.lix[li], &sl->layers[li].polys, err);
+        if (!c.lix)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing the sections");
+    }
     for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
         s0.layers++;
         rc = layer_paths(&c, li, out, &s0, err);
@@ -374,6 +382,9 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
             s0.travel_length += amp_v3_dist(a.p, b.p);
         }
     }
+    for (li = 0; c.lix && li < sl->nlayers; li++)
+        amp_polyindex_free(&c.lix[li]);
+    amp_free(al, c.lix);
     amp_free(al, c.ke);
     amp_free(al, c.kse[0]);
     amp_free(al, c.kse[1]);
