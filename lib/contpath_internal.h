@@ -130,9 +130,11 @@ int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t 
 /**
  * Corners (Fig. 5) on the bare ring stretches @p bare of one island, built
  * into its perimeter loops, paths [0, nperim) of @p ps (closed, radius r).
- * Counts support_corners and corners_left_out in @p st. AMP_ERR_NOMEM.
+ * Counts support_corners and corners_left_out in @p st. @p covered > 0:
+ * no corner where a printed infill segment passes within that distance of
+ * its centre (skins: the strips cover the ring there). AMP_ERR_NOMEM.
  */
-amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
                                   amp_contpath_stats *st, amp_error *err);
 
 /* ---- one start per island (contpath_join.c) ---- */

@@ -21,6 +21,7 @@ typedef struct lctx {
     amp_polyset isl, ins, reg;
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
+    amp_pathset bare_skin; /* those of its solid regions */
     amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
     int have_at;
     unsigned char *done; /* islands of the layer already printed */
@@ -256,6 +257,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
         nperim = c->tmp.npaths;
     }
     amp_pathset_clear(&c->bare);
+    amp_pathset_clear(&c->bare_skin);
     /* R̃: inside the perimeter bead (2r) and one bead radius more */
     if (rc == AMP_OK)
         rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius, 0, &c->ins, err);
@@ -267,19 +269,24 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * filled by the beads around it */
         if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
             continue;
-        /* a solid region needs no support corners (step 6): its strips lie
-         * at most one bead from every point of R̃'s unprinted stretches, and
-         * corners over them would print that plastic twice */
+        /* a solid region gets support corners (step 6) only where no strip
+         * runs within r of the ring's unprinted stretch (a strip parallel to
+         * the ring up to a bead inside it leaves a sliver that wide bare);
+         * elsewhere its strips lie within r of the ring and corners over
+         * them would print that plastic twice */
         skin = c->skins && amp_cp_region_is_skin(c->sl, c->lix, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
         s0->skin_regions += (size_t)skin;
         rc = amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
                                skin ? c->nkse[li & 1] : c->nke, &c->reg,
                                L->z_print, o, o->join && o->perimeters, &c->tmp,
-                               o->support_corners && !o->support_stretches && !skin ? &c->bare : NULL, s0, err);
+                               o->support_corners && !o->support_stretches ? (skin ? &c->bare_skin : &c->bare) : NULL,
+                               s0, err);
     }
     /* step 6: corners from the bare stretches to the perimeter */
     if (rc == AMP_OK && nperim)
-        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, s0, err);
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, 0.0, s0, err);
+    if (rc == AMP_OK && nperim && c->bare_skin.npaths)
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare_skin, o->radius, 0.5 * o->radius, s0, err);
     return rc;
 }
 
@@ -381,6 +388,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_init(&c.reg, al);
     amp_pathset_init(&c.tmp, al);
     amp_pathset_init(&c.bare, al);
+    amp_pathset_init(&c.bare_skin, al);
     rc = amp_contpath_complex(sl, o, &c.khat, err);
     if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
@@ -436,6 +444,7 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_free(&c.reg);
     amp_pathset_free(&c.tmp);
     amp_pathset_free(&c.bare);
+    amp_pathset_free(&c.bare_skin);
     if (st)
         *st = s0;
     return rc;

@@ -290,7 +290,34 @@ static amp_vec2 poly_at(const amp_pvert *b, size_t n, double s)
     return xy(b[0].p);
 }
 
-amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+/* Is a printed segment of the island's infill strokes (paths after the
+ * perimeters: vertex ids from @p end on) within @p lim of q? */
+static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_vec2 q, double lim)
+{
+    size_t k;
+    long cx0 = sg_cell(q.x - lim, g->x0, g->cell, g->nx), cx1 = sg_cell(q.x + lim, g->x0, g->cell, g->nx);
+    long cy0 = sg_cell(q.y - lim, g->y0, g->cell, g->ny), cy1 = sg_cell(q.y + lim, g->y0, g->cell, g->ny), x, y;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
+                size_t id = g->item[k];
+                amp_vec2 a, b;
+                double dx, dy, l2, t;
+                if (id < end || !(ps->verts[id].r > 0) || !(ps->verts[id + 1].r > 0))
+                    continue;
+                a = xy(ps->verts[id].p);
+                b = xy(ps->verts[id + 1].p);
+                dx = b.x - a.x;
+                dy = b.y - a.y;
+                l2 = dx * dx + dy * dy;
+                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+                if (hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) <= lim)
+                    return 1;
+            }
+    return 0;
+}
+
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
                                   amp_contpath_stats *st, amp_error *err)
 {
     const amp_allocator *al = ps->alloc;
@@ -339,6 +366,11 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
             size_t loop = 0, seg;
             double s = 0, d = nearest_perimeter(ps, &sg, nperim, cl, c, 3 * r, &loop, &s), tot;
             amp_pvert a0, a1;
+            /* a skin's strip already runs within `covered` of the ring
+             * here: a corner would print its plastic a second time */
+            if (covered > 0 &&
+                infill_within(ps, &sg, ps->paths[nperim - 1].first + ps->paths[nperim - 1].n, c, covered))
+                continue;
             tot = cl[loop][ps->paths[loop].n - 1];
             /* the perimeter is 2r out; the base r to either side */
             if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {

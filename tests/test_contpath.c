@@ -1004,6 +1004,42 @@ static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, doubl
     return in ? (double)hit / (double)in : 0;
 }
 
+/* Issue 16: between the last strip of a solid region and the perimeter a
+ * sliver up to a bead wide stayed bare where the ring of R̃ runs parallel to
+ * the strips and the patching leaves it unprinted (solid regions took no
+ * corners). They now take corners where no strip runs within r of the
+ * ring: every layer of the idler solid (skins thicker than the part), the
+ * points of the infill rings within r of material, with and without. */
+START_TEST(solid_regions_leave_no_sliver_bare_beside_their_strips)
+{
+    amp_slices sl, sl2;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_contpath_opts o;
+    double ca, cb;
+    amp_slices_init(&sl, NULL);
+    amp_slices_init(&sl2, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    o.skin_bottom = o.skin_top = 10;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
+    o.support_corners = 0;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl2, &b, &sb, &o);
+    ck_assert_uint_eq(sa.skin_regions, sa.regions);
+    ck_assert_uint_gt(sa.support_corners, 0);
+    ck_assert_uint_eq(sa.island_strokes, sa.islands);
+    ca = ring_cover(&sl, &a, 0.225, 0.225 * 1.01);
+    cb = ring_cover(&sl2, &b, 0.225, 0.225 * 1.01);
+    ck_assert_msg(ca >= 0.99 && 1 - ca <= 0.5 * (1 - cb), "ring within r of material: %g with corners, %g without", ca,
+                  cb);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+    amp_slices_free(&sl2);
+}
+END_TEST
+
 START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 {
     /* the idler's first and last layers are skins: >= 95 % of the section
@@ -1162,6 +1198,7 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
     AMP_ADD_TEST(tc, fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end);
     AMP_ADD_TEST(tc, a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke);
+    AMP_ADD_TEST(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
     suite_add_tcase(s, tc);
     return s;
 }
