@@ -83,8 +83,6 @@ typedef struct amp_contpath_stats {
     size_t empty_layers;     /**< layers with section area that received no path (0 expected) */
     size_t islands;          /**< islands of the sections (outer ring with its holes) that received paths */
     size_t thin_islands;     /**< islands narrower than 2r printed by a perimeter of a smaller inset */
-    size_t neck_islands;     /**< islands with infill whose inset by r splits at a neck narrower than a bead:
-                                  perimeter (and infill) at the largest smaller offset that holds them together */
     size_t dropped_islands;  /**< islands narrower than r/32: nothing printed */
     size_t island_strokes;   /**< object strokes written for the islands (= islands when joined) */
     size_t specks;           /**< closed loops under r/4 across left out when joining (inside other beads) */
@@ -110,6 +108,9 @@ typedef struct amp_contpath_stats {
     double unprinted_length; /**< mm, ring stretches of R̃ left unprinted by the lattice and its patches */
     size_t support_corners;  /**< step 6 corners built into the perimeter loops */
     size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour or find no perimeter */
+    size_t neck_islands;     /**< islands with infill whose inset by r splits at a neck narrower than a bead:
+                                  perimeter (and infill) at the largest smaller offset that holds them together
+                                  (last: bindings that mirror this struct, python/ampath/_lib.py, append it) */
 } amp_contpath_stats;
 
 /**
