@@ -121,6 +121,14 @@ amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pa
  */
 int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R, double below,
                           double above, double step);
+/**
+ * As amp_cp_region_is_skin, and how deep: -1 when every sample is covered,
+ * else the largest distance from R's boundary of an uncovered sample plus
+ * @p step (the grid spacing used), so every uncovered point of R lies within
+ * that distance of its boundary (up to the sampling).
+ */
+double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R,
+                                double below, double above, double step);
 
 /* ---- step 6, support corners (contpath_support.c) ---- */
 /* While an island is assembled, a corner's tip carries this radius (r less

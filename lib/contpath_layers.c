@@ -19,6 +19,7 @@ typedef struct lctx {
     int skins;
     amp_polyindex *lix; /* row index of every layer's section (skin tests) */
     amp_polyset isl, ins, reg;
+    amp_polyset bin, core, band, reg2; /* a skin band split off a region (skin_band) */
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
     amp_pathset bare_skin; /* those of its solid regions */
@@ -210,6 +211,57 @@ static amp_status neck_offset(lctx *c, double *dp, amp_error *err)
     return rc;
 }
 
+/* Steps 5 and §4 for region @p R of layer li, over the skin lattice of the
+ * layer's direction or the sparse K̂; its bare stretches kept for step 6. */
+static amp_status run_region(lctx *c, size_t li, const amp_polyset *R, int skin, amp_contpath_stats *s0,
+                             amp_error *err)
+{
+    const amp_contpath_opts *o = c->o;
+    return amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
+                             skin ? c->nkse[li & 1] : c->nke, R, c->sl->layers[li].z_print, o,
+                             o->join && o->perimeters, &c->tmp,
+                             o->support_corners && !o->support_stretches ? (skin ? &c->bare_skin : &c->bare) : NULL,
+                             s0, err);
+}
+
+/* Skins only where needed, without polygon booleans (issue 16): every
+ * uncovered point of region R̃ = c->reg lies within @p w of its boundary
+ * (amp_cp_region_skin_depth), so the band R̃ minus its inset by w is solid
+ * and the inset by w + 2r (one bead further in, so the two parts' strokes
+ * lie side by side like a perimeter and its infill) keeps the sparse
+ * lattice. R̃ minus an inset of itself needs no boolean: the inset's rings
+ * lie strictly inside at distance w, so the band is R̃'s rings plus the
+ * inset's rings reversed, nested again by amp_polyset_organize. c->core
+ * is left empty when nothing sparse remains (the whole region is solid:
+ * a flat top or bottom, or an uncovered point deep inside). */
+static amp_status skin_band(lctx *c, double w, amp_error *err)
+{
+    const double r = c->o->radius;
+    amp_status rc = amp_polyset_inset(&c->reg, w + 2 * r, 0, &c->core, err);
+    size_t k, i;
+    if (rc != AMP_OK || c->core.nrings == 0)
+        return rc;
+    if (amp_polyset_area(&c->core) < 16 * r * r) {
+        amp_polyset_clear(&c->core);
+        return AMP_OK;
+    }
+    if ((rc = amp_polyset_inset(&c->reg, w, 0, &c->bin, err)) != AMP_OK)
+        return rc;
+    amp_polyset_clear(&c->band);
+    for (k = 0; k < c->reg.nrings && rc == AMP_OK; k++)
+        rc = amp_polyset_add(&c->band, amp_polyset_ring(&c->reg, k), c->reg.rings[k].n, err);
+    for (k = 0; k < c->bin.nrings && rc == AMP_OK; k++) {
+        size_t first = c->band.npts, n = c->bin.rings[k].n;
+        rc = amp_polyset_add(&c->band, amp_polyset_ring(&c->bin, k), n, err);
+        for (i = 0; rc == AMP_OK && i < n / 2; i++) {
+            amp_vec2 t = c->band.pts[first + i];
+            c->band.pts[first + i] = c->band.pts[first + n - 1 - i];
+            c->band.pts[first + n - 1 - i] = t;
+        }
+    }
+    return rc == AMP_OK ? amp_polyset_organize(&c->band, err) : rc;
+}
+
 /* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
  * for an island narrower than 2r, at the deepest smaller inset that exists:
  * every island with area is printed) and the strokes of its regions. */
@@ -263,6 +315,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
         rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius, 0, &c->ins, err);
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
         int skin;
+        double w;
         if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
             break;
         /* a speck of R̃ (under a hundredth of a bead's cross-section) is
@@ -274,13 +327,25 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * the ring up to a bead inside it leaves a sliver that wide bare);
          * elsewhere its strips lie within r of the ring and corners over
          * them would print that plastic twice */
-        skin = c->skins && amp_cp_region_is_skin(c->sl, c->lix, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
+        w = c->skins ? amp_cp_region_skin_depth(c->sl, c->lix, li, &c->reg, o->skin_bottom, o->skin_top,
+                                                 4 * o->radius)
+                     : -1;
+        skin = w >= 0;
         s0->skin_regions += (size_t)skin;
-        rc = amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
-                               skin ? c->nkse[li & 1] : c->nke, &c->reg,
-                               L->z_print, o, o->join && o->perimeters, &c->tmp,
-                               o->support_corners && !o->support_stretches ? (skin ? &c->bare_skin : &c->bare) : NULL,
-                               s0, err);
+        /* bands need the perimeter to splice the two parts (without it, or
+         * without joining, the region stays whole: Fig. 6's joins across
+         * a band crossed its strips on the helix) */
+        if (skin && o->perimeters && o->join && (rc = skin_band(c, w, err)) == AMP_OK && c->core.nrings) {
+            /* solid only where needed: the band, then the sparse core */
+            size_t k;
+            s0->skin_bands++;
+            rc = run_region(c, li, &c->band, 1, s0, err);
+            for (k = 0; k < c->core.nislands && rc == AMP_OK; k++)
+                if ((rc = amp_polyset_island(&c->core, k, &c->reg2, err)) == AMP_OK &&
+                    amp_polyset_area(&c->reg2) >= 1e-2 * o->radius * o->radius)
+                    rc = run_region(c, li, &c->reg2, 0, s0, err);
+        } else if (rc == AMP_OK)
+            rc = run_region(c, li, &c->reg, skin, s0, err);
     }
     /* step 6: corners from the bare stretches to the perimeter */
     if (rc == AMP_OK && nperim)
@@ -386,6 +451,10 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_init(&c.isl, al);
     amp_polyset_init(&c.ins, al);
     amp_polyset_init(&c.reg, al);
+    amp_polyset_init(&c.bin, al);
+    amp_polyset_init(&c.core, al);
+    amp_polyset_init(&c.band, al);
+    amp_polyset_init(&c.reg2, al);
     amp_pathset_init(&c.tmp, al);
     amp_pathset_init(&c.bare, al);
     amp_pathset_init(&c.bare_skin, al);
@@ -442,6 +511,10 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_free(&c.isl);
     amp_polyset_free(&c.ins);
     amp_polyset_free(&c.reg);
+    amp_polyset_free(&c.bin);
+    amp_polyset_free(&c.core);
+    amp_polyset_free(&c.band);
+    amp_polyset_free(&c.reg2);
     amp_pathset_free(&c.tmp);
     amp_pathset_free(&c.bare);
     amp_pathset_free(&c.bare_skin);

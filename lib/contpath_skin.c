@@ -36,10 +36,17 @@ static int covered(const amp_slices *sl, const amp_polyindex *ix, size_t li, amp
 int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R, double below,
                           double above, double step)
 {
+    return amp_cp_region_skin_depth(sl, ix, li, R, below, above, step) >= 0;
+}
+
+double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R,
+                                double below, double above, double step)
+{
+    double depth = -1;
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
     size_t r, k;
     if (!(below > 0) && !(above > 0))
-        return 0;
+        return -1;
     for (r = 0; r < R->nrings; r++) {
         const amp_vec2 *p = amp_polyset_ring(R, r);
         size_t n = R->rings[r].n, stride = n / 64 + 1;
@@ -48,8 +55,8 @@ int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t 
             y0 = fmin(y0, p[k].y);
             x1 = fmax(x1, p[k].x);
             y1 = fmax(y1, p[k].y);
-            if (k % stride == 0 && !covered(sl, ix, li, p[k], below, above))
-                return 1;
+            if (depth < 0 && k % stride == 0 && !covered(sl, ix, li, p[k], below, above))
+                depth = 0;
         }
     }
     /* a grid inside: a hole opening above the middle of the region (at
@@ -59,7 +66,8 @@ int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t 
         for (x = x0 + 0.5 * step; x < x1; x += step) {
             amp_vec2 q = amp_v2(x, y);
             if (amp_polyset_contains(R, q, 0.0) == 1 && !covered(sl, ix, li, q, below, above))
-                return 1;
+                depth = fmax(depth, amp_polyset_boundary_dist(R, q));
         }
-    return 0;
+    /* a sample stands for the cell of `step` around it */
+    return depth < 0 ? -1 : depth + step;
 }

@@ -111,6 +111,8 @@ typedef struct amp_contpath_stats {
     size_t neck_islands;     /**< islands with infill whose inset by r splits at a neck narrower than a bead:
                                   perimeter (and infill) at the largest smaller offset that holds them together
                                   (last: bindings that mirror this struct, python/ampath/_lib.py, append it) */
+    size_t skin_bands;       /**< skin regions printed solid only in a band along their boundary (the
+                                  uncovered part), the rest sparse one bead further in */
 } amp_contpath_stats;
 
 /**
