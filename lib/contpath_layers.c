@@ -233,7 +233,8 @@ static amp_status run_region(lctx *c, size_t li, const amp_polyset *R, int skin,
  * lie strictly inside at distance w, so the band is R̃'s rings plus the
  * inset's rings reversed, nested again by amp_polyset_organize. c->core
  * is left empty when nothing sparse remains (the whole region is solid:
- * a flat top or bottom, or an uncovered point deep inside). */
+ * a flat top or bottom, or an uncovered point deep inside) or a piece of
+ * it would be smaller than (4r)^2. */
 static amp_status skin_band(lctx *c, double w, amp_error *err)
 {
     const double r = c->o->radius;
@@ -241,9 +242,15 @@ static amp_status skin_band(lctx *c, double w, amp_error *err)
     size_t k, i;
     if (rc != AMP_OK || c->core.nrings == 0)
         return rc;
-    if (amp_polyset_area(&c->core) < 16 * r * r) {
-        amp_polyset_clear(&c->core);
-        return AMP_OK;
+    /* a core piece under (4r)^2 would be a loop too small to splice (or a
+     * speck left bare inside the band's hole): the region stays whole */
+    for (k = 0; k < c->core.nislands; k++) {
+        if ((rc = amp_polyset_island(&c->core, k, &c->reg2, err)) != AMP_OK)
+            return rc;
+        if (amp_polyset_area(&c->reg2) < 16 * r * r) {
+            amp_polyset_clear(&c->core);
+            return AMP_OK;
+        }
     }
     if ((rc = amp_polyset_inset(&c->reg, w, 0, &c->bin, err)) != AMP_OK)
         return rc;
