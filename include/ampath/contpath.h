@@ -113,6 +113,8 @@ typedef struct amp_contpath_stats {
                                   (last: bindings that mirror this struct, python/ampath/_lib.py, append it) */
     size_t skin_bands;       /**< skin regions printed solid only in a band along their boundary (the
                                   uncovered part), the rest sparse one bead further in */
+    size_t band_retries;     /**< islands printed again with whole skin regions (their banded paths failed
+                                  the check) */
 } amp_contpath_stats;
 
 /**
