@@ -85,6 +85,8 @@ BUILD_PKGS := gcc make pkg-config libserialport-dev
 TEST_PKGS := $(BUILD_PKGS) check python3
 CROSS_PKGS := gcc-arm-none-eabi libnewlib-arm-none-eabi binutils-arm-none-eabi
 FUZZ_PKGS := clang libclang-rt-14-dev
+# make bench only: PrusaSlicer for the side-by-side of `bench slice` (skipped when it cannot be installed)
+BENCH_PKGS := prusa-slicer
 
 .PHONY: all check test-run demo bench soak cross fuzz fuzz-selftest install uninstall clean deps-present deps-build deps-test FORCE
 .DELETE_ON_ERROR:
@@ -204,6 +206,7 @@ demo: deps-build
 	@sh tools/demo.sh
 
 bench: all
+	@sh tools/deps.sh $(BENCH_PKGS) || echo "ampath: $(BENCH_PKGS) not installed: bench slice skips its side-by-side" >&2
 	$(AMPATH) bench
 
 # issue 10's soak at full size (10^5 moves, a few minutes): SOAK_LINES=N to change

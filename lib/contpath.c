@@ -159,6 +159,7 @@ void amp_cp_graph_free(amp_cp_graph *g)
     amp_free(g->al, g->pf);
     amp_free(g->al, g->iv);
     amp_free(g->al, g->cand);
+    amp_free(g->al, g->mate);
 }
 
 size_t amp_cp_uf_find(size_t *p, size_t x)
@@ -255,6 +256,17 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     if (rc != AMP_OK)
         goto done;
     g.nlat = g.ne;
+    g.nlatv = g.nv;
+    if (!(g.mate = amp_alloc(g.al, (g.nv + 1) * sizeof *g.mate))) {
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
+        goto done;
+    }
+    for (i = 0; i < g.nv; i++)
+        g.mate[i] = NONE;
+    for (i = 0; i < g.ne; i++) {
+        g.mate[g.eu[i]] = g.ev[i];
+        g.mate[g.ev[i]] = g.eu[i];
+    }
     if (g.nfe > 1)
         qsort(g.fe, g.nfe, sizeof *g.fe, amp_cp_cmp_fend);
     st->free_ends += g.nfe;

@@ -29,6 +29,8 @@ typedef struct amp_cp_graph {
     unsigned char *ep; /* 1: pseudo edge (travel inside the stroke, no material) */
     size_t ne, cap_eu, cap_ev, cap_ep;
     size_t nlat; /* edges [0, nlat) are the clipped lattice pieces */
+    size_t *mate; /* per node < nlatv: the other end of its last lattice edge (NONE: none) */
+    size_t nlatv;
     amp_cp_fend *fe;
     size_t nfe, cap_fe;
     /* scratch of amp_cp_patch_points(): the patch polyline and its segment kinds */
@@ -114,10 +116,19 @@ amp_status amp_cp_tour(amp_cp_graph *g, double z, double rad, int method, amp_pa
  * 1 when a sample of region @p R of layer @p li (ring vertices, a grid of
  * spacing @p step inside) is not covered by every section within @p below
  * mm under and @p above mm over the layer (the part's ends count as
- * uncovered): the region is printed solid.
+ * uncovered): the region is printed solid. @p ix: row indexes of the
+ * layers' sections (one per layer; NULL: plain scans).
  */
-int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R, double below, double above,
-                          double step);
+int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R, double below,
+                          double above, double step);
+/**
+ * As amp_cp_region_is_skin, and how deep: -1 when every sample is covered,
+ * else the largest distance from R's boundary of an uncovered sample plus
+ * @p step (the grid spacing used), so every uncovered point of R lies within
+ * that distance of its boundary (up to the sampling).
+ */
+double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R,
+                                double below, double above, double step);
 
 /* ---- step 6, support corners (contpath_support.c) ---- */
 /* While an island is assembled, a corner's tip carries this radius (r less
@@ -127,9 +138,11 @@ int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R,
 /**
  * Corners (Fig. 5) on the bare ring stretches @p bare of one island, built
  * into its perimeter loops, paths [0, nperim) of @p ps (closed, radius r).
- * Counts support_corners and corners_left_out in @p st. AMP_ERR_NOMEM.
+ * Counts support_corners and corners_left_out in @p st. @p covered > 0:
+ * no corner where a printed infill segment passes within that distance of
+ * its centre (skins: the strips cover the ring there). AMP_ERR_NOMEM.
  */
-amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
                                   amp_contpath_stats *st, amp_error *err);
 
 /* ---- one start per island (contpath_join.c) ---- */

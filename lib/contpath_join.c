@@ -408,7 +408,7 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_poly
     joiner J;
     size_t *uf = NULL, i, k, sets, nclosed = 0;
     amp_status st = AMP_OK;
-    int progress = 1, pass;
+    int progress = 1, pass, big = 0;
     memset(&J, 0, sizeof J);
     J.al = out->alloc;
     J.r = r;
@@ -420,13 +420,22 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_poly
         st = AMP_ERR_NOMEM;
         goto done;
     }
+    /* a loop under a bead across (r) next to larger ones is a speck: a
+     * lattice piece cutting a corner of a region, too small for a splice's
+     * two connectors; alone it is the island's print and stays unless under
+     * r/4 */
+    for (i = first; i < in->npaths && !big; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(in, i);
+        size_t n = in->paths[i].n;
+        big = in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && !speck(v, n, r);
+    }
     /* closed object loops are joined; anything else is copied as it is */
     for (i = first; i < in->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(in, i);
         size_t n = in->paths[i].n;
         if (in->paths[i].role != AMP_ROLE_OBJECT || n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y)
             continue;
-        if (speck(v, n, 0.25 * r)) {
+        if (speck(v, n, big ? r : 0.25 * r)) {
             (*nspeck)++; /* a loop smaller than a quarter bead: inside the beads around it */
             continue;
         }

@@ -17,9 +17,13 @@ typedef struct lctx {
     uint64_t *ke, *kse[2];
     size_t nke, nkse[2];
     int skins;
+    amp_polyindex *lix; /* row index of every layer's section (skin tests) */
     amp_polyset isl, ins, reg;
+    amp_polyset bin, core, band, reg2; /* a skin band split off a region (skin_band) */
+    int no_bands;                      /* 1: skin regions whole (an island printed again) */
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
+    amp_pathset bare_skin; /* those of its solid regions */
     amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
     int have_at;
     unsigned char *done; /* islands of the layer already printed */
@@ -59,11 +63,50 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
 /* v as the .amp writer will write it (10 significant digits, SPEC §3): the
  * checks then judge the coordinates the printer gets, and a touch that
  * rounding would turn into a crossing is caught before the file exists. */
-static double as_written(double v)
+static double as_written_slow(double v)
 {
     char buf[40];
     snprintf(buf, sizeof buf, "%.10g", v);
     return strtod(buf, NULL);
+}
+
+/* The same without formatting (a tenth of the run on large parts): with
+ * the 10 significant digits as an integer m < 2^53 and a power of ten
+ * p = 10^k, k <= 22, both exact in a double, m / p (or m * p) is rounded
+ * once, as strtod rounds the decimal m 10^-k. Only the rounding of v to m
+ * can differ from printf's (v 10^k is itself rounded, by at most 2e-6 at
+ * m < 1e10), so values within 1e-4 of a half step take the slow path. */
+static double as_written(double v)
+{
+    static const double p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                   1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    double a = fabs(v), m, f;
+    int e;
+    if (!(a > 1e-12) || !(a < 1e12))
+        return v == 0 ? v : as_written_slow(v);
+    e = (int)floor(log10(a));
+    if (e < 9) {
+        m = a * p10[9 - e];
+        if (m >= 1e10) {
+            e++;
+            if (e > 9)
+                return as_written_slow(v);
+            m = a * p10[9 - e];
+        } else if (m < 1e9) {
+            e--;
+            if (9 - e > 22)
+                return as_written_slow(v);
+            m = a * p10[9 - e];
+        }
+    } else
+        return as_written_slow(v);
+    if (m < 1e9 || m >= 1e10)
+        return as_written_slow(v);
+    f = m - floor(m);
+    if (fabs(f - 0.5) < 1e-4)
+        return as_written_slow(v);
+    m = floor(m + 0.5);
+    return copysign(m / p10[9 - e], v);
 }
 
 /* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
@@ -71,7 +114,11 @@ static double as_written(double v)
  * splices and swallowtail remnants, below a motor step, would be written as
  * moves without extrusion. A radius change (a pseudo edge's doubled vertex)
  * stays; the last vertex of a path stays (closure); a needle A-B-A left by
- * the merging loses its tip. Paths left without
+ * the merging loses its tip. Where a pseudo run ends, the joint (the vertex
+ * doubled with the printed radius) is kept rather than the vertex before
+ * it: the run back over a printed edge must end on the very vertex the
+ * printed copy kept, or the two copies interleave there (a crossing found
+ * on the helix with --no-join). Paths left without
  * length are removed. */
 static void compact_tail(amp_pathset *ps, size_t first, double tol)
 {
@@ -86,8 +133,11 @@ static void compact_tail(amp_pathset *ps, size_t first, double tol)
                 amp_pvert *last = &ps->verts[w - 1];
                 double d = amp_v3_dist(x.p, last->p);
                 if (d < tol && x.r == last->r) {
-                    if (k + 1 == n && m > 1)
-                        *last = x; /* keep the closing vertex itself */
+                    int joint = k + 1 < n && v[k + 1].r != x.r, last_joint = m > 1 && ps->verts[w - 2].r != last->r;
+                    if ((k + 1 == n && m > 1) || (joint && !last_joint))
+                        *last = x; /* keep the closing vertex, or the joint where printing resumes */
+                    else if (joint)
+                        goto keep; /* a pseudo run shorter than tol keeps both its joints */
                     continue;
                 }
                 if (m > 1 && k + 1 < n && amp_v3_dist(x.p, ps->verts[w - 2].p) < tol && x.r == ps->verts[w - 2].r &&
@@ -96,6 +146,7 @@ static void compact_tail(amp_pathset *ps, size_t first, double tol)
                     m--;
                     continue;
                 }
+            keep:
                 len += d;
             }
             ps->verts[w++] = x;
@@ -130,6 +181,95 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
     return rc;
 }
 
+/* An island with infill whose inset by r falls apart into lobes joined by
+ * necks narrower than a bead (issue 16: a lobe each would be a stroke
+ * each, and the neck would stay bare). Its perimeter is taken at the
+ * largest offset d < r (bisection between r/32 and r, to 1/64 r) at which the
+ * inset holds it in the fewest pieces; the loop then runs up one side of
+ * the neck and back down the other, printing it, and joins the lobes in one
+ * stroke. The whole island's paths move out by r - d (R̃ at d + 2r, so the
+ * perimeter keeps its bead's distance to the infill); the bead overhangs the
+ * section by r - d on that island only. c->ins receives the inset at d.
+ * *dp = r when no smaller offset has fewer pieces. */
+static amp_status neck_offset(lctx *c, double *dp, amp_error *err)
+{
+    double r = c->o->radius, lo = r / 32, hi = r;
+    size_t n_r = c->ins.nislands, n_lo, k;
+    amp_status rc = amp_polyset_inset(&c->isl, lo, 0, &c->ins, err);
+    *dp = r;
+    if (rc != AMP_OK || c->ins.nrings == 0 || (n_lo = c->ins.nislands) >= n_r)
+        return rc == AMP_OK ? amp_polyset_inset(&c->isl, r, 0, &c->ins, err) : rc;
+    for (k = 0; k < 6 && rc == AMP_OK; k++) {
+        double mid = 0.5 * (lo + hi);
+        rc = amp_polyset_inset(&c->isl, mid, 0, &c->ins, err);
+        if (rc == AMP_OK && c->ins.nrings && c->ins.nislands <= n_lo)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (rc == AMP_OK && (rc = amp_polyset_inset(&c->isl, lo, 0, &c->ins, err)) == AMP_OK)
+        *dp = lo;
+    return rc;
+}
+
+/* Steps 5 and §4 for region @p R of layer li, over the skin lattice of the
+ * layer's direction or the sparse K̂; its bare stretches kept for step 6. */
+static amp_status run_region(lctx *c, size_t li, const amp_polyset *R, int skin, amp_contpath_stats *s0,
+                             amp_error *err)
+{
+    const amp_contpath_opts *o = c->o;
+    return amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
+                             skin ? c->nkse[li & 1] : c->nke, R, c->sl->layers[li].z_print, o,
+                             o->join && o->perimeters, &c->tmp,
+                             o->support_corners && !o->support_stretches ? (skin ? &c->bare_skin : &c->bare) : NULL,
+                             s0, err);
+}
+
+/* Skins only where needed, without polygon booleans (issue 16): every
+ * uncovered point of region R̃ = c->reg lies within @p w of its boundary
+ * (amp_cp_region_skin_depth), so the band R̃ minus its inset by w is solid
+ * and the inset by w + 2r (one bead further in, so the two parts' strokes
+ * lie side by side like a perimeter and its infill) keeps the sparse
+ * lattice. R̃ minus an inset of itself needs no boolean: the inset's rings
+ * lie strictly inside at distance w, so the band is R̃'s rings plus the
+ * inset's rings reversed, nested again by amp_polyset_organize. c->core
+ * is left empty when nothing sparse remains (the whole region is solid:
+ * a flat top or bottom, or an uncovered point deep inside) or a piece of
+ * it would be smaller than (4r)^2. */
+static amp_status skin_band(lctx *c, double w, amp_error *err)
+{
+    const double r = c->o->radius;
+    amp_status rc = amp_polyset_inset(&c->reg, w + 2 * r, 0, &c->core, err);
+    size_t k, i;
+    if (rc != AMP_OK || c->core.nrings == 0)
+        return rc;
+    /* a core piece under (4r)^2 would be a loop too small to splice (or a
+     * speck left bare inside the band's hole): the region stays whole */
+    for (k = 0; k < c->core.nislands; k++) {
+        if ((rc = amp_polyset_island(&c->core, k, &c->reg2, err)) != AMP_OK)
+            return rc;
+        if (amp_polyset_area(&c->reg2) < 16 * r * r) {
+            amp_polyset_clear(&c->core);
+            return AMP_OK;
+        }
+    }
+    if ((rc = amp_polyset_inset(&c->reg, w, 0, &c->bin, err)) != AMP_OK)
+        return rc;
+    amp_polyset_clear(&c->band);
+    for (k = 0; k < c->reg.nrings && rc == AMP_OK; k++)
+        rc = amp_polyset_add(&c->band, amp_polyset_ring(&c->reg, k), c->reg.rings[k].n, err);
+    for (k = 0; k < c->bin.nrings && rc == AMP_OK; k++) {
+        size_t first = c->band.npts, n = c->bin.rings[k].n;
+        rc = amp_polyset_add(&c->band, amp_polyset_ring(&c->bin, k), n, err);
+        for (i = 0; rc == AMP_OK && i < n / 2; i++) {
+            amp_vec2 t = c->band.pts[first + i];
+            c->band.pts[first + i] = c->band.pts[first + n - 1 - i];
+            c->band.pts[first + n - 1 - i] = t;
+        }
+    }
+    return rc == AMP_OK ? amp_polyset_organize(&c->band, err) : rc;
+}
+
 /* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
  * for an island narrower than 2r, at the deepest smaller inset that exists:
  * every island with area is printed) and the strokes of its regions. */
@@ -137,7 +277,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
 {
     const amp_layer *L = &c->sl->layers[li];
     const amp_contpath_opts *o = c->o;
-    double d;
+    double d, dp = o->radius;
     size_t q, nperim = 0;
     amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
     int thin = rc == AMP_OK && c->ins.nrings == 0;
@@ -147,6 +287,8 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * so that a smaller inset may hold it in one piece */
         rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->reg, err);
         thin = rc == AMP_OK && c->reg.nrings == 0;
+        if (rc == AMP_OK && !thin && o->perimeters && (rc = neck_offset(c, &dp, err)) == AMP_OK)
+            s0->neck_islands += dp < o->radius;
     }
     if (thin) {
         /* thin island: the bead (2r wide) is wider than the part here; its
@@ -175,30 +317,50 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
         nperim = c->tmp.npaths;
     }
     amp_pathset_clear(&c->bare);
+    amp_pathset_clear(&c->bare_skin);
     /* R̃: inside the perimeter bead (2r) and one bead radius more */
     if (rc == AMP_OK)
-        rc = amp_polyset_inset(&c->isl, 3 * o->radius, 0, &c->ins, err);
+        rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius, 0, &c->ins, err);
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
         int skin;
+        double w;
         if ((rc = amp_polyset_island(&c->ins, q, &c->reg, err)) != AMP_OK)
             break;
         /* a speck of R̃ (under a hundredth of a bead's cross-section) is
          * filled by the beads around it */
         if (amp_polyset_area(&c->reg) < 1e-2 * o->radius * o->radius)
             continue;
-        /* a solid region needs no support corners (step 6): its strips lie
-         * at most one bead from every point of R̃'s unprinted stretches, and
-         * corners over them would print that plastic twice */
-        skin = c->skins && amp_cp_region_is_skin(c->sl, li, &c->reg, o->skin_bottom, o->skin_top, 4 * o->radius);
+        /* a solid region gets support corners (step 6) only where no strip
+         * runs within r of the ring's unprinted stretch (a strip parallel to
+         * the ring up to a bead inside it leaves a sliver that wide bare);
+         * elsewhere its strips lie within r of the ring and corners over
+         * them would print that plastic twice */
+        w = c->skins ? amp_cp_region_skin_depth(c->sl, c->lix, li, &c->reg, o->skin_bottom, o->skin_top,
+                                                 4 * o->radius)
+                     : -1;
+        skin = w >= 0;
         s0->skin_regions += (size_t)skin;
-        rc = amp_cp_region_run(skin ? &c->kskin[li & 1] : &c->khat, skin ? c->kse[li & 1] : c->ke,
-                               skin ? c->nkse[li & 1] : c->nke, &c->reg,
-                               L->z_print, o, o->join && o->perimeters, &c->tmp,
-                               o->support_corners && !o->support_stretches && !skin ? &c->bare : NULL, s0, err);
+        /* bands need the perimeter to splice the two parts (without it, or
+         * without joining, the region stays whole: Fig. 6's joins across
+         * a band crossed its strips on the helix) */
+        if (skin && o->perimeters && o->join && !c->no_bands && (rc = skin_band(c, w, err)) == AMP_OK &&
+            c->core.nrings) {
+            /* solid only where needed: the band, then the sparse core */
+            size_t k;
+            s0->skin_bands++;
+            rc = run_region(c, li, &c->band, 1, s0, err);
+            for (k = 0; k < c->core.nislands && rc == AMP_OK; k++)
+                if ((rc = amp_polyset_island(&c->core, k, &c->reg2, err)) == AMP_OK &&
+                    amp_polyset_area(&c->reg2) >= 1e-2 * o->radius * o->radius)
+                    rc = run_region(c, li, &c->reg2, 0, s0, err);
+        } else if (rc == AMP_OK)
+            rc = run_region(c, li, &c->reg, skin, s0, err);
     }
     /* step 6: corners from the bare stretches to the perimeter */
     if (rc == AMP_OK && nperim)
-        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, s0, err);
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, 0.0, s0, err);
+    if (rc == AMP_OK && nperim && c->bare_skin.npaths)
+        rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare_skin, o->radius, 0.5 * o->radius, s0, err);
     return rc;
 }
 
@@ -226,11 +388,57 @@ static size_t next_island(const lctx *c, const amp_layer *L)
 }
 
 /* One layer: its islands nearest first, each joined and started near the nozzle. */
+/* Island c->isl of layer li into @p out (paths from @p first on): its
+ * paths, joined, tips untagged, coordinates as written, micro-segments
+ * merged. *nobj: object strokes written. */
+static amp_status island_once(lctx *c, size_t li, double h, amp_pathset *out, size_t first, size_t *nobj,
+                              amp_contpath_stats *s0, amp_error *err)
+{
+    size_t i;
+    amp_status rc;
+    amp_pathset_clear(&c->tmp);
+    if ((rc = island_paths(c, li, s0, err)) != AMP_OK)
+        return rc;
+    if (c->o->join)
+        rc = amp_cp_join_loops(&c->tmp, 0, &c->isl, c->o->radius, h, out, nobj, &s0->specks, err);
+    else {
+        rc = amp_pathset_append(out, &c->tmp, err);
+        for (i = first, *nobj = 0; i < out->npaths; i++) {
+            out->paths[i].h = h;
+            *nobj += out->paths[i].role == AMP_ROLE_OBJECT;
+        }
+    }
+    /* corners' tips lose their tag (contpath_internal.h); coordinates as written */
+    for (i = out->npaths > first ? out->paths[first].first : out->nverts; i < out->nverts; i++) {
+        if (out->verts[i].r == AMP_CP_TOOTH_R(c->o->radius))
+            out->verts[i].r = c->o->radius;
+        out->verts[i].p.x = as_written(out->verts[i].p.x);
+        out->verts[i].p.y = as_written(out->verts[i].p.y);
+    }
+    compact_tail(out, first, 1e-3);
+    return rc;
+}
+
+/* Do the island's paths [first, npaths) pass the independent check? */
+static int island_clean(const amp_pathset *out, size_t first, const amp_polyset *sec)
+{
+    size_t i;
+    for (i = first; i < out->npaths; i++)
+        if (amp_check_path_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
+            return 0;
+    return 1;
+}
+
+/* One layer: its islands nearest first, each joined and started near the
+ * nozzle. An island printed with skin bands whose paths fail the check is
+ * printed again with its skin regions whole (a band's rings come from an
+ * inset, and a slip of it can meet the core's: seen once in 60 sweep runs,
+ * the bunny meshed at 0.95 mm, 0.3 mm layers, r 0.2). */
 static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
 {
     const amp_layer *L = &c->sl->layers[li];
     double h = li == 0 ? L->z_print : L->z_print - c->sl->layers[li - 1].z_print;
-    size_t n, k, before = out->npaths, i, nobj;
+    size_t n, k, before = out->npaths, i, nobj = 0;
     amp_status rc = AMP_OK;
     void *q = c->done;
     if (amp_grow(out->alloc, &q, &c->cap_done, L->polys.nislands + 1, 1) != AMP_OK)
@@ -239,31 +447,25 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
     memset(c->done, 0, L->polys.nislands + 1);
     for (n = 0; n < L->polys.nislands && rc == AMP_OK; n++) {
         size_t first = out->npaths;
+        amp_contpath_stats keep = *s0;
         k = next_island(c, L);
         if (k == NONE)
             break;
         c->done[k] = 1;
-        amp_pathset_clear(&c->tmp);
         if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
-            (rc = island_paths(c, li, s0, err)) != AMP_OK)
+            (rc = island_once(c, li, h, out, first, &nobj, s0, err)) != AMP_OK)
             break;
-        if (c->o->join)
-            rc = amp_cp_join_loops(&c->tmp, 0, &c->isl, c->o->radius, h, out, &nobj, &s0->specks, err);
-        else {
-            rc = amp_pathset_append(out, &c->tmp, err);
-            for (i = first, nobj = 0; i < out->npaths; i++) {
-                out->paths[i].h = h;
-                nobj += out->paths[i].role == AMP_ROLE_OBJECT;
-            }
+        if (s0->skin_bands > keep.skin_bands && !island_clean(out, first, &c->isl)) {
+            out->nverts = first < out->npaths ? out->paths[first].first : out->nverts;
+            out->npaths = first;
+            *s0 = keep;
+            s0->band_retries++;
+            c->no_bands = 1;
+            rc = island_once(c, li, h, out, first, &nobj, s0, err);
+            c->no_bands = 0;
+            if (rc != AMP_OK)
+                break;
         }
-        /* corners' tips lose their tag (contpath_internal.h); coordinates as written */
-        for (i = out->npaths > first ? out->paths[first].first : out->nverts; i < out->nverts; i++) {
-            if (out->verts[i].r == AMP_CP_TOOTH_R(c->o->radius))
-                out->verts[i].r = c->o->radius;
-            out->verts[i].p.x = as_written(out->verts[i].p.x);
-            out->verts[i].p.y = as_written(out->verts[i].p.y);
-        }
-        compact_tail(out, first, 1e-3);
         s0->islands += out->npaths > first;
         s0->island_strokes += nobj;
         for (i = first; i < out->npaths && rc == AMP_OK; i++) {
@@ -298,8 +500,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_init(&c.isl, al);
     amp_polyset_init(&c.ins, al);
     amp_polyset_init(&c.reg, al);
+    amp_polyset_init(&c.bin, al);
+    amp_polyset_init(&c.core, al);
+    amp_polyset_init(&c.band, al);
+    amp_polyset_init(&c.reg2, al);
     amp_pathset_init(&c.tmp, al);
     amp_pathset_init(&c.bare, al);
+    amp_pathset_init(&c.bare_skin, al);
     rc = amp_contpath_complex(sl, o, &c.khat, err);
     if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
@@ -318,6 +525,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin[li], al, &c.kse[li], &c.nkse[li]) != AMP_OK)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     }
+    if (rc == AMP_OK && c.skins) {
+        c.lix = amp_calloc(al, sl->nlayers + 1, sizeof *c.lix);
+        for (li = 0; li < sl->nlayers && rc == AMP_OK && c.lix; li++)
+            rc = amp_polyindex_build(&c.lix[li], &sl->layers[li].polys, err);
+        if (!c.lix)
+            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing the sections");
+    }
     for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
         s0.layers++;
         rc = layer_paths(&c, li, out, &s0, err);
@@ -333,6 +547,9 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
             s0.travel_length += amp_v3_dist(a.p, b.p);
         }
     }
+    for (li = 0; c.lix && li < sl->nlayers; li++)
+        amp_polyindex_free(&c.lix[li]);
+    amp_free(al, c.lix);
     amp_free(al, c.ke);
     amp_free(al, c.kse[0]);
     amp_free(al, c.kse[1]);
@@ -343,8 +560,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
     amp_polyset_free(&c.isl);
     amp_polyset_free(&c.ins);
     amp_polyset_free(&c.reg);
+    amp_polyset_free(&c.bin);
+    amp_polyset_free(&c.core);
+    amp_polyset_free(&c.band);
+    amp_polyset_free(&c.reg2);
     amp_pathset_free(&c.tmp);
     amp_pathset_free(&c.bare);
+    amp_pathset_free(&c.bare_skin);
     if (st)
         *st = s0;
     return rc;

@@ -176,6 +176,40 @@ void amp_cp_patchset_free(const amp_allocator *al, amp_cp_patchset *P)
     amp_free(al, P->box);
 }
 
+/* Ring vertices of the patch polyline g->pp closer than 2 µm to the
+ * previous kept point or to its end go: the layer code merges vertices
+ * under 1 µm apart (below a motor step) path by path, and a Fig. 6 join's
+ * two copies (printed, and run back as a pseudo edge) would then lose
+ * different vertices next to a free end and interleave there (crossings on
+ * the helix with --no-join). Without such points both copies stay one
+ * polyline to the last vertex. */
+static void micro_filter(amp_cp_graph *g, size_t a, size_t b)
+{
+    size_t i, w = 1;
+    const double tol = 2e-3;
+    if (g->npp < 3)
+        return;
+    /* a patch that would become the straight segment between its ends (R̃ a
+     * sliver thinner than tol along a lattice line) keeps its points: the
+     * segment would repeat the lattice edge between the same two nodes) */
+    for (i = 1; i + 1 < g->npp; i++)
+        if (hypot(g->pp[i].x - g->pp[0].x, g->pp[i].y - g->pp[0].y) >= tol &&
+            hypot(g->pp[i].x - g->pp[g->npp - 1].x, g->pp[i].y - g->pp[g->npp - 1].y) >= tol)
+            break;
+    if (i + 1 == g->npp && a < g->nlatv && g->mate && g->mate[a] == b)
+        return;
+    for (i = 1; i + 1 < g->npp; i++) {
+        amp_vec2 l = g->pp[w - 1], x = g->pp[i], e = g->pp[g->npp - 1];
+        if (hypot(x.x - l.x, x.y - l.y) < tol || hypot(x.x - e.x, x.y - e.y) < tol)
+            continue;
+        g->pp[w] = x;
+        g->pf[w++] = g->pf[i];
+    }
+    g->pp[w] = g->pp[g->npp - 1];
+    g->pf[w++] = g->pf[g->npp - 1];
+    g->npp = w;
+}
+
 /* Record the patch from free end fi to fj along the ring (step 5). */
 amp_status amp_cp_patch_add(amp_cp_graph *g, amp_cp_patchset *P, const amp_polyset *R, const amp_cp_fend *fi, const amp_cp_fend *fj, int join,
                             amp_error *err)
@@ -189,6 +223,7 @@ amp_status amp_cp_patch_add(amp_cp_graph *g, amp_cp_patchset *P, const amp_polys
         amp_grow(g->al, &q, &P->cap_pts, P->npts + g->npp, sizeof *P->pts) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
     P->pts = q;
+    micro_filter(g, fi->node, fj->node);
     P->a[k] = fi->node;
     P->b[k] = fj->node;
     P->p0[k] = P->npts;

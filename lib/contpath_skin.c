@@ -16,7 +16,7 @@
 
 /* Is q covered by the sections of every layer within [z - below, z + above]
  * (other than the layer itself)? Layers beyond the part's ends do not cover. */
-static int covered(const amp_slices *sl, size_t li, amp_vec2 q, double below, double above)
+static int covered(const amp_slices *sl, const amp_polyindex *ix, size_t li, amp_vec2 q, double below, double above)
 {
     double z = sl->layers[li].z_print;
     size_t j;
@@ -25,21 +25,28 @@ static int covered(const amp_slices *sl, size_t li, amp_vec2 q, double below, do
     if (above > 0 && (li + 1 == sl->nlayers || sl->layers[sl->nlayers - 1].z_print - z < above - 1e-9))
         return 0; /* the last layers: the top is above */
     for (j = li; j-- > 0 && z - sl->layers[j].z_print < below - 1e-9;)
-        if (amp_polyset_contains(&sl->layers[j].polys, q, 0.0) != 1)
+        if ((ix ? amp_polyindex_contains(&ix[j], q) : amp_polyset_contains(&sl->layers[j].polys, q, 0.0)) != 1)
             return 0;
     for (j = li + 1; j < sl->nlayers && sl->layers[j].z_print - z < above - 1e-9; j++)
-        if (amp_polyset_contains(&sl->layers[j].polys, q, 0.0) != 1)
+        if ((ix ? amp_polyindex_contains(&ix[j], q) : amp_polyset_contains(&sl->layers[j].polys, q, 0.0)) != 1)
             return 0;
     return 1;
 }
 
-int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R, double below, double above,
-                          double step)
+int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R, double below,
+                          double above, double step)
 {
+    return amp_cp_region_skin_depth(sl, ix, li, R, below, above, step) >= 0;
+}
+
+double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R,
+                                double below, double above, double step)
+{
+    double depth = -1;
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
     size_t r, k;
     if (!(below > 0) && !(above > 0))
-        return 0;
+        return -1;
     for (r = 0; r < R->nrings; r++) {
         const amp_vec2 *p = amp_polyset_ring(R, r);
         size_t n = R->rings[r].n, stride = n / 64 + 1;
@@ -48,8 +55,8 @@ int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R,
             y0 = fmin(y0, p[k].y);
             x1 = fmax(x1, p[k].x);
             y1 = fmax(y1, p[k].y);
-            if (k % stride == 0 && !covered(sl, li, p[k], below, above))
-                return 1;
+            if (depth < 0 && k % stride == 0 && !covered(sl, ix, li, p[k], below, above))
+                depth = 0;
         }
     }
     /* a grid inside: a hole opening above the middle of the region (at
@@ -58,8 +65,9 @@ int amp_cp_region_is_skin(const amp_slices *sl, size_t li, const amp_polyset *R,
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step) {
             amp_vec2 q = amp_v2(x, y);
-            if (amp_polyset_contains(R, q, 0.0) == 1 && !covered(sl, li, q, below, above))
-                return 1;
+            if (amp_polyset_contains(R, q, 0.0) == 1 && !covered(sl, ix, li, q, below, above))
+                depth = fmax(depth, amp_polyset_boundary_dist(R, q));
         }
-    return 0;
+    /* a sample stands for the cell of `step` around it */
+    return depth < 0 ? -1 : depth + step;
 }

@@ -167,26 +167,46 @@ static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b
     return 0;
 }
 
-/* Nearest point of the perimeter loops [0, nperim) of @p ps to q: loop and arclength. */
-static double nearest_perimeter(const amp_pathset *ps, size_t nperim, double *const *cl, amp_vec2 q, size_t *loop,
-                                double *s)
+/* Nearest point of the perimeter loops [0, nperim) of @p ps to q within
+ * @p lim: loop and arclength (HUGE_VAL when none is that close). Through the
+ * segment grid: a corner only takes a perimeter closer than 3r, and a scan
+ * of every perimeter segment per corner grew with the square of the part
+ * (the vase). Ties go to the first segment in path order, as a full scan. */
+static double nearest_perimeter(const amp_pathset *ps, const sgrid *g, size_t nperim, double *const *cl, amp_vec2 q,
+                                double lim, size_t *loop, double *s)
 {
-    size_t i, k;
-    double best = HUGE_VAL;
-    for (i = 0; i < nperim; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        for (k = 0; k + 1 < ps->paths[i].n; k++) {
-            amp_vec2 a = xy(v[k].p), b = xy(v[k + 1].p);
-            double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-            t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-            d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
-            if (d < best) {
-                best = d;
-                *loop = i;
-                *s = cl[i][k] + t * (cl[i][k + 1] - cl[i][k]);
+    size_t k, bestk = (size_t)-1, i, end = ps->paths[nperim - 1].first + ps->paths[nperim - 1].n;
+    double best = HUGE_VAL, bt = 0;
+    long cx0 = sg_cell(q.x - lim, g->x0, g->cell, g->nx), cx1 = sg_cell(q.x + lim, g->x0, g->cell, g->nx);
+    long cy0 = sg_cell(q.y - lim, g->y0, g->cell, g->ny), cy1 = sg_cell(q.y + lim, g->y0, g->cell, g->ny), x, y;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
+                size_t id = g->item[k];
+                amp_vec2 a, b;
+                double dx, dy, l2, t, d;
+                if (id >= end)
+                    continue; /* not a perimeter segment */
+                a = xy(ps->verts[id].p);
+                b = xy(ps->verts[id + 1].p);
+                dx = b.x - a.x;
+                dy = b.y - a.y;
+                l2 = dx * dx + dy * dy;
+                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+                d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
+                if (d < best || (d == best && id < bestk)) {
+                    best = d;
+                    bestk = id;
+                    bt = t;
+                }
             }
-        }
-    }
+    if (!(best < lim))
+        return HUGE_VAL;
+    for (i = 0; i < nperim && !(bestk < ps->paths[i].first + ps->paths[i].n); i++)
+        ;
+    k = bestk - ps->paths[i].first;
+    *loop = i;
+    *s = cl[i][k] + bt * (cl[i][k + 1] - cl[i][k]);
     return best;
 }
 
@@ -270,7 +290,34 @@ static amp_vec2 poly_at(const amp_pvert *b, size_t n, double s)
     return xy(b[0].p);
 }
 
-amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r,
+/* Is a printed segment of the island's infill strokes (paths after the
+ * perimeters: vertex ids from @p end on) within @p lim of q? */
+static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_vec2 q, double lim)
+{
+    size_t k;
+    long cx0 = sg_cell(q.x - lim, g->x0, g->cell, g->nx), cx1 = sg_cell(q.x + lim, g->x0, g->cell, g->nx);
+    long cy0 = sg_cell(q.y - lim, g->y0, g->cell, g->ny), cy1 = sg_cell(q.y + lim, g->y0, g->cell, g->ny), x, y;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
+                size_t id = g->item[k];
+                amp_vec2 a, b;
+                double dx, dy, l2, t;
+                if (id < end || !(ps->verts[id].r > 0) || !(ps->verts[id + 1].r > 0))
+                    continue;
+                a = xy(ps->verts[id].p);
+                b = xy(ps->verts[id + 1].p);
+                dx = b.x - a.x;
+                dy = b.y - a.y;
+                l2 = dx * dx + dy * dy;
+                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+                if (hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) <= lim)
+                    return 1;
+            }
+    return 0;
+}
+
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
                                   amp_contpath_stats *st, amp_error *err)
 {
     const amp_allocator *al = ps->alloc;
@@ -317,8 +364,13 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
         for (k = 0; k < m && rc == AMP_OK; k++) {
             amp_vec2 c = poly_at(b, n, closed ? L * (double)k / (double)m : L * (double)(k + 1) / (double)(m + 1));
             size_t loop = 0, seg;
-            double s = 0, d = nearest_perimeter(ps, nperim, cl, c, &loop, &s), tot;
+            double s = 0, d = nearest_perimeter(ps, &sg, nperim, cl, c, 3 * r, &loop, &s), tot;
             amp_pvert a0, a1;
+            /* a skin's strip already runs within `covered` of the ring
+             * here: a corner would print its plastic a second time */
+            if (covered > 0 &&
+                infill_within(ps, &sg, ps->paths[nperim - 1].first + ps->paths[nperim - 1].n, c, covered))
+                continue;
             tot = cl[loop][ps->paths[loop].n - 1];
             /* the perimeter is 2r out; the base r to either side */
             if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {

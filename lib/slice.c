@@ -224,9 +224,12 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
     return AMP_OK;
 }
 
-/* Distance from q to the section P (0 inside). */
-static double dist_to_section(const amp_polyset *P, amp_vec2 q)
+/* Distance from q to the section P (0 inside), through its row index when
+ * there is one. */
+static double dist_to_section(const amp_polyset *P, const amp_polyindex *ix, amp_vec2 q)
 {
+    if (ix)
+        return amp_polyindex_contains(ix, q) != 0 ? 0.0 : amp_polyindex_dist(ix, q);
     if (amp_polyset_contains(P, q, 0.0) != 0)
         return 0.0;
     return amp_polyset_boundary_dist(P, q);
@@ -235,8 +238,10 @@ static double dist_to_section(const amp_polyset *P, amp_vec2 q)
 double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
 {
     const amp_polyset *lo, *up;
+    amp_polyindex ilo, iup;
     double worst = 0, x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
     size_t k;
+    int have_lo, have_up;
     if (i + 1 >= sl->nlayers)
         return 0;
     lo = &sl->layers[i].polys;
@@ -247,11 +252,15 @@ double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
         return HUGE_VAL;
     if (!(step > 0))
         step = 1.0;
+    /* row indexes: a sample costs one row, not every edge (linear cost,
+     * issue 16); without memory for them the plain scans give the same */
+    have_lo = amp_polyindex_build(&ilo, lo, NULL) == AMP_OK;
+    have_up = amp_polyindex_build(&iup, up, NULL) == AMP_OK;
     /* the upper rings' vertices (about 512 of them at most): the overhang
      * of a slanted wall */
     for (k = 0; k < up->npts; k++) {
         if (k % (up->npts / 512 + 1) == 0)
-            worst = fmax(worst, dist_to_section(lo, up->pts[k]));
+            worst = fmax(worst, dist_to_section(lo, have_lo ? &ilo : NULL, up->pts[k]));
         x0 = fmin(x0, up->pts[k].x);
         y0 = fmin(y0, up->pts[k].y);
         x1 = fmax(x1, up->pts[k].x);
@@ -262,7 +271,12 @@ double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
     step = fmax(step, fmax(x1 - x0, y1 - y0) / 24);
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step)
-            if (amp_polyset_contains(up, amp_v2(x, y), 0.0) == 1)
-                worst = fmax(worst, dist_to_section(lo, amp_v2(x, y)));
+            if ((have_up ? amp_polyindex_contains(&iup, amp_v2(x, y)) : amp_polyset_contains(up, amp_v2(x, y), 0.0)) ==
+                1)
+                worst = fmax(worst, dist_to_section(lo, have_lo ? &ilo : NULL, amp_v2(x, y)));
+    if (have_lo)
+        amp_polyindex_free(&ilo);
+    if (have_up)
+        amp_polyindex_free(&iup);
     return worst;
 }

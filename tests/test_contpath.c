@@ -638,50 +638,46 @@ static size_t gcode_starts(const char *file, double *z, size_t *starts, size_t c
     return nz;
 }
 
-/* Every layer of the part: as many extrusion starts in the G-code as the
- * section has islands (one stroke per island), the check of every path
- * clean, and the first bead on the lowest layer. */
-static void part_one_start_per_island(fx_part part, double step)
+/* Every layer of the mesh in @p stl sliced at @p layer: as many extrusion
+ * starts in the G-code as the section has islands (one stroke per island),
+ * the check of every path clean, and the first bead on the lowest layer.
+ * @p out receives the JSON of slice --continuous. */
+static void stl_one_start_per_island(const char *stl, const char *name, double layer, char *out, size_t cap)
 {
-    static char out[1 << 17];
     static double z[4096];
     static size_t starts[4096];
-    amp_mesh m;
-    amp_error err;
-    char args[2048], name[64], stl[400], amp[400], gc[420];
+    char args[2048], amp[400], gc[420], json[1 << 14];
     const char *q;
     size_t nz, k, islands_total = 0, starts_total = 0;
     double first_z;
-    snprintf(name, sizeof name, "%s.stl", fx_part_name(part));
-    snprintf(stl, sizeof stl, "%s", amp_test_tmp(name));
-    snprintf(name, sizeof name, "%s.amp", fx_part_name(part));
-    snprintf(amp, sizeof amp, "%s", amp_test_tmp(name));
+    snprintf(amp, sizeof amp, "%s.amp", stl);
     snprintf(gc, sizeof gc, "%s.gcode", amp);
-    amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(fx_part_mesh(&m, part, step), AMP_OK);
-    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
-    amp_mesh_free(&m);
-    snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s --json", stl, amp);
-    ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", fx_part_name(part), out);
-    ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL, "%s",
-                  out);
-    ck_assert_msg(strstr(out, "\"empty_layers\":0,") != NULL, "%s", out);
+    snprintf(args, sizeof args, "slice %s --layer %g --continuous -o %s --json", stl, layer, amp);
+    ck_assert_msg(amp_test_run_tool(args, json, sizeof json) == 0, "%s: %s", name, json);
+    ck_assert_msg(strstr(json, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL,
+                  "%s", json);
+    ck_assert_msg(strstr(json, "\"empty_layers\":0,") != NULL, "%s", json);
+    if (out)
+        snprintf(out, cap, "%s", json);
     snprintf(args, sizeof args, "gcode %s -o %s", amp, gc);
     ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
     nz = gcode_starts(gc, z, starts, 4096, &first_z);
     /* islands per layer from the sections themselves (slice --polygons) */
-    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons --json", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
-    for (q = strstr(out, "\"z_print\":"); q; q = strstr(q + 1, "\"z_print\":")) {
-        double zp = atof(q + 10);
-        long isl = atol(strstr(q, "\"islands\":") + 10);
-        size_t got = 0;
-        for (k = 0; k < nz; k++)
-            if (fabs(z[k] - zp) < 1e-3)
-                got = starts[k];
-        ck_assert_msg(got == (size_t)isl, "%s: layer at z %g has %ld islands and %lu extrusion starts",
-                      fx_part_name(part), zp, isl, (unsigned long)got);
-        islands_total += (size_t)isl;
+    {
+        static char pol[1 << 17];
+        snprintf(args, sizeof args, "slice %s --layer %g --polygons --json", stl, layer);
+        ck_assert_int_eq(amp_test_run_tool(args, pol, sizeof pol), 0);
+        for (q = strstr(pol, "\"z_print\":"); q; q = strstr(q + 1, "\"z_print\":")) {
+            double zp = atof(q + 10);
+            long isl = atol(strstr(q, "\"islands\":") + 10);
+            size_t got = 0;
+            for (k = 0; k < nz; k++)
+                if (fabs(z[k] - zp) < 1e-3)
+                    got = starts[k];
+            ck_assert_msg(got == (size_t)isl, "%s: layer at z %g has %ld islands and %lu extrusion starts", name, zp,
+                          isl, (unsigned long)got);
+            islands_total += (size_t)isl;
+        }
     }
     for (k = 0; k < nz; k++)
         starts_total += starts[k];
@@ -689,9 +685,23 @@ static void part_one_start_per_island(fx_part part, double step)
     /* the first bead is laid on the lowest layer, nothing below it */
     for (k = 0; k < nz; k++)
         ck_assert(z[k] >= first_z - 1e-9);
-    remove(stl);
     remove(amp);
     remove(gc);
+}
+
+static void part_one_start_per_island(fx_part part, double step)
+{
+    amp_mesh m;
+    amp_error err;
+    char name[64], stl[400];
+    snprintf(name, sizeof name, "%s.stl", fx_part_name(part));
+    snprintf(stl, sizeof stl, "%s", amp_test_tmp(name));
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, part, step), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    amp_mesh_free(&m);
+    stl_one_start_per_island(stl, fx_part_name(part), 0.2, NULL, 0);
+    remove(stl);
 }
 
 START_TEST(torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode)
@@ -927,7 +937,26 @@ static int cmp_dbl(const void *a, const void *b)
 /* Independent bead coverage of one layer: the section rasterised by
  * scanlines (pixel @p px), every printed segment at height z stamped as a
  * capsule of radius r; the fraction of the section's pixels under a bead. */
-static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, double z, double r, double px)
+/* Is q a skin point of layer li: outside some section within T below or
+ * above it (the part's first and last T count as outside)? Decided here
+ * from the sections, independently of the builder. */
+static int skin_point(const amp_slices *sl, const amp_polyindex *ix, size_t li, amp_vec2 q, double T)
+{
+    double z = sl->layers[li].z_print;
+    size_t j;
+    if (z - sl->layers[0].z_print < T - 1e-9 || sl->layers[sl->nlayers - 1].z_print - z < T - 1e-9)
+        return 1;
+    for (j = 0; j < sl->nlayers; j++)
+        if (j != li && fabs(sl->layers[j].z_print - z) < T - 1e-9 && amp_polyindex_contains(&ix[j], q) != 1)
+            return 1;
+    return 0;
+}
+
+/* Fraction of the section's pixels (px mm) under a bead (within r of a
+ * printed segment at height z); with @p sl, only of the skin pixels of
+ * layer li (skin_point, thickness T), their count in *nskin. */
+static double bead_coverage_of(const amp_polyset *sec, const amp_pathset *ps, double z, double r, double px,
+                               const amp_slices *sl, const amp_polyindex *ix, size_t li, double T, size_t *nskin)
 {
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, *xs;
     size_t i, k, nx, ny, in = 0, hit = 0;
@@ -986,13 +1015,109 @@ static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, doubl
         }
     }
     for (i = 0; i < nx * ny; i++) {
+        if (img[i] && sl &&
+            !skin_point(sl, ix, li, amp_v2(x0 + ((double)(i % nx) + 0.5) * px, y0 + ((double)(i / nx) + 0.5) * px), T))
+            continue;
         in += img[i] != 0;
         hit += img[i] == 2;
     }
+    if (nskin)
+        *nskin = in;
     free(img);
     free(xs);
     return in ? (double)hit / (double)in : 0;
 }
+
+static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, double z, double r, double px)
+{
+    return bead_coverage_of(sec, ps, z, r, px, NULL, NULL, 0, 0, NULL);
+}
+
+/* Issue 16: between the last strip of a solid region and the perimeter a
+ * sliver up to a bead wide stayed bare where the ring of R̃ runs parallel to
+ * the strips and the patching leaves it unprinted (solid regions took no
+ * corners). They now take corners where no strip runs within r of the
+ * ring: every layer of the idler solid (skins thicker than the part), the
+ * points of the infill rings within r of material, with and without. */
+START_TEST(solid_regions_leave_no_sliver_bare_beside_their_strips)
+{
+    amp_slices sl, sl2;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_contpath_opts o;
+    double ca, cb;
+    amp_slices_init(&sl, NULL);
+    amp_slices_init(&sl2, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    o.skin_bottom = o.skin_top = 10;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
+    o.support_corners = 0;
+    layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl2, &b, &sb, &o);
+    ck_assert_uint_eq(sa.skin_regions, sa.regions);
+    ck_assert_uint_gt(sa.support_corners, 0);
+    ck_assert_uint_eq(sa.island_strokes, sa.islands);
+    ca = ring_cover(&sl, &a, 0.225, 0.225 * 1.01);
+    cb = ring_cover(&sl2, &b, 0.225, 0.225 * 1.01);
+    ck_assert_msg(ca >= 0.99 && 1 - ca <= 0.5 * (1 - cb), "ring within r of material: %g with corners, %g without", ca,
+                  cb);
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+    amp_slices_free(&sl2);
+}
+END_TEST
+
+/* Issue 16: skins only where needed. A region is solid only in a band along
+ * its boundary that holds every uncovered point (and sparse one bead
+ * further in), without polygon booleans. On the torus part (curved top and
+ * bottom: the uncovered part of a layer is a ring along the section's
+ * edge), measured independently: on every 3rd layer, the skin pixels
+ * (outside some section within 0.8 mm, decided from the sections) are
+ * >= 95 % under beads, while the layers' sparse middle is not solid; one
+ * stroke per island, checks clean. */
+START_TEST(skins_are_solid_only_where_a_layer_is_uncovered)
+{
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    amp_polyindex *ix;
+    size_t li, i, banded = 0;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
+    ck_assert_uint_gt(st.skin_bands, 0);
+    ck_assert_uint_eq(st.island_strokes, st.islands);
+    for (i = 0; i < ps.npaths; i++)
+        ck_assert(amp_check_path_stroke(&ps, i, NULL, 0, NULL, NULL) == AMP_OK);
+    ix = calloc(sl.nlayers, sizeof *ix);
+    ck_assert(ix != NULL);
+    for (li = 0; li < sl.nlayers; li++)
+        ck_assert_int_eq(amp_polyindex_build(&ix[li], &sl.layers[li].polys, NULL), AMP_OK);
+    for (li = 0; li < sl.nlayers; li += 3) {
+        size_t nskin = 0, nall = 0;
+        double cs = bead_coverage_of(&sl.layers[li].polys, &ps, sl.layers[li].z_print, 0.225, 0.05, &sl, ix, li, 0.8,
+                                     &nskin);
+        double ca = bead_coverage_of(&sl.layers[li].polys, &ps, sl.layers[li].z_print, 0.225, 0.05, NULL, NULL, 0, 0,
+                                     &nall);
+        if (nskin > 100)
+            ck_assert_msg(cs >= 0.95, "layer %lu: %g of %lu skin pixels under beads", (unsigned long)li, cs,
+                          (unsigned long)nskin);
+        /* a layer with a skin ring and a sparse middle: not all of it solid */
+        if (nskin > 100 && nskin < nall / 2 && ca < 0.85)
+            banded++;
+    }
+    ck_assert_uint_gt(banded, 2);
+    for (li = 0; li < sl.nlayers; li++)
+        amp_polyindex_free(&ix[li]);
+    free(ix);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
 
 START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 {
@@ -1071,6 +1196,62 @@ START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
 }
 END_TEST
 
+/* Issue 16: with --no-join (or --no-perimeter) the components of a region are
+ * joined by Fig. 6's doubled ring paths, printed once and run back as a
+ * pseudo edge. On the helix at 0.3 mm a ring vertex lies within 1 µm of a
+ * free end; the layer code merged it on one copy and kept it on the other,
+ * so the two copies interleaved at the free end: 30 crossings, exit 1. */
+START_TEST(fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end)
+{
+    static const char *const modes[] = {"--no-join", "--no-perimeter", "--no-join --pseudo"};
+    char args[1024], out[8192];
+    const char *stl = amp_test_tmp("helix_j.stl"), *amp = amp_test_tmp("helix_j.amp");
+    size_t k;
+    snprintf(args, sizeof args, "model helix -o %s", stl);
+    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    for (k = 0; k < 3; k++) {
+        snprintf(args, sizeof args, "slice %s --layer 0.3 --continuous %s -o %s --json", stl, modes[k], amp);
+        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+        ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL,
+                      "%s: %s", modes[k], out);
+        /* the joins are there: the case is exercised, not avoided */
+        ck_assert_msg(strstr(out, "\"joins\":0,") == NULL, "%s: %s", modes[k], out);
+        snprintf(args, sizeof args, "check %s --mesh %s --layer 0.3 --json", amp, stl);
+        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+    }
+    remove(stl);
+    remove(amp);
+}
+END_TEST
+
+/* Issue 16: an island whose inset by r splits at a neck narrower than a bead
+ * (the twisted bridge at 0.2 mm: a 6 mm long bridge 0.30-0.45 mm wide joins
+ * two lobes with infill) kept one stroke per lobe and left the neck bare
+ * (197 starts for 196 islands). Its perimeter now runs at the largest offset
+ * that holds it together, up one side of the neck and down the other.
+ * Counted from the G-code on every layer of the built-in meshes. */
+START_TEST(a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke)
+{
+    static const char *const names[] = {"twisted-bridge", "crocodile-like", "helix"};
+    static const double layers[] = {0.2, 0.3, 0.3};
+    static char out[1 << 14];
+    char args[1024];
+    size_t k;
+    for (k = 0; k < 3; k++) {
+        char stl[400], nm[64];
+        snprintf(nm, sizeof nm, "bi_%s.stl", names[k]);
+        snprintf(stl, sizeof stl, "%s", amp_test_tmp(nm));
+        snprintf(args, sizeof args, "model %s -o %s", names[k], stl);
+        ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+        stl_one_start_per_island(stl, names[k], layers[k], out, sizeof out);
+        /* the case is exercised: the bridge and the crocodile have such necks */
+        if (k < 2)
+            ck_assert_msg(strstr(out, "\"neck_islands\":0,") == NULL, "%s: %s", names[k], out);
+        remove(stl);
+    }
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -1094,6 +1275,10 @@ static Suite *contpath_suite(void)
     AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
     AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
     AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
+    AMP_ADD_TEST(tc, fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end);
+    AMP_ADD_TEST(tc, a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke);
+    AMP_ADD_TEST(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
+    AMP_ADD_TEST(tc, skins_are_solid_only_where_a_layer_is_uncovered);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -283,6 +283,81 @@ START_TEST(inset_of_marching_tetrahedra_torus_sections_matches_sampling)
 }
 END_TEST
 
+/* The row index answers every query as the plain scans do (issue 16: the
+ * skin and overhang tests use it): a star with a star-shaped hole and a
+ * separate square, 20 000 points (random, on vertices, on edges, at vertex
+ * heights, far outside), containment equal and distances equal to 1e-12. */
+START_TEST(row_index_answers_as_the_plain_scans)
+{
+    amp_polyset P;
+    amp_polyindex ix;
+    amp_vec2 star[64], hole[40], sq[4] = {{30, -2}, {34, -2}, {34, 2}, {30, 2}};
+    size_t i, k, nin = 0, non = 0;
+    unsigned long long seed = 12345;
+    amp_polyset_init(&P, NULL);
+    for (i = 0; i < 64; i++) {
+        double a = 6.283185307179586 * (double)i / 64, r = i % 2 ? 10 : 6 + (double)(i % 5);
+        star[i] = amp_v2(r * cos(a), r * sin(a));
+    }
+    for (i = 0; i < 40; i++) {
+        double a = -6.283185307179586 * (double)i / 40, r = i % 2 ? 3 : 2;
+        hole[i] = amp_v2(r * cos(a), r * sin(a));
+    }
+    ck_assert_int_eq(amp_polyset_add(&P, star, 64, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_add(&P, hole, 40, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_add(&P, sq, 4, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_organize(&P, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyindex_build(&ix, &P, NULL), AMP_OK);
+    for (k = 0; k < 20000; k++) {
+        amp_vec2 q;
+        double u, v;
+        int c0, c1;
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        u = (double)(seed >> 11) / 9007199254740992.0;
+        seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+        v = (double)(seed >> 11) / 9007199254740992.0;
+        if (k % 4 == 0)
+            q = amp_v2(-40 + 80 * u, -15 + 30 * v); /* anywhere, also far outside */
+        else {
+            size_t j = (size_t)(u * (double)P.npts) % P.npts, m;
+            const amp_vec2 *a = &P.pts[j];
+            for (m = 0; m < P.nrings && !(j >= P.rings[m].first && j < P.rings[m].first + P.rings[m].n); m++)
+                ;
+            {
+                size_t nx = P.rings[m].first + (j - P.rings[m].first + 1) % P.rings[m].n;
+                amp_vec2 b = P.pts[nx];
+                if (k % 4 == 1)
+                    q = *a; /* a vertex */
+                else if (k % 4 == 2)
+                    q = amp_v2(a->x + v * (b.x - a->x), a->y + v * (b.y - a->y)); /* on an edge (up to rounding) */
+                else
+                    q = amp_v2(-12 + 24 * v, a->y); /* at a vertex's height */
+            }
+        }
+        c0 = amp_polyset_contains(&P, q, 0.0);
+        c1 = amp_polyindex_contains(&ix, q);
+        ck_assert_msg(c0 == c1, "point (%.17g, %.17g): scan %d, index %d", q.x, q.y, c0, c1);
+        ck_assert_msg(fabs(amp_polyset_boundary_dist(&P, q) - amp_polyindex_dist(&ix, q)) <= 1e-12,
+                      "point (%.17g, %.17g): distance %.17g vs %.17g", q.x, q.y, amp_polyset_boundary_dist(&P, q),
+                      amp_polyindex_dist(&ix, q));
+        nin += c0 == 1;
+        non += c0 == -1;
+    }
+    /* the sample holds every kind of answer */
+    ck_assert_uint_gt(nin, 2000);
+    ck_assert_uint_gt(non, 1000);
+    amp_polyindex_free(&ix);
+    amp_polyindex_free(&ix); /* freeing twice is safe */
+    /* an empty set: outside everywhere, no distance */
+    amp_polyset_clear(&P);
+    ck_assert_int_eq(amp_polyindex_build(&ix, &P, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyindex_contains(&ix, amp_v2(0, 0)), 0);
+    ck_assert(amp_polyindex_dist(&ix, amp_v2(0, 0)) == HUGE_VAL);
+    amp_polyindex_free(&ix);
+    amp_polyset_free(&P);
+}
+END_TEST
+
 static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
@@ -297,6 +372,7 @@ static Suite *polygon_suite(void)
     AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
     AMP_ADD_TEST(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
     AMP_ADD_TEST(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
+    AMP_ADD_TEST(tc, row_index_answers_as_the_plain_scans);
     suite_add_tcase(s, tc);
     return s;
 }

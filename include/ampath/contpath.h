@@ -108,6 +108,13 @@ typedef struct amp_contpath_stats {
     double unprinted_length; /**< mm, ring stretches of R̃ left unprinted by the lattice and its patches */
     size_t support_corners;  /**< step 6 corners built into the perimeter loops */
     size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour or find no perimeter */
+    size_t neck_islands;     /**< islands with infill whose inset by r splits at a neck narrower than a bead:
+                                  perimeter (and infill) at the largest smaller offset that holds them together
+                                  (last: bindings that mirror this struct, python/ampath/_lib.py, append it) */
+    size_t skin_bands;       /**< skin regions printed solid only in a band along their boundary (the
+                                  uncovered part), the rest sparse one bead further in */
+    size_t band_retries;     /**< islands printed again with whole skin regions (their banded paths failed
+                                  the check) */
 } amp_contpath_stats;
 
 /**

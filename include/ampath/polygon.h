@@ -101,6 +101,29 @@ double amp_polyset_area(const amp_polyset *ps);
 double amp_polyset_boundary_dist(const amp_polyset *ps, amp_vec2 q);
 
 /**
+ * Row index of a polygon set for many point queries (issue 16: skin and
+ * overhang tests ran a full ring scan per sample point). Segments are listed
+ * in horizontal rows (about sqrt(n) of them); a query scans one row, or
+ * rows outward until the nearest segment is found. The set @p P is
+ * borrowed and must outlive the index; memory through P's allocator.
+ */
+typedef struct amp_polyindex {
+    const amp_polyset *P;
+    double y0, h;
+    long nrow;
+    size_t *start, *item; /* segment ids of row k: item[start[k] .. start[k + 1]) */
+    amp_vec2 *a, *b;      /* segment id -> its ends */
+} amp_polyindex;
+/** Build the index of @p P (an empty set gives an empty index). AMP_ERR_NOMEM. */
+amp_status amp_polyindex_build(amp_polyindex *ix, const amp_polyset *P, amp_error *err);
+/** Release the index (not the set); safe on a zeroed or freed index. */
+void amp_polyindex_free(amp_polyindex *ix);
+/** As amp_polyset_contains(P, q, 0): 1 inside, 0 outside, -1 on an edge (even-odd, half-open rule). */
+int amp_polyindex_contains(const amp_polyindex *ix, amp_vec2 q);
+/** As amp_polyset_boundary_dist(P, q): distance to the nearest edge (HUGE_VAL when empty). */
+double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q);
+
+/**
  * Convex hull of @p n points (Andrew's monotone chain, exact orientation
  * signs for doubles up to rounding). Writes the hull counter-clockwise,
  * without collinear points, to @p out (caller-allocated, room for @p n
