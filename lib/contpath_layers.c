@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "contpath_internal.h"
+#include "ampath/check.h" /* island_clean: see issue 19 follow-up (verifier to become a caller-set hook) */
 
 /* Work state of amp_contpath_layers(). */
 typedef struct lctx {
