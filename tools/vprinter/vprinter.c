@@ -227,13 +227,15 @@ static int open_pty(vp *v)
 
 static void close_pty(vp *v)
 {
+    /* the link first: a host that sees the hang-up must not follow it to a pty number that another
+       program may already have been given */
+    if (v->link)
+        unlink(v->link);
     if (v->mfd >= 0)
         close(v->mfd);
     if (v->sfd >= 0)
         close(v->sfd);
     v->mfd = v->sfd = -1;
-    if (v->link)
-        unlink(v->link);
 }
 
 /* ---------------- printer model ---------------- */
