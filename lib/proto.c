@@ -541,8 +541,10 @@ static void adv_ok(amp_proto *p, long n, long b)
     if (!confirmed || n < 1 || n > p->top_sent || n < p->ready_base) {
         ack_one(p);
     } else if (n > p->acked) {
-        if (n > p->acked + 1)
+        if (n > p->acked + 1) {
             p->n_lost_oks += n - p->acked - 1;
+            emit(p, AMP_EV_INFO, n, "lost oks placed by the ADVANCED_OK line number");
+        }
         while (p->acked < n)
             ack_one(p);
     } else if (n < p->acked) {

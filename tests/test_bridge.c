@@ -990,6 +990,17 @@ START_TEST(unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line)
 }
 END_TEST
 
+START_TEST(advanced_ok_numbers_place_lost_oks_under_corrupted_bytes)
+{
+    /* two oks never sent, and 0.1 % of the bytes corrupted both ways: each lost ok is placed from the
+       number of the ok after it, mid-job, not by the closing M105 */
+    scenario("--dialect 2.0 --advanced-ok --bufsize 8 --lose-ok 50 --lose-ok 120 --corrupt-in 0.001 "
+             "--corrupt-out 0.001 --seed 4",
+             "--window advanced", 300, 0);
+    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "lost oks placed by the ADVANCED_OK line number"), 2);
+}
+END_TEST
+
 /* AMP_TEST_ONLY=word,word: only the tests whose names contain one of the words (for stress runs) */
 static int only(const char *name)
 {
@@ -1029,6 +1040,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, hangup_and_reappearance_lose_and_duplicate_nothing);
     AMP_ADD_TEST(tc, unplugged_three_times_with_oks_in_flight_every_move_runs_once);
     AMP_ADD_TEST(tc, unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line);
+    AMP_ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
     AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
