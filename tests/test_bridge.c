@@ -971,8 +971,8 @@ START_TEST(unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line)
         ck_assert_msg(strstr(out, "stopped: printer reset") != NULL, "%s", out);
         last = report_num(out, "last acknowledged job line ");
         ck_assert_int_eq(report_num(out, "resume with --resume-from "), last + 1);
-        p = strstr(out, "lines ");
-        if (p && sscanf(p, "lines %ld..%ld may have run", &from, &to) == 2)
+        p = strstr(out, "\nlines ");
+        if (p && sscanf(p + 1, "lines %ld..%ld may have run", &from, &to) == 2)
             ck_assert_int_eq(from, last + 1);
         else
             to = last;
@@ -998,6 +998,40 @@ START_TEST(advanced_ok_numbers_place_lost_oks_under_corrupted_bytes)
              "--corrupt-out 0.001 --seed 4",
              "--window advanced", 300, 0);
     ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "lost oks placed by the ADVANCED_OK line number"), 2);
+}
+END_TEST
+
+START_TEST(klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run)
+{
+    /* Klipper's lines carry no numbers: after a hang-up nothing can tell which lines in flight ran */
+    vpr v;
+    char *out;
+    long last, from = 0, to = 0;
+    const char *p, *job;
+    static lines b;
+    job_homes = 1;
+    job = make_job("job.gcode", 200, NULL);
+    job_homes = 0;
+    vp_start(&v, "--flavor klipper --hangup-after 60 --hangup-secs 0.3 --turnaround 1");
+    ck_assert_int_eq(bridge_run(&v, job, "--flavor klipper --timeout 1 --reconnect 30", &out), 1);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "stopped: device lost: Klipper") != NULL, "%s", out);
+    last = report_num(out, "last acknowledged job line ");
+    ck_assert_int_eq(report_num(out, "resume with --resume-from "), last + 1);
+    p = strstr(out, "\nlines ");
+    if (p && sscanf(p + 1, "lines %ld..%ld may have run", &from, &to) == 2)
+        ck_assert_int_eq(from, last + 1);
+    else
+        to = last;
+    /* moves start at file line 6 (G28 and the header before them); the truth lies in last..to */
+    moves_of(v.log, 1, &b);
+    ck_assert_int_ge(b.n, (int)last - 5);
+    ck_assert_int_le(b.n, (int)to - 5);
+    {
+        int n = b.n;
+        free_lines(&b);
+        assert_executed_equals_job(&v, job, n);
+    }
 }
 END_TEST
 
@@ -1041,6 +1075,7 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, unplugged_three_times_with_oks_in_flight_every_move_runs_once);
     AMP_ADD_TEST(tc, unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line);
     AMP_ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
+    AMP_ADD_TEST(tc, klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run);
     AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
