@@ -1137,9 +1137,13 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
            after the last line it holds, phase 3 the M110 that makes the next job line welcome */
         base = p->relink_base;
         if (p->sync_phase == 1) {
+            /* a newline first: the unplug may have cut a line in the printer's buffer, and the query must not
+               be appended to it (the merged line could pass the checksum with odds 1/256 and run) */
             p->sync_n = (p->top_sent > p->relink_m105 ? p->top_sent : p->relink_m105) + 2;
             frame(p, &tmp, p->sync_n, "M105", 4);
-            return copy_out(tmp.text, tmp.len, buf, cap, len);
+            memmove(tmp.text + 1, tmp.text, tmp.len);
+            tmp.text[0] = '\n';
+            return copy_out(tmp.text, tmp.len + 1u, buf, cap, len);
         }
         if (p->sync_phase == 2) {
             p->sync_n = p->relink_next;

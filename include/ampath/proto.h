@@ -291,7 +291,8 @@ void amp_proto_estop(amp_proto *p);
  * discarded and, if the job had started (Marlin), the engine re-handshakes
  * without running anything twice or skipping anything (state SYNCING until
  * done, events as for the first handshake):
- *  1. a line numbered beyond anything sent (`N<top+2> M105`) is refused by
+ *  1. a newline (ends a line the unplug cut), then a line numbered beyond
+ *     anything sent (`N<top+2> M105`), refused by
  *     the printer with `Last Line: K` and `Resend: K+1`: K, the last line it
  *     RECEIVED, is learned only when both agree (nothing runs);
  *  2. `N<K+1> M105`: its `ok T:` comes after every queued line up to K ran
