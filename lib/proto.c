@@ -601,6 +601,46 @@ static void on_ok(amp_proto *p, unsigned long now)
         ack_one(p);
 }
 
+/* A Resend during a handshake (the learning's, the M110's, or the re-handshake's). */
+static void sync_resend(amp_proto *p, long m, long ll)
+{
+    if (p->relink && p->sync_phase != 3) {
+        relink_resend(p, m, ll);
+        return;
+    }
+    if (p->sync_phase == 1 || p->sync_phase == 2) {
+        p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
+        p->saw_ok = 0;
+        p->skip_ok = 0;    /* the ok after it is what learning looks for */
+        p->resync = 1;
+        return;
+    }
+    /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
+       M110's (the job would start one line off): send M110 again only once it is in. */
+    if (p->m110_out > 0)
+        p->m110_out--; /* that M110 is answered */
+    p->resync = !p->skip_ok;
+}
+
+/* A request for line m, no longer kept (@p ll: the `Last Line:` of the error before it, -1 if none). */
+static void resend_not_kept(amp_proto *p, long m, long ll)
+{
+    if (m == 1 && ll != 0 && ++p->line1_reqs < 2) {
+        /* one witness only (no `Last Line: 0` before it): maybe a garbled number; a restarted printer asks
+           again for the next line or the probe */
+        p->n_garbage++;
+        emit(p, AMP_EV_INFO, m, p->rx);
+    } else if (m == 1) {
+        emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
+        stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
+    } else if (m <= p->acked) {
+        p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
+        emit(p, AMP_EV_INFO, m, p->rx);
+    } else {
+        stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
+    }
+}
+
 static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
 {
     long k, ll = p->last_line;
@@ -609,23 +649,8 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
     if (with_ok && p->o.resend_ok)
         p->skip_ok = 1;
     p->last_line = -1;
-    if (p->state == AMP_PROTO_SYNCING && p->relink && p->sync_phase != 3) {
-        relink_resend(p, m, ll);
-        return;
-    }
     if (p->state == AMP_PROTO_SYNCING) {
-        if (p->sync_phase == 1 || p->sync_phase == 2) {
-            p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
-            p->saw_ok = 0;
-            p->skip_ok = 0;    /* the ok after it is what learning looks for */
-            p->resync = 1;
-            return;
-        }
-        /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
-           M110's (the job would start one line off): send M110 again only once it is in. */
-        if (p->m110_out > 0)
-            p->m110_out--; /* that M110 is answered */
-        p->resync = !p->skip_ok;
+        sync_resend(p, m, ll);
         return;
     }
     if (p->state != AMP_PROTO_RUNNING)
@@ -636,20 +661,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         return;
     }
     if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
-        if (m == 1 && ll != 0 && ++p->line1_reqs < 2) {
-            /* one witness only (no `Last Line: 0` before it): maybe a garbled number; a restarted printer
-               asks again for the next line or the probe */
-            p->n_garbage++;
-            emit(p, AMP_EV_INFO, m, p->rx);
-        } else if (m == 1) {
-            emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
-            stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
-        } else if (m <= p->acked) {
-            p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
-            emit(p, AMP_EV_INFO, m, p->rx);
-        } else {
-            stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
-        }
+        resend_not_kept(p, m, ll);
         return;
     }
     /* lines from m on were not received, so they cannot have been executed */
@@ -842,6 +854,31 @@ static void marlin_unknown(amp_proto *p, const char *s)
     emit(p, AMP_EV_INFO, 0, s);
 }
 
+/* The boot banner `start`: expected while connecting, a late boot during the handshake, a reset mid-job. */
+static void on_start(amp_proto *p, const char *s, unsigned long now)
+{
+    p->last_rx = now;
+    if (p->state == AMP_PROTO_CONNECTING) {
+        p->start_seen = 1;
+    } else if (p->state == AMP_PROTO_SYNCING && p->relink) {
+        stop(p, AMP_EV_RESET, s); /* it restarted while unplugged (or when the port was opened) */
+    } else if (p->state == AMP_PROTO_SYNCING) {
+        p->resync = 1; /* the banner came late and our M110 went to a booting printer */
+        p->sync_phase = 0;
+        p->skip_ok = 0;
+        p->m110_out = 0; /* it answers none of the M110s sent before */
+    } else if (p->state == AMP_PROTO_RUNNING) {
+        if (p->next_n == 1) {
+            p->state = AMP_PROTO_SYNCING;
+            p->resync = 1;
+            p->sync_phase = 0;
+        } else {
+            /* the printer lost its queue and position: never continue blindly */
+            stop(p, AMP_EV_RESET, s);
+        }
+    }
+}
+
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
@@ -880,26 +917,7 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         return;
     }
     if (starts(s, "start") && (s[5] == '\0' || s[5] == ' ')) {
-        p->last_rx = now;
-        if (p->state == AMP_PROTO_CONNECTING) {
-            p->start_seen = 1;
-        } else if (p->state == AMP_PROTO_SYNCING && p->relink) {
-            stop(p, AMP_EV_RESET, s); /* it restarted while unplugged (or when the port was opened) */
-        } else if (p->state == AMP_PROTO_SYNCING) {
-            p->resync = 1; /* the banner came late and our M110 went to a booting printer */
-            p->sync_phase = 0;
-            p->skip_ok = 0;
-            p->m110_out = 0; /* it answers none of the M110s sent before */
-        } else if (p->state == AMP_PROTO_RUNNING) {
-            if (p->next_n == 1) {
-                p->state = AMP_PROTO_SYNCING;
-                p->resync = 1;
-                p->sync_phase = 0;
-            } else {
-                /* the printer lost its queue and position: never continue blindly */
-                stop(p, AMP_EV_RESET, s);
-            }
-        }
+        on_start(p, s, now);
         return;
     }
     if (starts(s, "Error:") || starts(s, "error:")) {
