@@ -299,8 +299,15 @@ static void hangup(br_session *s, const char *why)
         fprintf(stderr, "ampath-bridge: device lost (%s), waiting up to %.0f s for it to come back\n", why,
                 s->cfg.reconnect_s);
     br_link_close(&s->link);
-    s->txlen = s->txoff = 0; /* a partial line is garbage to the printer: it asks again or the probe does */
+    s->txlen = s->txoff = 0; /* a partial line is garbage to the printer: the re-handshake sorts it out */
     s->t_lost = br_now();
+    if (s->cfg.flavor == AMP_PROTO_KLIPPER && s->have_job && s->p.state == AMP_PROTO_RUNNING) {
+        /* Klipper's pty goes away only with the Klipper host (a restart: unhomed, its queue gone), and its
+           lines carry no numbers: nothing could tell which lines in flight ran. Stop and name them. */
+        amp_proto_cancel_unsent(&s->p);
+        set_stop(s, BR_LINK_LOST, "Klipper's pseudo-terminal went away (a Klipper restart); lines carry no "
+                                  "numbers, so the job cannot go on");
+    }
 }
 
 static void try_reconnect(br_session *s)
@@ -314,7 +321,7 @@ static void try_reconnect(br_session *s)
         return;
     logf_(s, "link back: %s", s->link.real);
     if (!s->cfg.quiet)
-        fprintf(stderr, "ampath-bridge: device back, resuming from what the printer acknowledges\n");
+        fprintf(stderr, "ampath-bridge: device back, asking the printer for the last line it received\n");
     amp_proto_link_restored(&s->p, ms(br_now()));
 }
 

@@ -83,6 +83,8 @@ amp_status amp_proto_init(amp_proto *p, const amp_proto_opts *o, unsigned long n
     p->sync_n = -1;
     p->rewind_n = -1;
     p->last_line = -1;
+    p->relink_base = -1;
+    p->adv_prev = -1;
     p->qslots = o->bufsize;
     p->last_rx = p->t0 = now_ms;
     p->state = AMP_PROTO_CONNECTING; /* Klipper too: nothing is sent before it reports Ready */
@@ -256,6 +258,33 @@ void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
     p->rewind_n = -1;
     p->settling = 0;
     p->echo_budget = 0;
+    p->pend_err = 0;
+    p->probing = 0;
+    p->verify = 0;
+    p->skip_ok = 0;
+    p->last_line = -1;
+    if (p->o.flavor != AMP_PROTO_MARLIN || p->state == AMP_PROTO_STOPPED || p->state == AMP_PROTO_CONNECTING)
+        return;
+    if (p->state == AMP_PROTO_SYNCING && !p->relink) {
+        p->sync_phase = 0; /* no job line went out yet: the handshake starts over */
+        p->resync = 1;
+        return;
+    }
+    /* Re-handshake (proto.h): the printer kept its queue and line counter, but the oks it sent while
+       unplugged are gone, and lines sent before the unplug may or may not have arrived. Re-sending from the
+       last acknowledged line with M110 would run the received ones twice; the probe of a running job would
+       run the newest line if it was lost, but not tell when the queued lines are done. */
+    if (!p->relink) {
+        p->relink = 1;
+        p->relink_base = -1;
+        p->relink_m105 = 0;
+        p->relink_cand = -1;
+        p->relink_temps = 0;
+    }
+    p->state = AMP_PROTO_SYNCING;
+    p->sync_phase = 1;
+    p->resync = 1;
+    p->m110_out = 0;
 }
 
 static int has_temp(const char *s);
@@ -277,8 +306,10 @@ static int parse_long(const char *s, long *v)
 {
     long x = 0;
     int nd = 0;
-    while (*s == ' ' || *s == ':')
+    while (*s == ' ')
         s++;
+    if (s[0] == '0' && s[1] != '\0')
+        return 0; /* Marlin prints no leading zero: "Resend: 201" with the 2 garbled into ':' once read as 1 */
     while (*s >= '0' && *s <= '9' && nd < 12) {
         x = x * 10 + (*s - '0');
         s++;
@@ -286,10 +317,9 @@ static int parse_long(const char *s, long *v)
     }
     if (nd == 0 || nd >= 12)
         return 0;
-    while (*s == ' ')
-        s++;
     if (*s != '\0')
-        return 0; /* trailing garbage: a garbled number is worse than none */
+        return 0; /* trailing garbage, a blank too: a garbled number is worse than none ("Resend: 10" with its
+                     0 garbled into a blank (one bit) read as 1, a reset: the stop seen once in 72 runs) */
     *v = x;
     return 1;
 }
@@ -331,6 +361,7 @@ static void ack_one(amp_proto *p)
 {
     if (p->acked < p->top_sent) {
         p->acked++;
+        p->line1_reqs = 0;
         if (p->send_n <= p->acked)
             p->send_n = p->acked + 1; /* it ran: do not send it again */
         if (p->rewind_n >= 0 && p->acked >= p->rewind_n) {
@@ -345,15 +376,21 @@ static void ack_one(amp_proto *p)
     }
 }
 
+/* Is line k a job M105 still kept? */
+static int is_m105(const amp_proto *p, long k)
+{
+    const amp_proto_slot *sl = &p->ring[k & RING_MASK];
+    const char *sp = memchr(sl->text, ' ', sl->len);
+    return sl->n == k && sp && strncmp(sp + 1, "M105", 4) == 0 && (sp[5] == '*' || sp[5] == ' ');
+}
+
 /* `ok T:` is M105's answer and nothing else's: it acknowledges the oldest M105 in flight and, since Marlin
    runs commands in order, every line before it, whose oks may have been garbled away. Returns 1 if used. */
 static int ack_through_m105(amp_proto *p)
 {
     long k;
-    for (k = p->acked + 1; k <= p->top_sent && k < p->send_n; k++) {
-        const amp_proto_slot *sl = &p->ring[k & RING_MASK];
-        const char *sp = memchr(sl->text, ' ', sl->len);
-        if (sl->n == k && sp && strncmp(sp + 1, "M105*", 5) == 0) {
+    for (k = p->acked + 1; k <= p->top_sent; k++) {
+        if (is_m105(p, k)) {
             while (p->acked < k)
                 ack_one(p);
             return 1;
@@ -368,11 +405,76 @@ static void become_ready(amp_proto *p)
        line off and a reset report name the wrong line). Swallowing one too many only delays an ack. */
     p->stale_oks = p->o.flavor == AMP_PROTO_MARLIN && p->m110_out > 1 ? p->m110_out - 1 : 0;
     p->m110_out = 0;
+    if (p->relink) {
+        p->relink = 0;
+        p->send_n = p->relink_base + 1; /* the printer holds (and has run) everything up to it */
+        p->relink_base = -1;
+    }
+    p->ready_base = p->acked;
+    p->adv_prev = -1;
     p->state = AMP_PROTO_RUNNING;
     p->resync = 0;
     p->skip_ok = 0;
     p->last_line = -1;
     emit(p, AMP_EV_READY, 0, p->rx);
+}
+
+/* Re-handshake (proto.h, amp_proto_link_restored), phases 1 and 2: plain oks are the queued lines' (or a
+   Resend's) and place nothing; an `ok T:` answers an M105. Once one of OUR M105s answered, every job line up
+   to the base ran (Marlin runs its queue in order, ours came after them): the job's own M105s still queued
+   may answer first, so the barrier is the (c+1)-th `ok T:` with c of them in the range. */
+static void relink_ok(amp_proto *p, const char *s)
+{
+    long k, c = 0;
+    if (!has_temp(s))
+        return;
+    p->relink_temps++;
+    if (p->sync_phase != 2 || p->relink_base < 0)
+        return;
+    for (k = p->acked + 1; k <= p->relink_base; k++)
+        c += is_m105(p, k);
+    if (p->relink_temps < c + 1)
+        return;
+    while (p->acked < p->relink_base) {
+        p->acked++;
+        emit(p, AMP_EV_ACK, p->acked, s);
+    }
+    p->sync_phase = 3; /* M110 N<base>: our M105 used the next number */
+    p->resync = 1;
+}
+
+/* Re-handshake: the printer refused our line and names the last line it received (m - 1). */
+static void relink_resend(amp_proto *p, long m, long ll)
+{
+    p->skip_ok = 0; /* oks place nothing here */
+    p->resync = 1;
+    p->sync_phase = 1; /* ask again, unless the answer is conclusive */
+    if (ll != m - 1 && m != p->relink_cand) {
+        p->relink_cand = m; /* a garbled number must not name the base: `Last Line:` or a second answer agrees */
+        return;
+    }
+    p->relink_cand = -1;
+    if (p->relink_base >= 0) {
+        /* known base: the printer holds it (nothing sent), or one of our M105s after it */
+        if (m - 1 >= p->relink_base && m - 1 <= p->relink_m105) {
+            p->relink_next = m;
+            p->sync_phase = 2;
+        } else if (m == 1) {
+            stop(p, AMP_EV_RESET, "printer asks for line 1 after the link came back: it restarted");
+        }
+        return;
+    }
+    if (m == 1 && p->top_sent >= 1) {
+        /* its line counter is back at 0: it restarted while unplugged (banner lost), or line 1 never arrived;
+           lines whose oks the unplug swallowed may have run before a restart, so no host can go on safely */
+        stop(p, AMP_EV_RESET, "printer asks for line 1 after the link came back: it restarted");
+        return;
+    }
+    if (m - 1 < p->acked || m - 1 > p->top_sent || (m > 1 && p->ring[(m - 1) & RING_MASK].n != m - 1 && m - 1 > p->acked))
+        return; /* not a line it can hold: garbled beyond both checks; ask again */
+    p->relink_base = m - 1;
+    p->relink_next = m;
+    p->sync_phase = 2;
 }
 
 /* Marlin handshake (see proto.h, "Readiness"): the ok of M110, then the provoked resend and M105. */
@@ -381,6 +483,12 @@ static void sync_ok(amp_proto *p, const char *s)
     long n = 0, b = 0;
     if (parse_adv(s + 2, &n, &b))
         p->adv_seen = 1;
+    if (p->relink && p->sync_phase != 3) {
+        relink_ok(p, s);
+        return;
+    }
+    if ((p->sync_phase == 0 || p->sync_phase == 3) && has_temp(s))
+        return; /* an M105's answer (a learning or re-handshake M105 answered late), never the M110's */
     if ((p->sync_phase == 0 || p->sync_phase == 3) && p->skip_ok) {
         p->skip_ok = 0; /* the Resend's ok: now the M110 goes out again */
         p->resync = 1;
@@ -420,6 +528,42 @@ static void sync_ok(amp_proto *p, const char *s)
     p->resync = 1;
 }
 
+/* ADVANCED_OK: `ok N<n> P<p> B<b>`, where n is the number of the line this ok is for (Marlin prints the N of
+   the command it just ran) and b the free queue slots, one low (the command still holds its slot). Lines run
+   in order, once each, so the numbers of consecutive oks go up by one; a number that follows the previous
+   one is trusted, and places the oks that were lost before it (or drops one counted that was none, e.g. a
+   reply garbled into "ok"); an unconfirmed number (the first, or after a gap: maybe a garbled digit) only
+   counts as one ok, and the next ok confirms it. */
+static void adv_ok(amp_proto *p, long n, long b)
+{
+    int confirmed = p->adv_prev >= 0 && n == p->adv_prev + 1;
+    p->adv_prev = n;
+    if (!confirmed || n < 1 || n > p->top_sent || n < p->ready_base) {
+        ack_one(p);
+    } else if (n > p->acked) {
+        if (n > p->acked + 1) {
+            p->n_lost_oks += n - p->acked - 1;
+            emit(p, AMP_EV_INFO, n, "lost oks placed by the ADVANCED_OK line number");
+        }
+        while (p->acked < n)
+            ack_one(p);
+    } else if (n < p->acked) {
+        p->acked = n; /* an ok was counted that was none: the line may not have run yet */
+    }
+    if (p->o.mode == AMP_PROTO_ADVANCED) {
+        /* b + 1 slots are free now, counting the one this command leaves: a lower bound of the queue size
+           (the lines received behind it hold the others). Raise the window to it, never shrink it on it; a
+           garbled digit must not open the window, so the lower of two oks in a row counts. */
+        long q = b + 1, lo;
+        if (q > AMP_PROTO_MAX_INFLIGHT)
+            q = AMP_PROTO_MAX_INFLIGHT;
+        lo = q < p->q_cand ? q : p->q_cand;
+        if (lo > p->qslots)
+            p->qslots = (int)lo;
+        p->q_cand = (int)q;
+    }
+}
+
 static void on_ok(amp_proto *p, unsigned long now)
 {
     long n = 0, b = 0;
@@ -431,7 +575,7 @@ static void on_ok(amp_proto *p, unsigned long now)
     if (p->state != AMP_PROTO_RUNNING)
         return;
     p->last_line = -1;
-    if (p->stale_oks > 0 && p->top_sent <= p->qslots) {
+    if (p->stale_oks > 0 && p->acked - p->ready_base < p->qslots) {
         p->stale_oks--; /* the answer of a repeated handshake M110 (only near the start of the job) */
         emit(p, AMP_EV_INFO, 0, p->rx);
         return;
@@ -442,46 +586,71 @@ static void on_ok(amp_proto *p, unsigned long now)
         return;
     }
     p->probing = 0;
-    if (has_temp(p->rx) && ack_through_m105(p))
+    if (has_temp(p->rx)) {
+        /* `ok T:` answers an M105 and nothing else: with none in flight it is a late answer of one (the
+           handshake's), and counting it would acknowledge a line that may not have run */
+        if (!ack_through_m105(p)) {
+            p->n_garbage++;
+            emit(p, AMP_EV_INFO, 0, p->rx);
+        }
         return;
-    ack_one(p);
-    if (p->o.mode == AMP_PROTO_ADVANCED && p->o.flavor == AMP_PROTO_MARLIN && parse_adv(p->rx + 2, &n, &b) &&
-        n >= p->acked) {
-        /* The ok is sent while its own command still holds a queue slot (B is one low), and the lines
-           acked+1..N are queued behind it: queue size = B + 1 + (N - acked). */
-        long q = b + 1 + (n - p->acked);
-        if (q < 1)
-            q = 1;
-        if (q > AMP_PROTO_MAX_INFLIGHT)
-            q = AMP_PROTO_MAX_INFLIGHT;
-        /* a garbled digit must not open the window: adopt an estimate only when two oks agree */
-        if (q == p->q_cand)
-            p->qslots = (int)q;
-        p->q_cand = (int)q;
+    }
+    if (parse_adv(p->rx + 2, &n, &b))
+        adv_ok(p, n, b);
+    else
+        ack_one(p);
+}
+
+/* A Resend during a handshake (the learning's, the M110's, or the re-handshake's). */
+static void sync_resend(amp_proto *p, long m, long ll)
+{
+    if (p->relink && p->sync_phase != 3) {
+        relink_resend(p, m, ll);
+        return;
+    }
+    if (p->sync_phase == 1 || p->sync_phase == 2) {
+        p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
+        p->saw_ok = 0;
+        p->skip_ok = 0;    /* the ok after it is what learning looks for */
+        p->resync = 1;
+        return;
+    }
+    /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
+       M110's (the job would start one line off): send M110 again only once it is in. */
+    if (p->m110_out > 0)
+        p->m110_out--; /* that M110 is answered */
+    p->resync = !p->skip_ok;
+}
+
+/* A request for line m, no longer kept (@p ll: the `Last Line:` of the error before it, -1 if none). */
+static void resend_not_kept(amp_proto *p, long m, long ll)
+{
+    if (m == 1 && ll != 0 && ++p->line1_reqs < 2) {
+        /* one witness only (no `Last Line: 0` before it): maybe a garbled number; a restarted printer asks
+           again for the next line or the probe */
+        p->n_garbage++;
+        emit(p, AMP_EV_INFO, m, p->rx);
+    } else if (m == 1) {
+        emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
+        stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
+    } else if (m <= p->acked) {
+        p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
+        emit(p, AMP_EV_INFO, m, p->rx);
+    } else {
+        stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
     }
 }
 
 static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
 {
-    long k;
+    long k, ll = p->last_line;
     unsigned long stale_bytes = 0;
     p->last_rx = now;
     if (with_ok && p->o.resend_ok)
         p->skip_ok = 1;
     p->last_line = -1;
     if (p->state == AMP_PROTO_SYNCING) {
-        if (p->sync_phase == 1 || p->sync_phase == 2) {
-            p->sync_phase = 2; /* the provoked request (or N1 M105 was garbled): M105 goes out next */
-            p->saw_ok = 0;
-            p->skip_ok = 0;    /* the ok after it is what learning looks for */
-            p->resync = 1;
-            return;
-        }
-        /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
-           M110's (the job would start one line off): send M110 again only once it is in. */
-        if (p->m110_out > 0)
-            p->m110_out--; /* that M110 is answered */
-        p->resync = !p->skip_ok;
+        sync_resend(p, m, ll);
         return;
     }
     if (p->state != AMP_PROTO_RUNNING)
@@ -492,15 +661,7 @@ static void on_resend(amp_proto *p, long m, int with_ok, unsigned long now)
         return;
     }
     if (m < p->next_n && p->ring[m & RING_MASK].n != m) {
-        if (m == 1) {
-            emit(p, AMP_EV_INFO, m, p->rx); /* the request itself, for the log */
-            stop(p, AMP_EV_RESET, "printer asks for line 1: it restarted (banner lost)");
-        } else if (m <= p->acked) {
-            p->n_garbage++; /* far behind every line in flight: a garbled number; the probe sorts it out */
-            emit(p, AMP_EV_INFO, m, p->rx);
-        } else {
-            stop(p, AMP_EV_FATAL, "resend requested for a line no longer kept");
-        }
+        resend_not_kept(p, m, ll);
         return;
     }
     /* lines from m on were not received, so they cannot have been executed */
@@ -693,6 +854,31 @@ static void marlin_unknown(amp_proto *p, const char *s)
     emit(p, AMP_EV_INFO, 0, s);
 }
 
+/* The boot banner `start`: expected while connecting, a late boot during the handshake, a reset mid-job. */
+static void on_start(amp_proto *p, const char *s, unsigned long now)
+{
+    p->last_rx = now;
+    if (p->state == AMP_PROTO_CONNECTING) {
+        p->start_seen = 1;
+    } else if (p->state == AMP_PROTO_SYNCING && p->relink) {
+        stop(p, AMP_EV_RESET, s); /* it restarted while unplugged (or when the port was opened) */
+    } else if (p->state == AMP_PROTO_SYNCING) {
+        p->resync = 1; /* the banner came late and our M110 went to a booting printer */
+        p->sync_phase = 0;
+        p->skip_ok = 0;
+        p->m110_out = 0; /* it answers none of the M110s sent before */
+    } else if (p->state == AMP_PROTO_RUNNING) {
+        if (p->next_n == 1) {
+            p->state = AMP_PROTO_SYNCING;
+            p->resync = 1;
+            p->sync_phase = 0;
+        } else {
+            /* the printer lost its queue and position: never continue blindly */
+            stop(p, AMP_EV_RESET, s);
+        }
+    }
+}
+
 static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
 {
     long m;
@@ -731,24 +917,7 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         return;
     }
     if (starts(s, "start") && (s[5] == '\0' || s[5] == ' ')) {
-        p->last_rx = now;
-        if (p->state == AMP_PROTO_CONNECTING) {
-            p->start_seen = 1;
-        } else if (p->state == AMP_PROTO_SYNCING) {
-            p->resync = 1; /* the banner came late and our M110 went to a booting printer */
-            p->sync_phase = 0;
-            p->skip_ok = 0;
-            p->m110_out = 0; /* it answers none of the M110s sent before */
-        } else if (p->state == AMP_PROTO_RUNNING) {
-            if (p->next_n == 1) {
-                p->state = AMP_PROTO_SYNCING;
-                p->resync = 1;
-                p->sync_phase = 0;
-            } else {
-                /* the printer lost its queue and position: never continue blindly */
-                stop(p, AMP_EV_RESET, s);
-            }
-        }
+        on_start(p, s, now);
         return;
     }
     if (starts(s, "Error:") || starts(s, "error:")) {
@@ -763,6 +932,8 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
     }
     if (starts(s, "echo:busy:") || starts(s, "busy:")) {
         p->last_rx = now;
+        if (p->relink)
+            p->t0 = now; /* re-handshake behind a long command (M109): the printer is alive, keep waiting */
         p->n_busy++;
         emit(p, AMP_EV_BUSY, 0, s);
         return;
@@ -776,6 +947,8 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
     }
     if (has_temp(s)) {
         p->last_rx = now; /* M109/M190 report every second while heating */
+        if (p->relink)
+            p->t0 = now;
         emit(p, AMP_EV_TEMP, 0, s);
         return;
     }
@@ -967,9 +1140,9 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
     if (!p->resync && now - p->last_rx >= p->o.timeout_ms) {
         p->n_timeouts++;
         emit(p, AMP_EV_TIMEOUT, 0, "no answer during the handshake");
-        if (p->sync_phase == 1 || p->sync_phase == 2)
+        if (!p->relink && (p->sync_phase == 1 || p->sync_phase == 2))
             p->learn_fail++;
-        p->sync_phase = 0; /* start over from M110 */
+        p->sync_phase = p->relink ? 1 : 0; /* start over from M110; re-handshake: ask for the last line again */
         p->resync = 1;
         p->skip_ok = 0;
     }
@@ -977,7 +1150,27 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
         return 0;
     p->resync = 0;
     p->last_rx = now;
-    if (p->sync_phase == 1 || p->sync_phase == 2) {
+    if (p->relink) {
+        /* re-handshake: phase 1 asks with a number beyond any the printer can expect, phase 2 is the M105
+           after the last line it holds, phase 3 the M110 that makes the next job line welcome */
+        base = p->relink_base;
+        if (p->sync_phase == 1) {
+            /* a newline first: the unplug may have cut a line in the printer's buffer, and the query must not
+               be appended to it (the merged line could pass the checksum with odds 1/256 and run) */
+            p->sync_n = (p->top_sent > p->relink_m105 ? p->top_sent : p->relink_m105) + 2;
+            frame(p, &tmp, p->sync_n, "M105", 4);
+            memmove(tmp.text + 1, tmp.text, tmp.len);
+            tmp.text[0] = '\n';
+            return copy_out(tmp.text, tmp.len + 1u, buf, cap, len);
+        }
+        if (p->sync_phase == 2) {
+            p->sync_n = p->relink_next;
+            if (p->relink_m105 < p->sync_n)
+                p->relink_m105 = p->sync_n;
+            frame(p, &tmp, p->sync_n, "M105", 4);
+            return copy_out(tmp.text, tmp.len, buf, cap, len);
+        }
+    } else if (p->sync_phase == 1 || p->sync_phase == 2) {
         /* phase 1: N<base+2> where base+1 is expected provokes a resend; phase 2: N<base+1> M105 */
         p->sync_n = base + (p->sync_phase == 1 ? 2 : 1);
         frame(p, &tmp, p->sync_n, "M105", 4);

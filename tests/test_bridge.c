@@ -927,6 +927,132 @@ START_TEST(virtual_printer_refuses_what_each_firmware_refuses)
 }
 END_TEST
 
+/* Unplugged mid-job, several times, while lines sit in the printer's queue: the printer runs them while
+   unplugged and their oks are lost with the link. The executed log spans every unplug (one printer). */
+static void unplug_scenario(const char *vopts, const char *bopts)
+{
+    char v[512], b[256];
+    snprintf(v, sizeof v, "--hangup-after 60 --hangup-after 180 --hangup-after 300 --hangup-secs 0.4 --turnaround 1 %s",
+             vopts);
+    snprintf(b, sizeof b, "--window 4 --reconnect 30 %s", bopts);
+    scenario(v, b, 400, 0);
+    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link lost"), 3);
+    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link back"), 3);
+    /* each time the printer named its last line, and the job went on after an M110 to it */
+    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), " M110 N"), 3 + 2);
+}
+
+START_TEST(unplugged_three_times_with_oks_in_flight_every_move_runs_once)
+{
+    unplug_scenario("", "");
+    /* lines ran while unplugged (their oks lost): the M105 after the last line received acknowledged them */
+    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "< ack        "), 400);
+    unplug_scenario("--dialect prusa", "");
+    unplug_scenario("--dialect 2.0 --advanced-ok --bufsize 8", "--window advanced");
+    unplug_scenario("--corrupt-in 0.002 --corrupt-out 0.002 --seed 3", "");
+}
+END_TEST
+
+START_TEST(unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line)
+{
+    /* --boot-ms 100: its banner is lost while unplugged (it asks for line 1); 900: it comes after the link */
+    static const char *const boot[] = {"--boot-ms 100", "--boot-ms 900"};
+    int i;
+    for (i = 0; i < 2; i++) {
+        vpr v;
+        char *out, o[256];
+        long last, from = 0, to = 0;
+        const char *p, *job = make_job("job.gcode", 300, NULL);
+        static lines b;
+        snprintf(o, sizeof o, "--hangup-after 100 --hangup-reset --hangup-secs 0.4 --turnaround 1 %s", boot[i]);
+        vp_start(&v, o);
+        ck_assert_int_eq(bridge_run(&v, job, "--timeout 0.3 --boot-wait 0.3 --baud 1000000 --reconnect 30", &out), 1);
+        vp_stop(&v);
+        ck_assert_msg(strstr(out, "stopped: printer reset") != NULL, "%s", out);
+        last = report_num(out, "last acknowledged job line ");
+        ck_assert_int_eq(report_num(out, "resume with --resume-from "), last + 1);
+        p = strstr(out, "\nlines ");
+        if (p && sscanf(p + 1, "lines %ld..%ld may have run", &from, &to) == 2)
+            ck_assert_int_eq(from, last + 1);
+        else
+            to = last;
+        /* nothing ran twice, nothing after the reset; the truth lies in last..to (moves start at line 5) */
+        ck_assert_int_eq(count_in_file(v.log, "# reset"), 1);
+        moves_of(v.log, 1, &b);
+        ck_assert_int_ge(b.n, (int)last - 4);
+        ck_assert_int_le(b.n, (int)to - 4);
+        {
+            int n = b.n;
+            free_lines(&b);
+            assert_executed_equals_job(&v, job, n);
+        }
+    }
+}
+END_TEST
+
+START_TEST(advanced_ok_numbers_place_lost_oks_under_corrupted_bytes)
+{
+    /* two oks never sent, and 0.1 % of the bytes corrupted both ways: each lost ok is placed from the
+       number of the ok after it, mid-job, not by the closing M105 */
+    scenario("--dialect 2.0 --advanced-ok --bufsize 8 --lose-ok 50 --lose-ok 120 --corrupt-in 0.001 "
+             "--corrupt-out 0.001 --seed 4",
+             "--window advanced", 300, 0);
+    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "lost oks placed by the ADVANCED_OK line number"), 2);
+}
+END_TEST
+
+START_TEST(klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run)
+{
+    /* Klipper's lines carry no numbers: after a hang-up nothing can tell which lines in flight ran */
+    vpr v;
+    char *out;
+    long last, from = 0, to = 0;
+    const char *p, *job;
+    static lines b;
+    job_homes = 1;
+    job = make_job("job.gcode", 200, NULL);
+    job_homes = 0;
+    vp_start(&v, "--flavor klipper --hangup-after 60 --hangup-secs 0.3 --turnaround 1");
+    ck_assert_int_eq(bridge_run(&v, job, "--flavor klipper --timeout 1 --reconnect 30", &out), 1);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "stopped: device lost: Klipper") != NULL, "%s", out);
+    last = report_num(out, "last acknowledged job line ");
+    ck_assert_int_eq(report_num(out, "resume with --resume-from "), last + 1);
+    p = strstr(out, "\nlines ");
+    if (p && sscanf(p + 1, "lines %ld..%ld may have run", &from, &to) == 2)
+        ck_assert_int_eq(from, last + 1);
+    else
+        to = last;
+    /* moves start at file line 6 (G28 and the header before them); the truth lies in last..to */
+    moves_of(v.log, 1, &b);
+    ck_assert_int_ge(b.n, (int)last - 5);
+    ck_assert_int_le(b.n, (int)to - 5);
+    {
+        int n = b.n;
+        free_lines(&b);
+        assert_executed_equals_job(&v, job, n);
+    }
+}
+END_TEST
+
+/* AMP_TEST_ONLY=word,word: only the tests whose names contain one of the words (for stress runs) */
+static int only(const char *name)
+{
+    const char *w = getenv("AMP_TEST_ONLY");
+    char buf[512], *tok, *save = NULL;
+    if (!w || !*w)
+        return 1;
+    snprintf(buf, sizeof buf, "%s", w);
+    for (tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save))
+        if (strstr(name, tok))
+            return 1;
+    return 0;
+}
+#undef AMP_ADD_TEST
+#define AMP_ADD_TEST(tc, fn) \
+    if (only(#fn))           \
+    tcase_add_test(tc, fn)
+
 static Suite *bridge_suite(void)
 {
     Suite *s = suite_create("bridge");
@@ -946,6 +1072,10 @@ static Suite *bridge_suite(void)
     AMP_ADD_TEST(tc, reset_mid_job_stops_reports_and_resumes_safely);
     AMP_ADD_TEST(tc, sigint_finishes_the_lines_in_flight_and_reports_where_it_stopped);
     AMP_ADD_TEST(tc, hangup_and_reappearance_lose_and_duplicate_nothing);
+    AMP_ADD_TEST(tc, unplugged_three_times_with_oks_in_flight_every_move_runs_once);
+    AMP_ADD_TEST(tc, unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line);
+    AMP_ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
+    AMP_ADD_TEST(tc, klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run);
     AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
     AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);

@@ -192,12 +192,21 @@ typedef struct amp_proto {
     int ready_seen;  /**< Klipper: `Klipper state: Ready` seen */
     int adv_seen;    /**< an `ok N.. P.. B..` was seen (the firmware speaks ADVANCED_OK) */
     long last_line;  /**< `Last Line: L` of the latest protocol error, -1 if none */
+    int relink;      /**< Marlin: re-handshake after the link came back (amp_proto_link_restored) */
+    long relink_base; /**< the printer's last received job line, learned without running anything; -1 unknown */
+    long relink_next; /**< the number the next re-handshake M105 gets (the printer's last line + 1) */
+    long relink_m105; /**< highest number given to a re-handshake M105 (it may have been received) */
+    long relink_cand; /**< a `Resend:` number of the re-handshake not yet confirmed (by `Last Line:` or a second) */
+    int relink_temps; /**< `ok T:` replies seen during the re-handshake */
+    long adv_prev;   /**< ADVANCED_OK: N of the previous ok, -1 if none (a number that follows it is trusted) */
+    long ready_base; /**< acked when the engine last became ready (stale M110 oks come only near it) */
+    int line1_reqs;  /**< requests for line 1 (no longer kept) since the last ok: two make a reset */
     unsigned long next_poll; /**< Klipper: time of the next STATUS while not ready */
     unsigned long last_rx; /**< time of the last ok/busy/temperature/start */
     unsigned long t0;      /**< time of init or of the last link restore */
     /* counters */
     long n_sent, n_resent, n_rewinds, n_dups, n_errors, n_timeouts, n_busy, n_garbage;
-    long n_fwerrors, n_warnings;
+    long n_fwerrors, n_warnings, n_lost_oks; /**< n_lost_oks: oks placed from ADVANCED_OK numbers */
     size_t rxlen;
     int rx_over; /**< current reply longer than AMP_PROTO_RX_MAX (tail dropped) */
     char rx[AMP_PROTO_RX_MAX + 1];
@@ -278,11 +287,22 @@ void amp_proto_verify(amp_proto *p);
 void amp_proto_estop(amp_proto *p);
 
 /**
- * The link went away and came back (USB hang-up): the partial reply is
- * discarded and the reply timer restarts. The printer's state decides what
- * happens next: if it reset, `start` arrives and the engine stops; if not,
- * its pending oks arrive or the timeout probe asks it which line it expects
- * (a resend from the last acknowledged line with M110 could run queued lines twice).
+ * The link went away and came back (USB unplug): the partial reply is
+ * discarded and, if the job had started (Marlin), the engine re-handshakes
+ * without running anything twice or skipping anything (state SYNCING until
+ * done, events as for the first handshake):
+ *  1. a newline (ends a line the unplug cut), then a line numbered beyond
+ *     anything sent (`N<top+2> M105`), refused by
+ *     the printer with `Last Line: K` and `Resend: K+1`: K, the last line it
+ *     RECEIVED, is learned only when both agree (nothing runs);
+ *  2. `N<K+1> M105`: its `ok T:` comes after every queued line up to K ran
+ *     (Marlin runs its queue in order), so the lines up to K are acknowledged
+ *     exactly, whatever oks the unplug swallowed;
+ *  3. `N<K> M110 N<K>`, and streaming goes on from line K+1.
+ * A printer that reset meanwhile answers `start` or asks for line 1: the
+ * engine stops (AMP_EV_RESET) with the last acknowledged line. Klipper has no
+ * line numbers, so nothing can tell which lines in flight ran: the host must
+ * stop the job (ampath-bridge does), this function only clears the reply.
  */
 void amp_proto_link_restored(amp_proto *p, unsigned long now_ms);
 

@@ -62,7 +62,10 @@ static const char usage[] =
     "  --heat-secs S        M109/M190 take S s, reporting ' T:' every busy-interval (default 0)\n"
     "  --wait-ms MS         print 'wait' after MS idle with an empty queue (default 0 = never)\n"
     "  --reset-after K      reset after executing K commands (repeatable: counts restart)\n"
-    "  --hangup-after K --hangup-secs S   close the pty after K commands, reopen after S s\n"
+    "  --hangup-after K --hangup-secs S   unplug after K executed commands (repeatable, counts from the\n"
+    "                       start): the pty and --link vanish, the printer keeps running its queue and its\n"
+    "                       replies are lost; a new pty (and link) appears after S s. State is kept\n"
+    "  --hangup-reset       the printer also resets at each unplug (its banner is lost if --boot-ms < S)\n"
     "  --error-at K         Klipper: the K-th received line fails ('!! ...' then ok)\n"
     "  --shutdown-after K   Klipper: shut down after K executed commands\n"
     "  --ready-after-ms MS  Klipper: '!! Printer is not ready' (+ ok) to everything but STATUS for MS ms\n"
@@ -84,7 +87,10 @@ typedef struct vp {
     double corrupt_in, corrupt_out, drop_in, drop_out;
     long corrupt_line[LIST_MAX], lose_line[LIST_MAX], lose_ok[LIST_MAX], reset_after[LIST_MAX];
     int n_corrupt_line, n_lose_line, n_lose_ok, n_reset_after;
-    long busy_at, hangup_after, error_at, shutdown_after, halt_after, action_at;
+    long busy_at, error_at, shutdown_after, halt_after, action_at;
+    long hangup_after[LIST_MAX];
+    int n_hangup, hang_idx, hangup_reset;
+    long last_exec_n; /* line number of the last executed command (ADVANCED_OK with an empty queue) */
     const char *action;
     double bed[3], ready_at;
     double off[3]; /* G92 offsets: bed position = logical position - off (both firmwares check the bed) */
@@ -224,13 +230,15 @@ static int open_pty(vp *v)
 
 static void close_pty(vp *v)
 {
+    /* the link first: a host that sees the hang-up must not follow it to a pty number that another
+       program may already have been given */
+    if (v->link)
+        unlink(v->link);
     if (v->mfd >= 0)
         close(v->mfd);
     if (v->sfd >= 0)
         close(v->sfd);
     v->mfd = v->sfd = -1;
-    if (v->link)
-        unlink(v->link);
 }
 
 /* ---------------- printer model ---------------- */
@@ -307,13 +315,15 @@ static int outside_bed(const vp *v, const double t[3])
     return 0;
 }
 
-static void send_ok(vp *v)
+/* @p n: the line number of the command this ok is for (Marlin's ok_to_send prints the N of the command at
+   the head of its queue: the one just run, or after a Resend the next one waiting) */
+static void send_ok(vp *v, long n)
 {
     if (in_list(v->lose_ok, v->n_lose_ok, v->executed))
         return;
     if (v->adv_ok && !v->klipper)
         /* sent while the command still holds its queue slot: B is one low, as in Marlin */
-        say(v, "ok N%ld P%d B%d\n", v->last_n, v->planner - v->plan_count, v->bufsize - v->qcount);
+        say(v, "ok N%ld P%d B%d\n", n, v->planner - v->plan_count, v->bufsize - v->qcount);
     else
         say(v, "ok\n");
 }
@@ -372,7 +382,8 @@ static int execute(vp *v, const char *cmd, long n, double now)
         /* Marlin: unknown command (e.g. the tail of a line cut by an RX flush, or SET_VELOCITY_LIMIT): echo,
            no-op, ok */
         say(v, "echo:Unknown command: \"%s\"\n", cmd);
-        send_ok(v);
+        v->last_exec_n = n;
+        send_ok(v, n);
         v->exec_has = 0;
         return 1;
     }
@@ -436,8 +447,9 @@ static int execute(vp *v, const char *cmd, long n, double now)
     }
     v->executed++;
     v->since_reset++;
+    v->last_exec_n = n;
     logf_line(v, "%ld %s\n", n, cmd);
-    send_ok(v);
+    send_ok(v, n);
     v->exec_has = 0;
     v->exec_busy = 0;
     return 1;
@@ -524,7 +536,7 @@ resend:
         if (v->dialect == 21)
             say(v, "ok\n");
         else if (v->dialect == 20)
-            send_ok(v);
+            send_ok(v, v->qcount ? v->qn[v->qhead] : v->last_exec_n);
     }
 }
 
@@ -766,12 +778,18 @@ static void step(vp *v, double now)
             v->booting = 2;
             return;
         }
-        if (v->hangup_after > 0 && v->executed == v->hangup_after && !v->hung) {
+        if (v->n_hangup > v->hang_idx && v->executed == v->hangup_after[v->hang_idx] && !v->hung) {
+            /* USB unplugged: the device node goes, the host's bytes stop, the printer keeps running its
+               queue and what it says is lost (the oks of the lines still queued among it) */
+            v->hang_idx++;
             v->hung = 1;
             v->reopen_at = now + v->hangup_secs;
             logf_line(v, "# hangup\n");
             close_pty(v);
             v->outlen = 0;
+            v->wire_len = 0; /* bytes still on the wire die with the cable */
+            if (v->hangup_reset)
+                do_reset(v, now); /* the board lost its power with the cable */
             return;
         }
         parse_rx(v);
@@ -966,8 +984,10 @@ int main(int argc, char **argv)
             if (opt_num(val, 1000.0, &v->wait_s))
                 goto bad;
         } else if (OPT("--hangup-after")) {
-            if (cli_integer(val, &v->hangup_after))
+            if (parse_list(v->hangup_after, &v->n_hangup, val))
                 goto bad;
+        } else if (strcmp(a, "--hangup-reset") == 0) {
+            v->hangup_reset = 1;
         } else if (OPT("--hangup-secs")) {
             if (opt_num(val, 1.0, &v->hangup_secs))
                 goto bad;
@@ -1042,6 +1062,9 @@ int main(int argc, char **argv)
                     return 1;
                 logf_line(v, "# reopened\n");
             } else {
+                step(v, now); /* unplugged, not stopped: the queue runs on, the replies go nowhere */
+                v->outlen = 0;
+                v->protect = 0;
                 usleep(2000);
                 continue;
             }
