@@ -54,8 +54,10 @@ LIB_SRC := $(sort $(wildcard lib/*.c))
 TOOL_SRC := $(sort $(wildcard tools/*.c))
 VPR_SRC := $(sort $(wildcard tools/vprinter/*.c))
 BRIDGE_SRC := $(sort $(wildcard bridge/*.c))
-BRIDGE_MAIN := $(filter bridge/main.c,$(BRIDGE_SRC))
-BRIDGE_CORE := $(filter-out bridge/main.c,$(BRIDGE_SRC))
+# main.c and bench.c (`ampath-bridge --bench`, which uses tools/cli.c) make the program; the rest is the
+# bridge core the tests link too
+BRIDGE_MAIN := $(filter bridge/main.c bridge/bench.c,$(BRIDGE_SRC))
+BRIDGE_CORE := $(filter-out bridge/main.c bridge/bench.c,$(BRIDGE_SRC))
 TEST_SRC := $(sort $(wildcard tests/test_*.c))
 FIXTURE_SRC := $(filter-out $(TEST_SRC),$(sort $(wildcard tests/*.c)))
 CMD_NAMES := $(patsubst tools/cmd_%.c,%,$(sort $(wildcard tools/cmd_*.c)))
@@ -74,7 +76,7 @@ LIBA := $(OUTLIB)/libampath.a
 LIBSO := $(OUTLIB)/libampath.so
 AMPATH := $(OUTBIN)/tools/ampath
 VPRINTER := $(if $(VPR_SRC),$(OUTBIN)/tools/ampath-vprinter)
-BRIDGE := $(if $(BRIDGE_MAIN),$(OUTBIN)/bridge/ampath-bridge)
+BRIDGE := $(if $(filter bridge/main.c,$(BRIDGE_MAIN)),$(OUTBIN)/bridge/ampath-bridge)
 
 SERIAL_CFLAGS = $(shell pkg-config --cflags libserialport 2>/dev/null)
 SERIAL_LIBS = $(shell pkg-config --libs libserialport 2>/dev/null || echo -lserialport)
@@ -151,12 +153,13 @@ $(B)/gen/benches.inc: FORCE
 $(B)/tools/%.o: tools/%.c $(B)/gen/commands.inc $(B)/gen/benches.inc $(B)/gen/cflags
 	@mkdir -p $(dir $@)
 	@echo '  CC      $<'
-	$(Q)$(CC) $(ALL_CFLAGS) -I$(B)/gen -Itools $(SERIAL_CFLAGS) -c $< -o $@
+	$(Q)$(CC) $(ALL_CFLAGS) -I$(B)/gen -Itools -c $< -o $@
 
-$(AMPATH): $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
+# the geometry tool links neither the bridge nor libserialport
+$(AMPATH): $(TOOL_OBJ) $(LIBA)
 	@mkdir -p $(dir $@)
 	@echo '  LD      $@'
-	$(Q)$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA) -o $@ $(if $(BRIDGE_CORE),$(SERIAL_LIBS)) -lm
+	$(Q)$(CC) $(ALL_LDFLAGS) $(TOOL_OBJ) $(LIBA) -o $@ -lm
 
 # the virtual printer parses its numbers as ampath does (tools/cli.c)
 $(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(B)/tools/cli.o $(LIBA)
@@ -168,9 +171,10 @@ $(OUTBIN)/tools/ampath-vprinter: $(VPR_OBJ) $(B)/tools/cli.o $(LIBA)
 $(B)/bridge/%.o: bridge/%.c $(B)/gen/cflags
 	@mkdir -p $(dir $@)
 	@echo '  CC      $<'
-	$(Q)$(CC) $(ALL_CFLAGS) -Ibridge $(SERIAL_CFLAGS) -c $< -o $@
+	$(Q)$(CC) $(ALL_CFLAGS) -Ibridge -Itools -I$(B)/gen $(SERIAL_CFLAGS) -c $< -o $@
+$(B)/bridge/bench.o: $(B)/gen/commands.inc
 
-$(OUTBIN)/bridge/ampath-bridge: $(BRIDGE_MAIN_OBJ) $(BRIDGE_CORE_OBJ) $(LIBA)
+$(OUTBIN)/bridge/ampath-bridge: $(BRIDGE_MAIN_OBJ) $(BRIDGE_CORE_OBJ) $(B)/tools/cli.o $(LIBA)
 	@mkdir -p $(dir $@)
 	@echo '  LD      $@'
 	$(Q)$(CC) $(ALL_LDFLAGS) $^ -o $@ $(SERIAL_LIBS) -lm

@@ -59,6 +59,10 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char
 int br_job_next(br_job *j, char *buf, size_t cap, long *jobline);
 void br_job_close(br_job *j);
 
+/** `ampath-bridge --bench [--quick] [--json]`: throughput against the virtual printer (bridge/bench.c);
+ *  argv[0] is "--bench". Returns the exit status. */
+int br_bench_main(int argc, char **argv);
+
 /* ---- session ---- */
 typedef enum br_stop {
     BR_RUNNING = 0,

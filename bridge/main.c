@@ -18,6 +18,7 @@
 
 static const char usage[] =
     "usage: ampath-bridge DEVICE [JOB] [options]\n"
+    "       ampath-bridge --bench [--quick] [--json]   throughput against the virtual printer (make bench)\n"
     "Streams JOB (.gcode, or .amp converted with the G-code writer) to the printer on DEVICE\n"
     "(a serial port, a /dev/serial/by-id link, or a pty such as Klipper's /tmp/printer).\n"
     "  --baud N             link rate (default 115200; 250000 and other rates work)\n"
@@ -165,6 +166,8 @@ int main(int argc, char **argv)
     long resume_from = 1;
     int npos = 0, i, daemon = 0, quiet = 0, rc;
 
+    if (argc > 1 && strcmp(argv[1], "--bench") == 0)
+        return br_bench_main(argc - 1, argv + 1);
     br_cfg_default(&cfg);
     memset(&dopts, 0, sizeof dopts);
     dopts.idle_s = 600;

@@ -90,12 +90,34 @@ START_TEST(comparison_names_an_internal_symbol_that_leaks)
 }
 END_TEST
 
+/* Symbols of program @p prog (static and dynamic, defined and undefined) that belong to the bridge (br_) or to
+ * libserialport (sp_): the geometry tool links neither. */
+static size_t bridge_symbols(const char *prog, symset *out)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "(nm '%s'; nm -D '%s') 2>/dev/null | awk '$NF ~ /^(br|sp)_/ {print $NF}' | sort -u",
+             prog, prog);
+    out->n = 0;
+    ck_assert_int_eq(read_cmd(cmd, out), 0);
+    return out->n;
+}
+
+START_TEST(geometry_tool_links_neither_the_bridge_nor_libserialport)
+{
+    static symset tool, bridge;
+    /* the check can fail: the bridge program itself has both */
+    ck_assert_int_gt(bridge_symbols(fx_prog("AMP_BRIDGE"), &bridge), 10);
+    ck_assert_msg(bridge_symbols(fx_prog("AMP_TOOL"), &tool) == 0, "ampath has %s", tool.name[0]);
+}
+END_TEST
+
 static Suite *exports_suite(void)
 {
     Suite *s = suite_create("exports");
     TCase *tc = tcase_create("core");
     tcase_add_test(tc, shared_library_exports_exactly_the_declared_api);
     tcase_add_test(tc, comparison_names_an_internal_symbol_that_leaks);
+    tcase_add_test(tc, geometry_tool_links_neither_the_bridge_nor_libserialport);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -1,27 +1,24 @@
 /*
- * Benchmark (SPEC §7, issue 10): bridge throughput as a fraction of the serial
- * link's byte capacity, at 115200 and 250000 baud with a 2 ms printer turnaround,
- * ping-pong against the send-ahead window; and the CPU time of the bridge.
- * The printer is ampath-vprinter on a pty (modelled baud and turnaround); the
- * bridge session runs in this process.
+ * Benchmark (docs/interfaces.md §7): the bridge's throughput as a part of `ampath bench`. It is measured by
+ * `ampath-bridge --bench` (bridge/bench.c) in a child process, so that the geometry tool links neither the
+ * bridge nor libserialport; its figures are shown here as they come.
  */
 #define _DEFAULT_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #include <libgen.h>
 #include <limits.h>
-#include <signal.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "../bridge/bridge.h"
 #include "cli.h"
 
-static void vprinter_path(char *out, size_t cap)
+/* $AMP_BRIDGE, else beside this program when installed, else the build tree's bridge/ampath-bridge */
+static void bridge_path(char *out, size_t cap)
 {
-    const char *e = getenv("AMP_VPRINTER");
+    const char *e = getenv("AMP_BRIDGE");
     char exe[PATH_MAX];
     ssize_t n;
     if (e && *e) {
@@ -30,197 +27,55 @@ static void vprinter_path(char *out, size_t cap)
     }
     n = readlink("/proc/self/exe", exe, sizeof exe - 1);
     exe[n > 0 ? n : 0] = '\0';
-    snprintf(out, cap, "%s/ampath-vprinter", n > 0 ? dirname(exe) : "tools");
+    snprintf(out, cap, "%s/ampath-bridge", n > 0 ? dirname(exe) : "bridge");
+    if (access(out, X_OK) != 0 && snprintf(out, cap, "%s/../bridge/ampath-bridge", n > 0 ? exe : "tools") >= (int)cap)
+        out[0] = '\0';
 }
 
-static double cpu_s(void)
+/* The child's JSON object {"bridge":[...],...} as members of the open object: braces and blanks trimmed. */
+static void put_members(cli_json *j, char *text)
 {
-    struct rusage ru;
-    getrusage(RUSAGE_SELF, &ru);
-    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec + (double)ru.ru_stime.tv_sec +
-           1e-6 * (double)ru.ru_stime.tv_usec;
-}
-
-typedef struct result {
-    double lines_s, fraction, cpu_ms_per_kline;
-    long lines, bytes;
-    int ok;
-} result;
-
-/* One run: returns lines/s and the share of the link's byte capacity used host->printer. @p vextra: more
-   ampath-vprinter options (NULL-terminated, may be NULL). */
-static result run_one(const char *job, int nlines, long baud, amp_proto_window mode, const char *const *vextra,
-                      int wire)
-{
-    char vp[PATH_MAX], link[128], bstr[32], why[256];
-    br_cfg cfg;
-    br_session *s = calloc(1, sizeof *s);
-    result r;
-    pid_t pid;
-    double t0, c0, el;
-    long b0;
-    int i, st;
-    memset(&r, 0, sizeof r);
-    if (!s)
-        return r;
-    vprinter_path(vp, sizeof vp);
-    snprintf(link, sizeof link, "/tmp/ampath-bench-%ld.pty", (long)getpid());
-    snprintf(bstr, sizeof bstr, "%ld", baud);
-    unlink(link);
-    pid = fork();
-    if (pid == 0) {
-        const char *argv[32] = {"ampath-vprinter", "--link", link, "--baud", bstr, "--turnaround", "2",
-                                "--bufsize", "8", "--rx-bytes", "128"};
-        int a = 11;
-        if (!wire) {
-            /* the pty's own pace: no modelled wire */
-            memmove(argv + 3, argv + 5, 6 * sizeof argv[0]);
-            a = 9;
-        }
-        while (vextra && *vextra && a < 31)
-            argv[a++] = *vextra++;
-        argv[a] = NULL;
-        freopen("/dev/null", "w", stderr);
-        execv(vp, (char *const *)argv);
-        _exit(127);
+    char *a = strchr(text, '{'), *b = strrchr(text, '}');
+    if (!a || !b || b <= a) {
+        cli_json_str(j, "error", "ampath-bridge --bench wrote no JSON object");
+        return;
     }
-    for (i = 0; i < 300 && access(link, F_OK) != 0; i++)
-        usleep(10000);
-    br_cfg_default(&cfg);
-    cfg.device = link;
-    cfg.baud = baud;
-    cfg.mode = mode;
-    cfg.window = mode == AMP_PROTO_PINGPONG ? 1 : 8;
-    cfg.bufsize = 8;
-    cfg.boot_ms = 200;
-    cfg.quiet = 1;
-    if (br_session_open(s, &cfg, why, sizeof why) == 0 && br_session_start_job(s, job, 1, why, sizeof why) == 0) {
-        /* the clock starts with the first job line: the handshake is not throughput */
-        while (s->stop == BR_RUNNING && s->p.state != AMP_PROTO_RUNNING)
-            br_session_step(s, NULL, 0, 50);
-        t0 = cli_now();
-        c0 = cpu_s();
-        b0 = s->bytes_out;
-        while (s->stop == BR_RUNNING)
-            br_session_step(s, NULL, 0, 100);
-        el = cli_now() - t0;
-        r.ok = s->stop == BR_DONE && s->acked_moves == nlines && s->p.n_timeouts == 0;
-        r.lines = s->acked_moves;
-        r.bytes = s->bytes_out - b0; /* every byte written to the link while the job ran */
-        r.lines_s = (double)r.lines / el;
-        r.fraction = ((double)r.bytes / el) / ((double)baud / 10.0);
-        r.cpu_ms_per_kline = 1e6 * (cpu_s() - c0) / (double)(r.lines > 0 ? r.lines : 1);
-        br_session_close(s);
-    }
-    free(s);
-    kill(pid, SIGTERM);
-    waitpid(pid, &st, 0);
-    unlink(link);
-    return r;
-}
-
-/* Issue 15: every dialect with 0.05 % of the bytes corrupted both ways against the clean run (window of 8 or
-   ADVANCED_OK, 2 ms per command); the dialect is learned at the handshake, never given. The pty runs at its
-   own pace here: the modelled wire makes the virtual printer handle one error per turn of its loop, which on
-   a loaded machine stretches each error burst far beyond what a printer takes (docs/bridge.md, "Limits"). */
-static int bench_bridge_noise(cli_json *j, const char *job, int nlines)
-{
-    static const char *const dia[4][6] = {{"--dialect", "2.1", NULL},
-                                          {"--dialect", "prusa", NULL},
-                                          {"--dialect", "rs", NULL},
-                                          {"--dialect", "2.0", "--advanced-ok", NULL}};
-    static const char *const names[4] = {"marlin 2.1 (ok after Resend)", "prusa (Resend, no ok)", "rs N (no ok)",
-                                         "ADVANCED_OK"};
-    int d, rc = CLI_OK;
-    if (j)
-        cli_json_arr(j, "bridge_noise");
-    for (d = 0; d < 4; d++) {
-        const char *noisy[10];
-        amp_proto_window mode = d == 3 ? AMP_PROTO_ADVANCED : AMP_PROTO_FIXED;
-        int a = 0, b;
-        result clean, noise;
-        for (b = 0; dia[d][b]; b++)
-            noisy[a++] = dia[d][b];
-        noisy[a++] = "--corrupt-in";
-        noisy[a++] = "0.0005";
-        noisy[a++] = "--corrupt-out";
-        noisy[a++] = "0.0005";
-        noisy[a++] = "--seed";
-        noisy[a++] = "7";
-        noisy[a] = NULL;
-        clean = run_one(job, nlines, 250000, mode, dia[d], 0);
-        noise = run_one(job, nlines, 250000, mode, noisy, 0);
-        if (!clean.ok || !noise.ok)
-            rc = CLI_FAILED;
-        if (j) {
-            cli_json_obj(j, NULL);
-            cli_json_str(j, "dialect", names[d]);
-            cli_json_num(j, "clean_lines_per_s", clean.lines_s);
-            cli_json_num(j, "noisy_lines_per_s", noise.lines_s);
-            cli_json_num(j, "ratio", noise.lines_s / (clean.lines_s > 0 ? clean.lines_s : 1e-9));
-            cli_json_bool(j, "all_acknowledged_no_timeout", clean.ok && noise.ok);
-            cli_json_close(j);
-        } else {
-            printf("bridge pty, 0.05 %% corrupted bytes both ways, %-28s: %.0f lines/s vs %.0f clean, "
-                   "ratio %.2f (target >= 0.80)%s\n",
-                   names[d], noise.lines_s, clean.lines_s, noise.lines_s / (clean.lines_s > 0 ? clean.lines_s : 1e-9),
-                   clean.ok && noise.ok ? "" : " (NOT all acknowledged, or a timeout)");
-        }
-    }
-    if (j)
-        cli_json_close(j);
-    return rc;
+    *b = '\0';
+    if (a[1])
+        cli_json_members(j, a + 1);
 }
 
 int bench_bridge(cli_json *j, int quick)
 {
-    int nlines = quick ? 120 : 600, i, k, rc = CLI_OK;
-    const long bauds[2] = {115200, 250000};
-    const char *job = "/tmp/ampath-bench-bridge.gcode";
-    FILE *f = fopen(job, "w");
-    if (!f)
+    char prog[PATH_MAX], cmd[PATH_MAX + 64], buf[4096], *text = NULL;
+    size_t len = 0, n;
+    FILE *p;
+    int st;
+    bridge_path(prog, sizeof prog);
+    if (!prog[0] || access(prog, X_OK) != 0) {
+        fprintf(stderr, "ampath bench: bridge: ampath-bridge not found (set AMP_BRIDGE)\n");
         return CLI_FAILED;
-    for (i = 1; i <= nlines; i++)
-        fprintf(f, "G1 X%.3f Y%.3f E%.5f F1800\n", 100 + 30 * ((i * 37) % 100) / 100.0, 80 + (i % 50) * 0.4,
-                0.0123 * i);
-    fclose(f);
-    if (j)
-        cli_json_arr(j, "bridge");
-    for (k = 0; k < 2; k++) {
-        result pp = run_one(job, nlines, bauds[k], AMP_PROTO_PINGPONG, NULL, 1);
-        result win = run_one(job, nlines, bauds[k], AMP_PROTO_FIXED, NULL, 1);
-        if (!pp.ok || !win.ok)
-            rc = CLI_FAILED;
-        if (j) {
-            cli_json_obj(j, NULL);
-            cli_json_int(j, "baud", bauds[k]);
-            cli_json_num(j, "turnaround_s", 0.002);
-            cli_json_int(j, "lines", nlines);
-            cli_json_num(j, "pingpong_lines_per_s", pp.lines_s);
-            cli_json_num(j, "pingpong_link_fraction", pp.fraction);
-            cli_json_num(j, "window_lines_per_s", win.lines_s);
-            cli_json_num(j, "window_link_fraction", win.fraction);
-            cli_json_num(j, "window_over_pingpong", win.lines_s / (pp.lines_s > 0 ? pp.lines_s : 1e-9));
-            cli_json_num(j, "bridge_cpu_ms_per_1000_lines", win.cpu_ms_per_kline);
-            /* upper bounds: the printer takes 2 ms per command, the link 10 bits per byte */
-            cli_json_num(j, "printer_bound_lines_per_s", 500.0);
-            cli_json_num(j, "link_bound_lines_per_s", (double)bauds[k] / 10.0 / (win.lines > 0 ? (double)win.bytes / (double)win.lines : 1));
-            cli_json_bool(j, "all_acknowledged", pp.ok && win.ok);
-            cli_json_close(j);
-        } else {
-            printf("bridge %6ld baud, 2 ms turnaround, %d lines: ping-pong %.0f lines/s (%.0f %% of the link), "
-                   "window of 8 %.0f lines/s (%.0f %% of the link), %.2fx (bounds: printer 500, link %.0f lines/s); "
-                   "bridge CPU %.1f ms per 1000 lines%s\n",
-                   bauds[k], nlines, pp.lines_s, 100 * pp.fraction, win.lines_s, 100 * win.fraction,
-                   win.lines_s / (pp.lines_s > 0 ? pp.lines_s : 1e-9),
-                   (double)bauds[k] / 10.0 / (win.lines > 0 ? (double)win.bytes / (double)win.lines : 1), win.cpu_ms_per_kline,
-                   pp.ok && win.ok ? "" : " (NOT all acknowledged)");
-        }
     }
-    if (j)
-        cli_json_close(j);
-    if (bench_bridge_noise(j, job, nlines) != CLI_OK)
-        rc = CLI_FAILED;
-    unlink(job);
-    return rc;
+    snprintf(cmd, sizeof cmd, "'%s' --bench%s%s", prog, quick ? " --quick" : "", j ? " --json" : "");
+    fflush(stdout);
+    if (!(p = popen(cmd, "r")))
+        return CLI_FAILED;
+    while ((n = fread(buf, 1, sizeof buf, p)) > 0) {
+        char *t;
+        if (!j) {
+            fwrite(buf, 1, n, stdout);
+            continue;
+        }
+        if (!(t = realloc(text, len + n + 1)))
+            break;
+        text = t;
+        memcpy(text + len, buf, n);
+        len += n;
+        text[len] = '\0';
+    }
+    st = pclose(p);
+    if (j && text)
+        put_members(j, text);
+    free(text);
+    return st != -1 && WIFEXITED(st) && WEXITSTATUS(st) == 0 ? CLI_OK : CLI_FAILED;
 }

@@ -268,6 +268,12 @@ static void json_key(cli_json *j, const char *key)
     }
 }
 
+void cli_json_members(cli_json *j, const char *members)
+{
+    json_key(j, NULL);
+    fputs(members, j->f);
+}
+
 void cli_json_begin(cli_json *j, FILE *f)
 {
     memset(j, 0, sizeof *j);

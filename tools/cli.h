@@ -89,6 +89,8 @@ void cli_json_close(cli_json *j);                /* close the innermost object o
 void cli_json_vec3(cli_json *j, const char *key, amp_vec3 v); /* "key": [x, y, z] */
 void cli_json_box(cli_json *j, const char *key, amp_box3 b);  /* "key": [xmin, ymin, zmin, xmax, ymax, zmax] */
 void cli_json_csv(cli_json *j, const char *key, const char *csv); /* "key": ["a", "b"] from "a,b" */
+/* members of an object written elsewhere ("k":v,...), without braces, into the open object */
+void cli_json_members(cli_json *j, const char *members);
 void cli_json_end(cli_json *j);                  /* close everything and print a newline */
 
 /* ---- progress: a bar on stderr only when stderr is a terminal ---- */

@@ -15,7 +15,7 @@ static const bench benches[] = {
     {NULL, NULL}};
 
 const char cmd_bench_usage[] =
-    "run the benchmarks (SPEC 7) and print figures with same-run baselines\n"
+    "run the benchmarks (docs/interfaces.md 7) and print figures with same-run baselines\n"
     "usage: ampath bench [NAME...] [--quick] [--json]\n"
     "  NAME     run only the named benchmarks (default: all)\n"
     "  --quick  smaller sizes, for a smoke test\n";
