@@ -14,6 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "cli.h" /* numbers validated as ampath and ampath-vprinter do */
 #include "daemon.h"
 
 static const char usage[] =
@@ -68,13 +69,6 @@ static int fail(const char *fmt, const char *a)
     fprintf(stderr, fmt, a);
     fputc('\n', stderr);
     return 2;
-}
-
-static int parse_num(const char *s, double *v)
-{
-    char *end;
-    *v = strtod(s, &end);
-    return end != s && *end == '\0';
 }
 
 /* The log holds the job and the printer's words: private from the start (issue 21). */
@@ -189,7 +183,7 @@ int main(int argc, char **argv)
             dopts.keep_hot = 1;
         } else if (strcmp(a, "--client-timeout") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d <= 0 || d > 86400)
+            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 86400)
                 return fail("bad --client-timeout %s", val);
             dopts.idle_s = d;
         } else if (strcmp(a, "--printer") == 0) {
@@ -216,7 +210,7 @@ int main(int argc, char **argv)
             cfg.learn = 0;
         } else if (strcmp(a, "--ready-timeout") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d <= 0 || d > 86400)
+            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 86400)
                 return fail("bad --ready-timeout %s", val);
             cfg.ready_ms = (unsigned long)(d * 1000);
         } else if (strcmp(a, "--on-error") == 0) {
@@ -229,7 +223,7 @@ int main(int argc, char **argv)
                 return fail("bad --on-error %s (stop or continue)", val);
         } else if (strcmp(a, "--baud") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 50 || d > 4000000)
+            if (!(cli_number(val, &d) == 0) || d < 50 || d > 4000000)
                 return fail("bad --baud %s", val);
             cfg.baud = (long)d;
         } else if (strcmp(a, "--flavor") == 0) {
@@ -248,44 +242,44 @@ int main(int argc, char **argv)
                 cfg.mode = AMP_PROTO_PINGPONG;
             else if (strcmp(val, "advanced") == 0)
                 cfg.mode = AMP_PROTO_ADVANCED;
-            else if (parse_num(val, &d) && d >= 1 && d <= AMP_PROTO_MAX_INFLIGHT) {
+            else if ((cli_number(val, &d) == 0) && d >= 1 && d <= AMP_PROTO_MAX_INFLIGHT) {
                 cfg.mode = AMP_PROTO_FIXED;
                 cfg.window = (int)d;
             } else
                 return fail("bad --window %s (pingpong, advanced or 1..24)", val);
         } else if (strcmp(a, "--bufsize") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 1 || d > AMP_PROTO_MAX_INFLIGHT)
+            if (!(cli_number(val, &d) == 0) || d < 1 || d > AMP_PROTO_MAX_INFLIGHT)
                 return fail("bad --bufsize %s (1..24)", val);
             cfg.bufsize = (int)d;
         } else if (strcmp(a, "--rx-bytes") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < AMP_PROTO_LINE_MAX || d > 65536)
+            if (!(cli_number(val, &d) == 0) || d < AMP_PROTO_LINE_MAX || d > 65536)
                 return fail("bad --rx-bytes %s (96..65536)", val);
             cfg.rx_bytes = (int)d;
         } else if (strcmp(a, "--timeout") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d <= 0 || d > 3600)
+            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 3600)
                 return fail("bad --timeout %s", val);
             cfg.timeout_ms = (unsigned long)(d * 1000);
         } else if (strcmp(a, "--settle-ms") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 0 || d > 10000)
+            if (!(cli_number(val, &d) == 0) || d < 0 || d > 10000)
                 return fail("bad --settle-ms %s", val);
             cfg.settle_ms = (unsigned long)d;
         } else if (strcmp(a, "--boot-wait") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 0 || d > 600)
+            if (!(cli_number(val, &d) == 0) || d < 0 || d > 600)
                 return fail("bad --boot-wait %s", val);
             cfg.boot_ms = (unsigned long)(d * 1000);
         } else if (strcmp(a, "--reconnect") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 0)
+            if (!(cli_number(val, &d) == 0) || d < 0)
                 return fail("bad --reconnect %s", val);
             cfg.reconnect_s = d;
         } else if (strcmp(a, "--resume-from") == 0) {
             NEEDVAL;
-            if (!parse_num(val, &d) || d < 1)
+            if (!(cli_number(val, &d) == 0) || d < 1)
                 return fail("bad --resume-from %s", val);
             resume_from = (long)d;
         } else if (strcmp(a, "--log") == 0) {
