@@ -1,5 +1,5 @@
 /*
- * bridge.h — internals of ampath-bridge (SPEC §8): device links, jobs, and the
+ * bridge.h — internals of ampath-bridge (docs/interfaces.md §8): device links, jobs, and the
  * session loop that drives the protocol engine (include/ampath/proto.h).
  * Linked into ampath-bridge, the tests and tools/ampath (the benchmark).
  */
@@ -31,7 +31,7 @@ void br_link_close(br_link *l);
 /* ---- jobs: .gcode files (and .amp through the G-code writer when available) ---- */
 typedef struct br_job {
     FILE *f;
-    int is_amp;          /* .amp: G-code made on the fly by the library's writer (SPEC §5) */
+    int is_amp;          /* .amp: G-code made on the fly by the library's writer (docs/interfaces.md §5) */
     amp_pathset ps;
     amp_gcode_opts go;
     amp_printer pr;  /* .amp: the printer profile the G-code is written for (go points into it) */
@@ -123,7 +123,7 @@ typedef struct br_session {
     double t_start, t_lost, t_progress;
     double rate_t0;
     long rate_n0;
-    /* what the printer said (issue 15) */
+    /* what the printer said (errors, warnings: reported in status) */
     long n_fwerrors, n_warnings;
     long err_jobline;          /* job line of the first firmware error (0 = before the job / unknown) */
     char err_cmd[AMP_PROTO_LINE_MAX + 8], err_text[200];

@@ -1,5 +1,5 @@
 /*
- * clients.c — control-socket connections that no client can wedge (issue 21):
+ * clients.c — control-socket connections that no client can wedge:
  * sockets are non-blocking, input and output are bounded (a line longer than
  * BR_CL_IN is discarded whole up to its newline; a client whose replies pile
  * up past BR_CL_OUT is disconnected rather than waited for), idle clients are

@@ -1,5 +1,5 @@
 /*
- * control.c — the control socket's language (SPEC §8; issue 15 item 6, issue 21):
+ * control.c — the control socket's language (docs/interfaces.md §8; plain words and JSON lines):
  * a request is one line, plain words for people and scripts or one JSON object
  * for host software; every request gets exactly one reply line in its own form,
  * and subscribers get event lines. Pure functions: the daemon does the acting.

@@ -1,5 +1,5 @@
 /*
- * ctlsock.c — where the control socket lives and how it is taken (issue 21):
+ * ctlsock.c — where the control socket lives and how it is taken:
  * whoever can connect can drive the printer, so the socket sits in a directory
  * only its user can enter, is created 0600, and replaces nothing but a stale
  * socket of the same user (no daemon answers on it). A live daemon, a regular

@@ -1,5 +1,5 @@
 /*
- * daemon.c — `ampath-bridge DEVICE --daemon` (SPEC §8; issue 15 item 6, issue 21):
+ * daemon.c — `ampath-bridge DEVICE --daemon` (docs/interfaces.md §8; host API, hardened against clients):
  * one poll() over the printer and the control-socket clients; commands act on
  * the session of session.c; subscribers get state, progress and error events.
  * A signal (systemctl stop) or `quit` mid-job stops sending, waits for the

@@ -1,5 +1,5 @@
 /*
- * jsonl.c — the JSON half of the control socket (issue 15, item 6): one flat
+ * jsonl.c — the JSON half of the control socket (the host API of docs/interfaces.md §8): one flat
  * object per line in, one per line out. Requests need no nesting, so nesting
  * is refused rather than half-supported; output is always valid UTF-8 (printer
  * messages arrive over a noisy wire and may hold any byte).

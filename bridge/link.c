@@ -1,5 +1,5 @@
 /*
- * link.c — device backends of ampath-bridge (issue 10, "Facts to design around").
+ * link.c — device backends of ampath-bridge (libserialport for serial ports, a raw fd for ptys: docs/bridge.md).
  *
  * libserialport (0.1.1) cannot open pseudo-terminals (names must start with
  * /dev/, symlinks are not resolved, sp_open fails on TIOCMGET), so: resolve the

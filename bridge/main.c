@@ -1,5 +1,5 @@
 /*
- * ampath-bridge — stream a job to a Marlin or Klipper printer (SPEC §8).
+ * ampath-bridge — stream a job to a Marlin or Klipper printer (docs/interfaces.md §8).
  * One-shot: `ampath-bridge DEVICE JOB [options]`; daemon: `--daemon` with a
  * Unix control socket (mode 0600), in daemon.c. This file: options and the
  * one-shot run. See docs/bridge.md and ampath-bridge(1).
@@ -71,7 +71,7 @@ static int fail(const char *fmt, const char *a)
     return 2;
 }
 
-/* The log holds the job and the printer's words: private from the start (issue 21). */
+/* The log holds the job and the printer's words: private from the start. */
 static FILE *open_log(const char *path)
 {
     int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_NOCTTY, 0600);

@@ -1,6 +1,6 @@
 /*
  * safeend.c — what a careful host does when a print is stopped by a signal
- * (systemctl stop) or a cancel (issue 21): the heaters must not stay on over an
+ * (systemctl stop) or a cancel: the heaters must not stay on over an
  * unattended part. Heaters and fan off, no motion: the nozzle stays where the
  * job left it, which is what --resume-from's preamble assumes (docs/bridge.md).
  */

@@ -1,5 +1,5 @@
 /*
- * proto.c — printer streaming protocol engine (SPEC §8, issue 10).
+ * proto.c — printer streaming protocol engine (docs/interfaces.md §8).
  *
  * No I/O, no allocation, no printf: the framed lines live in a fixed ring so
  * that any line not yet acknowledged can be sent again, and reply lines are

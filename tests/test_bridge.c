@@ -1,5 +1,5 @@
 /*
- * ampath-bridge against ampath-vprinter over a pseudo-terminal (SPEC §8, issue 10).
+ * ampath-bridge against ampath-vprinter over a pseudo-terminal (docs/interfaces.md §8).
  * Every scenario passes only when the commands the virtual printer EXECUTED
  * (its log) equal the job exactly: nothing lost, nothing run twice, in order.
  */

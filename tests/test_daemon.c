@@ -1,5 +1,5 @@
 /*
- * The daemon of ampath-bridge and its control socket (SPEC §8; issue 15 item 6, issue 21 "The bridge and
+ * The daemon of ampath-bridge and its control socket (docs/interfaces.md §8; host API and hardening: "The bridge and
  * its daemon"). Unit tests of the request language (plain and JSON), then the real daemon against the
  * virtual printer (tools/ampath-vprinter) with hostile clients: never-reading floods, idle crowds,
  * over-long lines and NUL bytes, FIFOs and devices as jobs, squatted and stale sockets, a second daemon,

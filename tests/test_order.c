@@ -1,4 +1,4 @@
-/* Accessibility (paper §5.1): cone test, fragments, below graph, Algorithm 2, gouge checker. */
+/* Accessibility ([P1 §5.1]): cone test, fragments, below graph, Algorithm 2, gouge checker. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -768,7 +768,7 @@ START_TEST(ordering_survives_out_of_memory)
 }
 END_TEST
 
-/* ---- the commands (SPEC §4) ---- */
+/* ---- the commands (docs/interfaces.md §4) ---- */
 
 START_TEST(order_and_check_commands_report_and_exit_as_specified)
 {

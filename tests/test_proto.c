@@ -1,4 +1,4 @@
-/* Protocol engine (lib/proto.c, SPEC §8): scripted byte streams, no I/O. */
+/* Protocol engine (lib/proto.c, docs/interfaces.md §8): scripted byte streams, no I/O. */
 #include <stdio.h>
 #include <string.h>
 

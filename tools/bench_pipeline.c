@@ -500,7 +500,7 @@ int bench_pipeline(cli_json *j, int quick)
         printf("baseline, planar continuous pipeline on the helix mesh (layer %.1f mm): %.2f s, %lu strokes, %.1f MB; "
                "volumetric / planar = %.2fx\n",
                layer, t_planar, (unsigned long)strokes, (double)pbytes / 1e6, pipeline_s(&d) / fmax(t_planar, 1e-9));
-        printf("issue 18 and 14 (item 4) targets%s:\n", quick ? " (--quick: coarser sizes, not the targets' own)" : "");
+        printf("speed and travel targets%s:\n", quick ? " (--quick: coarser sizes, not the targets' own)" : "");
     }
     target(j, "demo_pipeline_s", "demo pipeline time (s), 1 thread", pipeline_s(&d), 1.0, 1, "s");
     target(j, "demo_check_s", "demo check time (s), 1 thread", d.t[ST_CHECK], 0.5, 1, "s");

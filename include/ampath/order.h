@@ -1,9 +1,9 @@
 /*
- * ampath/order.h — accessibility of print paths (paper §5.1): the print-head
+ * ampath/order.h — accessibility of print paths ([P1 §5.1]): the print-head
  * cone, fragments (Def. 5.3), the below relation (Def. 5.1, Figs. 9-10) and
  * the ordering of Algorithm 2 (OrderCurves) with its improvements.
  *
- * Geometry (SPEC §2): the head is a downward cone whose tip is z_offs above
+ * Geometry (docs/interfaces.md §2): the head is a downward cone whose tip is z_offs above
  * the point being printed, with half-angle theta from the vertical (+z) axis.
  * A point q lies inside the head printing p when
  *     (q.z - p.z - z_offs) - cot(theta) * |q.xy - p.xy| > 0.

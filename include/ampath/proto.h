@@ -1,5 +1,5 @@
 /*
- * ampath/proto.h — the printer streaming protocol engine (SPEC §8, issue 10).
+ * ampath/proto.h — the printer streaming protocol engine (docs/interfaces.md §8).
  *
  * Plain data plus step functions, no I/O, no allocation, no clock: the host
  * feeds the bytes it read from the printer (amp_proto_feed), asks for the
@@ -25,7 +25,7 @@
  * Klipper flavor: no numbers or checksums, one `ok` per line (also after
  * `!! error`), `// ...` information, `// Klipper state: Shutdown` stops.
  *
- * Readiness (issue 15): nothing of the job goes out before the printer is
+ * Readiness: nothing of the job goes out before the printer is
  * ready. Klipper: `STATUS` (answered in every state) is repeated every
  * opts.ready_poll_ms until it answers `Klipper state: Ready`; its `!! ...`
  * replies meanwhile are AMP_EV_WAITING, not errors. Marlin: the boot banner or

@@ -311,7 +311,7 @@ class PathSet(_Owner):
         return lib.amp_pathset_length(self._ref, -1 if role is None else _ROLES[role])
 
     def volume(self, role=None):
-        """Deposited bead volume Σ A·L (mm³, SPEC §5) of the paths with @role (None = all)."""
+        """Deposited bead volume Σ A·L (mm³, docs/interfaces.md §5) of the paths with @role (None = all)."""
         return lib.amp_pathset_volume(self._ref, -1 if role is None else _ROLES[role])
 
     def bbox(self):
@@ -319,7 +319,7 @@ class PathSet(_Owner):
         return {"min": (b.min.x, b.min.y, b.min.z), "max": (b.max.x, b.max.y, b.max.z)}
 
     def to_amp(self, comment=None):
-        """The `.amp` text (SPEC §3) as a str; @comment becomes `# ` lines after the header."""
+        """The `.amp` text (docs/interfaces.md §3) as a str; @comment becomes `# ` lines after the header."""
         with self._using():
             return _to_buf(lambda sink, buf, err: lib.amp_pathset_write(
                 self._ref, None if comment is None else comment.encode(), sink, buf, err)).decode()

@@ -519,7 +519,7 @@ def _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts):
 
 def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_gcode=None, end_gcode=None,
           **opts):
-    """`ampath gcode` (SPEC §5): MDR-modulated G-code for @printer (a Printer, a built-in name or a slicer
+    """`ampath gcode` (docs/interfaces.md §5): MDR-modulated G-code for @printer (a Printer, a built-in name or a slicer
     `.ini`), placed on its bed (@place: "center", "origin" or (x, y)). Other options are fields of
     amp_gcode_opts (print_feed, retract_length, z_hop, fan_speed, arcs, ...) overriding the profile's.
     With @output the file is written safely (replaced only after a complete write) and .text is None."""

@@ -1,4 +1,4 @@
-"""Pictures of path sets (SPEC §4 `ampath preview`), drawn by the library's renderer (ampath/preview.h):
+"""Pictures of path sets (docs/interfaces.md §4 `ampath preview`), drawn by the library's renderer (ampath/preview.h):
 the same bytes as the tool."""
 
 import ctypes

@@ -28,7 +28,7 @@ def make_gcode(stl, printer, layer=None, place=None):
     pr = ampath.Printer(printer)
     layer = layer or pr.layer_height
     with ampath.Mesh.load(stl) as mesh:
-        # beads 1.125 x the profile's nozzle wide (SPEC §4, as `ampath slice --continuous --printer`);
+        # beads 1.125 x the profile's nozzle wide (docs/interfaces.md §4, as `ampath slice --continuous --printer`);
         # every stroke is checked against its layer there (an Error when one fails)
         with ampath.Slices(mesh, layer, pr.first_layer_height) as sl:
             paths = sl.continuous(printer=pr)

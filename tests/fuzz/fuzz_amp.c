@@ -1,4 +1,4 @@
-/* libFuzzer target: the .amp parser (SPEC §3), and a write/parse round trip of what it accepted. */
+/* libFuzzer target: the .amp parser (docs/interfaces.md §3), and a write/parse round trip of what it accepted. */
 #include <limits.h>
 #include <stddef.h>
 #include <stdint.h>
