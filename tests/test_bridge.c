@@ -28,18 +28,18 @@ typedef struct vpr {
 static void vp_start(vpr *v, const char *opts)
 {
     char buf[1024];
-    char *argv[AMP_TEST_MAXARGS];
+    char *argv[FX_MAXARGS];
     int n = 0, i;
-    snprintf(v->link, sizeof v->link, "%s", amp_test_tmp("vp-link"));
-    snprintf(v->log, sizeof v->log, "%s", amp_test_tmp("vp-log"));
+    snprintf(v->link, sizeof v->link, "%s", fx_tmp("vp-link"));
+    snprintf(v->log, sizeof v->log, "%s", fx_tmp("vp-log"));
     unlink(v->link);
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)amp_test_prog("AMP_VPRINTER");
+    argv[n++] = (char *)fx_prog("AMP_VPRINTER");
     argv[n++] = "--link";
     argv[n++] = v->link;
     argv[n++] = "--log";
     argv[n++] = v->log;
-    n = amp_test_split(buf, argv, n);
+    n = fx_split(buf, argv, n);
     v->pid = fork();
     ck_assert_int_ge(v->pid, 0);
     if (v->pid == 0) {
@@ -48,7 +48,7 @@ static void vp_start(vpr *v, const char *opts)
         _exit(127);
     }
     for (i = 0; i < 500 && access(v->link, F_OK) != 0; i++)
-        amp_test_msleep(10);
+        fx_msleep(10);
     ck_assert_msg(access(v->link, F_OK) == 0, "virtual printer did not create %s", v->link);
 }
 
@@ -72,20 +72,20 @@ static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char 
 {
     static char obuf[8192];
     char buf[1024], outpath[256];
-    char *argv[AMP_TEST_MAXARGS];
+    char *argv[FX_MAXARGS];
     int n = 0, st;
     pid_t pid;
     FILE *f;
     size_t len;
-    snprintf(outpath, sizeof outpath, "%s", amp_test_tmp("bridge-out"));
+    snprintf(outpath, sizeof outpath, "%s", fx_tmp("bridge-out"));
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
+    argv[n++] = (char *)fx_prog("AMP_BRIDGE");
     argv[n++] = (char *)v->link;
     argv[n++] = (char *)job;
     argv[n++] = "--quiet";
     argv[n++] = "--log";
-    argv[n++] = (char *)amp_test_tmp("bridge-log");
-    n = amp_test_split(buf, argv, n);
+    argv[n++] = (char *)fx_tmp("bridge-log");
+    n = fx_split(buf, argv, n);
     pid = fork();
     ck_assert_int_ge(pid, 0);
     if (pid == 0) {
@@ -95,7 +95,7 @@ static int bridge_run_sig(const vpr *v, const char *job, const char *opts, char 
         _exit(127);
     }
     if (sigint_ms > 0) {
-        amp_test_msleep(sigint_ms);
+        fx_msleep(sigint_ms);
         kill(pid, SIGINT);
     }
     waitpid(pid, &st, 0);
@@ -113,10 +113,10 @@ static int job_homes; /* Klipper refuses moves before G28: Klipper jobs home fir
 /* Job: a header then n unique moves "G1 X.. Y.. E.." (E grows, so no two lines are alike). */
 static const char *make_job(const char *name, int n, const char *extra_at_10)
 {
-    static char path[256]; /* amp_test_tmp's buffers rotate: keep our own copy */
+    static char path[256]; /* fx_tmp's buffers rotate: keep our own copy */
     FILE *f;
     int i;
-    snprintf(path, sizeof path, "%s", amp_test_tmp(name));
+    snprintf(path, sizeof path, "%s", fx_tmp(name));
     f = fopen(path, "w");
     ck_assert_ptr_nonnull(f);
     fprintf(f, "; ampath test job\n%sG90\nM82\nG92 E0\n", job_homes ? "G28\n" : "");
@@ -220,7 +220,7 @@ START_TEST(delayed_boot_banner_then_every_move_runs_once)
 {
     /* the banner comes after our M110: the bridge must resynchronise, not lose line 1 */
     scenario("--boot-ms 600", "", 120, 0);
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "> N0 M110 N0"), 2);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "> N0 M110 N0"), 2);
 }
 END_TEST
 
@@ -230,7 +230,7 @@ static void one_rewind(const char *vopts, const char *bopts)
     snprintf(v, sizeof v, "--corrupt-line 30 %s", vopts);
     scenario(v, bopts, 80, 0);
     /* one rewind although the four lines sent ahead each provoked another request */
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "< resend "), 1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "< resend "), 1);
 }
 
 START_TEST(checksum_error_with_send_ahead_rewinds_once_marlin21)
@@ -288,8 +288,8 @@ START_TEST(busy_keepalive_for_seconds_is_not_a_timeout)
     ck_assert_int_eq(bridge_run(&v, job, "--timeout 0.6 --settle-ms 5 --boot-wait 0.1", &out), 0);
     vp_stop(&v);
     assert_executed_equals_job(&v, job, -1);
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "< busy "), 5);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "< timeout"), 0);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "< busy "), 5);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "< timeout"), 0);
 }
 END_TEST
 
@@ -297,7 +297,7 @@ START_TEST(advanced_ok_window_fills_a_larger_queue)
 {
     scenario("--advanced-ok --bufsize 12", "--window advanced", 150, 0);
     /* an ok reporting the 12-slot queue was seen, and more than the default 4 lines were in flight */
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "ok N"), 100);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "ok N"), 100);
 }
 END_TEST
 
@@ -378,8 +378,8 @@ END_TEST
 START_TEST(hangup_and_reappearance_lose_and_duplicate_nothing)
 {
     scenario("--hangup-after 40 --hangup-secs 0.5", "--window 4 --reconnect 10", 100, 0);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link lost"), 1);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link back"), 1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "link lost"), 1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "link back"), 1);
 }
 END_TEST
 
@@ -395,7 +395,7 @@ START_TEST(klipper_error_gets_ok_and_the_job_goes_on)
     ck_assert_int_eq(bridge_run(&v, job, "--flavor klipper --timeout 1", &out), 0);
     vp_stop(&v);
     assert_executed_equals_job(&v, job, -1);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "Unknown command"), 1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "Unknown command"), 1);
     /* a warning, reported with its job line (file line 16: comment, G28, 3 header lines, 10 moves) */
     ck_assert_msg(strstr(out, "printer warnings: 1; last at job line 16") != NULL, "%s", out);
 }
@@ -449,7 +449,7 @@ static int ctl(const char *sock, const char *cmd, char *reply, size_t cap)
 START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
 {
     vpr v;
-    const char *sock = amp_test_tmp("ctl.sock"), *job;
+    const char *sock = fx_tmp("ctl.sock"), *job;
     char reply[1024];
     struct stat st;
     pid_t pid;
@@ -464,12 +464,12 @@ START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
     if (pid == 0) {
         freopen("/dev/null", "w", stdout);
         freopen("/dev/null", "w", stderr);
-        execl(amp_test_prog("AMP_BRIDGE"), "ampath-bridge", v.link, "--daemon", "--socket", sock, "--flavor", "klipper",
+        execl(fx_prog("AMP_BRIDGE"), "ampath-bridge", v.link, "--daemon", "--socket", sock, "--flavor", "klipper",
               "--quiet", (char *)NULL);
         _exit(127);
     }
     for (i = 0; i < 300 && stat(sock, &st) != 0; i++)
-        amp_test_msleep(10);
+        fx_msleep(10);
     ck_assert_int_eq(stat(sock, &st), 0);
     ck_assert_int_eq(st.st_mode & 0777, 0600);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
@@ -482,14 +482,14 @@ START_TEST(daemon_socket_is_private_and_m112_beats_a_full_queue)
         ck_assert_int_eq(ctl(sock, cmd, reply, sizeof reply), 0);
         ck_assert_msg(strncmp(reply, "ok started", 10) == 0, "%s", reply);
     }
-    amp_test_msleep(300); /* Klipper's 20-line queue is full now (20 ms per command) */
+    fx_msleep(300); /* Klipper's 20-line queue is full now (20 ms per command) */
     ck_assert_int_eq(ctl(sock, "pause\n", reply, sizeof reply), 0);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
     ck_assert_ptr_nonnull(strstr(reply, "state=paused"));
     ck_assert_int_eq(ctl(sock, "resume\n", reply, sizeof reply), 0);
     ck_assert_int_eq(ctl(sock, "estop\n", reply, sizeof reply), 0);
     ck_assert_ptr_nonnull(strstr(reply, "ok"));
-    amp_test_msleep(200);
+    fx_msleep(200);
     ck_assert_int_eq(ctl(sock, "status\n", reply, sizeof reply), 0);
     ck_assert_msg(strstr(reply, "stop=\"printer shutdown\"") != NULL, "%s", reply);
     ck_assert_int_eq(ctl(sock, "quit\n", reply, sizeof reply), 0);
@@ -573,8 +573,8 @@ START_TEST(amp_job_is_converted_on_the_fly_with_the_gcode_writer)
     char *out, amp[256], gc[256];
     FILE *f;
     int k;
-    snprintf(amp, sizeof amp, "%s", amp_test_tmp("job.amp"));
-    snprintf(gc, sizeof gc, "%s", amp_test_tmp("expected.gcode"));
+    snprintf(amp, sizeof amp, "%s", fx_tmp("job.amp"));
+    snprintf(gc, sizeof gc, "%s", fx_tmp("expected.gcode"));
     amp_pathset_init(&ps, NULL);
     amp_buf_init(&b, NULL);
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
@@ -626,8 +626,8 @@ START_TEST(amp_job_is_written_for_the_printer_profile_given)
     char *out, amp[256], gc[256];
     FILE *f;
     int k;
-    snprintf(amp, sizeof amp, "%s", amp_test_tmp("prof.amp"));
-    snprintf(gc, sizeof gc, "%s", amp_test_tmp("prof.gcode"));
+    snprintf(amp, sizeof amp, "%s", fx_tmp("prof.amp"));
+    snprintf(gc, sizeof gc, "%s", fx_tmp("prof.gcode"));
     amp_pathset_init(&ps, NULL);
     amp_buf_init(&b, NULL);
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
@@ -687,9 +687,9 @@ START_TEST(klipper_started_before_ready_runs_every_move_once_none_before_ready)
     vp_stop(&v);
     assert_executed_equals_job(&v, job, -1);
     /* it was asked until ready; no job line met a not-ready printer (that would be an error) */
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "> STATUS"), 2);
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "< waiting"), 1);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "< fwerror"), 0);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "> STATUS"), 2);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "< waiting"), 1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "< fwerror"), 0);
     ck_assert_int_eq(count_in_file(v.log, "G28"), 1);
 }
 END_TEST
@@ -708,7 +708,7 @@ START_TEST(printer_never_ready_is_refused_after_the_ready_timeout)
     ck_assert_msg(strstr(out, "stopped: printer not ready: not ready after 2 s: !! Printer is not ready") != NULL ||
                       strstr(out, "stopped: printer not ready") != NULL, "%s", out);
     ck_assert_int_eq(count_in_file(v.log, "G"), 0); /* nothing of the job ran */
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "> G"), 0);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "> G"), 0);
 }
 END_TEST
 
@@ -729,7 +729,7 @@ START_TEST(klipper_rejected_move_stops_the_job_naming_the_line)
     /* file line 16: comment, G28, 3 header lines, 10 moves, then the bad move */
     ck_assert_msg(strstr(out, "stopped: printer error: job line 16 (G1 X300 Y100 E0.5): !! Move out of range") != NULL,
                   "%s", out);
-    ck_assert_int_eq(sent_after(amp_test_tmp("bridge-log"), "< fwerror"), 0);
+    ck_assert_int_eq(sent_after(fx_tmp("bridge-log"), "< fwerror"), 0);
     /* executed: moves 1..10, then at most the window of lines already sent behind the bad one */
     moves_of(job, 0, &a);
     moves_of(v.log, 1, &b);
@@ -778,7 +778,7 @@ START_TEST(marlin_action_cancel_stops_the_job)
     ck_assert_int_eq(bridge_run(&v, job, FAST, &out), 1);
     vp_stop(&v);
     ck_assert_msg(strstr(out, "stopped: printer action") != NULL, "%s", out);
-    ck_assert_int_eq(sent_after(amp_test_tmp("bridge-log"), "< action"), 0);
+    ck_assert_int_eq(sent_after(fx_tmp("bridge-log"), "< action"), 0);
     /* the lines in flight finished: the printer ran exactly the moves up to the reported line */
     last = report_num(out, "last acknowledged job line ");
     assert_executed_equals_job(&v, job, (int)last - 4);
@@ -835,8 +835,8 @@ static void noisy_dialect(const char *vopts, const char *learned)
         /* no stall per error: a misread dialect (e.g. --resend-ok against the Prusa dialect) swallows an ok per
            resend and waits for the timeout probe every few errors (12 timeouts for 31 rewinds, 25 s, measured);
            learned, a timeout is rare (an ok lost beyond repair), not one per few errors */
-        int to = count_in_file(amp_test_tmp("bridge-log"), "< timeout"),
-            rw = count_in_file(amp_test_tmp("bridge-log"), "< resend ");
+        int to = count_in_file(fx_tmp("bridge-log"), "< timeout"),
+            rw = count_in_file(fx_tmp("bridge-log"), "< resend ");
         ck_assert_int_ge(rw, 10);
         ck_assert_msg(to * 8 < rw, "%d timeouts for %d rewinds", to, rw);
     }
@@ -936,17 +936,17 @@ static void unplug_scenario(const char *vopts, const char *bopts)
              vopts);
     snprintf(b, sizeof b, "--window 4 --reconnect 30 %s", bopts);
     scenario(v, b, 400, 0);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link lost"), 3);
-    ck_assert_int_eq(count_in_file(amp_test_tmp("bridge-log"), "link back"), 3);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "link lost"), 3);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "link back"), 3);
     /* each time the printer named its last line, and the job went on after an M110 to it */
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), " M110 N"), 3 + 2);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), " M110 N"), 3 + 2);
 }
 
 START_TEST(unplugged_three_times_with_oks_in_flight_every_move_runs_once)
 {
     unplug_scenario("", "");
     /* lines ran while unplugged (their oks lost): the M105 after the last line received acknowledged them */
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "< ack        "), 400);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "< ack        "), 400);
     unplug_scenario("--dialect prusa", "");
     unplug_scenario("--dialect 2.0 --advanced-ok --bufsize 8", "--window advanced");
     unplug_scenario("--corrupt-in 0.002 --corrupt-out 0.002 --seed 3", "");
@@ -997,7 +997,7 @@ START_TEST(advanced_ok_numbers_place_lost_oks_under_corrupted_bytes)
     scenario("--dialect 2.0 --advanced-ok --bufsize 8 --lose-ok 50 --lose-ok 120 --corrupt-in 0.001 "
              "--corrupt-out 0.001 --seed 4",
              "--window advanced", 300, 0);
-    ck_assert_int_ge(count_in_file(amp_test_tmp("bridge-log"), "lost oks placed by the ADVANCED_OK line number"), 2);
+    ck_assert_int_ge(count_in_file(fx_tmp("bridge-log"), "lost oks placed by the ADVANCED_OK line number"), 2);
 }
 END_TEST
 
@@ -1048,9 +1048,9 @@ static int only(const char *name)
             return 1;
     return 0;
 }
-#undef AMP_ADD_TEST
-#define AMP_ADD_TEST(tc, fn) \
-    if (only(#fn))           \
+/* tcase_add_test, filtered by AMP_TEST_ONLY (stress runs of a subset) */
+#define ADD_TEST(tc, fn) \
+    if (only(#fn))       \
     tcase_add_test(tc, fn)
 
 static Suite *bridge_suite(void)
@@ -1058,45 +1058,45 @@ static Suite *bridge_suite(void)
     Suite *s = suite_create("bridge");
     TCase *tc = tcase_create("pty");
     tcase_set_timeout(tc, 120);
-    AMP_ADD_TEST(tc, delayed_boot_banner_then_every_move_runs_once);
-    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin21);
-    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin20_advanced);
-    AMP_ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_rs_form);
-    AMP_ADD_TEST(tc, checksum_error_with_bare_resend_and_no_ok);
-    AMP_ADD_TEST(tc, lost_line_is_sent_again);
-    AMP_ADD_TEST(tc, lost_ok_does_not_run_a_line_twice);
-    AMP_ADD_TEST(tc, garbled_replies_split_at_low_baud);
-    AMP_ADD_TEST(tc, busy_keepalive_for_seconds_is_not_a_timeout);
-    AMP_ADD_TEST(tc, advanced_ok_window_fills_a_larger_queue);
-    AMP_ADD_TEST(tc, overlong_line_is_rejected_before_anything_is_sent);
-    AMP_ADD_TEST(tc, reset_mid_job_stops_reports_and_resumes_safely);
-    AMP_ADD_TEST(tc, sigint_finishes_the_lines_in_flight_and_reports_where_it_stopped);
-    AMP_ADD_TEST(tc, hangup_and_reappearance_lose_and_duplicate_nothing);
-    AMP_ADD_TEST(tc, unplugged_three_times_with_oks_in_flight_every_move_runs_once);
-    AMP_ADD_TEST(tc, unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line);
-    AMP_ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
-    AMP_ADD_TEST(tc, klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run);
-    AMP_ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
-    AMP_ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
-    AMP_ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
-    AMP_ADD_TEST(tc, amp_job_is_converted_on_the_fly_with_the_gcode_writer);
-    AMP_ADD_TEST(tc, amp_job_is_written_for_the_printer_profile_given);
-    AMP_ADD_TEST(tc, soak_one_percent_corrupted_bytes_both_ways);
-    AMP_ADD_TEST(tc, soak_corrupted_commands_and_two_resets_resume_exactly);
-    AMP_ADD_TEST(tc, klipper_started_before_ready_runs_every_move_once_none_before_ready);
-    AMP_ADD_TEST(tc, printer_never_ready_is_refused_after_the_ready_timeout);
-    AMP_ADD_TEST(tc, klipper_rejected_move_stops_the_job_naming_the_line);
-    AMP_ADD_TEST(tc, on_error_continue_reports_and_counts_and_goes_on);
-    AMP_ADD_TEST(tc, marlin_action_cancel_stops_the_job);
-    AMP_ADD_TEST(tc, marlin_halt_stops_reports_the_printer_words_and_the_line);
-    AMP_ADD_TEST(tc, marlin_unknown_command_is_a_counted_warning);
-    AMP_ADD_TEST(tc, prusa_dialect_resend_without_ok_is_learned_and_never_stalls);
-    AMP_ADD_TEST(tc, marlin21_and_advanced_ok_with_noise_exactly_once);
-    AMP_ADD_TEST(tc, settle_time_sweep_zero_to_fifty_ms_same_exact_result);
-    AMP_ADD_TEST(tc, reset_with_garbled_replies_names_the_lines_that_may_have_run);
-    AMP_ADD_TEST(tc, virtual_printer_refuses_what_each_firmware_refuses);
+    ADD_TEST(tc, delayed_boot_banner_then_every_move_runs_once);
+    ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin21);
+    ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_marlin20_advanced);
+    ADD_TEST(tc, checksum_error_with_send_ahead_rewinds_once_rs_form);
+    ADD_TEST(tc, checksum_error_with_bare_resend_and_no_ok);
+    ADD_TEST(tc, lost_line_is_sent_again);
+    ADD_TEST(tc, lost_ok_does_not_run_a_line_twice);
+    ADD_TEST(tc, garbled_replies_split_at_low_baud);
+    ADD_TEST(tc, busy_keepalive_for_seconds_is_not_a_timeout);
+    ADD_TEST(tc, advanced_ok_window_fills_a_larger_queue);
+    ADD_TEST(tc, overlong_line_is_rejected_before_anything_is_sent);
+    ADD_TEST(tc, reset_mid_job_stops_reports_and_resumes_safely);
+    ADD_TEST(tc, sigint_finishes_the_lines_in_flight_and_reports_where_it_stopped);
+    ADD_TEST(tc, hangup_and_reappearance_lose_and_duplicate_nothing);
+    ADD_TEST(tc, unplugged_three_times_with_oks_in_flight_every_move_runs_once);
+    ADD_TEST(tc, unplugged_printer_that_reset_stops_the_job_and_names_the_resume_line);
+    ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
+    ADD_TEST(tc, klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run);
+    ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
+    ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
+    ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
+    ADD_TEST(tc, amp_job_is_converted_on_the_fly_with_the_gcode_writer);
+    ADD_TEST(tc, amp_job_is_written_for_the_printer_profile_given);
+    ADD_TEST(tc, soak_one_percent_corrupted_bytes_both_ways);
+    ADD_TEST(tc, soak_corrupted_commands_and_two_resets_resume_exactly);
+    ADD_TEST(tc, klipper_started_before_ready_runs_every_move_once_none_before_ready);
+    ADD_TEST(tc, printer_never_ready_is_refused_after_the_ready_timeout);
+    ADD_TEST(tc, klipper_rejected_move_stops_the_job_naming_the_line);
+    ADD_TEST(tc, on_error_continue_reports_and_counts_and_goes_on);
+    ADD_TEST(tc, marlin_action_cancel_stops_the_job);
+    ADD_TEST(tc, marlin_halt_stops_reports_the_printer_words_and_the_line);
+    ADD_TEST(tc, marlin_unknown_command_is_a_counted_warning);
+    ADD_TEST(tc, prusa_dialect_resend_without_ok_is_learned_and_never_stalls);
+    ADD_TEST(tc, marlin21_and_advanced_ok_with_noise_exactly_once);
+    ADD_TEST(tc, settle_time_sweep_zero_to_fifty_ms_same_exact_result);
+    ADD_TEST(tc, reset_with_garbled_replies_names_the_lines_that_may_have_run);
+    ADD_TEST(tc, virtual_printer_refuses_what_each_firmware_refuses);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(bridge_suite)
+FX_TEST_MAIN(bridge_suite)

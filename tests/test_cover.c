@@ -373,17 +373,17 @@ static double json_after(const char *js, const char *from, const char *key)
 START_TEST(mdr_and_check_report_one_over_coverage)
 {
     char args[1024], a[8192], b[8192];
-    const char *cov = amp_test_tmp("oc-cover.amp"), *m = amp_test_tmp("oc-mdr.amp");
+    const char *cov = fx_tmp("oc-cover.amp"), *m = fx_tmp("oc-mdr.amp");
     amp_pathset ps;
     amp_spline v;
     amp_error err;
     double om, oc, want;
     snprintf(args, sizeof args, "cover torus-quarter --eps 3 -o %s", cov);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "mdr %s --nominal 1 --trivariate torus-quarter --json -o %s", cov, m);
-    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_int_eq(fx_run_tool(args, a, sizeof a), 0);
     snprintf(args, sizeof args, "check %s --trivariate torus-quarter --no-gouge --samples 2000 --json", m);
-    amp_test_run_tool(args, b, sizeof b); /* the gap may exceed eps after MDR: only the figure matters here */
+    fx_run_tool(args, b, sizeof b); /* the gap may exceed eps after MDR: only the figure matters here */
     om = json_after(a, NULL, "over_coverage");
     oc = json_after(b, "\"coverage\"", "over_coverage");
     amp_pathset_init(&ps, NULL);
@@ -394,7 +394,7 @@ START_TEST(mdr_and_check_report_one_over_coverage)
                   oc, want);
     /* without a model mdr does not guess one: null, and the union-of-tubes overlap instead */
     snprintf(args, sizeof args, "mdr %s --nominal 1 --json", cov);
-    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_int_eq(fx_run_tool(args, a, sizeof a), 0);
     ck_assert_ptr_nonnull(strstr(a, "\"over_coverage\":null"));
     ck_assert_msg(json_after(a, NULL, "overlap") > 0.5, "%s", a);
     amp_spline_free(&v);
@@ -433,13 +433,13 @@ END_TEST
 /* The tool's stdout and stderr, as a user sees them. */
 static int run(const char *args, char *out, size_t cap)
 {
-    return amp_test_run_tool_ex(args, NULL, 1, out, cap);
+    return fx_run_tool_ex(args, NULL, 1, out, cap);
 }
 
 START_TEST(cli_cover_and_check_report_and_fail_properly)
 {
     char args[1024], out[8192];
-    const char *amp = amp_test_tmp("vase.amp"), *thin = amp_test_tmp("thin.amp");
+    const char *amp = fx_tmp("vase.amp"), *thin = fx_tmp("thin.amp");
     amp_pathset ps, t;
     size_t i;
     snprintf(args, sizeof args, "cover vase --eps 2 --samples 3000 --json -o %s", amp);
@@ -585,4 +585,4 @@ static Suite *cover_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(cover_suite)
+FX_TEST_MAIN(cover_suite)

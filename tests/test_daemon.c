@@ -232,7 +232,7 @@ static int wait_exit(pid_t pid)
         pid_t r = waitpid(pid, &st, WNOHANG);
         if (r == pid)
             return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-        amp_test_msleep(10);
+        fx_msleep(10);
     }
     kill(pid, SIGKILL);
     waitpid(pid, &st, 0);
@@ -274,25 +274,25 @@ typedef struct vpr {
 static void vp_start(vpr *v, const char *tag, const char *opts)
 {
     char buf[1024], name[64];
-    char *argv[AMP_TEST_MAXARGS];
+    char *argv[FX_MAXARGS];
     int n = 0;
     double t0 = now_s();
     snprintf(name, sizeof name, "vp-link-%s", tag);
-    snprintf(v->link, sizeof v->link, "%s", amp_test_tmp(name));
+    snprintf(v->link, sizeof v->link, "%s", fx_tmp(name));
     snprintf(name, sizeof name, "vp-log-%s", tag);
-    snprintf(v->log, sizeof v->log, "%s", amp_test_tmp(name));
+    snprintf(v->log, sizeof v->log, "%s", fx_tmp(name));
     unlink(v->link);
     unlink(v->log);
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)amp_test_prog("AMP_VPRINTER");
+    argv[n++] = (char *)fx_prog("AMP_VPRINTER");
     argv[n++] = "--link";
     argv[n++] = v->link;
     argv[n++] = "--log";
     argv[n++] = v->log;
-    amp_test_split(buf, argv, n);
+    fx_split(buf, argv, n);
     v->pid = spawn(argv, NULL, NULL, NULL, NULL);
     while (access(v->link, F_OK) != 0 && now_s() - t0 < DEADLINE)
-        amp_test_msleep(10);
+        fx_msleep(10);
     ck_assert_msg(access(v->link, F_OK) == 0, "virtual printer did not create %s", v->link);
 }
 
@@ -342,23 +342,23 @@ static int daemon_start(dmn *d, const vpr *v, const char *tag, const char *sock,
                         const char *tmpdir)
 {
     char buf[1024], name[64];
-    char *argv[AMP_TEST_MAXARGS];
+    char *argv[FX_MAXARGS];
     int n = 0, st;
     double t0 = now_s();
-    snprintf(d->sock, sizeof d->sock, "%s", sock ? sock : ""); /* amp_test_tmp's buffers rotate */
+    snprintf(d->sock, sizeof d->sock, "%s", sock ? sock : ""); /* fx_tmp's buffers rotate */
     snprintf(name, sizeof name, "d-out-%s", tag);
-    snprintf(d->out, sizeof d->out, "%s", amp_test_tmp(name));
+    snprintf(d->out, sizeof d->out, "%s", fx_tmp(name));
     snprintf(name, sizeof name, "d-err-%s", tag);
-    snprintf(d->err, sizeof d->err, "%s", amp_test_tmp(name));
+    snprintf(d->err, sizeof d->err, "%s", fx_tmp(name));
     snprintf(buf, sizeof buf, "%s", opts);
-    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
+    argv[n++] = (char *)fx_prog("AMP_BRIDGE");
     argv[n++] = (char *)v->link;
     argv[n++] = "--daemon";
     if (sock) {
         argv[n++] = "--socket";
         argv[n++] = d->sock;
     }
-    amp_test_split(buf, argv, n);
+    fx_split(buf, argv, n);
     d->pid = spawn(argv, d->out, d->err, NULL, tmpdir);
     /* up when it says so on stderr (a connect could reach another daemon on the same path) */
     while (now_s() - t0 < DEADLINE) {
@@ -370,7 +370,7 @@ static int daemon_start(dmn *d, const vpr *v, const char *tag, const char *sock,
             snprintf(d->sock, sizeof d->sock, "%.*s", (int)strcspn(p, "\n"), p);
             return -1;
         }
-        amp_test_msleep(10);
+        fx_msleep(10);
     }
     ck_abort_msg("daemon did not come up: %s", slurp(d->err));
     return -2;
@@ -478,7 +478,7 @@ static void wait_state(const char *sock, const char *want)
         status_num(sock, "acked", st, sizeof st);
         if (want ? strcmp(st, want) == 0 : strcmp(st, "printing") != 0 && strcmp(st, "stopping") != 0)
             return;
-        amp_test_msleep(20);
+        fx_msleep(20);
     }
     ck_abort_msg("state %s never reached (now %s)", want ? want : "end", st);
 }
@@ -487,7 +487,7 @@ static void wait_acked(const char *sock, long n)
 {
     double t0 = now_s();
     while (now_s() - t0 < DEADLINE && status_num(sock, "acked", NULL, 0) < n)
-        amp_test_msleep(20);
+        fx_msleep(20);
     ck_assert_int_ge((long)status_num(sock, "acked", NULL, 0), n);
 }
 
@@ -505,7 +505,7 @@ static const char *make_job(const char *name, int n, const char *extra_at_10)
     static char path[256];
     FILE *f;
     int i;
-    snprintf(path, sizeof path, "%s", amp_test_tmp(name));
+    snprintf(path, sizeof path, "%s", fx_tmp(name));
     f = fopen(path, "w");
     ck_assert_ptr_nonnull(f);
     fprintf(f, "; ampath test job\nG90\nM82\nG92 E0\n");
@@ -573,7 +573,7 @@ START_TEST(json_client_subscribes_and_follows_a_whole_job)
     long last_acked = -1, nprog = 0, total = -1;
     int saw_printing = 0, saw_done_state = 0, ended = 0;
     vp_start(&v, "a", "--turnaround 3");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), FAST, NULL), -1);
     cli_open(&c, d.sock);
     cli_say(&c, "{\"cmd\":\"subscribe\",\"id\":1}\n");
     ck_assert_int_eq(cli_line(&c, line, sizeof line), 1);
@@ -636,7 +636,7 @@ START_TEST(client_that_never_reads_is_dropped_while_printing_goes_on)
     double t0;
     int i, dropped = 0;
     vp_start(&v, "a", "--turnaround 5");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), FAST, NULL), -1);
     snprintf(line, sizeof line, "submit %s", job);
     ck_assert_ptr_nonnull(strstr(ask(d.sock, line), "ok started"));
     for (i = 0; i < 512; i++)
@@ -676,7 +676,7 @@ START_TEST(crowd_of_idle_clients_cannot_lock_out_estop)
     char line[8192];
     int i;
     vp_start(&v, "a", "--flavor klipper");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--flavor klipper --client-timeout 600",
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--flavor klipper --client-timeout 600",
                                   NULL),
                      -1);
     /* fill every ordinary slot (each proves it was admitted), then more that just sit there */
@@ -704,7 +704,7 @@ START_TEST(crowd_of_idle_clients_cannot_lock_out_estop)
         /* the printer got it */
         double t0 = now_s();
         while (count_in_file(v.log, "# shutdown") == 0 && now_s() - t0 < DEADLINE)
-            amp_test_msleep(20);
+            fx_msleep(20);
         ck_assert_int_eq(count_in_file(v.log, "# shutdown"), 1);
     }
     /* quit is no priority command: refused while the crowd holds every slot */
@@ -723,7 +723,7 @@ START_TEST(idle_client_is_closed_after_the_client_timeout)
     cli c;
     char line[8192];
     vp_start(&v, "a", "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--client-timeout 0.5 --boot-wait 0.3",
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--client-timeout 0.5 --boot-wait 0.3",
                                   NULL),
                      -1);
     cli_open(&c, d.sock);
@@ -758,7 +758,7 @@ START_TEST(overlong_line_is_discarded_whole_and_nul_does_not_wedge)
     static char big[3 * BR_CL_IN + 16];
     static const char nul[] = "stat\0us\n";
     vp_start(&v, "a", "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
     cli_open(&c, d.sock);
     /* 3 buffers of x ending in "quit": the tail must not run as a command */
     memset(big, 'x', sizeof big);
@@ -798,7 +798,7 @@ static void sigterm_mid_job(int keep_hot)
     static lines ex;
     vp_start(&v, "a", "--turnaround 10");
     snprintf(opts, sizeof opts, "%s%s", FAST, keep_hot ? " --keep-hot" : "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), opts, NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), opts, NULL), -1);
     /* a path with spaces and quotes, in the plain form */
     snprintf(line, sizeof line, "submit \"%.*s\\\"quoted\\\" job.gcode\"", (int)(strstr(job, "\"") - job), job);
     ck_assert_ptr_nonnull(strstr(ask(d.sock, line), "ok started"));
@@ -862,7 +862,7 @@ START_TEST(cancel_finishes_the_lines_in_flight_then_turns_heaters_off)
     const char *job = make_job("job.gcode", 1000, NULL), *r;
     long last;
     vp_start(&v, "a", "--turnaround 10");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), FAST, NULL), -1);
     snprintf(line, sizeof line, "{\"cmd\":\"submit\",\"path\":\"%s\"}", job);
     ck_assert_ptr_nonnull(strstr(ask(d.sock, line), "\"ok\":true"));
     wait_acked(d.sock, 10);
@@ -883,7 +883,7 @@ START_TEST(second_daemon_on_the_same_socket_refuses_and_leaves_the_first_alone)
     vpr v1, v2;
     dmn a, b;
     char sock[256];
-    snprintf(sock, sizeof sock, "%s", amp_test_tmp("ctl.sock"));
+    snprintf(sock, sizeof sock, "%s", fx_tmp("ctl.sock"));
     vp_start(&v1, "1", "");
     vp_start(&v2, "2", "");
     ck_assert_int_eq(daemon_start(&a, &v1, "a", sock, "--boot-wait 0.3", NULL), -1);
@@ -907,8 +907,8 @@ START_TEST(socket_path_that_is_not_a_stale_socket_is_never_unlinked)
     struct stat st;
     int fd;
     FILE *f;
-    snprintf(file, sizeof file, "%s", amp_test_tmp("precious.txt"));
-    snprintf(sock, sizeof sock, "%s", amp_test_tmp("stale.sock"));
+    snprintf(file, sizeof file, "%s", fx_tmp("precious.txt"));
+    snprintf(sock, sizeof sock, "%s", fx_tmp("stale.sock"));
     f = fopen(file, "w");
     fputs("precious\n", f);
     fclose(f);
@@ -947,7 +947,7 @@ START_TEST(default_socket_lives_in_a_private_directory_and_a_squatted_one_is_ref
     dmn d;
     char tmp[256], dir[300], link[300], sockp[400];
     struct stat st;
-    snprintf(tmp, sizeof tmp, "%s", amp_test_tmp("tmpdir"));
+    snprintf(tmp, sizeof tmp, "%s", fx_tmp("tmpdir"));
     snprintf(dir, sizeof dir, "%s/ampath-bridge-%ld", tmp, (long)getuid());
     snprintf(sockp, sizeof sockp, "%s/ctl.sock", dir);
     mkdir(tmp, 0755);
@@ -995,9 +995,9 @@ START_TEST(two_programs_never_share_the_printer)
     int n = 0, rc, fd;
     const char *job = make_job("job.gcode", 20, NULL);
     vp_start(&v, "a", "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
-    snprintf(out, sizeof out, "%s", amp_test_tmp("oneshot-out"));
-    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
+    snprintf(out, sizeof out, "%s", fx_tmp("oneshot-out"));
+    argv[n++] = (char *)fx_prog("AMP_BRIDGE");
     argv[n++] = v.link;
     argv[n++] = (char *)job;
     argv[n++] = "--boot-wait";
@@ -1028,11 +1028,11 @@ START_TEST(fifo_and_device_submits_are_refused_at_once)
     dmn d;
     char fifo[256], line[600];
     const char *r;
-    snprintf(fifo, sizeof fifo, "%s", amp_test_tmp("job-fifo.gcode"));
+    snprintf(fifo, sizeof fifo, "%s", fx_tmp("job-fifo.gcode"));
     unlink(fifo);
     ck_assert_int_eq(mkfifo(fifo, 0600), 0);
     vp_start(&v, "a", "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
     snprintf(line, sizeof line, "submit %s", fifo);
     r = ask(d.sock, line); /* no writer: an open() that blocked would hang the daemon here */
     ck_assert_msg(strstr(r, "is not a regular file") != NULL, "%s", r);
@@ -1055,15 +1055,15 @@ START_TEST(job_piped_on_stdin_is_refused_and_a_redirected_file_runs)
     int n = 0, rc;
     const char *job = make_job("job.gcode", 30, NULL);
     vp_start(&v, "a", "");
-    snprintf(out, sizeof out, "%s", amp_test_tmp("oneshot-out"));
-    argv[n++] = (char *)amp_test_prog("AMP_BRIDGE");
+    snprintf(out, sizeof out, "%s", fx_tmp("oneshot-out"));
+    argv[n++] = (char *)fx_prog("AMP_BRIDGE");
     argv[n++] = v.link;
     argv[n++] = "/dev/stdin";
     argv[n++] = "--boot-wait";
     argv[n++] = "0.3";
     argv[n] = NULL;
     /* a pipe: was "sent 0 commands", exit 0 */
-    snprintf(cmd, sizeof cmd, "cat %s | %s %s /dev/stdin --boot-wait 0.3 > %s 2>&1", job, amp_test_prog("AMP_BRIDGE"), v.link,
+    snprintf(cmd, sizeof cmd, "cat %s | %s %s /dev/stdin --boot-wait 0.3 > %s 2>&1", job, fx_prog("AMP_BRIDGE"), v.link,
              out);
     rc = system(cmd);
     ck_assert_msg(WIFEXITED(rc) && WEXITSTATUS(rc) == 2, "exit %d: %s", WEXITSTATUS(rc), slurp(out));
@@ -1107,9 +1107,9 @@ START_TEST(only_gcode_is_submitted_and_nothing_is_sent_before_the_check)
     size_t i;
     char line[600];
     vp_start(&v, "a", "");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), "--boot-wait 0.3", NULL), -1);
     for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        const char *path = amp_test_tmp(bad[i].name), *r;
+        const char *path = fx_tmp(bad[i].name), *r;
         write_file(path, bad[i].text, bad[i].n);
         snprintf(line, sizeof line, "submit %s", path);
         r = ask(d.sock, line);
@@ -1128,7 +1128,7 @@ START_TEST(log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr)
     char opts[600], line[600];
     struct stat st;
     char log[256];
-    const char *job = amp_test_tmp("homed.gcode");
+    const char *job = fx_tmp("homed.gcode");
     FILE *f = fopen(job, "w");
     int i;
     /* homed first: Klipper refuses moves before G28 (the job would stop there) */
@@ -1137,11 +1137,11 @@ START_TEST(log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr)
     for (i = 1; i <= 40; i++)
         fprintf(f, "G1 X%d Y%d E%.2f F1200\n%s", 100 + i, 100 + i % 7, 0.01 * i, i == 10 ? "FROBNICATE SECRET=hunter2\n" : "");
     fclose(f);
-    snprintf(log, sizeof log, "%s", amp_test_tmp("bridge.log"));
+    snprintf(log, sizeof log, "%s", fx_tmp("bridge.log"));
     unlink(log);
     vp_start(&v, "a", "--flavor klipper");
     snprintf(opts, sizeof opts, "--flavor klipper --timeout 1 --log %s", log);
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), opts, NULL), -1);
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), opts, NULL), -1);
     ck_assert_int_eq(stat(log, &st), 0);
     ck_assert_int_eq(st.st_mode & 0777, 0600);
     snprintf(line, sizeof line, "submit %s", job);
@@ -1176,15 +1176,15 @@ START_TEST(python_example_in_the_docs_follows_a_job_to_its_end)
     a += strlen("```python\n");
     b = strstr(a, "```");
     ck_assert_ptr_nonnull(b);
-    snprintf(script, sizeof script, "%s", amp_test_tmp("follow.py"));
+    snprintf(script, sizeof script, "%s", fx_tmp("follow.py"));
     write_file(script, a, (size_t)(b - a));
     if (system("python3 -c 'import json, socket' >/dev/null 2>&1") != 0) {
         fprintf(stderr, "python_example_in_the_docs_follows_a_job_to_its_end: no python3, not run\n");
         return;
     }
     vp_start(&v, "a", "--turnaround 2");
-    ck_assert_int_eq(daemon_start(&d, &v, "a", amp_test_tmp("ctl.sock"), FAST, NULL), -1);
-    snprintf(out, sizeof out, "%s", amp_test_tmp("follow.out"));
+    ck_assert_int_eq(daemon_start(&d, &v, "a", fx_tmp("ctl.sock"), FAST, NULL), -1);
+    snprintf(out, sizeof out, "%s", fx_tmp("follow.out"));
     snprintf(cmd, sizeof cmd, "python3 %s %s %s > %s 2>&1", script, d.sock, job, out);
     rc = system(cmd);
     ck_assert_msg(WIFEXITED(rc) && WEXITSTATUS(rc) == 0, "exit %d: %s", WEXITSTATUS(rc), slurp(out));
@@ -1206,33 +1206,33 @@ static Suite *daemon_suite(void)
 {
     Suite *s = suite_create("daemon");
     TCase *unit = tcase_create("language"), *tc = tcase_create("daemon");
-    AMP_ADD_TEST(unit, plain_submit_takes_quoted_paths_with_spaces_and_refuses_stray_words);
-    AMP_ADD_TEST(unit, unknown_command_nul_and_control_bytes_answer_one_line);
-    AMP_ADD_TEST(unit, json_requests_parse_with_escapes_and_ids);
-    AMP_ADD_TEST(unit, json_parser_refuses_what_it_does_not_understand);
-    AMP_ADD_TEST(unit, json_writer_escapes_control_bytes_and_repairs_garbled_utf8);
-    AMP_ADD_TEST(unit, plain_replies_quote_values_and_never_hold_a_second_line);
+    tcase_add_test(unit, plain_submit_takes_quoted_paths_with_spaces_and_refuses_stray_words);
+    tcase_add_test(unit, unknown_command_nul_and_control_bytes_answer_one_line);
+    tcase_add_test(unit, json_requests_parse_with_escapes_and_ids);
+    tcase_add_test(unit, json_parser_refuses_what_it_does_not_understand);
+    tcase_add_test(unit, json_writer_escapes_control_bytes_and_repairs_garbled_utf8);
+    tcase_add_test(unit, plain_replies_quote_values_and_never_hold_a_second_line);
     suite_add_tcase(s, unit);
     tcase_set_timeout(tc, 600);
-    AMP_ADD_TEST(tc, json_client_subscribes_and_follows_a_whole_job);
-    AMP_ADD_TEST(tc, client_that_never_reads_is_dropped_while_printing_goes_on);
-    AMP_ADD_TEST(tc, crowd_of_idle_clients_cannot_lock_out_estop);
-    AMP_ADD_TEST(tc, idle_client_is_closed_after_the_client_timeout);
-    AMP_ADD_TEST(tc, overlong_line_is_discarded_whole_and_nul_does_not_wedge);
-    AMP_ADD_TEST(tc, sigterm_mid_job_waits_for_acks_reports_resume_line_and_turns_heaters_off);
-    AMP_ADD_TEST(tc, sigterm_mid_job_with_keep_hot_leaves_the_heaters_alone);
-    AMP_ADD_TEST(tc, cancel_finishes_the_lines_in_flight_then_turns_heaters_off);
-    AMP_ADD_TEST(tc, second_daemon_on_the_same_socket_refuses_and_leaves_the_first_alone);
-    AMP_ADD_TEST(tc, socket_path_that_is_not_a_stale_socket_is_never_unlinked);
-    AMP_ADD_TEST(tc, default_socket_lives_in_a_private_directory_and_a_squatted_one_is_refused);
-    AMP_ADD_TEST(tc, two_programs_never_share_the_printer);
-    AMP_ADD_TEST(tc, fifo_and_device_submits_are_refused_at_once);
-    AMP_ADD_TEST(tc, job_piped_on_stdin_is_refused_and_a_redirected_file_runs);
-    AMP_ADD_TEST(tc, only_gcode_is_submitted_and_nothing_is_sent_before_the_check);
-    AMP_ADD_TEST(tc, log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr);
-    AMP_ADD_TEST(tc, python_example_in_the_docs_follows_a_job_to_its_end);
+    tcase_add_test(tc, json_client_subscribes_and_follows_a_whole_job);
+    tcase_add_test(tc, client_that_never_reads_is_dropped_while_printing_goes_on);
+    tcase_add_test(tc, crowd_of_idle_clients_cannot_lock_out_estop);
+    tcase_add_test(tc, idle_client_is_closed_after_the_client_timeout);
+    tcase_add_test(tc, overlong_line_is_discarded_whole_and_nul_does_not_wedge);
+    tcase_add_test(tc, sigterm_mid_job_waits_for_acks_reports_resume_line_and_turns_heaters_off);
+    tcase_add_test(tc, sigterm_mid_job_with_keep_hot_leaves_the_heaters_alone);
+    tcase_add_test(tc, cancel_finishes_the_lines_in_flight_then_turns_heaters_off);
+    tcase_add_test(tc, second_daemon_on_the_same_socket_refuses_and_leaves_the_first_alone);
+    tcase_add_test(tc, socket_path_that_is_not_a_stale_socket_is_never_unlinked);
+    tcase_add_test(tc, default_socket_lives_in_a_private_directory_and_a_squatted_one_is_refused);
+    tcase_add_test(tc, two_programs_never_share_the_printer);
+    tcase_add_test(tc, fifo_and_device_submits_are_refused_at_once);
+    tcase_add_test(tc, job_piped_on_stdin_is_refused_and_a_redirected_file_runs);
+    tcase_add_test(tc, only_gcode_is_submitted_and_nothing_is_sent_before_the_check);
+    tcase_add_test(tc, log_is_private_and_printer_echoes_of_job_lines_stay_off_stderr);
+    tcase_add_test(tc, python_example_in_the_docs_follows_a_job_to_its_end);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(daemon_suite)
+FX_TEST_MAIN(daemon_suite)

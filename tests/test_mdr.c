@@ -264,12 +264,12 @@ START_TEST(mdr_survives_out_of_memory)
     amp_pathset_init(&ps, NULL);
     fan(&ps, 6, 0.5);
     for (budget = 0; budget < 120; budget++) {
-        amp_test_failalloc fa;
+        fx_failalloc fa;
         amp_pathset out;
         amp_mdr_opts o;
         amp_error err;
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         amp_pathset_init(&out, &fa.a);
         amp_mdr_opts_default(&o, 0.5);
         st = amp_mdr(&ps, &o, &out, NULL, &err);
@@ -317,4 +317,4 @@ static Suite *mdr_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(mdr_suite)
+FX_TEST_MAIN(mdr_suite)

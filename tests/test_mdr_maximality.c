@@ -130,4 +130,4 @@ static Suite *mdr_max_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(mdr_max_suite)
+FX_TEST_MAIN(mdr_max_suite)

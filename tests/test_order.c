@@ -754,11 +754,11 @@ START_TEST(ordering_survives_out_of_memory)
     add_curve(&ps, fig8_green, NULL, 30);
     add_curve(&ps, fig8_red, NULL, 10);
     for (budget = 0; budget < 80; budget++) {
-        amp_test_failalloc fa;
+        fx_failalloc fa;
         amp_pathset out;
         amp_error err;
         amp_status st;
-        amp_test_failalloc_init(&fa, budget);
+        fx_failalloc_init(&fa, budget);
         amp_pathset_init(&out, &fa.a);
         st = amp_order(&ps, NULL, &out, NULL, &err);
         ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
@@ -774,46 +774,46 @@ START_TEST(order_and_check_commands_report_and_exit_as_specified)
 {
     amp_pathset ps;
     char args[1024], out[8192];
-    const char *in = amp_test_tmp("fig8.amp"), *ord = amp_test_tmp("fig8-ordered.amp"), *m = amp_test_tmp("mdr.amp");
+    const char *in = fx_tmp("fig8.amp"), *ord = fx_tmp("fig8-ordered.amp"), *m = fx_tmp("mdr.amp");
     amp_pathset_init(&ps, NULL);
     add_curve(&ps, fig8_green, NULL, 90);
     add_curve(&ps, fig8_red, NULL, 40);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
     snprintf(args, sizeof args, "order %s --z-offs 0.5 --theta 72 --max-edges 1000 --compare --json -o %s", in, ord);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(out[0] == '{' && strchr(out, '\n') == strrchr(out, '\n'), "one JSON object: %s", out);
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_greedy\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_improved\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"below_edges_complete\":true"));
     snprintf(args, sizeof args, "check %s --json", ord);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"gouge\":{\"ran\":true,\"ok\":true"));
     snprintf(args, sizeof args, "check %s --json", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     ck_assert_ptr_nonnull(strstr(out, "\"violation\":{\"earlier_path\":0"));
     ck_assert_ptr_nonnull(strstr(out, "\"ok\":false}"));
     snprintf(args, sizeof args, "check %s --no-gouge --json", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"ran\":false"));
     snprintf(args, sizeof args, "order %s --theta 95 -o %s", in, ord);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --z-offs -1", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     /* the dispatcher's own usage errors */
     snprintf(args, sizeof args, "check %s --layer 0.2", in); /* --layer needs the sliced --mesh */
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --trivariate helix --mesh x.stl", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --eps 0", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "check %s --no-gouge --no-coverage --no-strokes --json", in);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"strokes\":{\"ran\":false"));
     snprintf(args, sizeof args, "mdr %s --nominal 0.5 --min 0.2 --max 0.8 --json -o %s", ord, m);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"over_coverage\":"));
     snprintf(args, sizeof args, "mdr %s --min 2 --max 1", ord);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     remove(in);
     remove(ord);
     remove(m);
@@ -848,4 +848,4 @@ static Suite *order_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(order_suite)
+FX_TEST_MAIN(order_suite)

@@ -133,7 +133,7 @@ START_TEST(support_command_writes_interleaved_paths_and_rejects_bad_models)
     amp_pathset ps, back;
     amp_error err;
     char args[2048], out[4096];
-    const char *stl = amp_test_tmp("slab.stl"), *in = amp_test_tmp("slab.amp"), *res = amp_test_tmp("slab-sup.amp");
+    const char *stl = fx_tmp("slab.stl"), *in = fx_tmp("slab.amp"), *res = fx_tmp("slab-sup.amp");
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&back, NULL);
@@ -142,17 +142,17 @@ START_TEST(support_command_writes_interleaved_paths_and_rejects_bad_models)
     slab_paths(&ps);
     ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, &err), AMP_OK);
     snprintf(args, sizeof args, "support %s --mesh %s --spacing 1 --json -o %s", in, stl, res);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"rays\":121,"));
     ck_assert_int_eq(amp_pathset_read_file(&back, res, &err), AMP_OK);
     ck_assert_uint_gt(back.npaths, ps.npaths);
     ck_assert_int_eq(back.paths[0].role, AMP_ROLE_SUPPORT);
     snprintf(args, sizeof args, "check %s --json", res);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     snprintf(args, sizeof args, "support %s --trivariate no-such.spl -o %s", in, res);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     snprintf(args, sizeof args, "support %s -o %s", in, res);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     remove(stl);
     remove(in);
     remove(res);
@@ -166,17 +166,17 @@ END_TEST
 START_TEST(support_from_a_trivariate_matches_its_boundary_mesh)
 {
     char args[2048], a[4096], b[4096];
-    const char *stl = amp_test_tmp("tq.stl"), *in = amp_test_tmp("tq.amp"), *res = amp_test_tmp("tq-sup.amp");
+    const char *stl = fx_tmp("tq.stl"), *in = fx_tmp("tq.amp"), *res = fx_tmp("tq-sup.amp");
     snprintf(args, sizeof args, "cover torus-quarter --eps 3 -o %s", in);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "order %s -o %s", in, in);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "model torus-quarter -o %s", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "support %s --trivariate torus-quarter --json -o %s", in, res);
-    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_int_eq(fx_run_tool(args, a, sizeof a), 0);
     snprintf(args, sizeof args, "support %s --mesh %s --json -o %s", in, stl, res);
-    ck_assert_int_eq(amp_test_run_tool(args, b, sizeof b), 0);
+    ck_assert_int_eq(fx_run_tool(args, b, sizeof b), 0);
     /* the torus rests on z = 0 with its lower half overhanging: support is needed */
     ck_assert_msg(strstr(a, "\"support_paths\":0,") == NULL, "%s", a);
     /* the same rays hit the same columns (the tessellations differ a little: the trimming may too) */
@@ -187,7 +187,7 @@ START_TEST(support_from_a_trivariate_matches_its_boundary_mesh)
     ck_assert_str_eq(strstr(a, "\"rays\""), strstr(b, "\"rays\""));
     /* support placed between ordered object paths keeps the whole sequence gouge-free */
     snprintf(args, sizeof args, "check %s --json", res);
-    ck_assert_int_eq(amp_test_run_tool(args, a, sizeof a), 0);
+    ck_assert_int_eq(fx_run_tool(args, a, sizeof a), 0);
     ck_assert_msg(strstr(a, "\"gouge\":{\"ran\":true,\"ok\":true") != NULL, "%s", a);
     remove(stl);
     remove(in);
@@ -234,18 +234,18 @@ static double json_num(const char *js, const char *key)
 START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
 {
     char args[2048], js[16384];
-    const char *cov = amp_test_tmp("hx-u2.amp"), *ord = amp_test_tmp("hx-u2o.amp"), *res = amp_test_tmp("hx-u2s.amp");
+    const char *cov = fx_tmp("hx-u2.amp"), *ord = fx_tmp("hx-u2o.amp"), *res = fx_tmp("hx-u2s.amp");
     amp_pathset out;
     amp_error err;
     size_t zero;
     double made, kept;
     amp_pathset_init(&out, NULL);
     snprintf(args, sizeof args, "cover helix --eps 2 --dir u -o %s", cov);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "order %s -o %s", cov, ord);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "support %s --trivariate helix --json -o %s", ord, res);
-    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 0);
     ck_assert_msg(json_num(js, "conflicts") == 0 && json_num(js, "trimmed_mm") == 0, "%s", js);
     ck_assert_msg(json_num(js, "unheld_paths") == 0, "%s", js);
     made = json_num(js, "support_length_mm");
@@ -256,16 +256,16 @@ START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
     role_length(&out, AMP_ROLE_OBJECT, &zero);
     ck_assert_uint_eq(zero, 0);
     snprintf(args, sizeof args, "check %s --no-coverage --json", res);
-    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 0);
     ck_assert_msg(strstr(js, "\"gouge\":{\"ran\":true,\"ok\":true") != NULL, "%s", js);
     ck_assert_msg(strstr(js, "\"support\":{\"ran\":true,\"ok\":true") != NULL, "%s", js);
     /* the ordered job without support: object beads in the air under the overhang */
     snprintf(args, sizeof args, "check %s --no-coverage --no-gouge --support --json", ord);
-    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 1);
+    ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 1);
     ck_assert_msg(json_num(js, "unheld_paths") >= 10 && json_num(js, "unheld_mm") > 100.0, "%s", js);
     /* without --support a job with no support paths is not judged */
     snprintf(args, sizeof args, "check %s --no-coverage --no-gouge --json", ord);
-    ck_assert_int_eq(amp_test_run_tool(args, js, sizeof js), 0);
+    ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 0);
     ck_assert_msg(strstr(js, "\"support\":{\"ran\":false") != NULL, "%s", js);
     amp_pathset_free(&out);
     remove(cov);
@@ -480,4 +480,4 @@ static Suite *support_suite(void)
     return s;
 }
 
-AMP_TEST_MAIN(support_suite)
+FX_TEST_MAIN(support_suite)
