@@ -5,6 +5,7 @@
 
 #include "ampath/mdr.h"
 #include "ampath/order.h"
+#include "heap.h"
 
 void amp_mdr_opts_default(amp_mdr_opts *o, double nominal)
 {
@@ -146,41 +147,11 @@ typedef struct hent {
     uint32_t f;
 } hent;
 
-static amp_status hpush(const amp_allocator *a, hent **h, size_t *n, size_t *cap, double key, uint32_t f)
+/* lib/heap.h's rule (strictly better moves) keeps the order of equal keys a function of the pushes and pops */
+static int hent_better(const void *a, const void *b, const void *ctx)
 {
-    void *p = *h;
-    size_t i;
-    if (amp_grow(a, &p, cap, *n + 1, sizeof **h) != AMP_OK)
-        return AMP_ERR_NOMEM;
-    *h = p;
-    i = (*n)++;
-    while (i > 0 && (*h)[(i - 1) / 2].key > key) {
-        (*h)[i] = (*h)[(i - 1) / 2];
-        i = (i - 1) / 2;
-    }
-    (*h)[i].key = key;
-    (*h)[i].f = f;
-    return AMP_OK;
-}
-
-static hent hpop(hent *h, size_t *n)
-{
-    hent top = h[0], last = h[--*n];
-    size_t i = 0;
-    for (;;) {
-        size_t c = 2 * i + 1;
-        if (c >= *n)
-            break;
-        if (c + 1 < *n && h[c + 1].key < h[c].key)
-            c++;
-        if (h[c].key >= last.key)
-            break;
-        h[i] = h[c];
-        i = c;
-    }
-    if (*n)
-        h[i] = last;
-    return top;
+    (void)ctx;
+    return ((const hent *)a)->key < ((const hent *)b)->key;
 }
 
 /*
@@ -484,9 +455,11 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
                        amp_mdr_stats *s)
 {
     const amp_mdr_opts *o = c->o;
-    size_t i, nh = 0, caph = 0, nfrozen = 0, n = c->fs->n;
-    hent *heap = NULL;
+    size_t i, nfrozen = 0, n = c->fs->n;
+    amp_heap heap;
+    hent e;
     amp_status st = AMP_OK;
+    amp_heap_init(&heap, c->a, sizeof(hent), hent_better, NULL);
     for (i = 0; i < n && st == AMP_OK; i++) {
         if (nb->row[i] == nb->row[i + 1]) {
             frozen[i] = 1;
@@ -495,10 +468,11 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
             continue;
         }
         sched[i] = tube_key(c, nb, frozen, r, i);
-        st = hpush(c->a, &heap, &nh, &caph, sched[i], (uint32_t)i);
+        e.key = sched[i];
+        e.f = (uint32_t)i;
+        st = amp_heap_push(&heap, &e);
     }
-    while (nh && st == AMP_OK) {
-        hent e = hpop(heap, &nh);
+    while (st == AMP_OK && amp_heap_pop(&heap, &e)) {
         size_t q;
         double key;
         if (frozen[e.f] || e.key != sched[e.f])
@@ -506,8 +480,8 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
         key = tube_key(c, nb, frozen, r, e.f);
         if (key > e.key * (1 + 1e-12) + 1e-15) {
             /* a neighbour stopped earlier, so this tube touches it later than the pair's midpoint */
-            sched[e.f] = key;
-            st = hpush(c->a, &heap, &nh, &caph, key, e.f);
+            sched[e.f] = e.key = key;
+            st = amp_heap_push(&heap, &e);
             continue;
         }
         frozen[e.f] = 1;
@@ -522,12 +496,14 @@ static amp_status grow(mdr_ctx *c, const nbrs *nb, double *r, unsigned char *fro
             uint32_t nbo = nb->rother[q];
             double ev = fmax(0.0, nb->dist[nb->ridx[q]] - r[e.f]);
             if (!frozen[nbo] && ev < sched[nbo]) {
-                sched[nbo] = ev;
-                st = hpush(c->a, &heap, &nh, &caph, ev, nbo);
+                hent nev;
+                nev.key = sched[nbo] = ev;
+                nev.f = nbo;
+                st = amp_heap_push(&heap, &nev);
             }
         }
     }
-    amp_free(c->a, heap);
+    amp_heap_free(&heap);
     return st == AMP_OK ? AMP_OK : amp_fail(c->err, AMP_ERR_NOMEM, 0, "out of memory for the growth queue");
 }
 
