@@ -8,7 +8,6 @@
  */
 #define _DEFAULT_SOURCE
 #define _POSIX_C_SOURCE 200809L
-#include <libgen.h>
 #include <limits.h>
 #include <signal.h>
 #include <stdlib.h>
@@ -20,22 +19,6 @@
 #include "bridge.h"
 #include "cli.h"
 
-/* $AMP_VPRINTER, else beside this program when installed, else the build tree's tools/ampath-vprinter */
-static void vprinter_path(char *out, size_t cap)
-{
-    const char *e = getenv("AMP_VPRINTER");
-    char exe[PATH_MAX];
-    ssize_t n;
-    if (e && *e) {
-        snprintf(out, cap, "%s", e);
-        return;
-    }
-    n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[n > 0 ? n : 0] = '\0';
-    snprintf(out, cap, "%s/ampath-vprinter", n > 0 ? dirname(exe) : "tools");
-    if (access(out, X_OK) != 0 && snprintf(out, cap, "%s/../tools/ampath-vprinter", n > 0 ? exe : "bridge") >= (int)cap)
-        out[0] = '\0';
-}
 
 static double cpu_s(void)
 {
@@ -67,7 +50,10 @@ static result run_one(const char *job, int nlines, long baud, amp_proto_window m
     memset(&r, 0, sizeof r);
     if (!s)
         return r;
-    vprinter_path(vp, sizeof vp);
+    if (cli_program("AMP_VPRINTER", "ampath-vprinter", "tools", vp, sizeof vp) != 0) {
+        free(s);
+        return r;
+    }
     snprintf(link, sizeof link, "/tmp/ampath-bench-%ld.pty", (long)getpid());
     snprintf(bstr, sizeof bstr, "%ld", baud);
     unlink(link);

@@ -5,7 +5,6 @@
  */
 #define _DEFAULT_SOURCE
 #define _POSIX_C_SOURCE 200809L
-#include <libgen.h>
 #include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,22 +14,6 @@
 
 #include "cli.h"
 
-/* $AMP_BRIDGE, else beside this program when installed, else the build tree's bridge/ampath-bridge */
-static void bridge_path(char *out, size_t cap)
-{
-    const char *e = getenv("AMP_BRIDGE");
-    char exe[PATH_MAX];
-    ssize_t n;
-    if (e && *e) {
-        snprintf(out, cap, "%s", e);
-        return;
-    }
-    n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    exe[n > 0 ? n : 0] = '\0';
-    snprintf(out, cap, "%s/ampath-bridge", n > 0 ? dirname(exe) : "bridge");
-    if (access(out, X_OK) != 0 && snprintf(out, cap, "%s/../bridge/ampath-bridge", n > 0 ? exe : "tools") >= (int)cap)
-        out[0] = '\0';
-}
 
 /* The child's JSON object {"bridge":[...],...} as members of the open object: braces and blanks trimmed. */
 static void put_members(cli_json *j, char *text)
@@ -51,8 +34,7 @@ int bench_bridge(cli_json *j, int quick)
     size_t len = 0, n;
     FILE *p;
     int st;
-    bridge_path(prog, sizeof prog);
-    if (!prog[0] || access(prog, X_OK) != 0) {
+    if (cli_program("AMP_BRIDGE", "ampath-bridge", "bridge", prog, sizeof prog) != 0 || access(prog, X_OK) != 0) {
         fprintf(stderr, "ampath bench: bridge: ampath-bridge not found (set AMP_BRIDGE)\n");
         return CLI_FAILED;
     }

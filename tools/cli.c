@@ -513,3 +513,21 @@ int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
     amp_spline_list_free(NULL, list, n);
     return CLI_OK;
 }
+
+int cli_program(const char *env, const char *name, const char *dir, char *out, size_t cap)
+{
+    const char *e = env ? getenv(env) : NULL;
+    char exe[4096], *slash;
+    ssize_t n;
+    if (e && *e)
+        return snprintf(out, cap, "%s", e) < (int)cap ? 0 : -1;
+    n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    exe[n > 0 ? n : 0] = '\0';
+    if (n <= 0 || !(slash = strrchr(exe, '/')))
+        return snprintf(out, cap, "%s/%s", dir, name) < (int)cap ? 0 : -1;
+    *slash = '\0';
+    /* installed: side by side; build tree: tools/ and bridge/ are siblings */
+    if (snprintf(out, cap, "%s/%s", exe, name) < (int)cap && access(out, X_OK) == 0)
+        return 0;
+    return snprintf(out, cap, "%s/../%s/%s", exe, dir, name) < (int)cap ? 0 : -1;
+}

@@ -147,4 +147,9 @@ int cli_integer(const char *s, long *out);
 #undef AMP_BENCH
 #endif
 
+/** Path of the program @p name: $@p env when set (tests), else beside this program (an install), else
+ *  ../@p dir/@p name beside it (the build tree, where tools/ and bridge/ are siblings). 0, or -1 when it
+ *  does not fit @p cap. */
+int cli_program(const char *env, const char *name, const char *dir, char *out, size_t cap);
+
 #endif
