@@ -8,7 +8,6 @@
 #include <string.h>
 
 #include "contpath_internal.h"
-#include "ampath/check.h" /* island_clean: see issue 19 follow-up (verifier to become a caller-set hook) */
 
 /* Work state of amp_contpath_layers(). */
 typedef struct lctx {
@@ -420,19 +419,22 @@ static amp_status island_once(lctx *c, size_t li, double h, amp_pathset *out, si
     return rc;
 }
 
-/* Do the island's paths [first, npaths) pass the independent check? */
-static int island_clean(const amp_pathset *out, size_t first, const amp_polyset *sec)
+/* Do the island's paths [first, npaths) pass the caller's verifier
+ * (o->verify_stroke; none: they pass)? */
+static int island_clean(const amp_contpath_opts *o, const amp_pathset *out, size_t first, const amp_polyset *sec)
 {
     size_t i;
+    if (!o->verify_stroke)
+        return 1;
     for (i = first; i < out->npaths; i++)
-        if (amp_check_path_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
+        if (o->verify_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
             return 0;
     return 1;
 }
 
 /* One layer: its islands nearest first, each joined and started near the
- * nozzle. An island printed with skin bands whose paths fail the check is
- * printed again with its skin regions whole (a band's rings come from an
+ * nozzle. An island printed with skin bands whose paths the caller's
+ * verifier (o->verify_stroke) rejects is printed again with its skin regions whole (a band's rings come from an
  * inset, and a slip of it can meet the core's: seen once in 60 sweep runs,
  * the bunny meshed at 0.95 mm, 0.3 mm layers, r 0.2). */
 static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
@@ -456,7 +458,7 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
         if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
             (rc = island_once(c, li, h, out, first, &nobj, s0, err)) != AMP_OK)
             break;
-        if (s0->skin_bands > keep.skin_bands && !island_clean(out, first, &c->isl)) {
+        if (s0->skin_bands > keep.skin_bands && !island_clean(c->o, out, first, &c->isl)) {
             out->nverts = first < out->npaths ? out->paths[first].first : out->nverts;
             out->npaths = first;
             *s0 = keep;

@@ -162,6 +162,7 @@ static void check_section_fig(const amp_mesh *m, double z, double r, amp_grid_ki
     so.first_layer = 0;
     ck_assert_int_eq(amp_slice_mesh(m, &so, &sl, &err), AMP_OK);
     amp_contpath_opts_default(&o, r);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     o.grid = kind;
     o.pseudo_edges = pseudo;
     if (cell > 0)
@@ -380,6 +381,7 @@ START_TEST(all_layers_of_a_sphere_and_torus_pair)
     so.first_layer = 0;
     ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
     amp_contpath_opts_default(&o, 0.4);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
     ck_assert_uint_eq(st.layers, sl.nlayers);
     ck_assert_uint_gt(st.islands, sl.nlayers); /* two bodies on most layers */
@@ -426,6 +428,7 @@ START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
         ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
         ck_assert_uint_eq(sl.open_chains, 0);
         amp_contpath_opts_default(&o, 0.5);
+        o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
         ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_gt(st.islands, sl.nlayers / 2);
         /* a region's components are spliced to the perimeter, not joined inside it (Fig. 6) */
@@ -745,6 +748,7 @@ START_TEST(paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0.3, &sl, &ps, &st, &o);
     ck_assert_uint_gt(ps.npaths, 10);
     for (i = 0; i < ps.npaths; i++) {
@@ -787,6 +791,7 @@ START_TEST(cycle_tree_and_merging_trace_the_same_edges_once_without_crossing)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl, &a, &sa, &o);
     o.tour = AMP_TOUR_MERGE;
     layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl2, &b, &sb, &o);
@@ -832,6 +837,7 @@ START_TEST(a_sliver_first_layer_is_printed_on_the_bed)
     ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
     ck_assert_double_gt(amp_polyset_area(&sl.layers[0].polys), 0);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.empty_layers, 0);
     ck_assert_uint_eq(st.dropped_islands, 0);
@@ -907,6 +913,7 @@ START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     /* step 6 is about the sparse lattice: solid regions take no corners */
     o.skin_bottom = o.skin_top = 0;
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
@@ -1051,6 +1058,7 @@ START_TEST(solid_regions_leave_no_sliver_bare_beside_their_strips)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     o.skin_bottom = o.skin_top = 10;
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
     o.support_corners = 0;
@@ -1088,6 +1096,7 @@ START_TEST(skins_are_solid_only_where_a_layer_is_uncovered)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
     ck_assert_uint_gt(st.skin_bands, 0);
     ck_assert_uint_eq(st.island_strokes, st.islands);
@@ -1133,6 +1142,7 @@ START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_IDLER, 0.7, 0.2, 0, &sl, &ps, &st, &o);
     last = sl.nlayers - 1;
     ck_assert_uint_gt(st.skin_regions, 0);
@@ -1177,6 +1187,7 @@ START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
         ck_assert_int_eq(amp_polyset_add(&R, sq, 4, NULL), AMP_OK);
         ck_assert_int_eq(amp_polyset_organize(&R, NULL), AMP_OK);
         amp_contpath_opts_default(&o, 0.2);
+        o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
         ck_assert_msg(amp_contpath_region(&k, &R, 1.0, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_eq(st.free_ends, 2);
         ck_assert_uint_eq(ps.npaths, 1);

@@ -108,6 +108,7 @@ static int scaling(cli_json *j, int quick)
         so.layer = 0.5;
         so.first_layer = 0;
         amp_contpath_opts_default(&o, 0.225);
+        o.verify_stroke = amp_check_path_stroke;
         t0 = cli_now();
         if (rc == CLI_OK && (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK ||
                              amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK))
@@ -258,6 +259,7 @@ int bench_slice(cli_json *j, int quick)
     so.layer = quick ? 1.0 : 0.2;
     so.first_layer = 0;
     amp_contpath_opts_default(&o, 0.25);
+    o.verify_stroke = amp_check_path_stroke;
     o.cell = 4.0;
     t0 = cli_now();
     if (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK)
