@@ -162,25 +162,6 @@ void amp_cp_graph_free(amp_cp_graph *g)
     amp_free(g->al, g->mate);
 }
 
-size_t amp_cp_uf_find(size_t *p, size_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
-
-int amp_cp_uf_union(size_t *p, size_t a, size_t b)
-{
-    a = amp_cp_uf_find(p, a);
-    b = amp_cp_uf_find(p, b);
-    if (a == b)
-        return 0;
-    p[a] = b;
-    return 1;
-}
-
 static int cmp_u64(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -283,7 +264,7 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     for (i = 0; i < g.nv; i++)
         uf[i] = i;
     for (i = 0; i < g.ne; i++)
-        amp_cp_uf_union(uf, g.eu[i], g.ev[i]);
+        amp_uf_union(uf, g.eu[i], g.ev[i]);
     /* step 5: on every ring, one of the two alternating pairings of its free
      * ends (gap q printed when q % 2 == choice). The choice over all rings
      * of the region joins the most pieces (Fig. 6: pieces next to each other
@@ -315,7 +296,7 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
                     for (q = (size_t)opt; q + 1 < m + (size_t)opt; q += 2) {
                         const amp_cp_fend *fa = &g.fe[grs[gk] + q % m], *fb = &g.fe[grs[gk] + (q + 1) % m];
                         len += amp_cp_ring_len(R, fa->ring, fa->pos, fb->pos);
-                        merges += (size_t)amp_cp_uf_union(tmp, fa->node, fb->node);
+                        merges += (size_t)amp_uf_union(tmp, fa->node, fb->node);
                     }
                 }
                 if (mask == 0 || merges > bestmerge || (merges == bestmerge && len > bestlen)) {
@@ -343,7 +324,7 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
             if (q % 2 == choice[k] && q + 1 < m + choice[k]) {
                 if ((rc = amp_cp_patch_add(&g, &P, R, fa, fb, 0, err)) != AMP_OK)
                     goto done;
-                amp_cp_uf_union(uf, fa->node, fb->node);
+                amp_uf_union(uf, fa->node, fb->node);
             } else {
                 gp[ngap].k = k;
                 gp[ngap].q = q;
@@ -370,10 +351,10 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     for (i = 0; i < ngap; i++) {
         size_t m = grm[gp[i].k];
         const amp_cp_fend *fa = &g.fe[grs[gp[i].k] + gp[i].q], *fb = &g.fe[grs[gp[i].k] + (gp[i].q + 1) % m];
-        if (fig6 && amp_cp_uf_find(uf, fa->node) != amp_cp_uf_find(uf, fb->node)) {
+        if (fig6 && amp_uf_find(uf, fa->node) != amp_uf_find(uf, fb->node)) {
             if ((rc = amp_cp_patch_add(&g, &P, R, fa, fb, 1, err)) != AMP_OK)
                 goto done;
-            amp_cp_uf_union(uf, fa->node, fb->node);
+            amp_uf_union(uf, fa->node, fb->node);
             st->joins++;
         } else if (o->support_stretches) {
             /* Remark 2.1: print the unprinted stretch on its own */

@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "ampath/contpath.h"
+#include "uf.h"
 
 #define NONE ((size_t)-1)
 
@@ -59,8 +60,6 @@ amp_status amp_cp_vert(amp_cp_graph *g, amp_vec2 p, size_t *id);
 /** Edge a-b (none when a == b); pseudo: travel inside the stroke. */
 amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo);
 void amp_cp_graph_free(amp_cp_graph *g);
-size_t amp_cp_uf_find(size_t *p, size_t x);
-int amp_cp_uf_union(size_t *p, size_t a, size_t b);
 /** Unique undirected 1-cells of K̂ as vertex pairs (lo << 32 | hi). */
 amp_status amp_cp_khat_edges(const amp_cx2 *k, const amp_allocator *al, uint64_t **out, size_t *n);
 /** Printed length of path i (pseudo segments, radius 0 at both ends, excluded). */

@@ -131,7 +131,7 @@ static int nearest(const joiner *J, const size_t *uf, size_t skip, amp_vec2 q, s
                 size_t i = g->item[k].i, j = (i + 1) % L->n;
                 amp_vec2 a = P2v(L->v[i].p), b = P2v(L->v[j].p);
                 double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-                if (L->wall || amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
+                if (L->wall || amp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
                     !(L->v[j].r == J->r))
                     continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
@@ -338,7 +338,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
 {
     const jloop *X = &J->lp[lx];
     double d1, d2;
-    size_t l2, rx = amp_cp_uf_find(uf, lx), fw, bw;
+    size_t l2, rx = amp_uf_find(uf, lx), fw, bw;
     amp_pvert P1, P2, Q1, Q2;
     amp_vec2 p1, p2, q1, q2;
     cut c;
@@ -382,7 +382,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
         return 0;
     *st = splice(J, &c);
     if (*st == AMP_OK) {
-        amp_cp_uf_union(uf, c.ly, lx);
+        amp_uf_union(uf, c.ly, lx);
         *st = grid_build(J);
     }
     return 1;

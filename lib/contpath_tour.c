@@ -156,11 +156,11 @@ static int faces_and_levels(tour *t, size_t *fl, double *area, size_t *queue, si
     for (i = 0; i < g->nv; i++)
         uf[i] = i;
     for (i = 0; i < g->ne; i++)
-        amp_cp_uf_union(uf, g->eu[i], g->ev[i]);
+        amp_uf_union(uf, g->eu[i], g->ev[i]);
     for (i = 0; i < g->nv; i++)
         compf[i] = NONE;
     for (i = 0; i < t->ne2; i++) {
-        size_t c = amp_cp_uf_find(uf, end_at(g, i)), f = t->face[i];
+        size_t c = amp_uf_find(uf, end_at(g, i)), f = t->face[i];
         if (compf[c] == NONE || area[f] < area[compf[c]])
             compf[c] = f;
     }
@@ -281,8 +281,8 @@ static int splice(tour *t, size_t x, size_t y, unsigned char *isopen)
     size_t a = t->partner[x], d = t->partner[y], cx, cy;
     if (a == y || a == NONE || d == NONE)
         return 0;
-    cx = amp_cp_uf_find(t->uf, t->curve[x / 2]);
-    cy = amp_cp_uf_find(t->uf, t->curve[y / 2]);
+    cx = amp_uf_find(t->uf, t->curve[x / 2]);
+    cy = amp_uf_find(t->uf, t->curve[y / 2]);
     if (cx == cy || (isopen[cx] && isopen[cy]))
         return 0; /* two open curves re-paired stay two open curves */
     t->partner[a] = d;

@@ -5,8 +5,7 @@
 #include <string.h>
 
 #include "ampath/polygon.h"
-
-#define TWO_PI 6.283185307179586476925286766559
+#include "ampath/vec.h"
 
 void amp_polyset_init(amp_polyset *ps, const amp_allocator *a)
 {
@@ -416,9 +415,9 @@ static amp_status raw_ring(inset_ctx *c, const amp_vec2 *p, size_t n, int left, 
             double a0 = atan2(n1.y, n1.x), a1 = atan2(n2.y, n2.x), sweep = a0 - a1, rc;
             int steps, j;
             while (sweep < 0)
-                sweep += TWO_PI;
-            while (sweep >= TWO_PI)
-                sweep -= TWO_PI;
+                sweep += 2 * AMP_PI;
+            while (sweep >= 2 * AMP_PI)
+                sweep -= 2 * AMP_PI;
             steps = (int)ceil(sweep / dstep);
             if (steps < 1)
                 steps = 1;

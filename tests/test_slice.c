@@ -10,8 +10,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
-
 static size_t count_holes(const amp_polyset *ps)
 {
     size_t i, h = 0;
@@ -42,7 +40,7 @@ START_TEST(sphere_sections_are_single_discs_with_analytic_area)
     amp_polyset_init(&ps, NULL);
     ck_assert_int_eq(fx_sphere(&m, amp_v3(1, 2, 0), 10.0, 256, 128), AMP_OK);
     for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
-        double want = PI * (100.0 - zs[i] * zs[i]);
+        double want = AMP_PI * (100.0 - zs[i] * zs[i]);
         amp_polyset_clear(&ps);
         ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
         ck_assert_uint_eq(ps.nislands, 1);
@@ -72,7 +70,7 @@ START_TEST(torus_sections_are_annuli_with_one_hole_and_analytic_area)
     amp_polyset_init(&ps, NULL);
     ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), 10.0, 3.0, 256, 128), AMP_OK);
     for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
-        double w = sqrt(9.0 - zs[i] * zs[i]), want = 4 * PI * 10.0 * w;
+        double w = sqrt(9.0 - zs[i] * zs[i]), want = 4 * AMP_PI * 10.0 * w;
         amp_polyset_clear(&ps);
         ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
         ck_assert_uint_eq(ps.nislands, 1);
