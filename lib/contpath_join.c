@@ -1,8 +1,9 @@
-/* One extrusion start per island (beyond continuous-toolpath-euler.txt,
- * issue 16): the perimeter loops of an island and the closed strokes of its
- * infill regions are spliced into one closed stroke. Two loops X and Y that
- * run side by side (the perimeter at r and the ring of R̃ at 3r, or two
- * perimeter loops of a thin island) are joined by two parallel connectors
+/* One extrusion start per island (beyond continuous-toolpath-euler.txt:
+ * every extrusion start is a blob and a seam on the print): the perimeter
+ * loops of an island and the closed strokes of its infill regions are
+ * spliced into one closed stroke. Two loops X and Y that run side by side
+ * (the perimeter at r and the ring of R̃ at 3r, or two perimeter loops of a
+ * thin island) are joined by two parallel connectors
  * p1-q1 and p2-q2, |p1 p2| = 2r: X is run from p2 round to p1, the connector
  * to q1, Y round the long way to q2, the connector back to p2 (the stretch
  * p1 p2 of X and q1 q2 of Y is left out; the two connector beads cover it).

@@ -32,7 +32,7 @@ typedef struct lctx {
 
 /* Closed path @p k of @p ps (last vertex = first) is rotated to start at
  * its vertex nearest to @p q among those whose two segments are printed, so
- * that the stroke begins where the nozzle is (issue 14: travel). */
+ * that the stroke begins where the nozzle is (less travel between strokes). */
 static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *err)
 {
     amp_pvert *v = amp_pathset_path_verts(ps, k), *w;
@@ -60,7 +60,7 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
     return AMP_OK;
 }
 
-/* v as the .amp writer will write it (10 significant digits, SPEC §3): the
+/* v as the .amp writer will write it (10 significant digits, docs/interfaces.md §3): the
  * checks then judge the coordinates the printer gets, and a touch that
  * rounding would turn into a crossing is caught before the file exists. */
 static double as_written_slow(double v)
@@ -182,8 +182,8 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
 }
 
 /* An island with infill whose inset by r falls apart into lobes joined by
- * necks narrower than a bead (issue 16: a lobe each would be a stroke
- * each, and the neck would stay bare). Its perimeter is taken at the
+ * necks narrower than a bead (a lobe each would be a stroke each, one
+ * more extrusion start, and the neck would stay bare). Its perimeter is taken at the
  * largest offset d < r (bisection between r/32 and r, to 1/64 r) at which the
  * inset holds it in the fewest pieces; the loop then runs up one side of
  * the neck and back down the other, printing it, and joins the lobes in one
@@ -225,7 +225,8 @@ static amp_status run_region(lctx *c, size_t li, const amp_polyset *R, int skin,
                              s0, err);
 }
 
-/* Skins only where needed, without polygon booleans (issue 16): every
+/* Skins only where needed, without polygon booleans (the sparse lattice
+ * inside a region keeps the slice fast and light where no skin is due): every
  * uncovered point of region R̃ = c->reg lies within @p w of its boundary
  * (amp_cp_region_skin_depth), so the band R̃ minus its inset by w is solid
  * and the inset by w + 2r (one bead further in, so the two parts' strokes

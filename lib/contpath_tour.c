@@ -343,7 +343,7 @@ static void merge_any(tour *t, unsigned char *isopen)
  * clockwise around the region), then any printed end, then the rest. A
  * pseudo edge is written with radius 0 at both ends; where printing and
  * travel meet the vertex is written twice (a zero-length step), so no
- * segment mixes the two radii (SPEC §5: mean radius). */
+ * segment mixes the two radii (docs/interfaces.md §5: mean radius). */
 static amp_status trace(tour *t, double z, double rad, int by_level, amp_pathset *out, size_t *ntours,
                         unsigned char *used, amp_error *err)
 {

@@ -236,7 +236,7 @@ amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err)
                 continue;
             src = amp_polyset_ring(ps, r);
             memcpy(pts + npts, src, ps->rings[r].n * sizeof *pts);
-            /* outer boundaries counter-clockwise, holes clockwise (SPEC §4) */
+            /* outer boundaries counter-clockwise, holes clockwise (docs/interfaces.md §4) */
             if ((area[r] < 0) != hole)
                 amp_ring_reverse(pts + npts, ps->rings[r].n);
             rings[nout].first = npts;

@@ -253,7 +253,7 @@ double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
     if (!(step > 0))
         step = 1.0;
     /* row indexes: a sample costs one row, not every edge (linear cost,
-     * issue 16); without memory for them the plain scans give the same */
+     * on large sections); without memory for them the plain scans give the same */
     have_lo = amp_polyindex_build(&ilo, lo, NULL) == AMP_OK;
     have_up = amp_polyindex_build(&iup, up, NULL) == AMP_OK;
     /* the upper rings' vertices (about 512 of them at most): the overhang

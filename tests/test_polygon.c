@@ -362,19 +362,19 @@ static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, area_orientation_and_containment_of_an_l_shape);
-    AMP_ADD_TEST(tc, organize_orients_outers_ccw_and_holes_cw_in_islands);
-    AMP_ADD_TEST(tc, convex_hull_of_a_noisy_circle_and_interior_points);
-    AMP_ADD_TEST(tc, inset_of_a_square_keeps_sharp_corners);
-    AMP_ADD_TEST(tc, inset_splits_a_neck_narrower_than_the_extruder);
-    AMP_ADD_TEST(tc, inset_grows_and_merges_holes_and_drops_small_islands);
-    AMP_ADD_TEST(tc, inset_checker_rejects_a_wrong_offset);
-    AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
-    AMP_ADD_TEST(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
-    AMP_ADD_TEST(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
-    AMP_ADD_TEST(tc, row_index_answers_as_the_plain_scans);
+    tcase_add_test(tc, area_orientation_and_containment_of_an_l_shape);
+    tcase_add_test(tc, organize_orients_outers_ccw_and_holes_cw_in_islands);
+    tcase_add_test(tc, convex_hull_of_a_noisy_circle_and_interior_points);
+    tcase_add_test(tc, inset_of_a_square_keeps_sharp_corners);
+    tcase_add_test(tc, inset_splits_a_neck_narrower_than_the_extruder);
+    tcase_add_test(tc, inset_grows_and_merges_holes_and_drops_small_islands);
+    tcase_add_test(tc, inset_checker_rejects_a_wrong_offset);
+    tcase_add_test(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
+    tcase_add_test(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
+    tcase_add_test(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
+    tcase_add_test(tc, row_index_answers_as_the_plain_scans);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(polygon_suite)
+FX_TEST_MAIN(polygon_suite)

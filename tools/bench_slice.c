@@ -200,8 +200,8 @@ static void side_by_side(cli_json *j, const char *name, const amp_mesh *m, doubl
                theirs > 0 ? "ok" : "failed");
 }
 
-/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
- * gcode in at most half its wall time) on the built-in meshes and the
+/* Side by side with PrusaSlicer (the speed target: slice --continuous +
+ * gcode in at most half PrusaSlicer's wall time) on the built-in meshes and the
  * bench's bumpy torus, when `prusa-slicer` is installed (`make bench`
  * installs Debian's package); skipped with a message otherwise. */
 static void prusa(cli_json *j, const amp_mesh *torus, int quick)

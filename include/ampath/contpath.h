@@ -27,7 +27,7 @@
  * extruding: its two end vertices carry radius 0 in the path, and where
  * printing and travel meet the vertex is written twice (once with each
  * radius), so that no segment mixes the two (the G-code writer extrudes by
- * the mean radius of a segment, SPEC §5).
+ * the mean radius of a segment, docs/interfaces.md §5).
  * Functions are reentrant; inputs are only read.
  */
 #ifndef AMPATH_CONTPATH_H
