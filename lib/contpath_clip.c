@@ -207,8 +207,10 @@ static void place_vertices(clip_ctx *c, const amp_cx2 *k)
 static amp_status edge_crossings(clip_ctx *c, amp_vec2 A, amp_vec2 B)
 {
     rgrid *rg = &c->rg;
-    long cx0 = rg_cell(fmin(A.x, B.x), rg->x0, rg->cell, rg->nx), cx1 = rg_cell(fmax(A.x, B.x), rg->x0, rg->cell, rg->nx);
-    long cy0 = rg_cell(fmin(A.y, B.y), rg->y0, rg->cell, rg->ny), cy1 = rg_cell(fmax(A.y, B.y), rg->y0, rg->cell, rg->ny);
+    long cx0 = rg_cell(fmin(A.x, B.x), rg->x0, rg->cell, rg->nx);
+    long cx1 = rg_cell(fmax(A.x, B.x), rg->x0, rg->cell, rg->nx);
+    long cy0 = rg_cell(fmin(A.y, B.y), rg->y0, rg->cell, rg->ny);
+    long cy1 = rg_cell(fmax(A.y, B.y), rg->y0, rg->cell, rg->ny);
     long cx, cy;
     size_t kk;
     c->nh = 0;
