@@ -129,21 +129,21 @@ amp_status amp_cp_vert(amp_cp_graph *g, amp_vec2 p, size_t *id)
 
 amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo)
 {
-    void *q = g->eu, *r = g->ev, *t = g->ep;
+    void *q = g->edge_u, *r = g->edge_v, *t = g->edge_pseudo;
     if (a == b)
         return AMP_OK;
-    if (amp_grow(g->al, &t, &g->cap_ep, g->ne + 1, sizeof *g->ep) != AMP_OK)
+    if (amp_grow(g->al, &t, &g->cap_edge_pseudo, g->ne + 1, sizeof *g->edge_pseudo) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->ep = t;
-    g->ep[g->ne] = (unsigned char)(pseudo != 0);
-    if (amp_grow(g->al, &q, &g->cap_eu, g->ne + 1, sizeof *g->eu) != AMP_OK)
+    g->edge_pseudo = t;
+    g->edge_pseudo[g->ne] = (unsigned char)(pseudo != 0);
+    if (amp_grow(g->al, &q, &g->cap_edge_u, g->ne + 1, sizeof *g->edge_u) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->eu = q;
-    if (amp_grow(g->al, &r, &g->cap_ev, g->ne + 1, sizeof *g->ev) != AMP_OK)
+    g->edge_u = q;
+    if (amp_grow(g->al, &r, &g->cap_edge_v, g->ne + 1, sizeof *g->edge_v) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->ev = r;
-    g->eu[g->ne] = a;
-    g->ev[g->ne] = b;
+    g->edge_v = r;
+    g->edge_u[g->ne] = a;
+    g->edge_v[g->ne] = b;
     g->ne++;
     return AMP_OK;
 }
@@ -151,10 +151,10 @@ amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo)
 void amp_cp_graph_free(amp_cp_graph *g)
 {
     amp_free(g->al, g->v);
-    amp_free(g->al, g->eu);
-    amp_free(g->al, g->ev);
-    amp_free(g->al, g->ep);
-    amp_free(g->al, g->fe);
+    amp_free(g->al, g->edge_u);
+    amp_free(g->al, g->edge_v);
+    amp_free(g->al, g->edge_pseudo);
+    amp_free(g->al, g->fends);
     amp_free(g->al, g->pp);
     amp_free(g->al, g->pf);
     amp_free(g->al, g->iv);
@@ -227,7 +227,7 @@ typedef struct region_ctx {
     amp_contpath_stats *st;
     size_t *uf;               /* components of the graph (lib/uf.h) */
     size_t *trial;            /* scratch copy of uf while pairings are tried */
-    size_t *group_first;      /* first free end (index into g.fe) of each ring group */
+    size_t *group_first;      /* first free end (index into g.fends) of each ring group */
     size_t *group_ends;       /* free ends of each ring group (>= 2) */
     size_t ngroups;
     unsigned char *pairing;   /* per ring group: gap q is patched when q % 2 == pairing */
@@ -252,24 +252,24 @@ static amp_status region_clip(region_ctx *c, const amp_cx2 *khat, const uint64_t
     for (i = 0; i < g->nv; i++)
         g->mate[i] = NONE;
     for (i = 0; i < g->ne; i++) {
-        g->mate[g->eu[i]] = g->ev[i];
-        g->mate[g->ev[i]] = g->eu[i];
+        g->mate[g->edge_u[i]] = g->edge_v[i];
+        g->mate[g->edge_v[i]] = g->edge_u[i];
     }
-    if (g->nfe > 1)
-        qsort(g->fe, g->nfe, sizeof *g->fe, amp_cp_cmp_fend);
-    c->st->free_ends += g->nfe;
+    if (g->nfends > 1)
+        qsort(g->fends, g->nfends, sizeof *g->fends, amp_cp_cmp_fend);
+    c->st->free_ends += g->nfends;
     c->uf = amp_alloc(g->al, (g->nv + 1) * sizeof *c->uf);
     c->trial = amp_alloc(g->al, (g->nv + 1) * sizeof *c->trial);
-    c->group_first = amp_alloc(g->al, (g->nfe + 1) * sizeof *c->group_first);
-    c->group_ends = amp_alloc(g->al, (g->nfe + 1) * sizeof *c->group_ends);
-    c->pairing = amp_calloc(g->al, g->nfe + 1, 1);
-    c->gaps = amp_alloc(g->al, (g->nfe + 1) * sizeof *c->gaps);
+    c->group_first = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->group_first);
+    c->group_ends = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->group_ends);
+    c->pairing = amp_calloc(g->al, g->nfends + 1, 1);
+    c->gaps = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->gaps);
     if (!c->uf || !c->trial || !c->group_first || !c->group_ends || !c->pairing || !c->gaps)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
     for (i = 0; i < g->nv; i++)
         c->uf[i] = i;
     for (i = 0; i < g->ne; i++)
-        amp_uf_union(c->uf, g->eu[i], g->ev[i]);
+        amp_uf_union(c->uf, g->edge_u[i], g->edge_v[i]);
     return AMP_OK;
 }
 
@@ -288,8 +288,8 @@ static size_t try_pairings(region_ctx *c, size_t k, unsigned long mask, int gree
         if (opt < 0)
             continue;
         for (q = (size_t)opt; q + 1 < m + (size_t)opt; q += 2) {
-            const amp_cp_fend *fa = &c->g.fe[c->group_first[gk] + q % m];
-            const amp_cp_fend *fb = &c->g.fe[c->group_first[gk] + (q + 1) % m];
+            const amp_cp_fend *fa = &c->g.fends[c->group_first[gk] + q % m];
+            const amp_cp_fend *fb = &c->g.fends[c->group_first[gk] + (q + 1) % m];
             *len += amp_cp_ring_len(c->R, fa->ring, fa->pos, fb->pos);
             merges += (size_t)amp_uf_union(c->trial, fa->node, fb->node);
         }
@@ -307,8 +307,8 @@ static void choose_pairings(region_ctx *c)
     size_t i, j, k;
     int greedy;
     unsigned long mask, nmask, bestmask = 0;
-    for (i = 0, c->ngroups = 0; i < c->g.nfe; i = j) {
-        for (j = i; j < c->g.nfe && c->g.fe[j].ring == c->g.fe[i].ring; j++)
+    for (i = 0, c->ngroups = 0; i < c->g.nfends; i = j) {
+        for (j = i; j < c->g.nfends && c->g.fends[j].ring == c->g.fends[i].ring; j++)
             ;
         if (j - i >= 2) {
             c->group_first[c->ngroups] = i;
@@ -343,12 +343,13 @@ static amp_status patch_rings(region_ctx *c, amp_error *err)
 {
     size_t k, q;
     amp_status rc;
-    if (amp_cp_patchset_alloc(c->g.al, &c->P, c->g.nfe) != AMP_OK)
+    if (amp_cp_patchset_alloc(c->g.al, &c->P, c->g.nfends) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
     for (k = 0; k < c->ngroups; k++) {
         size_t m = c->group_ends[k];
         for (q = 0; q < m; q++) {
-            const amp_cp_fend *fa = &c->g.fe[c->group_first[k] + q], *fb = &c->g.fe[c->group_first[k] + (q + 1) % m];
+            const amp_cp_fend *fa = &c->g.fends[c->group_first[k] + q];
+            const amp_cp_fend *fb = &c->g.fends[c->group_first[k] + (q + 1) % m];
             if (q % 2 == c->pairing[k] && q + 1 < m + c->pairing[k]) {
                 if ((rc = amp_cp_patch_add(&c->g, &c->P, c->R, fa, fb, 0, err)) != AMP_OK)
                     return rc;
@@ -386,8 +387,8 @@ static amp_status join_components(region_ctx *c, int hub, amp_error *err)
     for (i = 0; i < c->ngaps; i++) {
         const gap *gi = &c->gaps[i];
         size_t m = c->group_ends[gi->group];
-        const amp_cp_fend *fa = &c->g.fe[c->group_first[gi->group] + gi->end];
-        const amp_cp_fend *fb = &c->g.fe[c->group_first[gi->group] + (gi->end + 1) % m];
+        const amp_cp_fend *fa = &c->g.fends[c->group_first[gi->group] + gi->end];
+        const amp_cp_fend *fb = &c->g.fends[c->group_first[gi->group] + (gi->end + 1) % m];
         if (fig6 && amp_uf_find(c->uf, fa->node) != amp_uf_find(c->uf, fb->node)) {
             if ((rc = amp_cp_patch_add(&c->g, &c->P, c->R, fa, fb, 1, err)) != AMP_OK)
                 return rc;
@@ -419,8 +420,8 @@ static amp_status bare_rings(region_ctx *c, amp_error *err)
     for (k = 0; k < R->nrings && c->g.ne > 0; k++) {
         size_t nf = 0;
         const amp_vec2 *p = amp_polyset_ring(R, k);
-        for (q = 0; q < c->g.nfe; q++)
-            nf += c->g.fe[q].ring == k;
+        for (q = 0; q < c->g.nfends; q++)
+            nf += c->g.fends[q].ring == k;
         if (nf)
             continue;
         c->st->unprinted_length += ring_perimeter(p, R->rings[k].n);

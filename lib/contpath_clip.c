@@ -154,16 +154,16 @@ static int rg_inside(const rgrid *g, amp_vec2 q)
 /* A node where edge AB crosses a ring (hit @p h), recorded as a free end. */
 static amp_status free_end(amp_cp_graph *g, amp_vec2 A, amp_vec2 B, const hit *h, size_t *id)
 {
-    void *q = g->fe;
+    void *q = g->fends;
     if (amp_cp_vert(g, amp_v2(A.x + h->t * (B.x - A.x), A.y + h->t * (B.y - A.y)), id) != AMP_OK)
         return AMP_ERR_NOMEM;
-    if (amp_grow(g->al, &q, &g->cap_fe, g->nfe + 1, sizeof *g->fe) != AMP_OK)
+    if (amp_grow(g->al, &q, &g->cap_fends, g->nfends + 1, sizeof *g->fends) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->fe = q;
-    g->fe[g->nfe].node = *id;
-    g->fe[g->nfe].ring = h->ring;
-    g->fe[g->nfe].pos = h->pos;
-    g->nfe++;
+    g->fends = q;
+    g->fends[g->nfends].node = *id;
+    g->fends[g->nfends].ring = h->ring;
+    g->fends[g->nfends].pos = h->pos;
+    g->nfends++;
     return AMP_OK;
 }
 
@@ -294,13 +294,13 @@ static amp_status keep_free_ends(const amp_allocator *al, amp_cp_graph *g)
     if (!deg)
         return AMP_ERR_NOMEM;
     for (i = 0; i < g->ne; i++) {
-        deg[g->eu[i]]++;
-        deg[g->ev[i]]++;
+        deg[g->edge_u[i]]++;
+        deg[g->edge_v[i]]++;
     }
-    for (i = 0, s = 0; i < g->nfe; i++)
-        if (deg[g->fe[i].node] == 1)
-            g->fe[s++] = g->fe[i];
-    g->nfe = s;
+    for (i = 0, s = 0; i < g->nfends; i++)
+        if (deg[g->fends[i].node] == 1)
+            g->fends[s++] = g->fends[i];
+    g->nfends = s;
     amp_free(al, deg);
     return AMP_OK;
 }

@@ -26,14 +26,14 @@ typedef struct amp_cp_graph {
     const amp_allocator *al;
     amp_vec2 *v;
     size_t nv, cap_v;
-    size_t *eu, *ev;
-    unsigned char *ep; /* 1: pseudo edge (travel inside the stroke, no material) */
-    size_t ne, cap_eu, cap_ev, cap_ep;
+    size_t *edge_u, *edge_v; /* edge i joins nodes edge_u[i] and edge_v[i] */
+    unsigned char *edge_pseudo; /* 1: pseudo edge (travel inside the stroke, no material) */
+    size_t ne, cap_edge_u, cap_edge_v, cap_edge_pseudo;
     size_t nlat; /* edges [0, nlat) are the clipped lattice pieces */
     size_t *mate; /* per node < nlatv: the other end of its last lattice edge (NONE: none) */
     size_t nlatv;
-    amp_cp_fend *fe;
-    size_t nfe, cap_fe;
+    amp_cp_fend *fends; /* free ends: lattice nodes of degree 1 on a ring */
+    size_t nfends, cap_fends;
     /* scratch of amp_cp_patch_points(): the patch polyline and its segment kinds */
     amp_vec2 *pp;
     unsigned char *pf;
