@@ -356,7 +356,8 @@ static amp_status trace(tour *t, double z, double rad, int by_level, amp_pathset
             size_t x = i, first = i, at = end_at(g, x);
             double cur;
             if (used[i / 2] || (pass == 0 && t->partner[i] != NONE) ||
-                (pass >= 1 && pass <= 2 && g->edge_pseudo[i / 2]) || (pass == 1 && !(by_level && t->depth[t->face[i]] == 0)))
+                (pass >= 1 && pass <= 2 && g->edge_pseudo[i / 2]) ||
+                (pass == 1 && !(by_level && t->depth[t->face[i]] == 0)))
                 continue;
             cur = g->edge_pseudo[i / 2] ? 0.0 : rad;
             if ((st = amp_pathset_begin(out, AMP_ROLE_OBJECT, err)) != AMP_OK)
