@@ -1128,6 +1128,50 @@ START_TEST(skins_are_solid_only_where_a_layer_is_uncovered)
 }
 END_TEST
 
+static size_t verifier_calls;
+
+/* A verifier that rejects every path (counts its calls). */
+static amp_status reject_every_path(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    struct amp_stroke_report *rep, amp_error *err)
+{
+    (void)ps, (void)i, (void)region, (void)tol, (void)rep, (void)err;
+    verifier_calls++;
+    return AMP_ERR_GEOMETRY;
+}
+
+/* The skin bands' safety net is the caller's: without a verifier
+ * (verify_stroke NULL, the default) no island is printed again; with one
+ * that rejects every path, every island printed with bands is printed again
+ * with its skin regions whole (no bands are left, band_retries counts them),
+ * and the verifier was asked about each of its paths. */
+START_TEST(the_band_retry_asks_the_callers_verifier)
+{
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    ck_assert(o.verify_stroke == NULL);
+    layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
+    ck_assert_uint_gt(st.skin_bands, 0);
+    ck_assert_uint_eq(st.band_retries, 0);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    o.verify_stroke = reject_every_path;
+    verifier_calls = 0;
+    layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
+    ck_assert_uint_eq(st.skin_bands, 0);
+    ck_assert_uint_gt(st.band_retries, 0);
+    ck_assert_uint_ge(verifier_calls, st.band_retries);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
+
 START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 {
     /* the idler's first and last layers are skins: >= 95 % of the section
@@ -1290,6 +1334,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke);
     tcase_add_test(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
     tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
+    tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     suite_add_tcase(s, tc);
     return s;
 }
