@@ -129,21 +129,21 @@ amp_status amp_cp_vert(amp_cp_graph *g, amp_vec2 p, size_t *id)
 
 amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo)
 {
-    void *q = g->eu, *r = g->ev, *t = g->ep;
+    void *q = g->edge_u, *r = g->edge_v, *t = g->edge_pseudo;
     if (a == b)
         return AMP_OK;
-    if (amp_grow(g->al, &t, &g->cap_ep, g->ne + 1, sizeof *g->ep) != AMP_OK)
+    if (amp_grow(g->al, &t, &g->cap_edge_pseudo, g->ne + 1, sizeof *g->edge_pseudo) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->ep = t;
-    g->ep[g->ne] = (unsigned char)(pseudo != 0);
-    if (amp_grow(g->al, &q, &g->cap_eu, g->ne + 1, sizeof *g->eu) != AMP_OK)
+    g->edge_pseudo = t;
+    g->edge_pseudo[g->ne] = (unsigned char)(pseudo != 0);
+    if (amp_grow(g->al, &q, &g->cap_edge_u, g->ne + 1, sizeof *g->edge_u) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->eu = q;
-    if (amp_grow(g->al, &r, &g->cap_ev, g->ne + 1, sizeof *g->ev) != AMP_OK)
+    g->edge_u = q;
+    if (amp_grow(g->al, &r, &g->cap_edge_v, g->ne + 1, sizeof *g->edge_v) != AMP_OK)
         return AMP_ERR_NOMEM;
-    g->ev = r;
-    g->eu[g->ne] = a;
-    g->ev[g->ne] = b;
+    g->edge_v = r;
+    g->edge_u[g->ne] = a;
+    g->edge_v[g->ne] = b;
     g->ne++;
     return AMP_OK;
 }
@@ -151,34 +151,15 @@ amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo)
 void amp_cp_graph_free(amp_cp_graph *g)
 {
     amp_free(g->al, g->v);
-    amp_free(g->al, g->eu);
-    amp_free(g->al, g->ev);
-    amp_free(g->al, g->ep);
-    amp_free(g->al, g->fe);
+    amp_free(g->al, g->edge_u);
+    amp_free(g->al, g->edge_v);
+    amp_free(g->al, g->edge_pseudo);
+    amp_free(g->al, g->fends);
     amp_free(g->al, g->pp);
     amp_free(g->al, g->pf);
     amp_free(g->al, g->iv);
     amp_free(g->al, g->cand);
     amp_free(g->al, g->mate);
-}
-
-size_t amp_cp_uf_find(size_t *p, size_t x)
-{
-    while (p[x] != x) {
-        p[x] = p[p[x]];
-        x = p[x];
-    }
-    return x;
-}
-
-int amp_cp_uf_union(size_t *p, size_t a, size_t b)
-{
-    a = amp_cp_uf_find(p, a);
-    b = amp_cp_uf_find(p, b);
-    if (a == b)
-        return 0;
-    p[a] = b;
-    return 1;
 }
 
 static int cmp_u64(const void *a, const void *b)
@@ -213,9 +194,10 @@ amp_status amp_cp_khat_edges(const amp_cx2 *k, const amp_allocator *al, uint64_t
     return AMP_OK;
 }
 
-/* One gap of a ring: the stretch from free end q to q + 1 (cyclic) of ring group k. */
+/* One gap of a ring: the stretch from free end q to q + 1 (cyclic) of ring
+ * group `group` (the free ends of one ring, in order along it). */
 typedef struct gap {
-    size_t k, q;
+    size_t group, end;
     double len;
 } gap;
 
@@ -235,207 +217,268 @@ static double ring_perimeter(const amp_vec2 *p, size_t n)
     return l;
 }
 
-/* Region processing with a prepared K̂ edge list. */
-amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
-                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_pathset *bare,
-                             amp_contpath_stats *st, amp_error *err)
+/* One region R̃ on its way through step 5, Figs. 6-8 and §4. */
+typedef struct region_ctx {
+    amp_cp_graph g;           /* K̂ clipped to R̃, then its patches */
+    const amp_polyset *R;     /* the region R̃ */
+    const amp_contpath_opts *o;
+    double z;
+    amp_pathset *out, *bare;  /* strokes; bare ring stretches for step 6 (may be NULL) */
+    amp_contpath_stats *st;
+    size_t *uf;               /* components of the graph (lib/uf.h) */
+    size_t *trial;            /* scratch copy of uf while pairings are tried */
+    size_t *group_first;      /* first free end (index into g.fends) of each ring group */
+    size_t *group_ends;       /* free ends of each ring group (>= 2) */
+    size_t ngroups;
+    unsigned char *pairing;   /* per ring group: gap q is patched when q % 2 == pairing */
+    gap *gaps;                /* gaps left unpatched by the pairing */
+    size_t ngaps;
+    amp_cp_patchset P;        /* the patches (ring paths) chosen */
+} region_ctx;
+
+/* Step 5, clipping: K̂ clipped to R̃, each vertex's lattice mate, the free
+ * ends in order along their rings, and the lattice's components. */
+static amp_status region_clip(region_ctx *c, const amp_cx2 *khat, const uint64_t *ke, size_t nke, amp_error *err)
 {
-    amp_cp_graph g;
-    size_t *uf = NULL, *grs = NULL, *grm = NULL, *tmp = NULL, i, j, k, ngr, ntours = 0, nodd = 0, first_path, ngap = 0;
-    unsigned char *choice = NULL;
-    gap *gp = NULL;
-    amp_cp_patchset P;
-    amp_cp_tour_info ti;
-    int fig6;
-    double D = o->pseudo_edges ? 2 * o->radius * (1 - 1e-9) : 0.0, pseudo = 0;
-    amp_status rc;
-    memset(&g, 0, sizeof g);
-    memset(&P, 0, sizeof P);
-    g.al = out->alloc;
-    rc = amp_cp_clip(khat, ke, nke, R, &g, err);
+    amp_cp_graph *g = &c->g;
+    size_t i;
+    amp_status rc = amp_cp_clip(khat, ke, nke, c->R, g, err);
     if (rc != AMP_OK)
-        goto done;
-    g.nlat = g.ne;
-    g.nlatv = g.nv;
-    if (!(g.mate = amp_alloc(g.al, (g.nv + 1) * sizeof *g.mate))) {
-        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
-        goto done;
+        return rc;
+    g->nlat = g->ne;
+    g->nlatv = g->nv;
+    if (!(g->mate = amp_alloc(g->al, (g->nv + 1) * sizeof *g->mate)))
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
+    for (i = 0; i < g->nv; i++)
+        g->mate[i] = NONE;
+    for (i = 0; i < g->ne; i++) {
+        g->mate[g->edge_u[i]] = g->edge_v[i];
+        g->mate[g->edge_v[i]] = g->edge_u[i];
     }
-    for (i = 0; i < g.nv; i++)
-        g.mate[i] = NONE;
-    for (i = 0; i < g.ne; i++) {
-        g.mate[g.eu[i]] = g.ev[i];
-        g.mate[g.ev[i]] = g.eu[i];
+    if (g->nfends > 1)
+        qsort(g->fends, g->nfends, sizeof *g->fends, amp_cp_cmp_fend);
+    c->st->free_ends += g->nfends;
+    c->uf = amp_alloc(g->al, (g->nv + 1) * sizeof *c->uf);
+    c->trial = amp_alloc(g->al, (g->nv + 1) * sizeof *c->trial);
+    c->group_first = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->group_first);
+    c->group_ends = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->group_ends);
+    c->pairing = amp_calloc(g->al, g->nfends + 1, 1);
+    c->gaps = amp_alloc(g->al, (g->nfends + 1) * sizeof *c->gaps);
+    if (!c->uf || !c->trial || !c->group_first || !c->group_ends || !c->pairing || !c->gaps)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
+    for (i = 0; i < g->nv; i++)
+        c->uf[i] = i;
+    for (i = 0; i < g->ne; i++)
+        amp_uf_union(c->uf, g->edge_u[i], g->edge_v[i]);
+    return AMP_OK;
+}
+
+/* Merges of pieces made by one trial of pairings, with the length patched
+ * in *len. Exhaustive: bit gk of @p mask is ring group gk's pairing; greedy:
+ * the pairings chosen for the groups before @p k, @p mask for group k, none
+ * for those after. */
+static size_t try_pairings(region_ctx *c, size_t k, unsigned long mask, int greedy, double *len)
+{
+    size_t merges = 0, gk;
+    *len = 0;
+    memcpy(c->trial, c->uf, c->g.nv * sizeof *c->trial);
+    for (gk = 0; gk < c->ngroups; gk++) {
+        int opt = greedy ? (gk < k ? c->pairing[gk] : (gk == k ? (int)mask : -1)) : (int)((mask >> gk) & 1u);
+        size_t q, m = c->group_ends[gk];
+        if (opt < 0)
+            continue;
+        for (q = (size_t)opt; q + 1 < m + (size_t)opt; q += 2) {
+            const amp_cp_fend *fa = &c->g.fends[c->group_first[gk] + q % m];
+            const amp_cp_fend *fb = &c->g.fends[c->group_first[gk] + (q + 1) % m];
+            *len += amp_cp_ring_len(c->R, fa->ring, fa->pos, fb->pos);
+            merges += (size_t)amp_uf_union(c->trial, fa->node, fb->node);
+        }
     }
-    if (g.nfe > 1)
-        qsort(g.fe, g.nfe, sizeof *g.fe, amp_cp_cmp_fend);
-    st->free_ends += g.nfe;
-    uf = amp_alloc(g.al, (g.nv + 1) * sizeof *uf);
-    tmp = amp_alloc(g.al, (g.nv + 1) * sizeof *tmp);
-    grs = amp_alloc(g.al, (g.nfe + 1) * sizeof *grs);
-    grm = amp_alloc(g.al, (g.nfe + 1) * sizeof *grm);
-    choice = amp_calloc(g.al, g.nfe + 1, 1);
-    gp = amp_alloc(g.al, (g.nfe + 1) * sizeof *gp);
-    if (!uf || !tmp || !grs || !grm || !choice || !gp) {
-        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
-        goto done;
-    }
-    for (i = 0; i < g.nv; i++)
-        uf[i] = i;
-    for (i = 0; i < g.ne; i++)
-        amp_cp_uf_union(uf, g.eu[i], g.ev[i]);
-    /* step 5: on every ring, one of the two alternating pairings of its free
-     * ends (gap q printed when q % 2 == choice). The choice over all rings
-     * of the region joins the most pieces (Fig. 6: pieces next to each other
-     * along a ring are linked by the path between them), then prints the
-     * longer length; exhaustive up to 12 rings, greedy ring by ring beyond. */
-    for (i = 0, ngr = 0; i < g.nfe; i = j) {
-        for (j = i; j < g.nfe && g.fe[j].ring == g.fe[i].ring; j++)
+    return merges;
+}
+
+/* Step 5, pairing: on every ring, one of the two alternating pairings of its
+ * free ends (gap q printed when q % 2 == pairing). The choice over all rings
+ * of the region joins the most pieces (Fig. 6: pieces next to each other
+ * along a ring are linked by the path between them), then prints the
+ * longer length; exhaustive up to 12 rings, greedy ring by ring beyond. */
+static void choose_pairings(region_ctx *c)
+{
+    size_t i, j, k;
+    int greedy;
+    unsigned long mask, nmask, bestmask = 0;
+    for (i = 0, c->ngroups = 0; i < c->g.nfends; i = j) {
+        for (j = i; j < c->g.nfends && c->g.fends[j].ring == c->g.fends[i].ring; j++)
             ;
         if (j - i >= 2) {
-            grs[ngr] = i;
-            grm[ngr++] = j - i;
+            c->group_first[c->ngroups] = i;
+            c->group_ends[c->ngroups++] = j - i;
         }
     }
-    {
-        int greedy = ngr > 12;
-        unsigned long mask, nmask = greedy ? 2ul : 1ul << ngr, bestmask = 0;
-        for (k = 0; k < (greedy ? ngr : 1); k++) {
-            size_t bestmerge = 0;
-            double bestlen = -1;
-            for (mask = 0; mask < nmask; mask++) {
-                size_t merges = 0, gk;
-                double len = 0;
-                memcpy(tmp, uf, g.nv * sizeof *tmp);
-                for (gk = 0; gk < ngr; gk++) {
-                    int opt = greedy ? (gk < k ? choice[gk] : (gk == k ? (int)mask : -1)) : (int)((mask >> gk) & 1u);
-                    size_t q, m = grm[gk];
-                    if (opt < 0)
-                        continue;
-                    for (q = (size_t)opt; q + 1 < m + (size_t)opt; q += 2) {
-                        const amp_cp_fend *fa = &g.fe[grs[gk] + q % m], *fb = &g.fe[grs[gk] + (q + 1) % m];
-                        len += amp_cp_ring_len(R, fa->ring, fa->pos, fb->pos);
-                        merges += (size_t)amp_cp_uf_union(tmp, fa->node, fb->node);
-                    }
-                }
-                if (mask == 0 || merges > bestmerge || (merges == bestmerge && len > bestlen)) {
-                    bestmask = mask;
-                    bestmerge = merges;
-                    bestlen = len;
-                }
+    greedy = c->ngroups > 12;
+    nmask = greedy ? 2ul : 1ul << c->ngroups;
+    for (k = 0; k < (greedy ? c->ngroups : 1); k++) {
+        size_t bestmerge = 0;
+        double bestlen = -1;
+        for (mask = 0; mask < nmask; mask++) {
+            double len;
+            size_t merges = try_pairings(c, k, mask, greedy, &len);
+            if (mask == 0 || merges > bestmerge || (merges == bestmerge && len > bestlen)) {
+                bestmask = mask;
+                bestmerge = merges;
+                bestlen = len;
             }
-            if (greedy)
-                choice[k] = (unsigned char)bestmask;
         }
-        if (!greedy)
-            for (k = 0; k < ngr; k++)
-                choice[k] = (unsigned char)((bestmask >> k) & 1u);
+        if (greedy)
+            c->pairing[k] = (unsigned char)bestmask;
     }
-    /* the chosen patches; the other gaps are candidates for joining */
-    if (amp_cp_patchset_alloc(g.al, &P, g.nfe) != AMP_OK) {
-        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
-        goto done;
-    }
-    for (k = 0; k < ngr; k++) {
-        size_t m = grm[k], q;
+    if (!greedy)
+        for (k = 0; k < c->ngroups; k++)
+            c->pairing[k] = (unsigned char)((bestmask >> k) & 1u);
+}
+
+/* Step 5, patching: the chosen patches; the other gaps are candidates for
+ * joining (Fig. 6), shortest first. */
+static amp_status patch_rings(region_ctx *c, amp_error *err)
+{
+    size_t k, q;
+    amp_status rc;
+    if (amp_cp_patchset_alloc(c->g.al, &c->P, c->g.nfends) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
+    for (k = 0; k < c->ngroups; k++) {
+        size_t m = c->group_ends[k];
         for (q = 0; q < m; q++) {
-            const amp_cp_fend *fa = &g.fe[grs[k] + q], *fb = &g.fe[grs[k] + (q + 1) % m];
-            if (q % 2 == choice[k] && q + 1 < m + choice[k]) {
-                if ((rc = amp_cp_patch_add(&g, &P, R, fa, fb, 0, err)) != AMP_OK)
-                    goto done;
-                amp_cp_uf_union(uf, fa->node, fb->node);
+            const amp_cp_fend *fa = &c->g.fends[c->group_first[k] + q];
+            const amp_cp_fend *fb = &c->g.fends[c->group_first[k] + (q + 1) % m];
+            if (q % 2 == c->pairing[k] && q + 1 < m + c->pairing[k]) {
+                if ((rc = amp_cp_patch_add(&c->g, &c->P, c->R, fa, fb, 0, err)) != AMP_OK)
+                    return rc;
+                amp_uf_union(c->uf, fa->node, fb->node);
             } else {
-                gp[ngap].k = k;
-                gp[ngap].q = q;
-                gp[ngap++].len = amp_cp_ring_len(R, fa->ring, fa->pos, fb->pos);
+                c->gaps[c->ngaps].group = k;
+                c->gaps[c->ngaps].end = q;
+                c->gaps[c->ngaps++].len = amp_cp_ring_len(c->R, fa->ring, fa->pos, fb->pos);
             }
         }
     }
-    /* Fig. 6, several components: when the pairings leave pieces apart
-     * (two pieces that need opposite pairings on one ring, or pieces whose
-     * free ends alternate on two rings), neighbouring components — whose
-     * free ends follow each other along a ring with no other free end
-     * between — are joined by the path p along R̃ between them. The patch
-     * is printed once and run back as a pseudo edge over the fresh bead (a
-     * doubled edge keeps every vertex even: only the two copies together
-     * leave the parity of step 5 intact). Shortest gaps first, like
-     * Kruskal, until the region is one component. */
-    if (ngap > 1)
-        qsort(gp, ngap, sizeof *gp, cmp_gap);
-    /* With perimeters spliced into the island's stroke (o->join), the
-     * perimeter loop runs beside every component: they are spliced to it
-     * there (contpath_join.c) instead, which needs no travel inside the
-     * stroke. Fig. 6 stays for strokes without perimeters or joining. */
-    fig6 = !hub;
-    for (i = 0; i < ngap; i++) {
-        size_t m = grm[gp[i].k];
-        const amp_cp_fend *fa = &g.fe[grs[gp[i].k] + gp[i].q], *fb = &g.fe[grs[gp[i].k] + (gp[i].q + 1) % m];
-        if (fig6 && amp_cp_uf_find(uf, fa->node) != amp_cp_uf_find(uf, fb->node)) {
-            if ((rc = amp_cp_patch_add(&g, &P, R, fa, fb, 1, err)) != AMP_OK)
-                goto done;
-            amp_cp_uf_union(uf, fa->node, fb->node);
+    if (c->ngaps > 1)
+        qsort(c->gaps, c->ngaps, sizeof *c->gaps, cmp_gap);
+    return AMP_OK;
+}
+
+/* Fig. 6, several components: when the pairings leave pieces apart (two
+ * pieces that need opposite pairings on one ring, or pieces whose free ends
+ * alternate on two rings), neighbouring components — whose free ends follow
+ * each other along a ring with no other free end between — are joined by
+ * the path p along R̃ between them. The patch is printed once and run back
+ * as a pseudo edge over the fresh bead (a doubled edge keeps every vertex
+ * even: only the two copies together leave the parity of step 5 intact).
+ * Shortest gaps first, like Kruskal, until the region is one component.
+ * With perimeters spliced into the island's stroke (@p hub), the perimeter
+ * loop runs beside every component: they are spliced to it there
+ * (contpath_join.c) instead, which needs no travel inside the stroke. The
+ * gaps left are Remark 2.1's support paths or step 6's bare stretches. */
+static amp_status join_components(region_ctx *c, int hub, amp_error *err)
+{
+    amp_contpath_stats *st = c->st;
+    int fig6 = !hub;
+    size_t i;
+    amp_status rc;
+    for (i = 0; i < c->ngaps; i++) {
+        const gap *gi = &c->gaps[i];
+        size_t m = c->group_ends[gi->group];
+        const amp_cp_fend *fa = &c->g.fends[c->group_first[gi->group] + gi->end];
+        const amp_cp_fend *fb = &c->g.fends[c->group_first[gi->group] + (gi->end + 1) % m];
+        if (fig6 && amp_uf_find(c->uf, fa->node) != amp_uf_find(c->uf, fb->node)) {
+            if ((rc = amp_cp_patch_add(&c->g, &c->P, c->R, fa, fb, 1, err)) != AMP_OK)
+                return rc;
+            amp_uf_union(c->uf, fa->node, fb->node);
             st->joins++;
-        } else if (o->support_stretches) {
+        } else if (c->o->support_stretches) {
             /* Remark 2.1: print the unprinted stretch on its own */
-            if ((rc = amp_cp_ring_support(&g, R, fa, fb, out, z, o->radius, err)) != AMP_OK)
-                goto done;
+            if ((rc = amp_cp_ring_support(&c->g, c->R, fa, fb, c->out, c->z, c->o->radius, err)) != AMP_OK)
+                return rc;
             st->support_paths++;
-            st->support_length += gp[i].len;
+            st->support_length += gi->len;
         } else {
-            st->unprinted_length += gp[i].len;
+            st->unprinted_length += gi->len;
             /* step 6: the bare stretch, for the support corners */
-            if (bare && (rc = amp_cp_ring_support(&g, R, fa, fb, bare, z, 0.0, err)) != AMP_OK)
-                goto done;
+            if (c->bare && (rc = amp_cp_ring_support(&c->g, c->R, fa, fb, c->bare, c->z, 0.0, err)) != AMP_OK)
+                return rc;
         }
     }
-    /* a ring no lattice edge reaches (a hole in the middle of a cell) is
-     * bare as a whole when the region has lattice strokes elsewhere */
-    for (k = 0; k < R->nrings && g.ne > 0; k++) {
-        size_t q, nf = 0;
+    return AMP_OK;
+}
+
+/* Step 6: a ring no lattice edge reaches (a hole in the middle of a cell) is
+ * bare as a whole when the region has lattice strokes elsewhere. */
+static amp_status bare_rings(region_ctx *c, amp_error *err)
+{
+    const amp_polyset *R = c->R;
+    size_t k, q;
+    amp_status rc = AMP_OK;
+    for (k = 0; k < R->nrings && c->g.ne > 0; k++) {
+        size_t nf = 0;
         const amp_vec2 *p = amp_polyset_ring(R, k);
-        for (q = 0; q < g.nfe; q++)
-            nf += g.fe[q].ring == k;
+        for (q = 0; q < c->g.nfends; q++)
+            nf += c->g.fends[q].ring == k;
         if (nf)
             continue;
-        st->unprinted_length += ring_perimeter(p, R->rings[k].n);
-        if (bare) {
-            if ((rc = amp_pathset_begin(bare, AMP_ROLE_SUPPORT, err)) != AMP_OK)
-                goto done;
+        c->st->unprinted_length += ring_perimeter(p, R->rings[k].n);
+        if (c->bare) {
+            if ((rc = amp_pathset_begin(c->bare, AMP_ROLE_SUPPORT, err)) != AMP_OK)
+                return rc;
             for (q = 0; q <= R->rings[k].n && rc == AMP_OK; q++)
-                rc = amp_pathset_push(bare, amp_v3(p[q % R->rings[k].n].x, p[q % R->rings[k].n].y, z), 0.0, err);
+                rc = amp_pathset_push(c->bare, amp_v3(p[q % R->rings[k].n].x, p[q % R->rings[k].n].y, c->z), 0.0,
+                                      err);
             if (rc != AMP_OK)
-                goto done;
+                return rc;
         }
     }
-    /* Figs. 7, 8: every patch against the printed edges near it, then into
-     * the graph (a join twice: printed, and back as a pseudo edge) */
-    for (k = 0; k < P.n; k++) {
-        if ((rc = amp_cp_patch_points(&g, &P, k, D, err)) != AMP_OK)
-            goto done;
-        if (amp_cp_add_chain(&g, P.a[k], P.b[k], 0, &pseudo) != AMP_OK ||
-            (P.join[k] && amp_cp_add_chain(&g, P.a[k], P.b[k], 1, &pseudo) != AMP_OK)) {
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
-            goto done;
-        }
+    return AMP_OK;
+}
+
+/* Figs. 7, 8: every patch against the printed edges near it (closer than
+ * @p D: pseudo), then into the graph (a join twice: printed, and back as a
+ * pseudo edge); the pseudo length is added to *pseudo. */
+static amp_status patches_into_graph(region_ctx *c, double D, double *pseudo, amp_error *err)
+{
+    size_t k;
+    amp_status rc;
+    for (k = 0; k < c->P.n; k++) {
+        if ((rc = amp_cp_patch_points(&c->g, &c->P, k, D, err)) != AMP_OK)
+            return rc;
+        if (amp_cp_add_chain(&c->g, c->P.a[k], c->P.b[k], 0, pseudo) != AMP_OK ||
+            (c->P.join[k] && amp_cp_add_chain(&c->g, c->P.a[k], c->P.b[k], 1, pseudo) != AMP_OK))
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory patching a region");
     }
-    first_path = out->npaths;
-    rc = amp_cp_tour(&g, z, o->radius, (int)o->tour, out, &ti, err);
+    return AMP_OK;
+}
+
+/* §4: the tours of the patched graph (no lattice edge in the region: its
+ * outer ring is the stroke), and the region's figures. */
+static amp_status region_tours(region_ctx *c, double pseudo, amp_error *err)
+{
+    amp_contpath_stats *st = c->st;
+    amp_pathset *out = c->out;
+    const amp_polyset *R = c->R;
+    size_t i, ntours, first_path = out->npaths;
+    amp_cp_tour_info ti;
+    amp_status rc = amp_cp_tour(&c->g, c->z, c->o->radius, (int)c->o->tour, out, &ti, err);
     if (rc != AMP_OK)
-        goto done;
+        return rc;
     ntours = ti.ntours;
-    nodd = ti.nodd;
     st->cycles += ti.cycles;
     st->tour_fallbacks += (size_t)ti.fallback;
     if (ti.levels > st->tree_levels)
         st->tree_levels = ti.levels;
     if (ntours == 0 && R->nrings) {
-        /* no lattice edge reaches this region: its outer ring is the stroke */
         const amp_vec2 *p = amp_polyset_ring(R, 0);
         size_t n = R->rings[0].n;
         if ((rc = amp_pathset_begin(out, AMP_ROLE_OBJECT, err)) != AMP_OK)
-            goto done;
+            return rc;
         for (i = 0; i <= n && rc == AMP_OK; i++)
-            rc = amp_pathset_push(out, amp_v3(p[i % n].x, p[i % n].y, z), o->radius, err);
+            rc = amp_pathset_push(out, amp_v3(p[i % n].x, p[i % n].y, c->z), c->o->radius, err);
         ntours = 1;
     }
     for (i = first_path; i < out->npaths; i++)
@@ -445,16 +488,41 @@ amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke
     st->regions++;
     st->strokes += ntours;
     st->multi_stroke += ntours > 1;
-    st->odd_vertices += nodd;
-done:
-    amp_cp_graph_free(&g);
-    amp_free(g.al, uf);
-    amp_free(g.al, grs);
-    amp_free(g.al, grm);
-    amp_free(g.al, tmp);
-    amp_free(g.al, choice);
-    amp_free(g.al, gp);
-    amp_cp_patchset_free(g.al, &P);
+    st->odd_vertices += ti.nodd;
+    return rc;
+}
+
+/* Region processing with a prepared K̂ edge list: step 5 (clip, pair,
+ * patch), Fig. 6 joins, step 6's bare stretches, Figs. 7-8, §4 tours. */
+amp_status amp_cp_region_run(const amp_cx2 *khat, const uint64_t *ke, size_t nke, const amp_polyset *R, double z,
+                             const amp_contpath_opts *o, int hub, amp_pathset *out, amp_pathset *bare,
+                             amp_contpath_stats *st, amp_error *err)
+{
+    region_ctx c;
+    double D = o->pseudo_edges ? 2 * o->radius * (1 - 1e-9) : 0.0, pseudo = 0;
+    amp_status rc;
+    memset(&c, 0, sizeof c);
+    c.g.al = out->alloc;
+    c.R = R;
+    c.o = o;
+    c.z = z;
+    c.out = out;
+    c.bare = bare;
+    c.st = st;
+    if ((rc = region_clip(&c, khat, ke, nke, err)) == AMP_OK) {
+        choose_pairings(&c);
+        if ((rc = patch_rings(&c, err)) == AMP_OK && (rc = join_components(&c, hub, err)) == AMP_OK &&
+            (rc = bare_rings(&c, err)) == AMP_OK && (rc = patches_into_graph(&c, D, &pseudo, err)) == AMP_OK)
+            rc = region_tours(&c, pseudo, err);
+    }
+    amp_cp_graph_free(&c.g);
+    amp_free(c.g.al, c.uf);
+    amp_free(c.g.al, c.group_first);
+    amp_free(c.g.al, c.group_ends);
+    amp_free(c.g.al, c.trial);
+    amp_free(c.g.al, c.pairing);
+    amp_free(c.g.al, c.gaps);
+    amp_cp_patchset_free(c.g.al, &c.P);
     return rc;
 }
 

@@ -11,6 +11,7 @@
 #include <stdint.h>
 
 #include "ampath/contpath.h"
+#include "uf.h"
 
 #define NONE ((size_t)-1)
 
@@ -25,14 +26,14 @@ typedef struct amp_cp_graph {
     const amp_allocator *al;
     amp_vec2 *v;
     size_t nv, cap_v;
-    size_t *eu, *ev;
-    unsigned char *ep; /* 1: pseudo edge (travel inside the stroke, no material) */
-    size_t ne, cap_eu, cap_ev, cap_ep;
+    size_t *edge_u, *edge_v; /* edge i joins nodes edge_u[i] and edge_v[i] */
+    unsigned char *edge_pseudo; /* 1: pseudo edge (travel inside the stroke, no material) */
+    size_t ne, cap_edge_u, cap_edge_v, cap_edge_pseudo;
     size_t nlat; /* edges [0, nlat) are the clipped lattice pieces */
     size_t *mate; /* per node < nlatv: the other end of its last lattice edge (NONE: none) */
     size_t nlatv;
-    amp_cp_fend *fe;
-    size_t nfe, cap_fe;
+    amp_cp_fend *fends; /* free ends: lattice nodes of degree 1 on a ring */
+    size_t nfends, cap_fends;
     /* scratch of amp_cp_patch_points(): the patch polyline and its segment kinds */
     amp_vec2 *pp;
     unsigned char *pf;
@@ -59,8 +60,6 @@ amp_status amp_cp_vert(amp_cp_graph *g, amp_vec2 p, size_t *id);
 /** Edge a-b (none when a == b); pseudo: travel inside the stroke. */
 amp_status amp_cp_edge(amp_cp_graph *g, size_t a, size_t b, int pseudo);
 void amp_cp_graph_free(amp_cp_graph *g);
-size_t amp_cp_uf_find(size_t *p, size_t x);
-int amp_cp_uf_union(size_t *p, size_t a, size_t b);
 /** Unique undirected 1-cells of K̂ as vertex pairs (lo << 32 | hi). */
 amp_status amp_cp_khat_edges(const amp_cx2 *k, const amp_allocator *al, uint64_t **out, size_t *n);
 /** Printed length of path i (pseudo segments, radius 0 at both ends, excluded). */

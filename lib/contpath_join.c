@@ -1,8 +1,9 @@
-/* One extrusion start per island (beyond continuous-toolpath-euler.txt,
- * issue 16): the perimeter loops of an island and the closed strokes of its
- * infill regions are spliced into one closed stroke. Two loops X and Y that
- * run side by side (the perimeter at r and the ring of R̃ at 3r, or two
- * perimeter loops of a thin island) are joined by two parallel connectors
+/* One extrusion start per island (beyond continuous-toolpath-euler.txt:
+ * every extrusion start is a blob and a seam on the print): the perimeter
+ * loops of an island and the closed strokes of its infill regions are
+ * spliced into one closed stroke. Two loops X and Y that run side by side
+ * (the perimeter at r and the ring of R̃ at 3r, or two perimeter loops of a
+ * thin island) are joined by two parallel connectors
  * p1-q1 and p2-q2, |p1 p2| = 2r: X is run from p2 round to p1, the connector
  * to q1, Y round the long way to q2, the connector back to p2 (the stretch
  * p1 p2 of X and q1 q2 of Y is left out; the two connector beads cover it).
@@ -131,7 +132,7 @@ static int nearest(const joiner *J, const size_t *uf, size_t skip, amp_vec2 q, s
                 size_t i = g->item[k].i, j = (i + 1) % L->n;
                 amp_vec2 a = P2v(L->v[i].p), b = P2v(L->v[j].p);
                 double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-                if (L->wall || amp_cp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
+                if (L->wall || amp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
                     !(L->v[j].r == J->r))
                     continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
@@ -338,7 +339,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
 {
     const jloop *X = &J->lp[lx];
     double d1, d2;
-    size_t l2, rx = amp_cp_uf_find(uf, lx), fw, bw;
+    size_t l2, rx = amp_uf_find(uf, lx), fw, bw;
     amp_pvert P1, P2, Q1, Q2;
     amp_vec2 p1, p2, q1, q2;
     cut c;
@@ -382,7 +383,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, 
         return 0;
     *st = splice(J, &c);
     if (*st == AMP_OK) {
-        amp_cp_uf_union(uf, c.ly, lx);
+        amp_uf_union(uf, c.ly, lx);
         *st = grid_build(J);
     }
     return 1;
@@ -402,24 +403,21 @@ static int speck(const amp_pvert *v, size_t n, double d)
     return hypot(x1 - x0, y1 - y0) < d;
 }
 
-amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_polyset *walls, double r, double h,
-                             amp_pathset *out, size_t *nout, size_t *nspeck, amp_error *err)
+/* Is path i of @p in a closed object loop (joined; anything else is copied
+ * as it is)? */
+static int closed_object(const amp_pathset *in, size_t i)
 {
-    joiner J;
-    size_t *uf = NULL, i, k, sets, nclosed = 0;
-    amp_status st = AMP_OK;
-    int progress = 1, pass, big = 0;
-    memset(&J, 0, sizeof J);
-    J.al = out->alloc;
-    J.r = r;
-    J.dmax = 4.5 * r;
-    *nout = 0;
-    J.lp = amp_calloc(J.al, in->npaths - first + walls->nrings + 1, sizeof *J.lp);
-    uf = amp_alloc(J.al, (in->npaths - first + walls->nrings + 1) * sizeof *uf);
-    if (!J.lp || !uf) {
-        st = AMP_ERR_NOMEM;
-        goto done;
-    }
+    const amp_pvert *v = amp_pathset_path_verts(in, i);
+    size_t n = in->paths[i].n;
+    return in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y;
+}
+
+/* The closed object loops of paths [first, npaths) of @p in into J's loops,
+ * each a set of its own in @p uf; specks left out are counted in *nspeck. */
+static amp_status collect_loops(joiner *J, size_t *uf, const amp_pathset *in, size_t first, size_t *nspeck)
+{
+    size_t i;
+    int big = 0;
     /* a loop under a bead across (r) next to larger ones is a speck: a
      * lattice piece cutting a corner of a region, too small for a splice's
      * two connectors; alone it is the island's print and stays unless under
@@ -427,89 +425,122 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_poly
     for (i = first; i < in->npaths && !big; i++) {
         const amp_pvert *v = amp_pathset_path_verts(in, i);
         size_t n = in->paths[i].n;
-        big = in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && !speck(v, n, r);
+        big = in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && !speck(v, n, J->r);
     }
-    /* closed object loops are joined; anything else is copied as it is */
     for (i = first; i < in->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(in, i);
         size_t n = in->paths[i].n;
-        if (in->paths[i].role != AMP_ROLE_OBJECT || n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y)
+        jloop *L = &J->lp[J->nl];
+        if (!closed_object(in, i))
             continue;
-        if (speck(v, n, big ? r : 0.25 * r)) {
+        if (speck(v, n, big ? J->r : 0.25 * J->r)) {
             (*nspeck)++; /* a loop smaller than a quarter bead: inside the beads around it */
             continue;
         }
-        J.lp[J.nl].v = amp_alloc(J.al, n * sizeof *J.lp[J.nl].v);
-        if (!J.lp[J.nl].v) {
-            st = AMP_ERR_NOMEM;
-            goto done;
-        }
+        if (!(L->v = amp_alloc(J->al, n * sizeof *L->v)))
+            return AMP_ERR_NOMEM;
         /* the cyclic loop drops the closing vertex unless it carries
          * another radius (a tour ending on a pseudo edge) */
-        J.lp[J.nl].n = v[n - 1].r == v[0].r ? n - 1 : n;
-        memcpy(J.lp[J.nl].v, v, J.lp[J.nl].n * sizeof *v);
-        J.lp[J.nl].alive = 1;
-        uf[J.nl] = J.nl;
-        J.nl++;
-        nclosed++;
+        L->n = v[n - 1].r == v[0].r ? n - 1 : n;
+        memcpy(L->v, v, L->n * sizeof *v);
+        L->alive = 1;
+        uf[J->nl] = J->nl;
+        J->nl++;
     }
-    sets = J.nl;
-    /* the section's rings, as walls in the grid */
-    for (i = 0; i < walls->nrings && sets > 1; i++) {
+    return AMP_OK;
+}
+
+/* The section's rings, as walls in the grid: connectors may not cross them. */
+static amp_status add_walls(joiner *J, size_t *uf, const amp_polyset *walls)
+{
+    size_t i, k;
+    for (i = 0; i < walls->nrings; i++) {
         const amp_vec2 *p = amp_polyset_ring(walls, i);
-        jloop *L = &J.lp[J.nl];
+        jloop *L = &J->lp[J->nl];
         L->n = walls->rings[i].n;
-        L->v = amp_alloc(J.al, (L->n + 1) * sizeof *L->v);
-        if (!L->v) {
-            st = AMP_ERR_NOMEM;
-            goto done;
-        }
+        if (!(L->v = amp_alloc(J->al, (L->n + 1) * sizeof *L->v)))
+            return AMP_ERR_NOMEM;
         for (k = 0; k < L->n; k++) {
             L->v[k].p = amp_v3(p[k].x, p[k].y, 0);
             L->v[k].r = 0;
         }
         L->alive = L->wall = 1;
-        uf[J.nl] = J.nl;
-        J.nl++;
+        uf[J->nl] = J->nl;
+        J->nl++;
     }
-    if (sets > 1 && (st = grid_build(&J)) != AMP_OK)
-        goto done;
-    /* connectors 2r apart (their beads just touch), closer where a loop
-     * offers no straight stretch that long (small infill components) */
+    return AMP_OK;
+}
+
+/* Splices until one set is left or none is found: connectors 2r apart (their
+ * beads just touch), closer where a loop offers no straight stretch that
+ * long (small infill components). */
+static amp_status splice_all(joiner *J, size_t *uf, size_t sets)
+{
+    size_t i, k;
+    int pass, progress;
+    amp_status st = AMP_OK;
     for (pass = 0; pass < 3 && sets > 1 && st == AMP_OK; pass++) {
-        double ell = 2 * r / (double)(1 << pass);
+        double ell = 2 * J->r / (double)(1 << pass);
         progress = 1;
         while (sets > 1 && progress && st == AMP_OK) {
             progress = 0;
-            for (k = 0; k < J.nl && !progress && st == AMP_OK; k++)
-                for (i = 0; J.lp[k].alive && !J.lp[k].wall && i < J.lp[k].n && !progress && st == AMP_OK; i++)
-                    progress = try_segment(&J, uf, k, i, ell, &st);
+            for (k = 0; k < J->nl && !progress && st == AMP_OK; k++)
+                for (i = 0; J->lp[k].alive && !J->lp[k].wall && i < J->lp[k].n && !progress && st == AMP_OK; i++)
+                    progress = try_segment(J, uf, k, i, ell, &st);
             sets -= (size_t)progress;
         }
     }
-    if (st != AMP_OK)
-        goto done;
-    for (k = 0; k < J.nl && st == AMP_OK; k++) {
-        if (!J.lp[k].alive || J.lp[k].wall)
+    return st;
+}
+
+/* The joined loops closed again, then the rest of @p in (open strokes,
+ * support stretches) unchanged, at height @p h (> 0). */
+static amp_status write_joined(const joiner *J, const amp_pathset *in, size_t first, double h, amp_pathset *out,
+                               size_t *nout, amp_error *err)
+{
+    size_t i, k;
+    amp_status st = AMP_OK;
+    for (k = 0; k < J->nl && st == AMP_OK; k++) {
+        const jloop *L = &J->lp[k];
+        if (!L->alive || L->wall)
             continue;
         st = amp_pathset_begin(out, AMP_ROLE_OBJECT, err);
-        for (i = 0; i <= J.lp[k].n && st == AMP_OK; i++)
-            st = amp_pathset_push(out, J.lp[k].v[i % J.lp[k].n].p, J.lp[k].v[i % J.lp[k].n].r, err);
+        for (i = 0; i <= L->n && st == AMP_OK; i++)
+            st = amp_pathset_push(out, L->v[i % L->n].p, L->v[i % L->n].r, err);
         if (st == AMP_OK && h > 0)
             st = amp_pathset_set_height(out, h, err);
         (*nout)++;
     }
-    /* the rest (open strokes, support stretches) unchanged */
     for (i = first; i < in->npaths && st == AMP_OK; i++) {
         const amp_pvert *v = amp_pathset_path_verts(in, i);
-        size_t n = in->paths[i].n;
-        if (in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y)
+        if (closed_object(in, i))
             continue; /* joined above, or a speck */
-        if ((st = amp_pathset_add(out, in->paths[i].role, v, n, err)) == AMP_OK && h > 0)
+        if ((st = amp_pathset_add(out, in->paths[i].role, v, in->paths[i].n, err)) == AMP_OK && h > 0)
             st = amp_pathset_set_height(out, h, err);
         *nout += in->paths[i].role == AMP_ROLE_OBJECT;
     }
-done:
+    return st;
+}
+
+amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_polyset *walls, double r, double h,
+                             amp_pathset *out, size_t *nout, size_t *nspeck, amp_error *err)
+{
+    joiner J;
+    size_t *uf = NULL, k, sets;
+    amp_status st;
+    memset(&J, 0, sizeof J);
+    J.al = out->alloc;
+    J.r = r;
+    J.dmax = 4.5 * r;
+    *nout = 0;
+    J.lp = amp_calloc(J.al, in->npaths - first + walls->nrings + 1, sizeof *J.lp);
+    uf = amp_alloc(J.al, (in->npaths - first + walls->nrings + 1) * sizeof *uf);
+    st = !J.lp || !uf ? AMP_ERR_NOMEM : collect_loops(&J, uf, in, first, nspeck);
+    sets = J.nl;
+    if (st == AMP_OK && sets > 1 && (st = add_walls(&J, uf, walls)) == AMP_OK && (st = grid_build(&J)) == AMP_OK)
+        st = splice_all(&J, uf, sets);
+    if (st == AMP_OK)
+        st = write_joined(&J, in, first, h, out, nout, err);
     for (k = 0; J.lp && k < J.nl; k++)
         amp_free(J.al, J.lp[k].v);
     amp_free(J.al, J.lp);

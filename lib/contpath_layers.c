@@ -8,7 +8,6 @@
 #include <string.h>
 
 #include "contpath_internal.h"
-#include "ampath/check.h" /* island_clean: see issue 19 follow-up (verifier to become a caller-set hook) */
 
 /* Work state of amp_contpath_layers(). */
 typedef struct lctx {
@@ -33,7 +32,7 @@ typedef struct lctx {
 
 /* Closed path @p k of @p ps (last vertex = first) is rotated to start at
  * its vertex nearest to @p q among those whose two segments are printed, so
- * that the stroke begins where the nozzle is (issue 14: travel). */
+ * that the stroke begins where the nozzle is (less travel between strokes). */
 static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *err)
 {
     amp_pvert *v = amp_pathset_path_verts(ps, k), *w;
@@ -61,7 +60,7 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
     return AMP_OK;
 }
 
-/* v as the .amp writer will write it (10 significant digits, SPEC §3): the
+/* v as the .amp writer will write it (10 significant digits, docs/interfaces.md §3): the
  * checks then judge the coordinates the printer gets, and a touch that
  * rounding would turn into a crossing is caught before the file exists. */
 static double as_written_slow(double v)
@@ -183,8 +182,8 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
 }
 
 /* An island with infill whose inset by r falls apart into lobes joined by
- * necks narrower than a bead (issue 16: a lobe each would be a stroke
- * each, and the neck would stay bare). Its perimeter is taken at the
+ * necks narrower than a bead (a lobe each would be a stroke each, one
+ * more extrusion start, and the neck would stay bare). Its perimeter is taken at the
  * largest offset d < r (bisection between r/32 and r, to 1/64 r) at which the
  * inset holds it in the fewest pieces; the loop then runs up one side of
  * the neck and back down the other, printing it, and joins the lobes in one
@@ -226,7 +225,8 @@ static amp_status run_region(lctx *c, size_t li, const amp_polyset *R, int skin,
                              s0, err);
 }
 
-/* Skins only where needed, without polygon booleans (issue 16): every
+/* Skins only where needed, without polygon booleans (the sparse lattice
+ * inside a region keeps the slice fast and light where no skin is due): every
  * uncovered point of region R̃ = c->reg lies within @p w of its boundary
  * (amp_cp_region_skin_depth), so the band R̃ minus its inset by w is solid
  * and the inset by w + 2r (one bead further in, so the two parts' strokes
@@ -420,19 +420,22 @@ static amp_status island_once(lctx *c, size_t li, double h, amp_pathset *out, si
     return rc;
 }
 
-/* Do the island's paths [first, npaths) pass the independent check? */
-static int island_clean(const amp_pathset *out, size_t first, const amp_polyset *sec)
+/* Do the island's paths [first, npaths) pass the caller's verifier
+ * (o->verify_stroke; none: they pass)? */
+static int island_clean(const amp_contpath_opts *o, const amp_pathset *out, size_t first, const amp_polyset *sec)
 {
     size_t i;
+    if (!o->verify_stroke)
+        return 1;
     for (i = first; i < out->npaths; i++)
-        if (amp_check_path_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
+        if (o->verify_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
             return 0;
     return 1;
 }
 
 /* One layer: its islands nearest first, each joined and started near the
- * nozzle. An island printed with skin bands whose paths fail the check is
- * printed again with its skin regions whole (a band's rings come from an
+ * nozzle. An island printed with skin bands whose paths the caller's
+ * verifier (o->verify_stroke) rejects is printed again with its skin regions whole (a band's rings come from an
  * inset, and a slip of it can meet the core's: seen once in 60 sweep runs,
  * the bunny meshed at 0.95 mm, 0.3 mm layers, r 0.2). */
 static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
@@ -456,7 +459,7 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
         if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
             (rc = island_once(c, li, h, out, first, &nobj, s0, err)) != AMP_OK)
             break;
-        if (s0->skin_bands > keep.skin_bands && !island_clean(out, first, &c->isl)) {
+        if (s0->skin_bands > keep.skin_bands && !island_clean(c->o, out, first, &c->isl)) {
             out->nverts = first < out->npaths ? out->paths[first].first : out->nverts;
             out->npaths = first;
             *s0 = keep;

@@ -276,9 +276,10 @@ amp_status amp_cp_patch_points(amp_cp_graph *g, const amp_cp_patchset *P, size_t
     if (D > 0) {
         /* the printed lattice pieces near the patch, except the stubs at its ends */
         for (i = 0; i < g->nlat && st == AMP_OK; i++) {
-            amp_vec2 A = g->v[g->eu[i]], B = g->v[g->ev[i]];
-            if (g->ep[i] || g->eu[i] == na || g->ev[i] == na || g->eu[i] == nb || g->ev[i] == nb ||
-                fmax(A.x, B.x) < bx0 || fmin(A.x, B.x) > bx1 || fmax(A.y, B.y) < by0 || fmin(A.y, B.y) > by1)
+            amp_vec2 A = g->v[g->edge_u[i]], B = g->v[g->edge_v[i]];
+            if (g->edge_pseudo[i] || g->edge_u[i] == na || g->edge_v[i] == na || g->edge_u[i] == nb ||
+                g->edge_v[i] == nb || fmax(A.x, B.x) < bx0 || fmin(A.x, B.x) > bx1 || fmax(A.y, B.y) < by0 ||
+                fmin(A.y, B.y) > by1)
                 continue;
             st = cand_push(g, &ncand, A, B);
         }

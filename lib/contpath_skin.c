@@ -1,4 +1,5 @@
-/* Solid skins (issue 16, beyond the paper): a region of a layer is printed
+/* Solid skins (beyond the paper: a sparse lattice alone leaves top and
+ * bottom surfaces open): a region of a layer is printed
  * solid — with a second Euler lattice K̂_s whose cell is small enough that
  * its beads touch (square cell 4r, offset r: Class 2 strips 2r wide, Class
  * 1 and 3 cells 2r across, every bead covering r to each side) — when some

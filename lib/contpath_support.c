@@ -317,130 +317,168 @@ static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_
     return 0;
 }
 
-amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
-                                  amp_contpath_stats *st, amp_error *err)
+/* Step 6 for one island: the corners found so far and what they need. */
+typedef struct corner_ctx {
+    const amp_allocator *al;
+    amp_pathset *ps;          /* the island's paths, perimeter loops first */
+    size_t nperim;            /* perimeter loops, paths [0, nperim) */
+    double r, covered;        /* bead radius; see amp_cp_support_corners */
+    amp_contpath_stats *st;
+    sgrid sg;                 /* the island's segments */
+    double **cl;              /* per perimeter loop: arclength at each vertex */
+    tooth *t;                 /* the corners placed */
+    size_t nt, cap_t;
+    amp_vec2 *legs;           /* the two legs of corner k: legs[4k .. 4k + 3] (two segments) */
+    size_t cap_l;
+} corner_ctx;
+
+/* Arclength at every vertex of each perimeter loop. */
+static amp_status perimeter_lengths(corner_ctx *c, amp_error *err)
 {
-    const amp_allocator *al = ps->alloc;
-    double **cl = NULL;
-    tooth *t = NULL;
-    amp_vec2 *legs = NULL;
-    size_t nt = 0, cap_t = 0, cap_l = 0, i, k, j;
-    amp_pathset scratch;
-    sgrid sg;
-    amp_status rc = AMP_OK;
-    if (nperim == 0 || bare->npaths == 0)
+    size_t i, k;
+    for (i = 0; i < c->nperim; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(c->ps, i);
+        c->cl[i] = amp_alloc(c->al, (c->ps->paths[i].n + 1) * sizeof **c->cl);
+        if (!c->cl[i])
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+        c->cl[i][0] = 0;
+        for (k = 1; k < c->ps->paths[i].n; k++)
+            c->cl[i][k] = c->cl[i][k - 1] + amp_v3_dist(v[k - 1].p, v[k].p);
+    }
+    return AMP_OK;
+}
+
+/* Fig. 5: one corner with its tip at the centre @p ctr of a bare stretch and
+ * its base (half width @p hw) on the nearest perimeter loop, unless that
+ * would cross a path, overlap a neighbour or find no perimeter. */
+static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error *err)
+{
+    const amp_pathset *ps = c->ps;
+    double r = c->r, s = 0, d, tot;
+    size_t loop = 0, seg, last = c->nperim - 1;
+    amp_pvert a0, a1;
+    void *q = c->t, *ql = c->legs;
+    d = nearest_perimeter(ps, &c->sg, c->nperim, c->cl, ctr, 3 * r, &loop, &s);
+    /* a skin's strip already runs within `covered` of the ring here: a
+     * corner would print its plastic a second time */
+    if (c->covered > 0 && infill_within(ps, &c->sg, ps->paths[last].first + ps->paths[last].n, ctr, c->covered))
         return AMP_OK;
-    amp_pathset_init(&scratch, al);
-    if (sg_build(&sg, ps, 2 * r, al) != AMP_OK) {
-        amp_free(al, sg.start);
-        amp_free(al, sg.item);
+    tot = c->cl[loop][ps->paths[loop].n - 1];
+    /* the perimeter is 2r out; the base r to either side */
+    if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {
+        c->st->corners_left_out++;
+        return AMP_OK;
+    }
+    a0 = at_len(ps, loop, c->cl[loop], s - hw, &seg);
+    a1 = at_len(ps, loop, c->cl[loop], s + hw, &seg);
+    if (blocked(ps, &c->sg, xy(a0.p), ctr, c->legs, 2 * c->nt, 1e-4 * r) ||
+        blocked(ps, &c->sg, xy(a1.p), ctr, c->legs, 2 * c->nt, 1e-4 * r)) {
+        c->st->corners_left_out++;
+        return AMP_OK;
+    }
+    if (amp_grow(c->al, &q, &c->cap_t, c->nt + 1, sizeof *c->t) != AMP_OK ||
+        amp_grow(c->al, &ql, &c->cap_l, 4 * (c->nt + 1), sizeof *c->legs) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
-    }
-    cl = amp_calloc(al, nperim, sizeof *cl);
-    if (!cl) {
-        amp_free(al, sg.start);
-        amp_free(al, sg.item);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
-    }
-    for (i = 0; i < nperim && rc == AMP_OK; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        cl[i] = amp_alloc(al, (ps->paths[i].n + 1) * sizeof **cl);
-        if (!cl[i]) {
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
-            break;
-        }
-        cl[i][0] = 0;
-        for (k = 1; k < ps->paths[i].n; k++)
-            cl[i][k] = cl[i][k - 1] + amp_v3_dist(v[k - 1].p, v[k].p);
-    }
+    c->t = q;
+    c->legs = ql;
+    c->legs[4 * c->nt] = xy(a0.p);
+    c->legs[4 * c->nt + 1] = ctr;
+    c->legs[4 * c->nt + 2] = ctr;
+    c->legs[4 * c->nt + 3] = xy(a1.p);
+    c->t[c->nt].s0 = s - hw;
+    c->t[c->nt].s1 = s + hw;
+    c->t[c->nt].loop = loop;
+    c->t[c->nt].tip.p = amp_v3(ctr.x, ctr.y, a0.p.z);
+    c->t[c->nt].tip.r = AMP_CP_TOOTH_R(r); /* tagged: the joiner keeps off corners */
+    c->nt++;
+    return AMP_OK;
+}
+
+/* The corners of every bare stretch, at evenly spaced centres along it. */
+static amp_status stretch_corners(corner_ctx *c, const amp_pathset *bare, amp_error *err)
+{
+    size_t i, k;
+    amp_status rc = AMP_OK;
     for (i = 0; i < bare->npaths && rc == AMP_OK; i++) {
         const amp_pvert *b = amp_pathset_path_verts(bare, i);
         size_t n = bare->paths[i].n, m;
         double L, hw;
         int closed;
-        m = centres(b, n, r, &L, &closed);
+        m = centres(b, n, c->r, &L, &closed);
         /* half the base: the corners of one stretch must not overlap */
-        hw = m ? fmin(r, 0.45 * L / (double)(closed ? m : m + 1)) : r;
+        hw = m ? fmin(c->r, 0.45 * L / (double)(closed ? m : m + 1)) : c->r;
         for (k = 0; k < m && rc == AMP_OK; k++) {
-            amp_vec2 c = poly_at(b, n, closed ? L * (double)k / (double)m : L * (double)(k + 1) / (double)(m + 1));
-            size_t loop = 0, seg;
-            double s = 0, d = nearest_perimeter(ps, &sg, nperim, cl, c, 3 * r, &loop, &s), tot;
-            amp_pvert a0, a1;
-            /* a skin's strip already runs within `covered` of the ring
-             * here: a corner would print its plastic a second time */
-            if (covered > 0 &&
-                infill_within(ps, &sg, ps->paths[nperim - 1].first + ps->paths[nperim - 1].n, c, covered))
-                continue;
-            tot = cl[loop][ps->paths[loop].n - 1];
-            /* the perimeter is 2r out; the base r to either side */
-            if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {
-                st->corners_left_out++;
-                continue;
-            }
-            a0 = at_len(ps, loop, cl[loop], s - hw, &seg);
-            a1 = at_len(ps, loop, cl[loop], s + hw, &seg);
-            if (blocked(ps, &sg, xy(a0.p), c, legs, 2 * nt, 1e-4 * r) ||
-                blocked(ps, &sg, xy(a1.p), c, legs, 2 * nt, 1e-4 * r)) {
-                st->corners_left_out++;
-                continue;
-            }
-            {
-                void *q = t, *ql = legs;
-                if (amp_grow(al, &q, &cap_t, nt + 1, sizeof *t) != AMP_OK ||
-                    amp_grow(al, &ql, &cap_l, 4 * (nt + 1), sizeof *legs) != AMP_OK) {
-                    rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
-                    break;
-                }
-                t = q;
-                legs = ql;
-            }
-            /* the two legs of tooth k are legs[4k .. 4k + 3] (two segments) */
-            legs[4 * nt] = xy(a0.p);
-            legs[4 * nt + 1] = c;
-            legs[4 * nt + 2] = c;
-            legs[4 * nt + 3] = xy(a1.p);
-            t[nt].s0 = s - hw;
-            t[nt].s1 = s + hw;
-            t[nt].loop = loop;
-            t[nt].tip.p = amp_v3(c.x, c.y, a0.p.z);
-            t[nt].tip.r = AMP_CP_TOOTH_R(r); /* tagged: the joiner keeps off corners */
-            nt++;
+            double at = closed ? L * (double)k / (double)m : L * (double)(k + 1) / (double)(m + 1);
+            rc = place_corner(c, poly_at(b, n, at), hw, err);
         }
     }
-    /* per perimeter loop: teeth sorted by base, overlapping ones left out */
-    for (i = 0; i < nperim && rc == AMP_OK; i++) {
+    return rc;
+}
+
+/* Per perimeter loop: its corners sorted by base, overlapping ones left
+ * out, the rest built into the loop. */
+static amp_status build_corners(corner_ctx *c, amp_pathset *scratch, amp_error *err)
+{
+    size_t i, k, j;
+    amp_status rc = AMP_OK;
+    for (i = 0; i < c->nperim && rc == AMP_OK; i++) {
         size_t mt = 0;
         tooth *u = NULL;
-        if (nt)
-            u = amp_alloc(al, nt * sizeof *u);
-        if (nt && !u) {
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
-            break;
-        }
-        for (k = 0; k < nt; k++)
-            if (t[k].loop == i)
-                u[mt++] = t[k];
+        if (c->nt)
+            u = amp_alloc(c->al, c->nt * sizeof *u);
+        if (c->nt && !u)
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+        for (k = 0; k < c->nt; k++)
+            if (c->t[k].loop == i)
+                u[mt++] = c->t[k];
         if (mt > 1)
             qsort(u, mt, sizeof *u, cmp_tooth);
         for (k = 0, j = 0; k < mt; k++) {
             if (j > 0 && u[k].s0 < u[j - 1].s1) {
-                st->corners_left_out++;
+                c->st->corners_left_out++;
                 continue;
             }
             u[j++] = u[k];
         }
-        st->support_corners += j;
+        c->st->support_corners += j;
         if (j)
-            rc = insert_teeth(ps, i, cl[i], u, j, &scratch, err);
-        amp_free(al, u);
+            rc = insert_teeth(c->ps, i, c->cl[i], u, j, scratch, err);
+        amp_free(c->al, u);
     }
+    return rc;
+}
+
+amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_pathset *bare, double r, double covered,
+                                  amp_contpath_stats *st, amp_error *err)
+{
+    corner_ctx c;
+    size_t i;
+    amp_pathset scratch;
+    amp_status rc;
+    if (nperim == 0 || bare->npaths == 0)
+        return AMP_OK;
+    memset(&c, 0, sizeof c);
+    c.al = ps->alloc;
+    c.ps = ps;
+    c.nperim = nperim;
+    c.r = r;
+    c.covered = covered;
+    c.st = st;
+    amp_pathset_init(&scratch, c.al);
+    if (sg_build(&c.sg, ps, 2 * r, c.al) != AMP_OK || !(c.cl = amp_calloc(c.al, nperim, sizeof *c.cl))) {
+        amp_free(c.al, c.sg.start);
+        amp_free(c.al, c.sg.item);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
+    }
+    if ((rc = perimeter_lengths(&c, err)) == AMP_OK && (rc = stretch_corners(&c, bare, err)) == AMP_OK)
+        rc = build_corners(&c, &scratch, err);
     for (i = 0; i < nperim; i++)
-        amp_free(al, cl[i]);
-    amp_free(al, cl);
-    amp_free(al, t);
-    amp_free(al, legs);
-    amp_free(al, sg.start);
-    amp_free(al, sg.item);
+        amp_free(c.al, c.cl[i]);
+    amp_free(c.al, c.cl);
+    amp_free(c.al, c.t);
+    amp_free(c.al, c.legs);
+    amp_free(c.al, c.sg.start);
+    amp_free(c.al, c.sg.item);
     amp_pathset_free(&scratch);
     return rc;
 }

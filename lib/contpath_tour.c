@@ -44,7 +44,7 @@
 #include "contpath_internal.h"
 
 typedef struct rot_end {
-    size_t end; /* 2 * edge + side: side 0 leaves eu, side 1 leaves ev */
+    size_t end; /* 2 * edge + side: side 0 leaves edge_u, side 1 leaves edge_v */
     double ang;
 } rot_end;
 
@@ -81,7 +81,7 @@ typedef struct tour {
     size_t nface, ncurve, maxlevel;
 } tour;
 
-static size_t end_at(const amp_cp_graph *g, size_t x) { return x % 2 ? g->ev[x / 2] : g->eu[x / 2]; }
+static size_t end_at(const amp_cp_graph *g, size_t x) { return x % 2 ? g->edge_v[x / 2] : g->edge_u[x / 2]; }
 
 /* Rotation system: ends grouped by vertex, sorted by angle. */
 static void build_rotation(tour *t)
@@ -89,8 +89,8 @@ static void build_rotation(tour *t)
     amp_cp_graph *g = t->g;
     size_t i, v;
     for (i = 0; i < g->ne; i++) {
-        t->start[g->eu[i] + 2]++;
-        t->start[g->ev[i] + 2]++;
+        t->start[g->edge_u[i] + 2]++;
+        t->start[g->edge_v[i] + 2]++;
     }
     for (v = 0; v < g->nv; v++)
         t->start[v + 2] += t->start[v + 1];
@@ -156,11 +156,11 @@ static int faces_and_levels(tour *t, size_t *fl, double *area, size_t *queue, si
     for (i = 0; i < g->nv; i++)
         uf[i] = i;
     for (i = 0; i < g->ne; i++)
-        amp_cp_uf_union(uf, g->eu[i], g->ev[i]);
+        amp_uf_union(uf, g->edge_u[i], g->edge_v[i]);
     for (i = 0; i < g->nv; i++)
         compf[i] = NONE;
     for (i = 0; i < t->ne2; i++) {
-        size_t c = amp_cp_uf_find(uf, end_at(g, i)), f = t->face[i];
+        size_t c = amp_uf_find(uf, end_at(g, i)), f = t->face[i];
         if (compf[c] == NONE || area[f] < area[compf[c]])
             compf[c] = f;
     }
@@ -281,8 +281,8 @@ static int splice(tour *t, size_t x, size_t y, unsigned char *isopen)
     size_t a = t->partner[x], d = t->partner[y], cx, cy;
     if (a == y || a == NONE || d == NONE)
         return 0;
-    cx = amp_cp_uf_find(t->uf, t->curve[x / 2]);
-    cy = amp_cp_uf_find(t->uf, t->curve[y / 2]);
+    cx = amp_uf_find(t->uf, t->curve[x / 2]);
+    cy = amp_uf_find(t->uf, t->curve[y / 2]);
     if (cx == cy || (isopen[cx] && isopen[cy]))
         return 0; /* two open curves re-paired stay two open curves */
     t->partner[a] = d;
@@ -343,7 +343,7 @@ static void merge_any(tour *t, unsigned char *isopen)
  * clockwise around the region), then any printed end, then the rest. A
  * pseudo edge is written with radius 0 at both ends; where printing and
  * travel meet the vertex is written twice (a zero-length step), so no
- * segment mixes the two radii (SPEC §5: mean radius). */
+ * segment mixes the two radii (docs/interfaces.md §5: mean radius). */
 static amp_status trace(tour *t, double z, double rad, int by_level, amp_pathset *out, size_t *ntours,
                         unsigned char *used, amp_error *err)
 {
@@ -355,16 +355,17 @@ static amp_status trace(tour *t, double z, double rad, int by_level, amp_pathset
         for (i = 0; i < t->ne2 && st == AMP_OK; i++) {
             size_t x = i, first = i, at = end_at(g, x);
             double cur;
-            if (used[i / 2] || (pass == 0 && t->partner[i] != NONE) || (pass >= 1 && pass <= 2 && g->ep[i / 2]) ||
+            if (used[i / 2] || (pass == 0 && t->partner[i] != NONE) ||
+                (pass >= 1 && pass <= 2 && g->edge_pseudo[i / 2]) ||
                 (pass == 1 && !(by_level && t->depth[t->face[i]] == 0)))
                 continue;
-            cur = g->ep[i / 2] ? 0.0 : rad;
+            cur = g->edge_pseudo[i / 2] ? 0.0 : rad;
             if ((st = amp_pathset_begin(out, AMP_ROLE_OBJECT, err)) != AMP_OK)
                 break;
             st = amp_pathset_push(out, amp_v3(g->v[at].x, g->v[at].y, z), cur, err);
             while (st == AMP_OK) {
                 size_t e = x / 2, to = end_at(g, x ^ 1u);
-                double r = g->ep[e] ? 0.0 : rad;
+                double r = g->edge_pseudo[e] ? 0.0 : rad;
                 used[e] = 1;
                 if (r != cur)
                     st = amp_pathset_push(out, amp_v3(g->v[at].x, g->v[at].y, z), r, err);

@@ -5,8 +5,7 @@
 #include <string.h>
 
 #include "ampath/polygon.h"
-
-#define TWO_PI 6.283185307179586476925286766559
+#include "ampath/vec.h"
 
 void amp_polyset_init(amp_polyset *ps, const amp_allocator *a)
 {
@@ -237,7 +236,7 @@ amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err)
                 continue;
             src = amp_polyset_ring(ps, r);
             memcpy(pts + npts, src, ps->rings[r].n * sizeof *pts);
-            /* outer boundaries counter-clockwise, holes clockwise (SPEC §4) */
+            /* outer boundaries counter-clockwise, holes clockwise (docs/interfaces.md §4) */
             if ((area[r] < 0) != hole)
                 amp_ring_reverse(pts + npts, ps->rings[r].n);
             rings[nout].first = npts;
@@ -416,9 +415,9 @@ static amp_status raw_ring(inset_ctx *c, const amp_vec2 *p, size_t n, int left, 
             double a0 = atan2(n1.y, n1.x), a1 = atan2(n2.y, n2.x), sweep = a0 - a1, rc;
             int steps, j;
             while (sweep < 0)
-                sweep += TWO_PI;
-            while (sweep >= TWO_PI)
-                sweep -= TWO_PI;
+                sweep += 2 * AMP_PI;
+            while (sweep >= 2 * AMP_PI)
+                sweep -= 2 * AMP_PI;
             steps = (int)ceil(sweep / dstep);
             if (steps < 1)
                 steps = 1;
@@ -766,28 +765,18 @@ static size_t bridge_gap(const inset_ctx *c, const piece *pc, size_t npc, size_t
     return at;
 }
 
-static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+/* The pieces of the raw offset curves that lie on the offset boundary. */
+typedef struct piece_list {
+    piece *pc;
+    size_t n, cap;
+} piece_list;
+
+/* Step 1: the raw offset curves of every ring, on the interior side given by
+ * the parity of its nesting depth. */
+static amp_status raw_offsets(inset_ctx *c, const amp_polyset *in, double r, double dstep)
 {
-    inset_ctx c;
-    egrid g;
-    piece *pc = NULL;
-    size_t *first = NULL;
-    amp_vec2 *loop = NULL;
-    size_t i, j, k, npc = 0, cap_pc = 0, cap_loop = 0;
-    double dstep, lim;
+    size_t i, j;
     amp_status st = AMP_OK;
-    amp_polyset_clear(out);
-    if (in->nrings == 0)
-        return AMP_OK;
-    memset(&c, 0, sizeof c);
-    memset(&g, 0, sizeof g);
-    c.al = out->alloc;
-    if (!(arc_tol > 0))
-        arc_tol = r / 100.0;
-    dstep = 2.0 * acos(r / (r + arc_tol));
-    if (!(dstep > 1e-3))
-        dstep = 1e-3;
-    /* 1. raw offset curves, interior side from nesting depth parity */
     for (i = 0; i < in->nrings && st == AMP_OK; i++) {
         const amp_vec2 *p = amp_polyset_ring(in, i);
         size_t n = in->rings[i].n, depth = 0;
@@ -795,133 +784,183 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
         for (j = 0; j < in->nrings; j++)
             if (j != i && amp_ring_contains(amp_polyset_ring(in, j), in->rings[j].n, p[0], 0.0) == 1)
                 depth++;
-        st = raw_ring(&c, p, n, (area > 0) == (depth % 2 == 0), r, dstep);
+        st = raw_ring(c, p, n, (area > 0) == (depth % 2 == 0), r, dstep);
     }
-    /* 2. all mutual crossings (sweep over x) */
-    if (st == AMP_OK)
-        if (c.nseg > 1)
-            qsort(c.seg, c.nseg, sizeof *c.seg, cmp_seg_x);
-    for (i = 0; i < c.nseg && st == AMP_OK; i++) {
-        double xmax = fmax(c.seg[i].a.x, c.seg[i].b.x);
-        double ylo = fmin(c.seg[i].a.y, c.seg[i].b.y), yhi = fmax(c.seg[i].a.y, c.seg[i].b.y);
-        for (j = i + 1; j < c.nseg && st == AMP_OK; j++) {
-            if (fmin(c.seg[j].a.x, c.seg[j].b.x) > xmax)
+    return st;
+}
+
+/* Step 2: all mutual crossings of the raw segments (sweep over x). */
+static amp_status raw_crossings(inset_ctx *c)
+{
+    size_t i, j;
+    amp_status st = AMP_OK;
+    if (c->nseg > 1)
+        qsort(c->seg, c->nseg, sizeof *c->seg, cmp_seg_x);
+    for (i = 0; i < c->nseg && st == AMP_OK; i++) {
+        double xmax = fmax(c->seg[i].a.x, c->seg[i].b.x);
+        double ylo = fmin(c->seg[i].a.y, c->seg[i].b.y), yhi = fmax(c->seg[i].a.y, c->seg[i].b.y);
+        for (j = i + 1; j < c->nseg && st == AMP_OK; j++) {
+            if (fmin(c->seg[j].a.x, c->seg[j].b.x) > xmax)
                 break;
-            if (fmax(c.seg[j].a.y, c.seg[j].b.y) < ylo || fmin(c.seg[j].a.y, c.seg[j].b.y) > yhi)
+            if (fmax(c->seg[j].a.y, c->seg[j].b.y) < ylo || fmin(c->seg[j].a.y, c->seg[j].b.y) > yhi)
                 continue;
-            st = intersect(&c, i, j);
+            st = intersect(c, i, j);
         }
     }
-    if (st == AMP_OK)
-        st = egrid_build(&g, in, r, c.al);
-    if (st != AMP_OK)
-        goto done;
-    if (c.nspl > 1)
-        qsort(c.spl, c.nspl, sizeof *c.spl, cmp_split);
-    /* 3. split into pieces and keep those on the offset boundary {d = r} */
-    lim = r * (1.0 - 1e-9);
-    for (i = 0, k = 0; i < c.nseg; i++) {
-        size_t cur = c.seg[i].na, nxt;
+    return st;
+}
+
+/* Step 3: split the raw segments at their crossings and keep the pieces on
+ * the offset boundary {d = r} (midpoint no closer than r to the input,
+ * and inside it), into @p pl. */
+static amp_status boundary_pieces(inset_ctx *c, const egrid *g, double r, piece_list *pl)
+{
+    double lim = r * (1.0 - 1e-9);
+    size_t i, k;
+    if (c->nspl > 1)
+        qsort(c->spl, c->nspl, sizeof *c->spl, cmp_split);
+    for (i = 0, k = 0; i < c->nseg; i++) {
+        size_t cur = c->seg[i].na, nxt;
         for (;;) {
-            amp_vec2 a, b, m;
-            if (k < c.nspl && c.spl[k].seg == i)
-                nxt = c.spl[k++].node;
+            if (k < c->nspl && c->spl[k].seg == i)
+                nxt = c->spl[k++].node;
             else
-                nxt = c.seg[i].nb;
+                nxt = c->seg[i].nb;
             if (nxt != cur) {
-                a = c.node[cur];
-                b = c.node[nxt];
-                m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
-                if (!egrid_closer(&g, m, lim) && egrid_inside(&g, m)) {
-                    void *v = pc;
-                    if (amp_grow(c.al, &v, &cap_pc, npc + 1, sizeof *pc) != AMP_OK) {
-                        st = AMP_ERR_NOMEM;
-                        goto done;
-                    }
-                    pc = v;
-                    pc[npc].na = cur;
-                    pc[npc].nb = nxt;
-                    pc[npc].used = 0;
-                    npc++;
+                amp_vec2 a = c->node[cur], b = c->node[nxt], m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
+                if (!egrid_closer(g, m, lim) && egrid_inside(g, m)) {
+                    void *v = pl->pc;
+                    if (amp_grow(c->al, &v, &pl->cap, pl->n + 1, sizeof *pl->pc) != AMP_OK)
+                        return AMP_ERR_NOMEM;
+                    pl->pc = v;
+                    pl->pc[pl->n].na = cur;
+                    pl->pc[pl->n].nb = nxt;
+                    pl->pc[pl->n].used = 0;
+                    pl->n++;
                 }
             }
             cur = nxt;
-            if (nxt == c.seg[i].nb && !(k < c.nspl && c.spl[k].seg == i))
+            if (nxt == c->seg[i].nb && !(k < c->nspl && c->spl[k].seg == i))
                 break;
         }
     }
-    /* 4. stitch pieces into rings by node ids */
-    if (npc > 1)
-        qsort(pc, npc, sizeof *pc, cmp_piece);
-    first = amp_alloc(c.al, (c.nnode + 1) * sizeof *first);
-    if (!first) {
-        st = AMP_ERR_NOMEM;
-        goto done;
-    }
-    for (i = 0; i <= c.nnode; i++)
-        first[i] = npc;
-    for (i = npc; i-- > 0;)
-        first[pc[i].na] = i;
-    for (i = 0; i < npc; i++) {
-        size_t len = 0, at, start;
-        if (pc[i].used)
-            continue;
-        start = pc[i].na;
-        at = i;
-        for (;;) {
-            void *v = loop;
-            size_t nb;
-            pc[at].used = 1;
-            if (amp_grow(c.al, &v, &cap_loop, len + 1, sizeof *loop) != AMP_OK) {
-                st = AMP_ERR_NOMEM;
-                goto done;
-            }
-            loop = v;
-            loop[len++] = c.node[pc[at].na];
-            nb = pc[at].nb;
-            if (nb == start)
-                break;
-            /* next unused piece leaving node nb */
-            for (at = first[nb]; at < npc && pc[at].na == nb && pc[at].used; at++)
-                ;
-            if (at >= npc || pc[at].na != nb) {
-                /* dead end: a sliver piece of a swallowtail (crossings
-                 * of nearly parallel raw segments) was misclassified.
-                 * Bridge the gap to the nearest piece start, or close the
-                 * ring, when it is within r/4 (the boundary moves by at
-                 * most the gap); otherwise the chain is dropped. */
-                at = bridge_gap(&c, pc, npc, nb, start, 0.25 * r);
-                if (at == npc + 1)
-                    break;
-                if (at >= npc) {
-                    len = 0;
-                    break;
-                }
+    return AMP_OK;
+}
+
+/* Step 4, one ring: the chain of unused pieces from piece @p i (pieces
+ * sorted by start node, @p first: a node's first piece) until it closes,
+ * into *loop (*len vertices; 0: the chain was dropped). */
+static amp_status trace_ring(const inset_ctx *c, piece_list *pl, const size_t *first, size_t i, double r,
+                             amp_vec2 **loop, size_t *cap_loop, size_t *len)
+{
+    piece *pc = pl->pc;
+    size_t npc = pl->n, start = pc[i].na, at = i;
+    *len = 0;
+    for (;;) {
+        void *v = *loop;
+        size_t nb;
+        pc[at].used = 1;
+        if (amp_grow(c->al, &v, cap_loop, *len + 1, sizeof **loop) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        *loop = v;
+        (*loop)[(*len)++] = c->node[pc[at].na];
+        nb = pc[at].nb;
+        if (nb == start)
+            return AMP_OK;
+        /* next unused piece leaving node nb */
+        for (at = first[nb]; at < npc && pc[at].na == nb && pc[at].used; at++)
+            ;
+        if (at >= npc || pc[at].na != nb) {
+            /* dead end: a sliver piece of a swallowtail (crossings of nearly
+             * parallel raw segments) was misclassified. Bridge the gap to
+             * the nearest piece start, or close the ring, when it is within
+             * r/4 (the boundary moves by at most the gap); otherwise the
+             * chain is dropped. */
+            at = bridge_gap(c, pc, npc, nb, start, 0.25 * r);
+            if (at == npc + 1)
+                return AMP_OK;
+            if (at >= npc) {
+                *len = 0;
+                return AMP_OK;
             }
         }
-        if (len >= 3)
-            len = despike(loop, len, 1e-9 * r, 0.05 * r);
+    }
+}
+
+/* Step 4, cleaning a stitched ring: spikes and small loops out, and once
+ * more half a turn on (a needle or loop across the seam). */
+static size_t clean_ring(amp_vec2 *loop, size_t len, double r)
+{
+    if (len >= 3)
+        len = despike(loop, len, 1e-9 * r, 0.05 * r);
+    if (len >= 4)
+        len = untangle(loop, len);
+    if (len >= 4) {
+        rotate_half(loop, len);
+        len = despike(loop, len, 1e-9 * r, 0.05 * r);
         if (len >= 4)
             len = untangle(loop, len);
-        /* once more half a turn on: a needle or loop across the seam */
-        if (len >= 4) {
-            rotate_half(loop, len);
-            len = despike(loop, len, 1e-9 * r, 0.05 * r);
-            if (len >= 4)
-                len = untangle(loop, len);
-        }
-        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r &&
-            (st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
-            goto done;
     }
-    st = amp_polyset_organize(out, err);
-done:
+    return len;
+}
+
+/* Step 4: stitch the pieces into rings by node ids, into @p out. */
+static amp_status stitch_rings(const inset_ctx *c, piece_list *pl, double r, amp_polyset *out, amp_error *err)
+{
+    size_t *first, i, len, cap_loop = 0, npc = pl->n;
+    amp_vec2 *loop = NULL;
+    amp_status st = AMP_OK;
+    if (npc > 1)
+        qsort(pl->pc, npc, sizeof *pl->pc, cmp_piece);
+    if (!(first = amp_alloc(c->al, (c->nnode + 1) * sizeof *first)))
+        return AMP_ERR_NOMEM;
+    for (i = 0; i <= c->nnode; i++)
+        first[i] = npc;
+    for (i = npc; i-- > 0;)
+        first[pl->pc[i].na] = i;
+    for (i = 0; i < npc && st == AMP_OK; i++) {
+        if (pl->pc[i].used)
+            continue;
+        if ((st = trace_ring(c, pl, first, i, r, &loop, &cap_loop, &len)) != AMP_OK)
+            break;
+        len = clean_ring(loop, len, r);
+        if (len >= 3 && fabs(amp_ring_area(loop, len)) > 1e-4 * r * r)
+            st = amp_polyset_add(out, loop, len, err);
+    }
+    amp_free(c->al, first);
+    amp_free(c->al, loop);
+    return st;
+}
+
+/* The inward offset of [P2 §2.2] step 5: raw offset curves (1), their
+ * crossings (2), the pieces on the boundary {d = r} (3), stitched (4). */
+static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, amp_polyset *out, amp_error *err)
+{
+    inset_ctx c;
+    egrid g;
+    piece_list pl;
+    double dstep;
+    amp_status st;
+    amp_polyset_clear(out);
+    if (in->nrings == 0)
+        return AMP_OK;
+    memset(&c, 0, sizeof c);
+    memset(&g, 0, sizeof g);
+    memset(&pl, 0, sizeof pl);
+    c.al = out->alloc;
+    if (!(arc_tol > 0))
+        arc_tol = r / 100.0;
+    dstep = 2.0 * acos(r / (r + arc_tol));
+    if (!(dstep > 1e-3))
+        dstep = 1e-3;
+    if ((st = raw_offsets(&c, in, r, dstep)) == AMP_OK && (st = raw_crossings(&c)) == AMP_OK &&
+        (st = egrid_build(&g, in, r, c.al)) == AMP_OK && (st = boundary_pieces(&c, &g, r, &pl)) == AMP_OK &&
+        (st = stitch_rings(&c, &pl, r, out, err)) == AMP_OK)
+        st = amp_polyset_organize(out, err);
     amp_free(c.al, c.seg);
     amp_free(c.al, c.node);
     amp_free(c.al, c.spl);
-    amp_free(c.al, pc);
-    amp_free(c.al, first);
-    amp_free(c.al, loop);
+    amp_free(c.al, pl.pc);
     egrid_free(&g, c.al);
     if (st == AMP_ERR_NOMEM)
         return amp_fail(err, st, 0, "out of memory computing the inset");

@@ -54,22 +54,17 @@ static size_t find_key(const skey *s, size_t n, uint64_t k)
     return lo < n && s[lo].k == k ? lo : n;
 }
 
-amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
+/* The section segments: one per triangle the plane z crosses, from the
+ * mesh edge it enters by to the one it leaves by, into *seg (*nseg). */
+static amp_status cut_triangles(const amp_mesh *m, double z, const amp_allocator *al, sseg **seg, size_t *nseg)
 {
-    const amp_allocator *al = out->alloc;
-    sseg *seg = NULL;
-    skey *starts = NULL;
-    amp_vec2 *loop = NULL;
-    size_t nseg = 0, cap = 0, i, cap_loop = 0, pass;
-    amp_section_stats st0;
-    amp_status st = AMP_OK;
-    memset(&st0, 0, sizeof st0);
-    if (!isfinite(z))
-        return amp_fail(err, AMP_ERR_ARG, 0, "cutting height is not finite");
+    size_t i, cap = 0;
     for (i = 0; i < m->ntris; i++) {
         const uint32_t *v = m->tris[i].v;
         /* symbolic perturbation: a vertex on the plane counts as above it */
         int s[3], k, kin = -1, kout = -1;
+        void *p = *seg;
+        sseg *g;
         for (k = 0; k < 3; k++)
             s[k] = m->verts[v[k]].z >= z;
         if (s[0] == s[1] && s[1] == s[2])
@@ -85,29 +80,28 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
             if (!s[k] && s[n])
                 kin = k;
         }
-        {
-            void *p = seg;
-            if (amp_grow(al, &p, &cap, nseg + 1, sizeof *seg) != AMP_OK) {
-                st = AMP_ERR_NOMEM;
-                goto done;
-            }
-            seg = p;
-        }
-        seg[nseg].ks = edge_key(v[kout], v[(kout + 1) % 3]);
-        seg[nseg].ke = edge_key(v[kin], v[(kin + 1) % 3]);
-        seg[nseg].next = SIZE_MAX;
-        seg[nseg].used = 0;
-        seg[nseg].has_prev = 0;
-        nseg++;
+        if (amp_grow(al, &p, &cap, *nseg + 1, sizeof **seg) != AMP_OK)
+            return AMP_ERR_NOMEM;
+        *seg = p;
+        g = &(*seg)[(*nseg)++];
+        g->ks = edge_key(v[kout], v[(kout + 1) % 3]);
+        g->ke = edge_key(v[kin], v[(kin + 1) % 3]);
+        g->next = SIZE_MAX;
+        g->used = 0;
+        g->has_prev = 0;
     }
-    st0.segments = nseg;
-    if (nseg == 0)
-        goto done;
-    starts = amp_alloc(al, nseg * sizeof *starts);
-    if (!starts) {
-        st = AMP_ERR_NOMEM;
-        goto done;
-    }
+    return AMP_OK;
+}
+
+/* Link each segment to the one starting on the edge where it ends:
+ * topology (edge ids), not coordinates. Counts edges where two segments
+ * start (a non-manifold mesh) in st0->nonmanifold. */
+static amp_status link_segments(const amp_allocator *al, sseg *seg, size_t nseg, amp_section_stats *st0)
+{
+    size_t i;
+    skey *starts = amp_alloc(al, nseg * sizeof *starts);
+    if (!starts)
+        return AMP_ERR_NOMEM;
     for (i = 0; i < nseg; i++) {
         starts[i].k = seg[i].ks;
         starts[i].seg = i;
@@ -116,9 +110,7 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
         qsort(starts, nseg, sizeof *starts, cmp_key);
     for (i = 0; i + 1 < nseg; i++)
         if (starts[i].k == starts[i + 1].k)
-            st0.nonmanifold++;
-    /* link each segment to the one starting on the edge where it ends:
-     * topology (edge ids), not coordinates */
+            st0->nonmanifold++;
     for (i = 0; i < nseg; i++) {
         size_t j = find_key(starts, nseg, seg[i].ke);
         if (j < nseg) {
@@ -126,9 +118,22 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
             seg[starts[j].seg].has_prev = 1;
         }
     }
-    /* open chains first (from segments nobody leads to), then closed loops */
-    for (pass = 0; pass < 2; pass++)
-        for (i = 0; i < nseg; i++) {
+    amp_free(al, starts);
+    return AMP_OK;
+}
+
+/* The linked segments walked into rings: open chains first (from segments
+ * nobody leads to; counted in st0->open_chains, not kept), then closed
+ * loops, added to @p out. */
+static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t nseg, amp_polyset *out,
+                                 amp_section_stats *st0, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    amp_vec2 *loop = NULL;
+    size_t i, pass, cap_loop = 0;
+    amp_status st = AMP_OK;
+    for (pass = 0; pass < 2 && st == AMP_OK; pass++)
+        for (i = 0; i < nseg && st == AMP_OK; i++) {
             size_t at = i, len = 0;
             int closed = 0;
             if (seg[i].used || (pass == 0 && seg[i].has_prev))
@@ -136,8 +141,8 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
             while (at != SIZE_MAX && !seg[at].used) {
                 void *p = loop;
                 if (amp_grow(al, &p, &cap_loop, len + 1, sizeof *loop) != AMP_OK) {
-                    st = AMP_ERR_NOMEM;
-                    goto done;
+                    amp_free(al, loop);
+                    return AMP_ERR_NOMEM;
                 }
                 loop = p;
                 seg[at].used = 1;
@@ -146,18 +151,32 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
                 if (at == i)
                     closed = 1;
             }
-            if (!closed) {
-                st0.open_chains++;
-                continue;
-            }
-            if ((st = amp_polyset_add(out, loop, len, err)) != AMP_OK)
-                goto done;
+            if (!closed)
+                st0->open_chains++;
+            else
+                st = amp_polyset_add(out, loop, len, err);
         }
-    st = amp_polyset_organize(out, err);
-done:
-    amp_free(al, seg);
-    amp_free(al, starts);
     amp_free(al, loop);
+    return st;
+}
+
+/* [P2 §2.2] step 1 at one height: cut, link, chain, organize. */
+amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    sseg *seg = NULL;
+    size_t nseg = 0;
+    amp_section_stats st0;
+    amp_status st;
+    memset(&st0, 0, sizeof st0);
+    if (!isfinite(z))
+        return amp_fail(err, AMP_ERR_ARG, 0, "cutting height is not finite");
+    st = cut_triangles(m, z, al, &seg, &nseg);
+    st0.segments = st == AMP_OK ? nseg : 0;
+    if (st == AMP_OK && nseg > 0 && (st = link_segments(al, seg, nseg, &st0)) == AMP_OK &&
+        (st = chain_segments(m, z, seg, nseg, out, &st0, err)) == AMP_OK)
+        st = amp_polyset_organize(out, err);
+    amp_free(al, seg);
     if (stats)
         *stats = st0;
     if (st == AMP_ERR_NOMEM)
@@ -253,7 +272,7 @@ double amp_slices_overhang(const amp_slices *sl, size_t i, double step)
     if (!(step > 0))
         step = 1.0;
     /* row indexes: a sample costs one row, not every edge (linear cost,
-     * issue 16); without memory for them the plain scans give the same */
+     * on large sections); without memory for them the plain scans give the same */
     have_lo = amp_polyindex_build(&ilo, lo, NULL) == AMP_OK;
     have_up = amp_polyindex_build(&iup, up, NULL) == AMP_OK;
     /* the upper rings' vertices (about 512 of them at most): the overhang

@@ -162,6 +162,7 @@ static void check_section_fig(const amp_mesh *m, double z, double r, amp_grid_ki
     so.first_layer = 0;
     ck_assert_int_eq(amp_slice_mesh(m, &so, &sl, &err), AMP_OK);
     amp_contpath_opts_default(&o, r);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     o.grid = kind;
     o.pseudo_edges = pseudo;
     if (cell > 0)
@@ -380,6 +381,7 @@ START_TEST(all_layers_of_a_sphere_and_torus_pair)
     so.first_layer = 0;
     ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
     amp_contpath_opts_default(&o, 0.4);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
     ck_assert_uint_eq(st.layers, sl.nlayers);
     ck_assert_uint_gt(st.islands, sl.nlayers); /* two bodies on most layers */
@@ -426,6 +428,7 @@ START_TEST(built_in_models_get_one_crossing_free_stroke_per_island)
         ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
         ck_assert_uint_eq(sl.open_chains, 0);
         amp_contpath_opts_default(&o, 0.5);
+        o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
         ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_gt(st.islands, sl.nlayers / 2);
         /* a region's components are spliced to the perimeter, not joined inside it (Fig. 6) */
@@ -502,7 +505,7 @@ START_TEST(printer_profile_sets_the_bead_width_of_a_continuous_slice)
     amp_mesh m;
     amp_error err;
     char args[768], out[4096];
-    const char *stl = amp_test_tmp("pplate.stl"), *amp = amp_test_tmp("pplate.amp"), *ini = amp_test_tmp("p06.ini");
+    const char *stl = fx_tmp("pplate.stl"), *amp = fx_tmp("pplate.amp"), *ini = fx_tmp("p06.ini");
     FILE *f = fopen(ini, "w");
     ck_assert_ptr_nonnull(f);
     fputs("# a PrusaSlicer printer with a 0.6 mm nozzle\nnozzle_diameter = 0.6,0.6\nbed_shape = 0x0,250x0,250x210,0x210\n", f);
@@ -511,13 +514,13 @@ START_TEST(printer_profile_sets_the_bead_width_of_a_continuous_slice)
     ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 2.0), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer %s --json -o %s", stl, ini, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"radius\":0.3375") != NULL, "%s", out);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer %s --radius 0.3 --json -o %s", stl, ini, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"radius\":0.3,") != NULL, "%s", out);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --printer no-such-printer -o %s", stl, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 2);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
     amp_mesh_free(&m);
 }
 END_TEST
@@ -527,13 +530,13 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     amp_mesh m;
     amp_error err;
     char args[768], out[4096];
-    const char *stl = amp_test_tmp("plate.stl"), *amp = amp_test_tmp("plate.amp");
+    const char *stl = fx_tmp("plate.stl"), *amp = fx_tmp("plate.amp");
     FILE *f;
     amp_mesh_init(&m, NULL);
     ck_assert_int_eq(fx_voxel_picture(&m, plate, 3, 2.0), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --radius 0.4 --continuous -o %s --json", stl, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     /* 12 layers x 2 islands x one stroke; 3 regions per layer (the neck splits R̃) */
     ck_assert_msg(strstr(out, "\"layers\":12,\"empty_layers\":0,\"islands\":24,") != NULL, "%s", out);
     /* the 12 solid regions are strip lattices: one stroke per strip, joined
@@ -547,11 +550,11 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     ck_assert_msg(strstr(out, "\"joins\":") != NULL && strstr(out, "\"pseudo_length_mm\":") != NULL, "%s", out);
     /* the G-code writer takes the pseudo edges (radius 0) as moves without extrusion */
     snprintf(args, sizeof args, "gcode %s -o %s.gcode", amp, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(args, sizeof args, "%s.gcode", amp);
     remove(args);
     snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", amp, stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"ok\":true") != NULL, "%s", out);
     ck_assert_msg(strstr(out, "\"pseudo_segments\":") != NULL, "%s", out);
     /* a crossing path appended: the check fails with exit 1 */
@@ -559,10 +562,10 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
     ck_assert(f != NULL);
     fprintf(f, "path object 5\n1 1 0.5 0.4\n9 9 0.5 0.4\n9 1 0.5 0.4\n1 9 0.5 0.4\n1 1 0.5 0.4\n");
     fclose(f);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 1);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
     ck_assert_msg(strstr(out, "\"crossings\":1") != NULL, "%s", out);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --grid octagon", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     remove(stl);
     remove(amp);
     amp_mesh_free(&m);
@@ -653,20 +656,20 @@ static void stl_one_start_per_island(const char *stl, const char *name, double l
     snprintf(amp, sizeof amp, "%s.amp", stl);
     snprintf(gc, sizeof gc, "%s.gcode", amp);
     snprintf(args, sizeof args, "slice %s --layer %g --continuous -o %s --json", stl, layer, amp);
-    ck_assert_msg(amp_test_run_tool(args, json, sizeof json) == 0, "%s: %s", name, json);
+    ck_assert_msg(fx_run_tool(args, json, sizeof json) == 0, "%s: %s", name, json);
     ck_assert_msg(strstr(json, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL,
                   "%s", json);
     ck_assert_msg(strstr(json, "\"empty_layers\":0,") != NULL, "%s", json);
     if (out)
         snprintf(out, cap, "%s", json);
     snprintf(args, sizeof args, "gcode %s -o %s", amp, gc);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     nz = gcode_starts(gc, z, starts, 4096, &first_z);
     /* islands per layer from the sections themselves (slice --polygons) */
     {
         static char pol[1 << 17];
         snprintf(args, sizeof args, "slice %s --layer %g --polygons --json", stl, layer);
-        ck_assert_int_eq(amp_test_run_tool(args, pol, sizeof pol), 0);
+        ck_assert_int_eq(fx_run_tool(args, pol, sizeof pol), 0);
         for (q = strstr(pol, "\"z_print\":"); q; q = strstr(q + 1, "\"z_print\":")) {
             double zp = atof(q + 10);
             long isl = atol(strstr(q, "\"islands\":") + 10);
@@ -695,7 +698,7 @@ static void part_one_start_per_island(fx_part part, double step)
     amp_error err;
     char name[64], stl[400];
     snprintf(name, sizeof name, "%s.stl", fx_part_name(part));
-    snprintf(stl, sizeof stl, "%s", amp_test_tmp(name));
+    snprintf(stl, sizeof stl, "%s", fx_tmp(name));
     amp_mesh_init(&m, NULL);
     ck_assert_int_eq(fx_part_mesh(&m, part, step), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
@@ -745,6 +748,7 @@ START_TEST(paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0.3, &sl, &ps, &st, &o);
     ck_assert_uint_gt(ps.npaths, 10);
     for (i = 0; i < ps.npaths; i++) {
@@ -787,6 +791,7 @@ START_TEST(cycle_tree_and_merging_trace_the_same_edges_once_without_crossing)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl, &a, &sa, &o);
     o.tour = AMP_TOUR_MERGE;
     layers_of(FX_PART_TORUS, 0.9, 0.5, 0, &sl2, &b, &sb, &o);
@@ -832,6 +837,7 @@ START_TEST(a_sliver_first_layer_is_printed_on_the_bed)
     ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
     ck_assert_double_gt(amp_polyset_area(&sl.layers[0].polys), 0);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.empty_layers, 0);
     ck_assert_uint_eq(st.dropped_islands, 0);
@@ -907,6 +913,7 @@ START_TEST(support_corners_cover_the_unprinted_stretches_of_the_infill_ring)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     /* step 6 is about the sparse lattice: solid regions take no corners */
     o.skin_bottom = o.skin_top = 0;
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
@@ -1051,6 +1058,7 @@ START_TEST(solid_regions_leave_no_sliver_bare_beside_their_strips)
     amp_pathset_init(&a, NULL);
     amp_pathset_init(&b, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     o.skin_bottom = o.skin_top = 10;
     layers_of(FX_PART_IDLER, 0.8, 0.2, 0, &sl, &a, &sa, &o);
     o.support_corners = 0;
@@ -1088,6 +1096,7 @@ START_TEST(skins_are_solid_only_where_a_layer_is_uncovered)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
     ck_assert_uint_gt(st.skin_bands, 0);
     ck_assert_uint_eq(st.island_strokes, st.islands);
@@ -1119,6 +1128,50 @@ START_TEST(skins_are_solid_only_where_a_layer_is_uncovered)
 }
 END_TEST
 
+static size_t verifier_calls;
+
+/* A verifier that rejects every path (counts its calls). */
+static amp_status reject_every_path(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                    struct amp_stroke_report *rep, amp_error *err)
+{
+    (void)ps, (void)i, (void)region, (void)tol, (void)rep, (void)err;
+    verifier_calls++;
+    return AMP_ERR_GEOMETRY;
+}
+
+/* The skin bands' safety net is the caller's: without a verifier
+ * (verify_stroke NULL, the default) no island is printed again; with one
+ * that rejects every path, every island printed with bands is printed again
+ * with its skin regions whole (no bands are left, band_retries counts them),
+ * and the verifier was asked about each of its paths. */
+START_TEST(the_band_retry_asks_the_callers_verifier)
+{
+    amp_slices sl;
+    amp_pathset ps;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_contpath_opts_default(&o, 0.225);
+    ck_assert(o.verify_stroke == NULL);
+    layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
+    ck_assert_uint_gt(st.skin_bands, 0);
+    ck_assert_uint_eq(st.band_retries, 0);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    o.verify_stroke = reject_every_path;
+    verifier_calls = 0;
+    layers_of(FX_PART_TORUS, 0.8, 0.2, 0, &sl, &ps, &st, &o);
+    ck_assert_uint_eq(st.skin_bands, 0);
+    ck_assert_uint_gt(st.band_retries, 0);
+    ck_assert_uint_ge(verifier_calls, st.band_retries);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+}
+END_TEST
+
 START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 {
     /* the idler's first and last layers are skins: >= 95 % of the section
@@ -1133,6 +1186,7 @@ START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
     amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
     layers_of(FX_PART_IDLER, 0.7, 0.2, 0, &sl, &ps, &st, &o);
     last = sl.nlayers - 1;
     ck_assert_uint_gt(st.skin_regions, 0);
@@ -1177,6 +1231,7 @@ START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
         ck_assert_int_eq(amp_polyset_add(&R, sq, 4, NULL), AMP_OK);
         ck_assert_int_eq(amp_polyset_organize(&R, NULL), AMP_OK);
         amp_contpath_opts_default(&o, 0.2);
+        o.verify_stroke = amp_check_path_stroke; /* as the tool: the skin bands' safety net */
         ck_assert_msg(amp_contpath_region(&k, &R, 1.0, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
         ck_assert_uint_eq(st.free_ends, 2);
         ck_assert_uint_eq(ps.npaths, 1);
@@ -1205,19 +1260,19 @@ START_TEST(fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end)
 {
     static const char *const modes[] = {"--no-join", "--no-perimeter", "--no-join --pseudo"};
     char args[1024], out[8192];
-    const char *stl = amp_test_tmp("helix_j.stl"), *amp = amp_test_tmp("helix_j.amp");
+    const char *stl = fx_tmp("helix_j.stl"), *amp = fx_tmp("helix_j.amp");
     size_t k;
     snprintf(args, sizeof args, "model helix -o %s", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     for (k = 0; k < 3; k++) {
         snprintf(args, sizeof args, "slice %s --layer 0.3 --continuous %s -o %s --json", stl, modes[k], amp);
-        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+        ck_assert_msg(fx_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
         ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0,\"outside\":0,\"failed_paths\":0") != NULL,
                       "%s: %s", modes[k], out);
         /* the joins are there: the case is exercised, not avoided */
         ck_assert_msg(strstr(out, "\"joins\":0,") == NULL, "%s: %s", modes[k], out);
         snprintf(args, sizeof args, "check %s --mesh %s --layer 0.3 --json", amp, stl);
-        ck_assert_msg(amp_test_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
+        ck_assert_msg(fx_run_tool(args, out, sizeof out) == 0, "%s: %s", modes[k], out);
     }
     remove(stl);
     remove(amp);
@@ -1240,9 +1295,9 @@ START_TEST(a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke)
     for (k = 0; k < 3; k++) {
         char stl[400], nm[64];
         snprintf(nm, sizeof nm, "bi_%s.stl", names[k]);
-        snprintf(stl, sizeof stl, "%s", amp_test_tmp(nm));
+        snprintf(stl, sizeof stl, "%s", fx_tmp(nm));
         snprintf(args, sizeof args, "model %s -o %s", names[k], stl);
-        ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+        ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
         stl_one_start_per_island(stl, names[k], layers[k], out, sizeof out);
         /* the case is exercised: the bridge and the crocodile have such necks */
         if (k < 2)
@@ -1257,30 +1312,31 @@ static Suite *contpath_suite(void)
     Suite *s = suite_create("contpath");
     TCase *tc = tcase_create("core");
     tcase_set_timeout(tc, 120);
-    AMP_ADD_TEST(tc, torus_sections_get_one_crossing_free_stroke);
-    AMP_ADD_TEST(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
-    AMP_ADD_TEST(tc, perforated_plate_with_many_holes_gets_one_stroke);
-    AMP_ADD_TEST(tc, perforated_plate_hex_lattice_joins_its_components_into_one_stroke);
-    AMP_ADD_TEST(tc, thin_boundary_cells_become_pseudo_edges_so_beads_do_not_collide);
-    AMP_ADD_TEST(tc, all_layers_of_a_sphere_and_torus_pair);
-    AMP_ADD_TEST(tc, built_in_models_get_one_crossing_free_stroke_per_island);
-    AMP_ADD_TEST(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
-    AMP_ADD_TEST(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
-    AMP_ADD_TEST(tc, printer_profile_sets_the_bead_width_of_a_continuous_slice);
-    AMP_ADD_TEST(tc, torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode);
-    AMP_ADD_TEST(tc, screw_bunny_and_open_mesh_get_one_extrusion_start_per_island_counted_in_the_gcode);
-    AMP_ADD_TEST(tc, paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is);
-    AMP_ADD_TEST(tc, cycle_tree_and_merging_trace_the_same_edges_once_without_crossing);
-    AMP_ADD_TEST(tc, a_sliver_first_layer_is_printed_on_the_bed);
-    AMP_ADD_TEST(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
-    AMP_ADD_TEST(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
-    AMP_ADD_TEST(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
-    AMP_ADD_TEST(tc, fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end);
-    AMP_ADD_TEST(tc, a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke);
-    AMP_ADD_TEST(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
-    AMP_ADD_TEST(tc, skins_are_solid_only_where_a_layer_is_uncovered);
+    tcase_add_test(tc, torus_sections_get_one_crossing_free_stroke);
+    tcase_add_test(tc, plate_with_holes_islands_and_a_thin_neck_gets_one_stroke_per_region);
+    tcase_add_test(tc, perforated_plate_with_many_holes_gets_one_stroke);
+    tcase_add_test(tc, perforated_plate_hex_lattice_joins_its_components_into_one_stroke);
+    tcase_add_test(tc, thin_boundary_cells_become_pseudo_edges_so_beads_do_not_collide);
+    tcase_add_test(tc, all_layers_of_a_sphere_and_torus_pair);
+    tcase_add_test(tc, built_in_models_get_one_crossing_free_stroke_per_island);
+    tcase_add_test(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
+    tcase_add_test(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
+    tcase_add_test(tc, printer_profile_sets_the_bead_width_of_a_continuous_slice);
+    tcase_add_test(tc, torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode);
+    tcase_add_test(tc, screw_bunny_and_open_mesh_get_one_extrusion_start_per_island_counted_in_the_gcode);
+    tcase_add_test(tc, paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is);
+    tcase_add_test(tc, cycle_tree_and_merging_trace_the_same_edges_once_without_crossing);
+    tcase_add_test(tc, a_sliver_first_layer_is_printed_on_the_bed);
+    tcase_add_test(tc, support_corners_cover_the_unprinted_stretches_of_the_infill_ring);
+    tcase_add_test(tc, skin_layers_are_covered_by_beads_and_sparse_layers_are_not);
+    tcase_add_test(tc, of_the_two_pairings_of_a_ring_the_longer_is_printed);
+    tcase_add_test(tc, fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end);
+    tcase_add_test(tc, a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke);
+    tcase_add_test(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
+    tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
+    tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(contpath_suite)
+FX_TEST_MAIN(contpath_suite)

@@ -112,7 +112,7 @@ START_TEST(convex_hull_of_a_noisy_circle_and_interior_points)
     amp_vec2 p[400], h[400];
     size_t n = 0, nh, i;
     for (i = 0; i < 200; i++) {
-        double t = 6.283185307179586 * i / 200;
+        double t = 2 * AMP_PI * i / 200;
         p[n++] = amp_v2(5 * cos(t), 5 * sin(t));
         p[n++] = amp_v2(3 * cos(3 * t) * 0.9, 2 * sin(t)); /* inside */
     }
@@ -212,7 +212,7 @@ START_TEST(inset_of_a_star_with_reflex_vertices_matches_sampling)
     amp_polyset_init(&in, NULL);
     amp_polyset_init(&out, NULL);
     for (i = 0; i < 40; i++) {
-        double t = 6.283185307179586 * i / 40, rr = i % 2 ? 4.0 : 9.0;
+        double t = 2 * AMP_PI * i / 40, rr = i % 2 ? 4.0 : 9.0;
         p[i] = amp_v2(rr * cos(t), rr * sin(t));
     }
     ck_assert_int_eq(amp_polyset_add(&in, p, 40, NULL), AMP_OK);
@@ -235,7 +235,7 @@ START_TEST(inset_survives_near_duplicate_points_from_a_section_through_vertices)
     amp_polyset_init(&in, NULL);
     amp_polyset_init(&out, NULL);
     for (k = 0; k < 64; k++) {
-        double t = 6.283185307179586 * k / 64;
+        double t = 2 * AMP_PI * k / 64;
         o[k] = amp_v2(13 * cos(t), 13 * sin(t));
         h[127 - 2 * k] = amp_v2(7 * cos(t), 7 * sin(t));
         h[126 - 2 * k] = amp_v2(7 * cos(t) + 3e-16, 7 * sin(t) - 5e-16);
@@ -296,11 +296,11 @@ START_TEST(row_index_answers_as_the_plain_scans)
     unsigned long long seed = 12345;
     amp_polyset_init(&P, NULL);
     for (i = 0; i < 64; i++) {
-        double a = 6.283185307179586 * (double)i / 64, r = i % 2 ? 10 : 6 + (double)(i % 5);
+        double a = 2 * AMP_PI * (double)i / 64, r = i % 2 ? 10 : 6 + (double)(i % 5);
         star[i] = amp_v2(r * cos(a), r * sin(a));
     }
     for (i = 0; i < 40; i++) {
-        double a = -6.283185307179586 * (double)i / 40, r = i % 2 ? 3 : 2;
+        double a = -2 * AMP_PI * (double)i / 40, r = i % 2 ? 3 : 2;
         hole[i] = amp_v2(r * cos(a), r * sin(a));
     }
     ck_assert_int_eq(amp_polyset_add(&P, star, 64, NULL), AMP_OK);
@@ -362,19 +362,19 @@ static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, area_orientation_and_containment_of_an_l_shape);
-    AMP_ADD_TEST(tc, organize_orients_outers_ccw_and_holes_cw_in_islands);
-    AMP_ADD_TEST(tc, convex_hull_of_a_noisy_circle_and_interior_points);
-    AMP_ADD_TEST(tc, inset_of_a_square_keeps_sharp_corners);
-    AMP_ADD_TEST(tc, inset_splits_a_neck_narrower_than_the_extruder);
-    AMP_ADD_TEST(tc, inset_grows_and_merges_holes_and_drops_small_islands);
-    AMP_ADD_TEST(tc, inset_checker_rejects_a_wrong_offset);
-    AMP_ADD_TEST(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
-    AMP_ADD_TEST(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
-    AMP_ADD_TEST(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
-    AMP_ADD_TEST(tc, row_index_answers_as_the_plain_scans);
+    tcase_add_test(tc, area_orientation_and_containment_of_an_l_shape);
+    tcase_add_test(tc, organize_orients_outers_ccw_and_holes_cw_in_islands);
+    tcase_add_test(tc, convex_hull_of_a_noisy_circle_and_interior_points);
+    tcase_add_test(tc, inset_of_a_square_keeps_sharp_corners);
+    tcase_add_test(tc, inset_splits_a_neck_narrower_than_the_extruder);
+    tcase_add_test(tc, inset_grows_and_merges_holes_and_drops_small_islands);
+    tcase_add_test(tc, inset_checker_rejects_a_wrong_offset);
+    tcase_add_test(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
+    tcase_add_test(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
+    tcase_add_test(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
+    tcase_add_test(tc, row_index_answers_as_the_plain_scans);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(polygon_suite)
+FX_TEST_MAIN(polygon_suite)

@@ -10,8 +10,6 @@
 #include "runtool.h"
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
-
 static size_t count_holes(const amp_polyset *ps)
 {
     size_t i, h = 0;
@@ -42,7 +40,7 @@ START_TEST(sphere_sections_are_single_discs_with_analytic_area)
     amp_polyset_init(&ps, NULL);
     ck_assert_int_eq(fx_sphere(&m, amp_v3(1, 2, 0), 10.0, 256, 128), AMP_OK);
     for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
-        double want = PI * (100.0 - zs[i] * zs[i]);
+        double want = AMP_PI * (100.0 - zs[i] * zs[i]);
         amp_polyset_clear(&ps);
         ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
         ck_assert_uint_eq(ps.nislands, 1);
@@ -72,7 +70,7 @@ START_TEST(torus_sections_are_annuli_with_one_hole_and_analytic_area)
     amp_polyset_init(&ps, NULL);
     ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), 10.0, 3.0, 256, 128), AMP_OK);
     for (i = 0; i < sizeof zs / sizeof zs[0]; i++) {
-        double w = sqrt(9.0 - zs[i] * zs[i]), want = 4 * PI * 10.0 * w;
+        double w = sqrt(9.0 - zs[i] * zs[i]), want = 4 * AMP_PI * 10.0 * w;
         amp_polyset_clear(&ps);
         ck_assert_int_eq(amp_slice_plane(&m, zs[i], &ps, &ss, NULL), AMP_OK);
         ck_assert_uint_eq(ps.nislands, 1);
@@ -239,14 +237,14 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
     amp_pathset ps;
     amp_error err;
     char args[512], out[8192];
-    const char *stl = amp_test_tmp("torus.stl"), *amp = amp_test_tmp("torus.amp"), *svg = amp_test_tmp("torus.svg");
+    const char *stl = fx_tmp("torus.stl"), *amp = fx_tmp("torus.amp"), *svg = fx_tmp("torus.svg");
     size_t i;
     amp_mesh_init(&m, NULL);
     amp_pathset_init(&ps, NULL);
     ck_assert_int_eq(fx_torus(&m, amp_v3(5, 5, 9), 10.0, 3.0, 96, 48), AMP_OK); /* z in [6, 12] */
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.5 --polygons -o %s --json", stl, amp);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"layers\":12,\"polygons\":24,\"islands\":12,\"holes\":12") != NULL, "%s", out);
     ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
     ck_assert_uint_eq(ps.npaths, 24);
@@ -263,7 +261,7 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert_msg(i % 2 == 0 ? a > 0 : a < 0, "path %lu: outer CCW then hole CW", (unsigned long)i);
     }
     snprintf(args, sizeof args, "slice %s --layer 0.5 --z 3 -o %s", stl, svg);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     {
         FILE *f = fopen(svg, "r");
         char head[64] = {0};
@@ -273,21 +271,21 @@ START_TEST(cli_writes_closed_oriented_polygons_per_layer)
         ck_assert(strstr(head, "<?xml") == head);
     }
     snprintf(args, sizeof args, "slice %s --polygons", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2); /* --layer missing */
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2); /* --layer missing */
     snprintf(args, sizeof args, "slice %s.missing --layer 0.5", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid tri --json", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"euler\":true") != NULL, "%s", out);
     /* one pass with combinatorial changes: the lattice never collapses a
      * Class 2 cell, so Lemma 3.3 repairs nothing; rim cells stay odd */
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid hex --single --combinatorial --json", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, out, sizeof out), 0);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_msg(strstr(out, "\"collapsed_class2\":0") != NULL && strstr(out, "\"repaired_cells\":0") != NULL &&
                       strstr(out, "\"euler\":false") != NULL,
                   "%s", out);
     snprintf(args, sizeof args, "euler %s --layer 0.5 --cell 2 --grid pentagon", stl);
-    ck_assert_int_eq(amp_test_run_tool(args, NULL, 0), 2);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     remove(stl);
     remove(amp);
     remove(svg);
@@ -339,15 +337,15 @@ static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
     TCase *tc = tcase_create("core");
-    AMP_ADD_TEST(tc, sphere_sections_are_single_discs_with_analytic_area);
-    AMP_ADD_TEST(tc, torus_sections_are_annuli_with_one_hole_and_analytic_area);
-    AMP_ADD_TEST(tc, voxel_plate_gives_islands_holes_and_exact_areas);
-    AMP_ADD_TEST(tc, open_mesh_is_reported_as_open_chains);
-    AMP_ADD_TEST(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
-    AMP_ADD_TEST(tc, cli_writes_closed_oriented_polygons_per_layer);
-    AMP_ADD_TEST(tc, overhang_of_consecutive_layers_measures_eps_continuity);
+    tcase_add_test(tc, sphere_sections_are_single_discs_with_analytic_area);
+    tcase_add_test(tc, torus_sections_are_annuli_with_one_hole_and_analytic_area);
+    tcase_add_test(tc, voxel_plate_gives_islands_holes_and_exact_areas);
+    tcase_add_test(tc, open_mesh_is_reported_as_open_chains);
+    tcase_add_test(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
+    tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
+    tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     suite_add_tcase(s, tc);
     return s;
 }
 
-AMP_TEST_MAIN(slice_suite)
+FX_TEST_MAIN(slice_suite)

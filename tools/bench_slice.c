@@ -108,6 +108,7 @@ static int scaling(cli_json *j, int quick)
         so.layer = 0.5;
         so.first_layer = 0;
         amp_contpath_opts_default(&o, 0.225);
+        o.verify_stroke = amp_check_path_stroke;
         t0 = cli_now();
         if (rc == CLI_OK && (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK ||
                              amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK))
@@ -199,8 +200,8 @@ static void side_by_side(cli_json *j, const char *name, const amp_mesh *m, doubl
                theirs > 0 ? "ok" : "failed");
 }
 
-/* Side by side with PrusaSlicer (issue 16 target: slice --continuous +
- * gcode in at most half its wall time) on the built-in meshes and the
+/* Side by side with PrusaSlicer (the speed target: slice --continuous +
+ * gcode in at most half PrusaSlicer's wall time) on the built-in meshes and the
  * bench's bumpy torus, when `prusa-slicer` is installed (`make bench`
  * installs Debian's package); skipped with a message otherwise. */
 static void prusa(cli_json *j, const amp_mesh *torus, int quick)
@@ -258,6 +259,7 @@ int bench_slice(cli_json *j, int quick)
     so.layer = quick ? 1.0 : 0.2;
     so.first_layer = 0;
     amp_contpath_opts_default(&o, 0.25);
+    o.verify_stroke = amp_check_path_stroke;
     o.cell = 4.0;
     t0 = cli_now();
     if (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK)

@@ -454,6 +454,7 @@ int cmd_slice(int argc, char **argv)
     if (continuous && polygons)
         return cli_fail("slice", CLI_USAGE, "--polygons and --continuous exclude each other");
     amp_contpath_opts_default(&co, radius);
+    co.verify_stroke = amp_check_path_stroke; /* the skin bands' safety net */
     co.grid = grid_kind(grid, &ok);
     if (!ok)
         return cli_fail("slice", CLI_USAGE, "--grid must be square, tri or hex, not '%s'", grid);

@@ -27,7 +27,7 @@
  * extruding: its two end vertices carry radius 0 in the path, and where
  * printing and travel meet the vertex is written twice (once with each
  * radius), so that no segment mixes the two (the G-code writer extrudes by
- * the mean radius of a segment, SPEC §5).
+ * the mean radius of a segment, docs/interfaces.md §5).
  * Functions are reentrant; inputs are only read.
  */
 #ifndef AMPATH_CONTPATH_H
@@ -44,6 +44,18 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+struct amp_stroke_report; /* check.h: amp_stroke_report */
+
+/**
+ * A stroke verifier, exactly the signature of check.h's amp_check_path_stroke:
+ * AMP_OK when path @p i of @p ps passes (in @p region, tolerance @p tol),
+ * another status when it fails. @p rep and @p err may be NULL. The builder
+ * calls it through amp_contpath_opts.verify_stroke and never links a checker
+ * itself: whoever fills the options decides whether the safety net is on.
+ */
+typedef amp_status (*amp_contpath_verify_fn)(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                             struct amp_stroke_report *rep, amp_error *err);
 
 /** How §4's tour is built from the patched complex of a region. */
 typedef enum amp_tour_method {
@@ -67,6 +79,11 @@ typedef struct amp_contpath_opts {
     double skin_cell;      /**< strip width of the solid skins (<= 0: 4 r, where the beads of K̂ lie side by side) */
     int join;              /**< 1: splice each island's perimeter loops and region strokes into one closed
                                 stroke (one extrusion start per island); 0: separate closed paths */
+    amp_contpath_verify_fn verify_stroke; /**< NULL (default): no retry. Else the safety net of the skin bands:
+                                an island printed with skin bands whose paths this verifier rejects (called
+                                with tol 1e-6, rep and err NULL) is printed again with its skin regions whole
+                                (counted in band_retries). Set it to amp_check_path_stroke (check.h) for the
+                                behaviour of the ampath tool. */
 } amp_contpath_opts;
 
 /**
@@ -149,7 +166,8 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);
 
-/* The independent stroke checker (amp_check_stroke, amp_check_path_stroke): check.h. */
+/* The independent stroke checker (amp_check_stroke, amp_check_path_stroke): check.h; it is not linked by
+ * the builder (see amp_contpath_opts.verify_stroke). */
 
 #ifdef __cplusplus
 }

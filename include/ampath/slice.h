@@ -1,12 +1,12 @@
 /*
  * ampath/slice.h — planar slicing of a triangle mesh into layers of
- * polygons with holes (continuous-toolpath-euler.txt §2.2 step 1, SPEC §4).
+ * polygons with holes (continuous-toolpath-euler.txt §2.2 step 1, docs/interfaces.md §4).
  *
  * Layer i is cut at mid-height of its slab and its paths are printed at the
  * slab's top: with first-layer height H0 and layer height H, layer 0 spans
  * [0, H0] and layer i >= 1 spans [H0 + (i-1)H, H0 + iH]; without a first
  * layer height (H0 = H) this is the cut z = (i + 1/2)H and print z = (i+1)H of
- * SPEC §4. Heights are measured from the mesh's lowest point (the mesh placed
+ * docs/interfaces.md §4. Heights are measured from the mesh's lowest point (the mesh placed
  * on the plate).
  *
  * Sections are built by topology: each triangle crossing the plane gives one

@@ -203,11 +203,16 @@ class amp_slices(Structure):
                 ("open_chains", c_size_t), ("nonmanifold", c_size_t)]
 
 
+# amp_contpath_verify_fn (contpath.h): amp_check_path_stroke's signature; the stroke report is passed on as an
+# opaque pointer (the mirror amp_stroke_report is defined below)
+VERIFY_FN = ctypes.CFUNCTYPE(c_int, c_void_p, c_size_t, c_void_p, c_double, c_void_p, c_void_p)
+
+
 class amp_contpath_opts(Structure):
     _fields_ = [("radius", c_double), ("cell", c_double), ("grid", c_int), ("offset", c_double),
                 ("perimeters", c_int), ("support_stretches", c_int), ("support_corners", c_int),
                 ("pseudo_edges", c_int), ("tour", c_int), ("skin_bottom", c_double), ("skin_top", c_double),
-                ("skin_cell", c_double), ("join", c_int)]
+                ("skin_cell", c_double), ("join", c_int), ("verify_stroke", VERIFY_FN)]
 
 
 class amp_contpath_stats(Structure):

@@ -398,7 +398,9 @@ def _contpath_opts(radius, grid, infill, tour, eps_c, opts):
             _fail("skin_bottom and skin_top must be thicknesses >= 0 mm")
     if not (isinstance(eps_c, (int, float)) and 0 < eps_c <= 1):
         _fail("eps_c must be in (0, 1]")
-    _apply(o, opts, "continuous", skip=("radius", "grid", "tour"))
+    _apply(o, opts, "continuous", skip=("radius", "grid", "tour", "verify_stroke"))
+    # the skin bands' safety net as the tool sets it: the library's own checker, called from C
+    o.verify_stroke = ctypes.cast(lib.amp_check_path_stroke, L.VERIFY_FN)
     if infill is not None and "cell" in opts and infill > 0:
         _fail("cell and infill exclude each other")
     if infill is not None and infill != 0:
