@@ -699,10 +699,6 @@ static inline double rect_dist2(double px, double py, double x0, double y0, doub
     return dx * dx + dy * dy;
 }
 
-static double rect_dist(double px, double py, double x0, double y0, double side)
-{
-    return sqrt(rect_dist2(px, py, x0, y0, side));
-}
 
 /*
  * The lowest nozzle height over the interval of half-width @p hh around
@@ -723,13 +719,16 @@ static double cone_floor(const amp_gcode_iter *it, double px, double py, double 
         return lo;
     for (bj = 0; bj < 16; bj++)
         for (bi = 0; bi < 16; bi++) {
-            double c = (double)it->grid_cb[bj * 16 + bi];
-            if (c - zo + k * hh <= lo ||
-                c - zo - k * (rect_dist(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs) - hh) <= lo)
+            double c = (double)it->grid_cb[bj * 16 + bi], room = c - zo + k * hh - lo, d2;
+            if (!(room > 0.0))
+                continue;
+            /* as for the cells below: a clear margin skips the block without its sqrt, else the exact test */
+            d2 = rect_dist2(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs);
+            if (k * k * d2 > room * room * (1.0 + 1e-6) + 1e-12 || c - zo - k * (sqrt(d2) - hh) <= lo)
                 continue;
             for (j = bj * GC_BLK; j < (bj + 1) * GC_BLK; j++)
                 for (i = bi * GC_BLK; i < (bi + 1) * GC_BLK; i++) {
-                    double room, d2, v;
+                    double v;
                     c = (double)it->grid_c[j * AMP_GCODE_GRID + i];
                     room = c - zo + k * hh - lo;
                     if (!(room > 0.0))
