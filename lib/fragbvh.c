@@ -342,7 +342,19 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
         uint32_t g;
         if (id == cl)
             continue; /* proven clear by an earlier query of f */
-        g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
+        if (prev == AMP_FBVH_NONE) {
+            g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
+        } else {
+            /* the level adds prev's sibling: searched straight away, under the bounds the level's own node would
+             * have applied to it (its pass, then the sibling's slack), so the order of the search is the same */
+            const amp_fragment *fr = &fs->frag[f];
+            double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+            uint32_t sib = b->act[id].left == prev ? b->act[id].right : b->act[id].left;
+            g = AMP_FBVH_NONE;
+            if (sib != cl && act_pass(&b->act[id].bx, reach, k2, &fr->box) &&
+                act_slack(&b->act[sib].bx, reach, k2, &fr->box) > 0.0)
+                g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, sib, AMP_FBVH_NONE, cl);
+        }
         if (g != AMP_FBVH_NONE) {
             /* every level below this one held no blocker of f: printing only ever removes blockers, so that
              * subtree stays clear for f's later queries (the larger of the two clear subtrees is kept) */
