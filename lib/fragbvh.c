@@ -45,7 +45,7 @@ void amp_fbvh_free(amp_fbvh *b)
     if (!b)
         return;
     amp_free(b->alloc, b->node);
-    amp_free(b->alloc, b->act);
+    amp_free(b->alloc, b->act_mem);
     amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
@@ -126,7 +126,8 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         if (shrunk)
             b->node = shrunk;
     }
-    b->act = amp_calloc(a, b->nnodes, sizeof *b->act);
+    b->act_mem = amp_calloc(a, b->nnodes + 1, sizeof *b->act);
+    b->act = b->act_mem ? (amp_fbvh_act *)(((uintptr_t)b->act_mem + 63u) & ~(uintptr_t)63u) : NULL;
     if (!b->act) {
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");

@@ -36,12 +36,14 @@ typedef struct amp_fbvh_box5 {
 typedef struct amp_fbvh_act {
     amp_fbvh_box5 bx;
     uint32_t left, right, lo, hi;
+    uint32_t pad[2]; /* 64 bytes, and the array 64-byte aligned: one cache line a node */
 } amp_fbvh_act;
 
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
-    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate */
+    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate (inside act_mem, cache-line aligned) */
+    void *act_mem;
     amp_fbvh_box5 *fbox;  /* per fragment in leaf order (order[q]): its xy box and lowest z */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
