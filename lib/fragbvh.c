@@ -157,6 +157,20 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
     return AMP_OK;
 }
 
+void amp_fbvh_reactivate(amp_fbvh *b)
+{
+    size_t i;
+    for (i = 0; i < b->nnodes; i++) {
+        const amp_box3 *bx = &b->node[i].box;
+        b->node[i].minz = bx->min.z;
+        b->act[i].bx.x0 = bx->min.x;
+        b->act[i].bx.y0 = bx->min.y;
+        b->act[i].bx.x1 = bx->max.x;
+        b->act[i].bx.y1 = bx->max.y;
+        b->act[i].bx.minz = bx->min.z;
+    }
+}
+
 static double dmin(double a, double b) { return a < b ? a : b; }
 static double dmax(double a, double b) { return a > b ? a : b; }
 

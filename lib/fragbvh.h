@@ -53,6 +53,10 @@ typedef struct amp_fbvh {
 amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
 void amp_fbvh_free(amp_fbvh *b);
 
+/* Every fragment unprinted again: the hierarchy as amp_fbvh_build left it (the node boxes never shrink, only
+ * the unprinted bounds do), without sorting again. */
+void amp_fbvh_reactivate(amp_fbvh *b);
+
 /* Fragment f is done (done[f] != 0): refresh the unprinted bounds (xy box, lowest z) on its way to the root. */
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f);
 

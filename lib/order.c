@@ -884,14 +884,12 @@ static size_t join_contiguous(orderer *o)
     return joined;
 }
 
-/* Re-sequence the sub-curves for travel (lib/order_seq.c) on a hierarchy with every fragment active again,
+/* Re-sequence the sub-curves for travel (lib/order_seq.c) on the hierarchy with every fragment active again,
  * then join the ones that continue each other. */
 static amp_status travel_pass(orderer *o)
 {
     amp_status st;
-    amp_fbvh_free(&o->bvh);
-    if ((st = amp_fbvh_build(&o->bvh, o->fs, o->a, o->err)) != AMP_OK)
-        return st;
+    amp_fbvh_reactivate(&o->bvh);
     st = amp_order_resequence(o->fs, &o->bvh, o->h->z_offs, o->k, o->o->travel_z_weight, o->pc, o->npc, o->a, o->err,
                               &o->st.queries);
     if (st == AMP_OK)
