@@ -45,7 +45,7 @@ void amp_fbvh_free(amp_fbvh *b)
     if (!b)
         return;
     amp_free(b->alloc, b->node);
-    amp_free(b->alloc, b->act);
+    amp_free(b->alloc, b->act_mem);
     amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
@@ -126,7 +126,8 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         if (shrunk)
             b->node = shrunk;
     }
-    b->act = amp_calloc(a, b->nnodes, sizeof *b->act);
+    b->act_mem = amp_calloc(a, b->nnodes + 1, sizeof *b->act);
+    b->act = b->act_mem ? (amp_fbvh_act *)(((uintptr_t)b->act_mem + 63u) & ~(uintptr_t)63u) : NULL;
     if (!b->act) {
         amp_fbvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
@@ -154,6 +155,20 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         b->act[i].hi = nd->hi;
     }
     return AMP_OK;
+}
+
+void amp_fbvh_reactivate(amp_fbvh *b)
+{
+    size_t i;
+    for (i = 0; i < b->nnodes; i++) {
+        const amp_box3 *bx = &b->node[i].box;
+        b->node[i].minz = bx->min.z;
+        b->act[i].bx.x0 = bx->min.x;
+        b->act[i].bx.y0 = bx->min.y;
+        b->act[i].bx.x1 = bx->max.x;
+        b->act[i].bx.y1 = bx->max.y;
+        b->act[i].bx.minz = bx->min.z;
+    }
 }
 
 static double dmin(double a, double b) { return a < b ? a : b; }
@@ -342,7 +357,19 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
         uint32_t g;
         if (id == cl)
             continue; /* proven clear by an earlier query of f */
-        g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
+        if (prev == AMP_FBVH_NONE) {
+            g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
+        } else {
+            /* the level adds prev's sibling: searched straight away, under the bounds the level's own node would
+             * have applied to it (its pass, then the sibling's slack), so the order of the search is the same */
+            const amp_fragment *fr = &fs->frag[f];
+            double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
+            uint32_t sib = b->act[id].left == prev ? b->act[id].right : b->act[id].left;
+            g = AMP_FBVH_NONE;
+            if (sib != cl && act_pass(&b->act[id].bx, reach, k2, &fr->box) &&
+                act_slack(&b->act[sib].bx, reach, k2, &fr->box) > 0.0)
+                g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, sib, AMP_FBVH_NONE, cl);
+        }
         if (g != AMP_FBVH_NONE) {
             /* every level below this one held no blocker of f: printing only ever removes blockers, so that
              * subtree stays clear for f's later queries (the larger of the two clear subtrees is kept) */

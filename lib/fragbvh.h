@@ -36,12 +36,14 @@ typedef struct amp_fbvh_box5 {
 typedef struct amp_fbvh_act {
     amp_fbvh_box5 bx;
     uint32_t left, right, lo, hi;
+    uint32_t pad[2]; /* 64 bytes, and the array 64-byte aligned: one cache line a node */
 } amp_fbvh_act;
 
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
-    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate */
+    amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate (inside act_mem, cache-line aligned) */
+    void *act_mem;
     amp_fbvh_box5 *fbox;  /* per fragment in leaf order (order[q]): its xy box and lowest z */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
@@ -50,6 +52,10 @@ typedef struct amp_fbvh {
 
 amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
 void amp_fbvh_free(amp_fbvh *b);
+
+/* Every fragment unprinted again: the hierarchy as amp_fbvh_build left it (the node boxes never shrink, only
+ * the unprinted bounds do), without sorting again. */
+void amp_fbvh_reactivate(amp_fbvh *b);
 
 /* Fragment f is done (done[f] != 0): refresh the unprinted bounds (xy box, lowest z) on its way to the root. */
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f);

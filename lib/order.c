@@ -709,10 +709,16 @@ static int piece_below(const orderer *o, const piece *a, const piece *b)
     uint32_t i, j;
     if (b->box.max.z - a->box.min.z - o->h->z_offs - k * amp_box_xy_gap(a->box, b->box) <= AMP_CONE_TOL)
         return 0;
-    for (i = a->lo; i <= a->hi; i++)
+    for (i = a->lo; i <= a->hi; i++) {
+        /* the pair's box bound (the first test of amp_fragment_below_k) against all of b at once: b's box holds
+         * every fragment's, so it is never smaller, and a fragment of a that fails it fails every pair */
+        const amp_box3 *ab = &o->fs->frag[i].box;
+        if (b->box.max.z - ab->min.z - o->h->z_offs - k * amp_box_xy_gap(*ab, b->box) <= AMP_CONE_TOL)
+            continue;
         for (j = b->lo; j <= b->hi; j++)
             if (amp_fragment_below_k(o->fs, o->h->z_offs, k, i, j))
                 return 1;
+    }
     return 0;
 }
 
@@ -878,14 +884,12 @@ static size_t join_contiguous(orderer *o)
     return joined;
 }
 
-/* Re-sequence the sub-curves for travel (lib/order_seq.c) on a hierarchy with every fragment active again,
+/* Re-sequence the sub-curves for travel (lib/order_seq.c) on the hierarchy with every fragment active again,
  * then join the ones that continue each other. */
 static amp_status travel_pass(orderer *o)
 {
     amp_status st;
-    amp_fbvh_free(&o->bvh);
-    if ((st = amp_fbvh_build(&o->bvh, o->fs, o->a, o->err)) != AMP_OK)
-        return st;
+    amp_fbvh_reactivate(&o->bvh);
     st = amp_order_resequence(o->fs, &o->bvh, o->h->z_offs, o->k, o->o->travel_z_weight, o->pc, o->npc, o->a, o->err,
                               &o->st.queries);
     if (st == AMP_OK)
