@@ -16,17 +16,6 @@ double fx_rand(unsigned long long *s);
 /** Exact torus classification: signed distance to the tube (negative inside). */
 double fx_torus_sdf(amp_vec3 p, double R, double r);
 
-/* Merge shim (issue 19): the names test files of other branches still use; remove once
- * tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
-#define amp_fix_torus(m, R, r, nu, nv) fx_torus(m, amp_v3(0, 0, 0), R, r, nu, nv)
-#define amp_fix_box fx_box
-#define amp_fix_rand fx_rand
-#define amp_fix_torus_sdf fx_torus_sdf
-#define amp_fix_mesh_dist fx_mesh_dist
-#define amp_fix_helix_point fx_helix_point
-#define amp_fix_helix_axis_dist fx_helix_axis_dist
-#define amp_fix_components fx_components
-
 #endif
 
 /** Distance from @p p to the surface of @p m, brute force over every triangle (independent of the BVH). */

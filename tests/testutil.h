@@ -62,18 +62,4 @@ typedef struct fx_failalloc {
 } fx_failalloc;
 void fx_failalloc_init(fx_failalloc *f, long budget);
 
-/* Merge shim (issue 19): the names test files of other branches still use; remove once
- * tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
-#define AMP_TEST_MAIN FX_TEST_MAIN
-#define AMP_ADD_TEST(tc, fn) tcase_add_test(tc, fn)
-#define AMP_TEST_MAXARGS FX_MAXARGS
-#define amp_test_tmp fx_tmp
-#define amp_test_prog fx_prog
-#define amp_test_msleep fx_msleep
-#define amp_test_split fx_split
-#define amp_test_failalloc fx_failalloc
-#define amp_test_failalloc_init fx_failalloc_init
-#define amp_test_run_tool fx_run_tool
-#define amp_test_run_tool_ex fx_run_tool_ex
-
 #endif
