@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "ampath/order.h"
+#include "heap.h"
 #include "order_internal.h"
 
 #define NONE AMP_FBVH_NONE
@@ -170,8 +171,7 @@ typedef struct orderer {
     uint32_t *clear; /* per fragment, a subtree of the hierarchy its earlier queries proved free of blockers */
     uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
     double *rz;
-    runent *heap;
-    size_t nheap, cap_heap;
+    amp_heap heap; /* of runent, best by run_better: GetBest's candidates */
     piece *pc;
     size_t npc, cap_pc;
     size_t nprinted;
@@ -193,9 +193,12 @@ static uint32_t step_along(uint32_t f, int d, uint32_t lo, uint32_t hi)
     return f > lo ? f - 1 : NONE;
 }
 
-/* GetBest's preference: fewer new cuts, then a longer run, then the lower run (Lemma 5.1), then curve order */
-static int run_better(const runent *x, const runent *y)
+/* GetBest's preference: fewer new cuts, then a longer run, then the lower run (Lemma 5.1), then curve order.
+ * lib/heap.h's rule (strictly better moves) keeps the order of equal runs a function of the pushes and pops. */
+static int run_better(const void *xp, const void *yp, const void *ctx)
 {
+    const runent *x = xp, *y = yp;
+    (void)ctx;
     if (x->cuts != y->cuts)
         return x->cuts < y->cuts;
     if (x->len != y->len)
@@ -205,20 +208,10 @@ static int run_better(const runent *x, const runent *y)
     return x->s < y->s;
 }
 
-static amp_status heap_insert(orderer *o, const runent *rp)
+static amp_status heap_insert(orderer *o, const runent *r)
 {
-    void *p = o->heap;
-    runent r = *rp;
-    size_t i;
-    if (amp_grow(o->a, &p, &o->cap_heap, o->nheap + 1, sizeof *o->heap) != AMP_OK)
+    if (amp_heap_push(&o->heap, r) != AMP_OK)
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the printable runs");
-    o->heap = p;
-    i = o->nheap++;
-    while (i > 0 && run_better(&r, &o->heap[(i - 1) / 2])) {
-        o->heap[i] = o->heap[(i - 1) / 2];
-        i = (i - 1) / 2;
-    }
-    o->heap[i] = r;
     return AMP_OK;
 }
 
@@ -237,26 +230,6 @@ static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
     if ((st = heap_insert(o, &r)) != AMP_OK)
         return st;
     return o->grid.cell ? rgrid_add(o, s, e, r.cuts) : AMP_OK;
-}
-
-static runent heap_pop(orderer *o)
-{
-    runent top = o->heap[0], last = o->heap[--o->nheap];
-    size_t i = 0, n = o->nheap;
-    for (;;) {
-        size_t c = 2 * i + 1;
-        if (c >= n)
-            break;
-        if (c + 1 < n && run_better(&o->heap[c + 1], &o->heap[c]))
-            c++;
-        if (!run_better(&o->heap[c], &last))
-            break;
-        o->heap[i] = o->heap[c];
-        i = c;
-    }
-    if (n)
-        o->heap[i] = last;
-    return top;
 }
 
 static int run_valid(const orderer *o, const runent *r)
@@ -417,8 +390,8 @@ static int rgrid_nearest(orderer *o, uint32_t cuts, amp_vec3 at, runent *out, do
 /* Pop the best run still printable as a whole; 0 when none is left. */
 static int pop_valid(orderer *o, runent *out)
 {
-    while (o->nheap) {
-        runent r = heap_pop(o);
+    runent r;
+    while (amp_heap_pop(&o->heap, &r)) {
         if (run_valid(o, &r)) {
             *out = r;
             return 1;
@@ -1032,7 +1005,7 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->clear);
     amp_free(o->a, o->batch);
     amp_free(o->a, o->found);
-    amp_free(o->a, o->heap);
+    amp_heap_free(&o->heap);
     amp_free(o->a, o->pc);
     rgrid_free(o->a, &o->grid);
 }
@@ -1140,6 +1113,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.k = 1.0 / tan(opts->head.theta);
     o.o = opts;
     o.err = err;
+    amp_heap_init(&o.heap, o.a, sizeof(runent), run_better, NULL);
     for (i = 0; i < in->npaths; i++)
         o.st.paths_in += in->paths[i].n > 0;
     o.st.fragments = fs.n;
