@@ -1,4 +1,4 @@
-/* BVH over fragment boxes: the accelerated below relation of paper §5.1 (see fragbvh.h). */
+/* BVH over fragment boxes: the accelerated below relation of [P1 §5.1] (see fragbvh.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* Algorithm 2 (OrderCurves, paper §5.1) over fragments, with continuation, look-ahead and bottom-up merging. */
+/* Algorithm 2 (OrderCurves, [P1 §5.1]) over fragments, with continuation, look-ahead and bottom-up merging. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -567,7 +567,7 @@ typedef struct choice {
 /*
  * GetBest among the options (Alg. 2, line 5): fewest new cuts after the look-ahead's continuation. Runs as
  * good as that and within NEAR_LEN_SLACK of the longest such run count as equally good, and the one that
- * starts nearest to the head is taken (issue 14: shorter travel between paths); without the nearest choice
+ * starts nearest to the head is taken (shorter travel between paths); without the nearest choice
  * the longest run is taken. Ties keep the first option (heap order, then forward before backward).
  */
 static size_t choose(const orderer *o, const choice *c, size_t n)
@@ -738,7 +738,7 @@ static amp_status merge_init(orderer *o, merger *m)
     return AMP_OK;
 }
 
-/* The pair to merge [§5.1, bottom-up]: the sub-curve q that continues p = seq[a] on its curve, printed later,
+/* The pair to merge [P1 §5.1, bottom-up]: the sub-curve q that continues p = seq[a] on its curve, printed later,
  * in the same direction (a one-fragment p may turn round: *flip). NONE when there is none. */
 static uint32_t merge_partner(const orderer *o, const merger *m, size_t a, int *flip)
 {
@@ -784,7 +784,7 @@ static int merge_window(const orderer *o, merger *m, size_t a, size_t b)
     return 1;
 }
 
-/* Merging p and q keeps G_a acyclic [§5.1] unless q depends on something in S, the sub-curves between them
+/* Merging p and q keeps G_a acyclic [P1 §5.1] unless q depends on something in S, the sub-curves between them
  * reachable from p (marked in ins: they must stay after it). */
 static int merge_keeps_acyclic(const orderer *o, merger *m, const piece *p, const piece *q)
 {
@@ -847,7 +847,7 @@ static amp_status merge_compact(orderer *o, const merger *m)
     return AMP_OK;
 }
 
-/* One bottom-up pass [§5.1]: each sub-curve in print order absorbs the sub-curves that continue it while
+/* One bottom-up pass [P1 §5.1]: each sub-curve in print order absorbs the sub-curves that continue it while
  * G_a stays acyclic. */
 static amp_status merge_pass(orderer *o, size_t *merged_out)
 {

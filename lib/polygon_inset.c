@@ -1,4 +1,4 @@
-/* The inward Minkowski offset of a polygon set, continuous-toolpath-euler.txt §2.2 step 5
+/* The inward Minkowski offset of a polygon set, [P2 §2.2] step 5
  * (amp_polyset_inset of include/ampath/polygon.h). */
 #include <math.h>
 #include <stdlib.h>

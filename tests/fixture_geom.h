@@ -22,7 +22,7 @@ void fx_helix(amp_pathset *ps, int nstrands, int nper);
  */
 void fx_rings(amp_pathset *ps, double cx, double cy, int nlayers, int nrings, int nper, double r);
 
-/* Merge shim (issue 19): remove once tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
+/* Merge shim for the fixture renames of the house refactoring: remove once tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
 #define amp_fixture_helix fx_helix
 #define amp_fixture_rings fx_rings
 

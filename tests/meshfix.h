@@ -16,7 +16,7 @@ double fx_rand(unsigned long long *s);
 /** Exact torus classification: signed distance to the tube (negative inside). */
 double fx_torus_sdf(amp_vec3 p, double R, double r);
 
-/* Merge shim (issue 19): the names test files of other branches still use; remove once
+/* Merge shim for the fixture renames of the house refactoring: the names test files of other branches still use; remove once
  * tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
 #define amp_fix_torus(m, R, r, nu, nv) fx_torus(m, amp_v3(0, 0, 0), R, r, nu, nv)
 #define amp_fix_box fx_box

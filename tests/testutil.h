@@ -62,7 +62,7 @@ typedef struct fx_failalloc {
 } fx_failalloc;
 void fx_failalloc_init(fx_failalloc *f, long budget);
 
-/* Merge shim (issue 19): the names test files of other branches still use; remove once
+/* Merge shim for the fixture renames of the house refactoring: the names test files of other branches still use; remove once
  * tools/rename_fixtures.sed has been applied to every tests/test_*.c. */
 #define AMP_TEST_MAIN FX_TEST_MAIN
 #define AMP_ADD_TEST(tc, fn) tcase_add_test(tc, fn)
