@@ -1,5 +1,5 @@
 /*
- * daemon.h — ampath-bridge's daemon (docs/interfaces.md §8, issues 15 and 21): the control
+ * daemon.h — ampath-bridge's daemon (docs/interfaces.md §8; trusted printer replies, no client can wedge it): the control
  * socket (plain words and JSON lines), its clients, and the loop that serves
  * them next to the printer session of bridge.h.
  *

@@ -1,5 +1,5 @@
 /* Planar 2-complexes: half-edges, checker and lattice generators
- * (continuous-toolpath-euler.txt §1.3, §2.2 step 3). */
+ * ([P2 §1.3], [P2 §2.2] step 3). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-/* Continuous tool paths (continuous-toolpath-euler.txt §2.2 steps 2-6, §4):
+/* Continuous tool paths ([P2 §2.2] steps 2-6, [P2 §4]):
  * options, steps 2-4 (K and K̂), the region graph and one region's run.
  * Clipping, patching, the tour and the layers live in contpath_*.c. */
 #include <math.h>

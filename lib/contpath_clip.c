@@ -1,5 +1,5 @@
 /* Step 5 (clipping): the pieces of the K̂ edges inside a region, with free
- * ends where an edge leaves it (continuous-toolpath-euler.txt §2.2). */
+ * ends where an edge leaves it ([P2 §2.2]). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

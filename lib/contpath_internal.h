@@ -1,6 +1,6 @@
 /*
  * contpath_internal.h — shared state of the continuous-path modules
- * (lib/contpath*.c, continuous-toolpath-euler.txt §2.2 steps 5-6, §4).
+ * (lib/contpath*.c, [P2 §2.2] steps 5-6, [P2 §4]).
  * Not installed; functions follow the library's rules (caller's allocator,
  * amp_status results, no global state).
  */

@@ -1,4 +1,4 @@
-/* One extrusion start per island (beyond continuous-toolpath-euler.txt:
+/* One extrusion start per island (beyond [P2]:
  * every extrusion start is a blob and a seam on the print): the perimeter
  * loops of an island and the closed strokes of its infill regions are
  * spliced into one closed stroke. Two loops X and Y that run side by side

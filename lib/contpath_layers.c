@@ -1,6 +1,6 @@
 /* All layers: islands in print order, perimeters (thin islands included),
  * regions, one stroke per island, bead heights, stroke starts
- * (continuous-toolpath-euler.txt §2.2; issues 14 and 16). */
+ * ([P2 §2.2]; print-ready G-code and fewer starts than a slicer). */
 #include <math.h>
 #include <stdio.h>
 #include <stdint.h>

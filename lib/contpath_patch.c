@@ -1,5 +1,5 @@
 /* Step 5 (patching) and Figs. 6-8: ring paths between free ends, joins,
- * pseudo edges of thin boundary cells (continuous-toolpath-euler.txt §2.2). */
+ * pseudo edges of thin boundary cells ([P2 §2.2]). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

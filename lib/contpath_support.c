@@ -1,4 +1,4 @@
-/* Step 6 (continuous-toolpath-euler.txt §2.2, Fig. 5): support corners where
+/* Step 6 ([P2 §2.2], Fig. 5): support corners where
  * the ring of R̃ is left unprinted by the patching.
  *
  * Circles of radius r are put on the bare stretch p̃ between its two free

@@ -1,5 +1,5 @@
-/* §4: the crossover-free tour (continuous-toolpath-euler.txt §4.1 cycle
- * tree, §4.2 traversal).
+/* [P2 §4]: the crossover-free tour ([P2 §4.1] cycle
+ * tree, [P2 §4.2] traversal).
  *
  * The clipped, patched K̃ of a region is a plane graph whose vertices all
  * have even degree; its 2-cells are the bounded faces of the embedding

@@ -1,5 +1,5 @@
 /* The Euler transformation of planar 2-complexes
- * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2, Lemma 3.3). */
+ * ([P2 §1.3] Fig. 2, [P2 §3] Lemma 3.1, Def. 3.2, Lemma 3.3). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

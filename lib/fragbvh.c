@@ -1,4 +1,4 @@
-/* BVH over fragment boxes: the accelerated below relation of paper §5.1 (see fragbvh.h). */
+/* BVH over fragment boxes: the accelerated below relation of [P1 §5.1] (see fragbvh.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,26 +52,15 @@ void amp_fbvh_free(amp_fbvh *b)
     memset(b, 0, sizeof *b);
 }
 
-amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err)
+/* The fragments in Morton order of their box centres (order, fbox): neighbours in the order are near in space,
+ * so that ranges of it make tight boxes. */
+static amp_status fbvh_sort_morton(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err)
 {
-    size_t n = fs->n, i, top = 0;
-    uint32_t stack[STACK_MAX];
+    size_t n = fs->n, i;
     amp_box3 all = amp_box3_empty();
-    mkey *keys;
-    memset(b, 0, sizeof *b);
-    b->alloc = a;
-    if (n == 0)
-        return AMP_OK;
-    keys = amp_calloc(a, n, sizeof *keys);
-    b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
-    b->fbox = amp_calloc(a, n, sizeof *b->fbox);
-    b->order = amp_calloc(a, n, sizeof *b->order);
-    b->leaf = amp_calloc(a, n, sizeof *b->leaf);
-    if (!keys || !b->node || !b->fbox || !b->order || !b->leaf) {
-        amp_free(a, keys);
-        amp_fbvh_free(b);
+    mkey *keys = amp_calloc(a, n, sizeof *keys);
+    if (!keys)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
-    }
     for (i = 0; i < n; i++)
         all = amp_box3_union(all, fs->frag[i].box);
     for (i = 0; i < n; i++) {
@@ -91,8 +80,14 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         b->fbox[i].minz = bx->min.z;
     }
     amp_free(a, keys);
+    return AMP_OK;
+}
 
-    /* split ranges of the Morton order at their middle: depth is log2(n / LEAF_SIZE) */
+/* Split ranges of the Morton order at their middle: depth is log2(n / LEAF_SIZE). */
+static void fbvh_split_ranges(amp_fbvh *b, size_t n)
+{
+    uint32_t stack[STACK_MAX];
+    size_t top = 0;
     b->nnodes = 1;
     b->node[0].lo = 0;
     b->node[0].hi = (uint32_t)n;
@@ -120,19 +115,12 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
             stack[top++] = r;
         }
     }
-    /* the tree has about n / 2 nodes of the 2 n + 1 reserved: return the rest (a failed shrink keeps the block) */
-    {
-        amp_fbvh_node *shrunk = amp_realloc_array(a, b->node, b->nnodes, sizeof *b->node);
-        if (shrunk)
-            b->node = shrunk;
-    }
-    b->act_mem = amp_calloc(a, b->nnodes + 1, sizeof *b->act);
-    b->act = b->act_mem ? (amp_fbvh_act *)(((uintptr_t)b->act_mem + 63u) & ~(uintptr_t)63u) : NULL;
-    if (!b->act) {
-        amp_fbvh_free(b);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
-    }
-    /* children always follow their parent: fill boxes backwards */
+}
+
+/* The nodes' boxes and their compact copies (act). Children always follow their parent: fill backwards. */
+static void fbvh_fill_boxes(amp_fbvh *b, const amp_fragments *fs)
+{
+    size_t i;
     for (i = b->nnodes; i-- > 0;) {
         amp_fbvh_node *nd = &b->node[i];
         if (nd->left == 0) {
@@ -154,6 +142,42 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
         b->act[i].lo = nd->lo;
         b->act[i].hi = nd->hi;
     }
+}
+
+amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err)
+{
+    size_t n = fs->n;
+    amp_status st;
+    memset(b, 0, sizeof *b);
+    b->alloc = a;
+    if (n == 0)
+        return AMP_OK;
+    b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
+    b->fbox = amp_calloc(a, n, sizeof *b->fbox);
+    b->order = amp_calloc(a, n, sizeof *b->order);
+    b->leaf = amp_calloc(a, n, sizeof *b->leaf);
+    if (!b->node || !b->fbox || !b->order || !b->leaf) {
+        amp_fbvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
+    }
+    if ((st = fbvh_sort_morton(b, fs, a, err)) != AMP_OK) {
+        amp_fbvh_free(b);
+        return st;
+    }
+    fbvh_split_ranges(b, n);
+    /* the tree has about n / 2 nodes of the 2 n + 1 reserved: return the rest (a failed shrink keeps the block) */
+    {
+        amp_fbvh_node *shrunk = amp_realloc_array(a, b->node, b->nnodes, sizeof *b->node);
+        if (shrunk)
+            b->node = shrunk;
+    }
+    b->act_mem = amp_calloc(a, b->nnodes + 1, sizeof *b->act);
+    b->act = b->act_mem ? (amp_fbvh_act *)(((uintptr_t)b->act_mem + 63u) & ~(uintptr_t)63u) : NULL;
+    if (!b->act) {
+        amp_fbvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy");
+    }
+    fbvh_fill_boxes(b, fs);
     return AMP_OK;
 }
 

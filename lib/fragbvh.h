@@ -1,6 +1,6 @@
 /*
  * fragbvh.h (internal) — bounding volume hierarchy over fragment boxes, the
- * acceleration structure of the below relation (paper §5.1: "we are using a
+ * acceleration structure of the below relation ([P1 §5.1]: "we are using a
  * BVH query to find ... all sub-curves that are above other sub-curves").
  * Leaves hold up to 4 fragments in Morton order. Each node also keeps the
  * lowest z of its fragments that are still unprinted, so that Algorithm 2's

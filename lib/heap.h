@@ -5,8 +5,8 @@
  * it is strictly better, sift-down takes the right child only when it is
  * strictly better than the left and stops unless the child is strictly
  * better, so the order of equal items is a deterministic function of the
- * pushes and pops (the rule of the orderer's and MDR's heaps, lib/order.c and
- * lib/mdr.c, which can move onto this one).
+ * pushes and pops (the rule the orderer, lib/order.c, and MDR, lib/mdr.c,
+ * relied on before they moved onto this heap).
  */
 #ifndef AMPATH_LIB_HEAP_H
 #define AMPATH_LIB_HEAP_H

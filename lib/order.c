@@ -1,9 +1,10 @@
-/* Algorithm 2 (OrderCurves, paper §5.1) over fragments, with continuation, look-ahead and bottom-up merging. */
+/* Algorithm 2 (OrderCurves, [P1 §5.1]) over fragments, with continuation, look-ahead and bottom-up merging. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ampath/order.h"
+#include "heap.h"
 #include "order_internal.h"
 
 #define NONE AMP_FBVH_NONE
@@ -170,8 +171,7 @@ typedef struct orderer {
     uint32_t *clear; /* per fragment, a subtree of the hierarchy its earlier queries proved free of blockers */
     uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
     double *rz;
-    runent *heap;
-    size_t nheap, cap_heap;
+    amp_heap heap; /* of runent, best by run_better: GetBest's candidates */
     piece *pc;
     size_t npc, cap_pc;
     size_t nprinted;
@@ -193,9 +193,12 @@ static uint32_t step_along(uint32_t f, int d, uint32_t lo, uint32_t hi)
     return f > lo ? f - 1 : NONE;
 }
 
-/* GetBest's preference: fewer new cuts, then a longer run, then the lower run (Lemma 5.1), then curve order */
-static int run_better(const runent *x, const runent *y)
+/* GetBest's preference: fewer new cuts, then a longer run, then the lower run (Lemma 5.1), then curve order.
+ * lib/heap.h's rule (strictly better moves) keeps the order of equal runs a function of the pushes and pops. */
+static int run_better(const void *xp, const void *yp, const void *ctx)
 {
+    const runent *x = xp, *y = yp;
+    (void)ctx;
     if (x->cuts != y->cuts)
         return x->cuts < y->cuts;
     if (x->len != y->len)
@@ -205,20 +208,10 @@ static int run_better(const runent *x, const runent *y)
     return x->s < y->s;
 }
 
-static amp_status heap_insert(orderer *o, const runent *rp)
+static amp_status heap_insert(orderer *o, const runent *r)
 {
-    void *p = o->heap;
-    runent r = *rp;
-    size_t i;
-    if (amp_grow(o->a, &p, &o->cap_heap, o->nheap + 1, sizeof *o->heap) != AMP_OK)
+    if (amp_heap_push(&o->heap, r) != AMP_OK)
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for the printable runs");
-    o->heap = p;
-    i = o->nheap++;
-    while (i > 0 && run_better(&r, &o->heap[(i - 1) / 2])) {
-        o->heap[i] = o->heap[(i - 1) / 2];
-        i = (i - 1) / 2;
-    }
-    o->heap[i] = r;
     return AMP_OK;
 }
 
@@ -237,26 +230,6 @@ static amp_status heap_push(orderer *o, uint32_t s, uint32_t e)
     if ((st = heap_insert(o, &r)) != AMP_OK)
         return st;
     return o->grid.cell ? rgrid_add(o, s, e, r.cuts) : AMP_OK;
-}
-
-static runent heap_pop(orderer *o)
-{
-    runent top = o->heap[0], last = o->heap[--o->nheap];
-    size_t i = 0, n = o->nheap;
-    for (;;) {
-        size_t c = 2 * i + 1;
-        if (c >= n)
-            break;
-        if (c + 1 < n && run_better(&o->heap[c + 1], &o->heap[c]))
-            c++;
-        if (!run_better(&o->heap[c], &last))
-            break;
-        o->heap[i] = o->heap[c];
-        i = c;
-    }
-    if (n)
-        o->heap[i] = last;
-    return top;
 }
 
 static int run_valid(const orderer *o, const runent *r)
@@ -417,8 +390,8 @@ static int rgrid_nearest(orderer *o, uint32_t cuts, amp_vec3 at, runent *out, do
 /* Pop the best run still printable as a whole; 0 when none is left. */
 static int pop_valid(orderer *o, runent *out)
 {
-    while (o->nheap) {
-        runent r = heap_pop(o);
+    runent r;
+    while (amp_heap_pop(&o->heap, &r)) {
         if (run_valid(o, &r)) {
             *out = r;
             return 1;
@@ -594,7 +567,7 @@ typedef struct choice {
 /*
  * GetBest among the options (Alg. 2, line 5): fewest new cuts after the look-ahead's continuation. Runs as
  * good as that and within NEAR_LEN_SLACK of the longest such run count as equally good, and the one that
- * starts nearest to the head is taken (issue 14: shorter travel between paths); without the nearest choice
+ * starts nearest to the head is taken (shorter travel between paths); without the nearest choice
  * the longest run is taken. Ties keep the first option (heap order, then forward before backward).
  */
 static size_t choose(const orderer *o, const choice *c, size_t n)
@@ -726,139 +699,182 @@ static int piece_below(const orderer *o, const piece *a, const piece *b)
 static uint32_t piece_end(const piece *p) { return p->dir > 0 ? p->hi : p->lo; }
 
 
-static void merge_free(const orderer *o, uint32_t *seq, uint32_t *pos, uint32_t *owner, uint32_t *win,
-                       unsigned char *ins)
+/* The state of one merging pass: the print sequence (seq, NONE for a merged-away slot) and each sub-curve's
+ * place in it (pos), each fragment's sub-curve (owner), and the window S between a pair (win, ins). */
+typedef struct merger {
+    uint32_t *seq, *pos, *owner, *win;
+    unsigned char *ins; /* win[w] must stay after p: reachable from p in G_a */
+    size_t nwin;
+} merger;
+
+static void merge_free(const orderer *o, merger *m)
 {
-    amp_free(o->a, seq);
-    amp_free(o->a, pos);
-    amp_free(o->a, owner);
-    amp_free(o->a, win);
-    amp_free(o->a, ins);
+    amp_free(o->a, m->seq);
+    amp_free(o->a, m->pos);
+    amp_free(o->a, m->owner);
+    amp_free(o->a, m->win);
+    amp_free(o->a, m->ins);
 }
 
-static amp_status merge_pass(orderer *o, size_t *merged_out)
+static amp_status merge_init(orderer *o, merger *m)
 {
-    size_t n = o->npc, a, i, merged = 0;
-    uint32_t *seq = amp_calloc(o->a, n ? n : 1, sizeof *seq), *pos = amp_calloc(o->a, n ? n : 1, sizeof *pos);
-    uint32_t *owner = amp_calloc(o->a, o->fs->n ? o->fs->n : 1, sizeof *owner);
-    uint32_t *win = amp_calloc(o->a, MERGE_MAX_PIECES, sizeof *win);
-    unsigned char *ins = amp_calloc(o->a, MERGE_MAX_PIECES, 1);
-    piece *pc = o->pc;
-    if (!seq || !pos || !owner || !win || !ins) {
-        merge_free(o, seq, pos, owner, win, ins);
+    size_t n = o->npc, i;
+    m->seq = amp_calloc(o->a, n ? n : 1, sizeof *m->seq);
+    m->pos = amp_calloc(o->a, n ? n : 1, sizeof *m->pos);
+    m->owner = amp_calloc(o->a, o->fs->n ? o->fs->n : 1, sizeof *m->owner);
+    m->win = amp_calloc(o->a, MERGE_MAX_PIECES, sizeof *m->win);
+    m->ins = amp_calloc(o->a, MERGE_MAX_PIECES, 1);
+    m->nwin = 0;
+    if (!m->seq || !m->pos || !m->owner || !m->win || !m->ins) {
+        merge_free(o, m);
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
     }
     for (i = 0; i < n; i++) {
         uint32_t f;
-        seq[i] = pos[i] = (uint32_t)i;
-        for (f = pc[i].lo; f <= pc[i].hi; f++)
-            owner[f] = (uint32_t)i;
+        m->seq[i] = m->pos[i] = (uint32_t)i;
+        for (f = o->pc[i].lo; f <= o->pc[i].hi; f++)
+            m->owner[f] = (uint32_t)i;
     }
-    for (a = 0; a < n; a++) {
+    return AMP_OK;
+}
+
+/* The pair to merge [P1 §5.1, bottom-up]: the sub-curve q that continues p = seq[a] on its curve, printed later,
+ * in the same direction (a one-fragment p may turn round: *flip). NONE when there is none. */
+static uint32_t merge_partner(const orderer *o, const merger *m, size_t a, int *flip)
+{
+    const piece *p = &o->pc[m->seq[a]], *q;
+    uint32_t lo = (uint32_t)o->fs->first[p->path], hi = (uint32_t)o->fs->first[p->path + 1] - 1, nf, qid;
+    int pd, qd;
+    *flip = 0;
+    nf = step_along(piece_end(p), p->dir, lo, hi);
+    if (nf == NONE && p->lo == p->hi) {
+        /* a single fragment can be printed the other way round */
+        *flip = 1;
+        nf = step_along(p->lo, -p->dir, lo, hi);
+    }
+    if (nf == NONE)
+        return NONE;
+    qid = m->owner[nf];
+    q = &o->pc[qid];
+    if (m->pos[qid] <= a)
+        return NONE;
+    pd = *flip ? -p->dir : p->dir;
+    qd = q->lo == q->hi ? pd : q->dir;
+    if (qd != pd || (qd > 0 ? q->lo : q->hi) != nf)
+        return NONE;
+    return qid;
+}
+
+/* The sub-curves printed between positions a and b into win; 0 when they are more than the window allows. */
+static int merge_window(const orderer *o, merger *m, size_t a, size_t b)
+{
+    uint32_t nfr = 0;
+    size_t x;
+    m->nwin = 0;
+    for (x = a + 1; x < b; x++) {
+        if (m->seq[x] == NONE)
+            continue;
+        if (m->nwin >= MERGE_MAX_PIECES)
+            return 0;
+        m->win[m->nwin++] = m->seq[x];
+        nfr += o->pc[m->seq[x]].hi - o->pc[m->seq[x]].lo + 1;
+        if (nfr > o->o->merge_window)
+            return 0;
+    }
+    return 1;
+}
+
+/* Merging p and q keeps G_a acyclic [P1 §5.1] unless q depends on something in S, the sub-curves between them
+ * reachable from p (marked in ins: they must stay after it). */
+static int merge_keeps_acyclic(const orderer *o, merger *m, const piece *p, const piece *q)
+{
+    size_t w, t;
+    for (w = 0; w < m->nwin; w++) {
+        m->ins[w] = piece_below(o, p, &o->pc[m->win[w]]);
+        for (t = 0; t < w && !m->ins[w]; t++)
+            m->ins[w] = m->ins[t] && piece_below(o, &o->pc[m->win[t]], &o->pc[m->win[w]]);
+    }
+    for (w = 0; w < m->nwin; w++)
+        if (m->ins[w] && piece_below(o, &o->pc[m->win[w]], q))
+            return 0;
+    return 1;
+}
+
+/* Merge q into p and re-sequence positions a..b as [not in S] p+q [in S] tombstones; the new place of p. */
+static size_t merge_apply(orderer *o, merger *m, size_t a, uint32_t qid, int flip)
+{
+    uint32_t pid = m->seq[a], x;
+    piece *p = &o->pc[pid], *q = &o->pc[qid];
+    size_t b = m->pos[qid], at = a, w;
+    if (flip)
+        p->dir = -p->dir;
+    p->lo = p->lo < q->lo ? p->lo : q->lo;
+    p->hi = p->hi > q->hi ? p->hi : q->hi;
+    p->box = amp_box3_union(p->box, q->box);
+    for (x = q->lo; x <= q->hi; x++)
+        m->owner[x] = pid;
+    for (w = 0; w < m->nwin; w++)
+        if (!m->ins[w]) {
+            m->seq[at] = m->win[w];
+            m->pos[m->win[w]] = (uint32_t)at++;
+        }
+    m->seq[at] = pid;
+    m->pos[pid] = (uint32_t)at;
+    a = at++;
+    for (w = 0; w < m->nwin; w++)
+        if (m->ins[w]) {
+            m->seq[at] = m->win[w];
+            m->pos[m->win[w]] = (uint32_t)at++;
+        }
+    for (; at <= b; at++)
+        m->seq[at] = NONE;
+    return a;
+}
+
+/* The sub-curves in their new order, merged-away slots dropped. */
+static amp_status merge_compact(orderer *o, const merger *m)
+{
+    size_t n = o->npc, i, k = 0;
+    piece *np = amp_calloc(o->a, n ? n : 1, sizeof *np);
+    if (!np)
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
+    for (i = 0; i < n; i++)
+        if (m->seq[i] != NONE)
+            np[k++] = o->pc[m->seq[i]];
+    memcpy(o->pc, np, k * sizeof *np);
+    o->npc = k;
+    amp_free(o->a, np);
+    return AMP_OK;
+}
+
+/* One bottom-up pass [P1 §5.1]: each sub-curve in print order absorbs the sub-curves that continue it while
+ * G_a stays acyclic. */
+static amp_status merge_pass(orderer *o, size_t *merged_out)
+{
+    merger m;
+    size_t a, merged = 0;
+    amp_status st;
+    if ((st = merge_init(o, &m)) != AMP_OK)
+        return st;
+    for (a = 0; a < o->npc; a++) {
         for (;;) {
-            uint32_t pid = seq[a], qid, nf, b, nwin = 0, nfr = 0, x, lo, hi;
-            piece *p, *q;
-            int ok = 1, flip = 0;
-            size_t w;
-            if (pid == NONE)
+            uint32_t qid;
+            int flip;
+            if (m.seq[a] == NONE)
                 break;
-            p = &pc[pid];
-            lo = (uint32_t)o->fs->first[p->path];
-            hi = (uint32_t)o->fs->first[p->path + 1] - 1;
-            nf = step_along(piece_end(p), p->dir, lo, hi);
-            if (nf == NONE && p->lo == p->hi) {
-                /* a single fragment can be printed the other way round */
-                flip = 1;
-                nf = step_along(p->lo, -p->dir, lo, hi);
-            }
-            if (nf == NONE)
+            qid = merge_partner(o, &m, a, &flip);
+            if (qid == NONE || !merge_window(o, &m, a, m.pos[qid]) ||
+                !merge_keeps_acyclic(o, &m, &o->pc[m.seq[a]], &o->pc[qid]))
                 break;
-            qid = owner[nf];
-            q = &pc[qid];
-            b = pos[qid];
-            if (b <= a)
-                break;
-            {
-                int pd = flip ? -p->dir : p->dir;
-                int qd = q->lo == q->hi ? pd : q->dir;
-                uint32_t qs = qd > 0 ? q->lo : q->hi;
-                if (qd != pd || qs != nf)
-                    break;
-            }
-            /* the sub-curves printed in between: S = those reachable from p (they must stay after it) */
-            for (x = (uint32_t)a + 1; x < b && ok; x++) {
-                if (seq[x] == NONE)
-                    continue;
-                if (nwin >= MERGE_MAX_PIECES)
-                    ok = 0;
-                else {
-                    win[nwin++] = seq[x];
-                    nfr += pc[seq[x]].hi - pc[seq[x]].lo + 1;
-                    if (nfr > o->o->merge_window)
-                        ok = 0;
-                }
-            }
-            if (!ok)
-                break;
-            for (w = 0; w < nwin; w++) {
-                size_t t;
-                ins[w] = piece_below(o, p, &pc[win[w]]);
-                for (t = 0; t < w && !ins[w]; t++)
-                    ins[w] = ins[t] && piece_below(o, &pc[win[t]], &pc[win[w]]);
-            }
-            /* merged graph acyclic unless q depends on something in S */
-            for (w = 0; w < nwin && ok; w++)
-                if (ins[w] && piece_below(o, &pc[win[w]], q))
-                    ok = 0;
-            if (!ok)
-                break;
-            /* merge: [not in S] p+q [in S] tombstone */
-            if (flip)
-                p->dir = -p->dir;
-            p->lo = p->lo < q->lo ? p->lo : q->lo;
-            p->hi = p->hi > q->hi ? p->hi : q->hi;
-            p->box = amp_box3_union(p->box, q->box);
-            for (x = q->lo; x <= q->hi; x++)
-                owner[x] = pid;
-            {
-                size_t at = a;
-                for (w = 0; w < nwin; w++)
-                    if (!ins[w]) {
-                        seq[at] = win[w];
-                        pos[win[w]] = (uint32_t)at++;
-                    }
-                seq[at] = pid;
-                pos[pid] = (uint32_t)at;
-                a = at++;
-                for (w = 0; w < nwin; w++)
-                    if (ins[w]) {
-                        seq[at] = win[w];
-                        pos[win[w]] = (uint32_t)at++;
-                    }
-                for (; at <= b; at++)
-                    seq[at] = NONE;
-            }
+            a = merge_apply(o, &m, a, qid, flip);
             merged++;
         }
     }
-    /* compact in the new order */
-    {
-        piece *np = amp_calloc(o->a, n ? n : 1, sizeof *np);
-        size_t m = 0;
-        if (!np) {
-            merge_free(o, seq, pos, owner, win, ins);
-            return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for merging");
-        }
-        for (i = 0; i < n; i++)
-            if (seq[i] != NONE)
-                np[m++] = pc[seq[i]];
-        memcpy(o->pc, np, m * sizeof *np);
-        o->npc = m;
-        amp_free(o->a, np);
-    }
-    merge_free(o, seq, pos, owner, win, ins);
-    *merged_out = merged;
-    return AMP_OK;
+    st = merge_compact(o, &m);
+    merge_free(o, &m);
+    if (st == AMP_OK)
+        *merged_out = merged;
+    return st;
 }
 
 /* Consecutive sub-curves in print order that continue each other on their curve (the second starts at the
@@ -989,9 +1005,86 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->clear);
     amp_free(o->a, o->batch);
     amp_free(o->a, o->found);
-    amp_free(o->a, o->heap);
+    amp_heap_free(&o->heap);
     amp_free(o->a, o->pc);
     rgrid_free(o->a, &o->grid);
+}
+
+/* The orderer's working arrays over n fragments. */
+static amp_status orderer_alloc(orderer *o, size_t n)
+{
+    size_t i;
+    o->done = amp_calloc(o->a, n + 1, 1);
+    o->ready = amp_calloc(o->a, n + 1, 1);
+    o->whead = amp_calloc(o->a, n + 1, sizeof *o->whead);
+    o->wnext = amp_calloc(o->a, n + 1, sizeof *o->wnext);
+    o->rs = amp_calloc(o->a, n + 1, sizeof *o->rs);
+    o->re = amp_calloc(o->a, n + 1, sizeof *o->re);
+    o->rz = amp_calloc(o->a, n + 1, sizeof *o->rz);
+    o->waits = amp_calloc(o->a, n + 1, sizeof *o->waits);
+    o->clear = amp_calloc(o->a, n + 1, sizeof *o->clear);
+    o->batch = amp_calloc(o->a, n + 1, sizeof *o->batch);
+    o->found = amp_calloc(o->a, n + 1, sizeof *o->found);
+    if (!o->done || !o->ready || !o->whead || !o->wnext || !o->rs || !o->re || !o->rz || !o->waits || !o->clear ||
+        !o->batch || !o->found)
+        return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
+    for (i = 0; i < n; i++)
+        o->whead[i] = o->wnext[i] = o->clear[i] = NONE;
+    return AMP_OK;
+}
+
+/* OrderCurves [P1 §5.1, Alg. 2, lines 3-8]: print a best sequence of the printable set B until every
+ * fragment is printed. */
+static amp_status order_curves(orderer *o)
+{
+    const amp_order_opts *opts = o->o;
+    size_t n = o->fs->n, next_report = 0;
+    amp_status st = initial_set(o);
+    while (st == AMP_OK && o->nprinted < n) {
+        st = opts->improve ? step_improved(o) : step_plain(o);
+        if (opts->progress && o->nprinted >= next_report) {
+            opts->progress(opts->progress_user, (double)o->nprinted / (double)n);
+            next_report = o->nprinted + n / 256 + 1;
+        }
+    }
+    return st;
+}
+
+/* Bottom-up merging [P1 §5.1] until a pass merges nothing (at most four passes); the merges into *merged. */
+static amp_status merge_passes(orderer *o, size_t *merged)
+{
+    size_t m = 0, pass;
+    amp_status st = AMP_OK;
+    *merged = 0;
+    for (pass = 0; pass < 4 && st == AMP_OK; pass++) {
+        st = merge_pass(o, &m);
+        *merged += m;
+        if (m == 0)
+            break;
+    }
+    return st;
+}
+
+/* Merging, then the cheapest admissible travel order of the final sub-curves. */
+static amp_status improve_subcurves(orderer *o)
+{
+    size_t merged = 0;
+    amp_status st = merge_passes(o, &merged);
+    o->st.merges += merged;
+    if (st == AMP_OK && o->o->travel_z_weight > 0.0 && o->npc > 1) {
+        /* the sub-curves are final: print them in the cheapest admissible order. That order puts sub-curves of
+         * one curve next to each other that Algorithm 2's order kept apart: merging again finds more (demo
+         * helix: 4 531 -> 4 275 cuts), and the merged set is re-sequenced once more. */
+        st = travel_pass(o);
+        if (st == AMP_OK)
+            st = merge_passes(o, &merged);
+        else
+            merged = 0;
+        o->st.merges += merged;
+        if (st == AMP_OK && merged)
+            st = travel_pass(o);
+    }
+    return st;
 }
 
 amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_pathset *out, amp_order_stats *stats,
@@ -1001,7 +1094,7 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     amp_fragments fs;
     orderer o;
     amp_status st;
-    size_t i, n;
+    size_t i;
     if (!in || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_order: NULL pathset");
     if (!opts) {
@@ -1020,72 +1113,22 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     o.k = 1.0 / tan(opts->head.theta);
     o.o = opts;
     o.err = err;
-    n = fs.n;
+    amp_heap_init(&o.heap, o.a, sizeof(runent), run_better, NULL);
     for (i = 0; i < in->npaths; i++)
         o.st.paths_in += in->paths[i].n > 0;
-    o.st.fragments = n;
+    o.st.fragments = fs.n;
     if ((st = amp_fbvh_build(&o.bvh, &fs, o.a, err)) != AMP_OK) {
         amp_fragments_free(&fs);
         return st;
     }
-    o.done = amp_calloc(o.a, n + 1, 1);
-    o.ready = amp_calloc(o.a, n + 1, 1);
-    o.whead = amp_calloc(o.a, n + 1, sizeof *o.whead);
-    o.wnext = amp_calloc(o.a, n + 1, sizeof *o.wnext);
-    o.rs = amp_calloc(o.a, n + 1, sizeof *o.rs);
-    o.re = amp_calloc(o.a, n + 1, sizeof *o.re);
-    o.rz = amp_calloc(o.a, n + 1, sizeof *o.rz);
-    o.waits = amp_calloc(o.a, n + 1, sizeof *o.waits);
-    o.clear = amp_calloc(o.a, n + 1, sizeof *o.clear);
-    o.batch = amp_calloc(o.a, n + 1, sizeof *o.batch);
-    o.found = amp_calloc(o.a, n + 1, sizeof *o.found);
-    if (!o.done || !o.ready || !o.whead || !o.wnext || !o.rs || !o.re || !o.rz || !o.waits || !o.clear || !o.batch ||
-        !o.found) {
-        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
+    if ((st = orderer_alloc(&o, fs.n)) != AMP_OK)
         goto done;
-    }
-    for (i = 0; i < n; i++)
-        o.whead[i] = o.wnext[i] = o.clear[i] = NONE;
-    if (opts->improve && opts->nearest && n > 0)
+    if (opts->improve && opts->nearest && fs.n > 0)
         st = rgrid_init(&o);
     if (st == AMP_OK)
-        st = initial_set(&o);
-    /* Alg. 2, lines 3-8 */
-    {
-        size_t next_report = 0;
-        while (st == AMP_OK && o.nprinted < n) {
-            st = opts->improve ? step_improved(&o) : step_plain(&o);
-            if (opts->progress && o.nprinted >= next_report) {
-                opts->progress(opts->progress_user, (double)o.nprinted / (double)n);
-                next_report = o.nprinted + n / 256 + 1;
-            }
-        }
-    }
-    if (st == AMP_OK && opts->improve) {
-        size_t m = 0, pass;
-        for (pass = 0; pass < 4 && st == AMP_OK; pass++) {
-            st = merge_pass(&o, &m);
-            o.st.merges += m;
-            if (m == 0)
-                break;
-        }
-    }
-    if (st == AMP_OK && opts->improve && opts->travel_z_weight > 0.0 && o.npc > 1) {
-        /* the sub-curves are final: print them in the cheapest admissible order. That order puts sub-curves of
-         * one curve next to each other that Algorithm 2's order kept apart: merging again finds more (demo
-         * helix: 4 531 -> 4 275 cuts), and the merged set is re-sequenced once more. */
-        size_t m = 0, merged = 0, pass;
-        st = travel_pass(&o);
-        for (pass = 0; pass < 4 && st == AMP_OK; pass++) {
-            st = merge_pass(&o, &m);
-            merged += m;
-            if (m == 0)
-                break;
-        }
-        o.st.merges += merged;
-        if (st == AMP_OK && merged)
-            st = travel_pass(&o);
-    }
+        st = order_curves(&o);
+    if (st == AMP_OK && opts->improve)
+        st = improve_subcurves(&o);
     if (st == AMP_OK)
         st = emit(&o, in, out, err);
     o.st.pieces = o.npc;

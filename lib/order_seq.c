@@ -1,5 +1,5 @@
 /*
- * Re-sequencing of Algorithm 2's sub-curves for short travel (issue 14 item 4; paper §5.1).
+ * Re-sequencing of Algorithm 2's sub-curves for short travel (less travel between the printed paths, beyond [P1 §5.1]).
  *
  * Algorithm 2 decides where the curves are cut (its GetBest: fewest new cuts). The order it prints the
  * resulting sub-curves in is only one of the orders its rule allows: any order in which a sub-curve comes

@@ -1,5 +1,5 @@
 /* Planar slicing: triangle-plane sections chained by shared mesh edges
- * (continuous-toolpath-euler.txt §2.2 step 1). */
+ * ([P2 §2.2] step 1). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

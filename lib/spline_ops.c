@@ -1,7 +1,7 @@
 /*
  * Shape-preserving operations on amp_spline: knot insertion (Boehm), refinement,
  * subdivision, isoparametric extraction, reversal, derivative splines, and the
- * control-polygon length bound of the volumetric-covering paper (Appendix, Lemma A.2).
+ * control-polygon length bound of [P1] (Appendix, Lemma A.2).
  * Every operation works on one direction of the homogeneous control net, seen as
  * `outer` × count[d] × `stride` (u fastest), so curves, surfaces and trivariates
  * share the code.

@@ -573,7 +573,7 @@ START_TEST(cli_continuous_gives_one_stroke_per_island_and_check_agrees)
 END_TEST
 
 
-/* ---- real parts (issue 16): counted from the G-code text, not the library ---- */
+/* ---- real parts (fewer starts than a slicer): counted from the G-code text, not the library ---- */
 
 /* Extrusion starts per layer height in a G-code file: an extruding move
  * (XY change with E growing) after a move without extrusion (XY or Z). Returns the

@@ -1,4 +1,4 @@
-/* 2-complexes and the Euler transformation ([P2 §1.3], §3). */
+/* 2-complexes and the Euler transformation ([P2 §1.3], [P2 §3]). */
 #include <math.h>
 #include <string.h>
 

@@ -210,7 +210,7 @@ START_TEST(below_graph_from_hierarchy_equals_all_pairs)
 }
 END_TEST
 
-/* The exact below test skips the closed forms where a tangent-plane bound settles the pair (issue 18): on
+/* The exact below test skips the closed forms where a tangent-plane bound settles the pair (for speed): on
  * fragments made to sit near the cone's edge, it must answer exactly as the largest closed-form clearance of
  * their segment pairs. */
 START_TEST(fragment_below_equals_the_largest_segment_clearance)
@@ -663,7 +663,7 @@ START_TEST(pairwise_and_grid_checkers_agree_on_random_inputs)
 }
 END_TEST
 
-/* The gouge checker skips the golden-section search where a tangent-plane bound settles the pair (issue 18):
+/* The gouge checker skips the golden-section search where a tangent-plane bound settles the pair (for speed):
  * on two one-segment paths it must still fail exactly when the orderer's closed-form clearance of the later
  * segment's head over the earlier segment exceeds the tolerance (pairs within 1e-6 mm of it are not judged). */
 START_TEST(gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge)

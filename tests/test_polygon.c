@@ -283,8 +283,8 @@ START_TEST(inset_of_marching_tetrahedra_torus_sections_matches_sampling)
 }
 END_TEST
 
-/* The row index answers every query as the plain scans do (issue 16: the
- * skin and overhang tests use it): a star with a star-shaped hole and a
+/* The row index answers every query as the plain scans do (the continuous
+ * paths' skin and overhang tests use it): a star with a star-shaped hole and a
  * separate square, 20 000 points (random, on vertices, on edges, at vertex
  * heights, far outside), containment equal and distances equal to 1e-12. */
 START_TEST(row_index_answers_as_the_plain_scans)

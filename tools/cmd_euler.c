@@ -1,5 +1,5 @@
 /* ampath euler MESH.stl --layer H --cell S — the complex K of the layers' hull and its Euler
- * transformation K̂ as a picture ([P2 §2.2] steps 1-4, §1.3, Def. 3.2). */
+ * transformation K̂ as a picture ([P2 §2.2] steps 1-4, [P2 §1.3], Def. 3.2). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-# tools/rename_checkers.sed — the checker renames of the house refactoring (issue 19 item 1),
+# tools/rename_checkers.sed — the checker renames of the house refactoring (one checker module, include/ampath/check.h),
 # for files written on other branches: sed -i -f tools/rename_checkers.sed FILE...
 # amp_cover_measure_gap/amp_coverage_gap became amp_check_coverage with another signature
 # (see include/ampath/check.h): convert those calls by hand.

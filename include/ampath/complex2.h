@@ -1,7 +1,7 @@
 /*
  * ampath/complex2.h — planar 2-complexes (polygonal cells) with an explicit
- * half-edge structure and a consistency checker (continuous-toolpath-euler.txt
- * §1.3, §2.2 step 3).
+ * half-edge structure and a consistency checker ([P2 §1.3],
+ * [P2 §2.2] step 3).
  *
  * A complex is a set of vertices (points of the plane), 2-cells given as
  * counter-clockwise vertex loops, and optional free 1-cells (edges in no

@@ -1,6 +1,6 @@
 /*
  * ampath/contpath.h — continuous tool paths per layer from the Euler
- * transformed lattice (continuous-toolpath-euler.txt §2.2 steps 2-6, §4),
+ * transformed lattice ([P2 §2.2] steps 2-6, [P2 §4]),
  * and an independent checker of the strokes.
  *
  * Per layer and per island P of the layer (amp_contpath_layers):

@@ -1,6 +1,6 @@
 /*
  * ampath/euler.h — the Euler transformation of planar 2-complexes
- * (continuous-toolpath-euler.txt §1.3 Fig. 2, §3 Lemma 3.1, Def. 3.2, Lemma 3.3).
+ * ([P2 §1.3] Fig. 2, [P2 §3] Lemma 3.1, Def. 3.2, Lemma 3.3).
  *
  * K̂ = T(K) consists of
  *   Class 1: the mitered offset f̂ of every 2-cell f of K (offset distance δ);

@@ -3,7 +3,7 @@
  * point-in-polygon, convex hull, islands and the inward (Minkowski) offset.
  *
  * Used by the layer slicer and the continuous tool-path framework of
- * continuous-toolpath-euler.txt (§2.2 steps 1, 2 and 5).
+ * [P2 §2.2] (steps 1, 2 and 5).
  *
  * A ring is a closed polygon stored WITHOUT repeating its first vertex.
  * An amp_polyset holds rings in one shared point array; after

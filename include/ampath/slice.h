@@ -1,6 +1,6 @@
 /*
  * ampath/slice.h — planar slicing of a triangle mesh into layers of
- * polygons with holes (continuous-toolpath-euler.txt §2.2 step 1, docs/interfaces.md §4).
+ * polygons with holes ([P2 §2.2] step 1, docs/interfaces.md §4).
  *
  * Layer i is cut at mid-height of its slab and its paths are printed at the
  * slab's top: with first-layer height H0 and layer height H, layer 0 spans
@@ -88,7 +88,7 @@ void amp_slices_free(amp_slices *s);
 amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices *out, amp_error *err);
 
 /**
- * ε-continuity of layers i and i + 1 (continuous-toolpath-euler.txt §2.1):
+ * ε-continuity of layers i and i + 1 ([P2 §2.1]):
  * the largest distance from a point of layer i + 1's section to layer i's
  * section (0 when it lies inside), i.e. the overhang; the pair is
  * ε-continuous for ε = c r when this is <= c r. Sampled at the vertices of

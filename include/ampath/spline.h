@@ -6,7 +6,7 @@
  * rational, of any order 1..AMP_SPLINE_MAX_ORDER per direction, over any
  * non-decreasing knot vector (clamped or not). A Bézier patch is the special
  * case count == order with clamped knots (amp_spline_set_knots_uniform()).
- * The volumetric-covering paper (§4.1, Appendix) works on these objects.
+ * [P1 §4.1] and its Appendix work on these objects.
  *
  * Storage: control points are kept in homogeneous form (w·x, w·y, w·z, w), four
  * doubles each, u varying fastest, then v, then w (as in the .spl file). A
