@@ -109,7 +109,7 @@ static result run_one(const char *job, int nlines, long baud, amp_proto_window m
     return r;
 }
 
-/* Issue 15: every dialect with 0.05 % of the bytes corrupted both ways against the clean run (window of 8 or
+/* Every dialect without stalls: every dialect with 0.05 % of the bytes corrupted both ways against the clean run (window of 8 or
    ADVANCED_OK, 2 ms per command); the dialect is learned at the handshake, never given. The pty runs at its
    own pace here: the modelled wire makes the virtual printer handle one error per turn of its loop, which on
    a loaded machine stretches each error burst far beyond what a printer takes (docs/bridge.md, "Limits"). */

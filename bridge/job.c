@@ -195,7 +195,7 @@ static void build_preamble(br_job *j, const job_state *st)
         pre(j, "G1 F%.0f", st->f, 0);
 }
 
-/* Issue 21: a job is a regular file. A FIFO would block the daemon in open(), /dev/zero would never end,
+/* Hardening: a job is a regular file. A FIFO would block the daemon in open(), /dev/zero would never end,
    and neither can be read twice (checked whole, then sent). Opened without blocking to find out. */
 static int check_source(const char *path, char *why, size_t whylen)
 {
@@ -253,7 +253,7 @@ static int extended_command(const char *c)
     return 0;
 }
 
-/* Issue 21: a job must parse as G-code before anything is sent (`submit /etc/shadow` must not stream a
+/* Hardening: a job must parse as G-code before anything is sent (`submit /etc/shadow` must not stream a
    password file to the printer); '*' would end the checksummed part of a Marlin line early. */
 static int check_command(const char *c, amp_proto_flavor flavor, char *bad, size_t cap)
 {

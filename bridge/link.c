@@ -130,7 +130,7 @@ static int link_open(br_link *l, const char *path, long baud, char *why, size_t 
     return -1;
 }
 
-/* Issue 21: two programs must never share a printer. flock() is what pyserial's exclusive=True (OctoPrint)
+/* Hardening: two programs must never share a printer. flock() is what pyserial's exclusive=True (OctoPrint)
    and other hosts take; TIOCEXCL refuses any further open() (root excepted). TIOCEXCL only on real serial
    ports: their flag ends with the last close, while a pty whose other end keeps the slave open (Klipper,
    the virtual printer) would stay exclusive after a crashed bridge and lock out its successor. */

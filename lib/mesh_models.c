@@ -366,7 +366,7 @@ typedef struct model_entry {
 } model_entry;
 
 static const model_entry models[] = {
-    {"helix", "disc of radius 5 swept along a helix (radius 20, pitch 40, one turn), SPEC 4 / paper Fig. 2",
+    {"helix", "disc of radius 5 swept along a helix (radius 20, pitch 40, one turn), docs/interfaces.md §4.2 / [P1] Fig. 2",
      model_helix},
     {"twisted-bridge", "arched beam 80 x 16 x 6 mm twisting a quarter turn, paper Fig. 15", model_bridge},
     {"crocodile-like", "organic body with head, curved tail and four thin legs, paper Figs. 6, 19", model_crocodile},

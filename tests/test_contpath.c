@@ -1,4 +1,4 @@
-/* Continuous strokes per island (paper 2 §2.2 steps 5-6, §4). */
+/* Continuous strokes per island ([P2 §2.2] steps 5-6, §4). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -501,7 +501,7 @@ END_TEST
 
 START_TEST(printer_profile_sets_the_bead_width_of_a_continuous_slice)
 {
-    /* SPEC §4: beads 1.125 x the profile's nozzle; --radius still wins */
+    /* docs/interfaces.md §4: beads 1.125 x the profile's nozzle; --radius still wins */
     amp_mesh m;
     amp_error err;
     char args[768], out[4096];
@@ -1040,7 +1040,7 @@ static double bead_coverage(const amp_polyset *sec, const amp_pathset *ps, doubl
     return bead_coverage_of(sec, ps, z, r, px, NULL, NULL, 0, 0, NULL);
 }
 
-/* Issue 16: between the last strip of a solid region and the perimeter a
+/* between the last strip of a solid region and the perimeter a
  * sliver up to a bead wide stayed bare where the ring of R̃ runs parallel to
  * the strips and the patching leaves it unprinted (solid regions took no
  * corners). They now take corners where no strip runs within r of the
@@ -1077,7 +1077,7 @@ START_TEST(solid_regions_leave_no_sliver_bare_beside_their_strips)
 }
 END_TEST
 
-/* Issue 16: skins only where needed. A region is solid only in a band along
+/* skins only where needed. A region is solid only in a band along
  * its boundary that holds every uncovered point (and sparse one bead
  * further in), without polygon booleans. On the torus part (curved top and
  * bottom: the uncovered part of a layer is a ring along the section's
@@ -1251,7 +1251,7 @@ START_TEST(of_the_two_pairings_of_a_ring_the_longer_is_printed)
 }
 END_TEST
 
-/* Issue 16: with --no-join (or --no-perimeter) the components of a region are
+/* with --no-join (or --no-perimeter) the components of a region are
  * joined by Fig. 6's doubled ring paths, printed once and run back as a
  * pseudo edge. On the helix at 0.3 mm a ring vertex lies within 1 µm of a
  * free end; the layer code merged it on one copy and kept it on the other,
@@ -1279,7 +1279,7 @@ START_TEST(fig6_joins_stay_crossing_free_when_ring_vertices_crowd_a_free_end)
 }
 END_TEST
 
-/* Issue 16: an island whose inset by r splits at a neck narrower than a bead
+/* an island whose inset by r splits at a neck narrower than a bead
  * (the twisted bridge at 0.2 mm: a 6 mm long bridge 0.30-0.45 mm wide joins
  * two lobes with infill) kept one stroke per lobe and left the neck bare
  * (197 starts for 196 islands). Its perimeter now runs at the largest offset

@@ -534,7 +534,7 @@ static void helix_job(int threads, text_buf *g, amp_pathset *ordered)
     amp_spline_free(&v);
 }
 
-/* Issue 18: the library's parallel parts (coverage, ordering's first queries, MDR neighbour search, support
+/* Speed: the library's parallel parts (coverage, ordering's first queries, MDR neighbour search, support
  * rays) must not change any output: the whole job on 1 and on 2 threads, byte for byte. */
 START_TEST(helix_job_is_byte_identical_on_one_and_two_threads)
 {

@@ -901,7 +901,7 @@ END_TEST
 static void run_in_bed(gsim *s, const char *text, const amp_gcode_opts *o);
 static double gsim_filament(const gsim *s);
 
-/* Issue 7: the G-code of the demo pipeline (SPEC 6, smaller eps) parses line by line in the reader. */
+/* The G-code of the demo pipeline (docs/interfaces.md §6, smaller eps) parses line by line in the reader. */
 START_TEST(demo_pipeline_gcode_parses_in_the_reader)
 {
     static const char *const steps[] = {
@@ -1388,7 +1388,7 @@ static double json_num(const char *json, const char *key)
 }
 
 /*
- * Issue 14 proof for planar jobs: `slice --continuous` of each built-in mesh, then `gcode`: every coordinate on the
+ * Print-ready planar jobs: `slice --continuous` of each built-in mesh, then `gcode`: every coordinate on the
  * generic bed, the first extrusion at the first-layer height, plastic within 3 % of the beads and at most
  * 1.05 x (part + support). Where a path carries no bead height, the test gives
  * its paths h = the layer height, which is what that change writes.
@@ -1645,7 +1645,7 @@ START_TEST(cone_checker_catches_a_direct_hop_past_a_tower)
 END_TEST
 
 /*
- * Issue 14 item 4 on a real covering (the demo helix at eps 3 through the tool): direct hops cut the retractions
+ * Travel on a real covering (the demo helix at eps 3 through the tool): direct hops cut the retractions
  * and the travel time share; every direct hop passes the independent cone checker and every lifted travel the
  * hop-clearance checker. Measured: direct hops off 51.5 % of the time in travel, 3,304 retractions, travel 0.72 x
  * the extrusion; on 42.0 %, 1,394 retractions, 0.65 x.

@@ -408,7 +408,7 @@ START_TEST(improvements_reduce_subdivisions_of_plain_greedy)
 }
 END_TEST
 
-/* Issue 18: the initial blocker queries run on OpenMP threads, and each fragment keeps the subtree its own
+/* Speed: the initial blocker queries run on OpenMP threads, and each fragment keeps the subtree its own
  * queries proved clear; the ordered paths must not depend on the thread count (vertex for vertex). */
 START_TEST(ordering_is_identical_on_one_and_two_threads)
 {
@@ -460,7 +460,7 @@ static double travel_between(const amp_pathset *ps)
     return t;
 }
 
-/* Issue 14 item 4: where GetBest's runs are equally good, the one starting nearest to the head is printed
+/* Travel: where GetBest's runs are equally good, the one starting nearest to the head is printed
  * next. On the built-in helix's covering this shortens the travel between paths by far more than noise,
  * keeps the order gouge-free and still cuts less than plain greedy. */
 START_TEST(nearest_choice_shortens_travel_on_helix_covering)
@@ -517,7 +517,7 @@ static double travel_weighted(const amp_pathset *ps, double w)
     return t;
 }
 
-/* Issue 14 item 4: once Algorithm 2 has cut the curves, its sub-curves are printed in the admissible order
+/* Travel: once Algorithm 2 has cut the curves, its sub-curves are printed in the admissible order
  * that always takes the cheapest start to reach (Z weighted), and sub-curves that then continue each other
  * are joined. Never more cuts, the same material, still gouge-free (it fails with the admissibility test
  * skipped), and the Z-weighted travel between paths falls by far more than noise against Algorithm 2's own

@@ -462,7 +462,7 @@ static double iso_length(const amp_spline *s, int d, double a, double b)
     return len;
 }
 
-/* Issue 18: a long parameter list in random order (the knot index, 256 points and more) gives exactly the points
+/* Speed: a long parameter list in random order (the knot index, 256 points and more) gives exactly the points
  * of the same list sorted and of short lists (the span cache), for orders 2..5, uniform and random knots,
  * knots of multiplicity 2, parameters on knots, at and beyond both domain ends. */
 START_TEST(shuffled_long_lists_give_the_points_of_sorted_and_short_lists)

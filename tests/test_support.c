@@ -410,7 +410,7 @@ static void helix_support(const amp_pathset *ord, const amp_bvh *bvh, int thread
     ck_assert_uint_eq(st.conflicts, 0);
 }
 
-/* Issue 18: the slot search runs blocks of support fragments on OpenMP threads; the answers, and so the
+/* Speed: the slot search runs blocks of support fragments on OpenMP threads; the answers, and so the
  * support file, must not depend on the thread count. */
 START_TEST(support_on_the_helix_is_identical_on_one_and_two_threads)
 {

@@ -1,4 +1,4 @@
-/* Benchmark (SPEC 7): ordering time (Algorithm 2, paper 5.1) against fragment count, with a same-run
+/* Benchmark (docs/interfaces.md §7): ordering time (Algorithm 2, [P1 §5.1]) against fragment count, with a same-run
  * pairwise baseline (all pairs of fragments tested, then a topological sort) on the small sizes. */
 #include <stdlib.h>
 

@@ -7,7 +7,7 @@
 const char cmd_field_usage[] =
     "cover a mesh with the curves of a direction field, clipped to the mesh (paper 4.2)\n"
     "usage: ampath field MESH.stl --field NAME --spacing S [options] [-o PATHS.amp] [--json]\n"
-    "  --field F         built-in field: helix-square (12 mm square swept along the SPEC helix; contains the\n"
+    "  --field F         built-in field: helix-square (12 mm square swept along the built-in helix; contains the\n"
     "                    helix model), box (lines parallel to x over the mesh's bounding box), sweep (a\n"
     "                    square of side --side swept along the spine --along, paper Fig. 6); or a\n"
     "                    trivariate: a .spl file (its first trivariate) or a built-in trivariate name\n"

@@ -7,7 +7,7 @@
 #include "cli.h"
 
 const char cmd_gcode_usage[] =
-    "turn ordered paths into G-code for a printer, with extrusion from the deposition radius (SPEC 5)\n"
+    "turn ordered paths into G-code for a printer, with extrusion from the deposition radius (docs/interfaces.md §5)\n"
     "usage: ampath gcode PATHS.amp [--printer NAME|FILE.ini] [--place center|origin|X,Y] [options] [-o OUT.gcode]\n"
     "  --printer P             built-in profile (generic, prusa-mk3s, ender3, voron-350; `ampath printer list`)\n"
     "                          or a PrusaSlicer/SuperSlicer/OrcaSlicer .ini (default generic: 220x220x250 Marlin)\n"
@@ -44,7 +44,7 @@ const char cmd_gcode_usage[] =
     "  --end-lift H            lift at the end of the job, mm (10)\n"
     "  --direct-hop D          travels up to D mm go straight without retraction or lift where the head\n"
     "                          cone clears the printed material (3; 0 = always retract and lift)\n"
-    "  --z-offs Z, --theta DEG head cone of the direct-hop test (SPEC 2: 0.5 mm, 72 degrees)\n"
+    "  --z-offs Z, --theta DEG head cone of the direct-hop test (docs/interfaces.md §2: 0.5 mm, 72 degrees)\n"
     "  --junction-deviation J  junction deviation of the time estimate, mm (0.05)\n"
     "  --relative-e / --absolute-e   M83 or M82 (default: klipper relative, marlin absolute)\n"
     "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's\n"
@@ -329,7 +329,7 @@ int cmd_gcode(int argc, char **argv)
         if (strcmp(flavor, "marlin") != 0 && strcmp(flavor, "klipper") != 0)
             return cli_fail("gcode", CLI_USAGE, "--flavor must be marlin or klipper, got '%s'", flavor);
         o.flavor = strcmp(flavor, "klipper") == 0 ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN;
-        o.relative_e = o.flavor == AMP_FLAVOR_KLIPPER; /* SPEC 5: the flavour's E mode unless asked */
+        o.relative_e = o.flavor == AMP_FLAVOR_KLIPPER; /* docs/interfaces.md §5: the flavour's E mode unless asked */
     }
     apply_overrides(opts, &v, &o);
     if (place && (rc = parse_place(place, &o)) != CLI_OK)

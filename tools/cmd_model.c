@@ -8,7 +8,7 @@ const char cmd_model_usage[] =
     "write a built-in model: a trivariate (.spl) or a mesh (.stl)\n"
     "usage: ampath model NAME -o FILE [--json]\n"
     "  NAME       helix          disc of radius 5 mm swept along a helix of radius 20 mm, pitch 40 mm\n"
-    "                            (paper Fig. 2; SPEC 4), lowest point on z = 0\n"
+    "                            ([P1] Fig. 2; docs/interfaces.md §4.2), lowest point on z = 0\n"
     "             torus-quarter  paper Fig. 4 torus quarter (major 1, minor 0.2) scaled x50:\n"
     "                            major radius 50 mm, minor 10 mm, resting on z = 0\n"
     "             vase           paper Fig. 18: revolved wall 60 mm high, radii 9..30 mm, wall 3..12 mm\n"

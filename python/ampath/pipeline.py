@@ -498,7 +498,7 @@ def _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts):
         if flavor not in ("marlin", "klipper"):
             _fail("flavor must be marlin or klipper, got '%s'" % flavor)
         o.flavor = 1 if flavor == "klipper" else 0
-        o.relative_e = o.flavor  # SPEC 5: the flavour's E mode unless asked
+        o.relative_e = o.flavor  # docs/interfaces.md §5: the flavour's E mode unless asked
     if place is None or place in ("center", "centre"):
         o.place = 0
     elif place == "origin":
