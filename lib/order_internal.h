@@ -5,7 +5,7 @@
 #ifndef AMP_LIB_ORDER_INTERNAL_H
 #define AMP_LIB_ORDER_INTERNAL_H
 
-#include "fragbvh.h"
+#include "order_fragbvh.h"
 
 /* A sub-curve: fragments [lo, hi] of one path, printed lo..hi (dir +1) or hi..lo (dir -1). */
 typedef struct amp_order_piece {

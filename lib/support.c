@@ -3,7 +3,7 @@
 #include <string.h>
 
 #include "ampath/support.h"
-#include "fragbvh.h"
+#include "order_fragbvh.h"
 
 void amp_support_opts_default(amp_support_opts *o)
 {

@@ -1,9 +1,9 @@
-/* BVH over fragment boxes: the accelerated below relation of [P1 §5.1] (see fragbvh.h). */
+/* BVH over fragment boxes: the accelerated below relation of [P1 §5.1] (see order_fragbvh.h). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "fragbvh.h"
+#include "order_fragbvh.h"
 
 #define LEAF_SIZE 4
 #define STACK_MAX 128

@@ -1,5 +1,5 @@
 /*
- * lib/cone.h — internal: the head-cone tests of cone.c with k = cot(theta)
+ * lib/order_cone.h — internal: the head-cone tests of order_cone.c with k = cot(theta)
  * precomputed, for the hot loops of the fragment BVH, the orderer, support
  * and MDR ([P1 §5.1], Figs. 9-10). The public forms (amp_cone_clearance,
  * amp_fragment_below) are in ampath/head.h and ampath/order.h.

@@ -1,5 +1,5 @@
 /*
- * fragbvh.h (internal) — bounding volume hierarchy over fragment boxes, the
+ * order_fragbvh.h (internal) — bounding volume hierarchy over fragment boxes, the
  * acceleration structure of the below relation ([P1 §5.1]: "we are using a
  * BVH query to find ... all sub-curves that are above other sub-curves").
  * Leaves hold up to 4 fragments in Morton order. Each node also keeps the
@@ -14,7 +14,7 @@
 #include <stdint.h>
 
 #include "ampath/order.h"
-#include "cone.h"
+#include "order_cone.h"
 
 #define AMP_FBVH_NONE 0xffffffffU
 

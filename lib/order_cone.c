@@ -2,7 +2,7 @@
 #include <math.h>
 
 #include "ampath/order.h"
-#include "cone.h"
+#include "order_cone.h"
 
 /* Euclidean length in the plane; coordinates are millimetres, so no overflow guard (hypot) is needed. */
 static double len2d(double x, double y) { return sqrt(x * x + y * y); }
