@@ -20,7 +20,8 @@ static int vprinter_status(const char *args)
 START_TEST(malformed_numbers_are_refused_with_exit_2)
 {
     static const char *const bad[] = {"--bufsize 4x", "--bufsize ''", "--planner 1.5", "--turnaround fast",
-                                      "--baud 1e999", "--seed 12z", "--busy-at 3,4", "--corrupt-in nan"};
+                                      "--baud 1e999", "--seed 12z", "--busy-at 3,4", "--corrupt-in nan",
+                                      "--reset-after 12x", "--lose-ok 3.5", "--hangup-after two"};
     size_t i;
     for (i = 0; i < sizeof bad / sizeof bad[0]; i++)
         ck_assert_msg(vprinter_status(bad[i]) == 2, "ampath-vprinter %s was accepted", bad[i]);

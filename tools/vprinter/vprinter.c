@@ -845,11 +845,12 @@ static void flush_out(vp *v, double now)
         v->out_free += (double)consumed * 10.0 / v->baud;
 }
 
+/* A repeatable option: one more whole number (validated as ampath's), at most LIST_MAX of them. */
 static int parse_list(long *l, int *n, const char *s)
 {
-    if (*n >= LIST_MAX)
+    if (*n >= LIST_MAX || cli_integer(s, &l[*n]) != 0)
         return -1;
-    l[(*n)++] = atol(s);
+    (*n)++;
     return 0;
 }
 
