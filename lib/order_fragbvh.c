@@ -323,6 +323,21 @@ static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2,
  * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. Nodes
  * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
  * most often. */
+
+/* The children worth a visit (slack > 0) on the stack, the one the cone reaches deeper on top. */
+static inline size_t push_by_slack(uint32_t *stack, size_t top, uint32_t l, uint32_t r, double sl, double sr)
+{
+    if (sl > 0.0 && sr > 0.0) {
+        stack[top++] = sl > sr ? r : l;
+        stack[top++] = sl > sr ? l : r;
+    } else if (sl > 0.0) {
+        stack[top++] = l;
+    } else if (sr > 0.0) {
+        stack[top++] = r;
+    }
+    return top;
+}
+
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                   uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t root, uint32_t skip,
                                   uint32_t clear)
@@ -350,14 +365,7 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
             uint32_t l = nd->left, r = nd->right;
             double sl = l == skip || l == clear ? 0.0 : act_slack(&b->act[l].bx, reach, k2, &fr->box);
             double sr = r == skip || r == clear ? 0.0 : act_slack(&b->act[r].bx, reach, k2, &fr->box);
-            if (sl > 0.0 && sr > 0.0) {
-                stack[top++] = sl > sr ? nd->right : nd->left;
-                stack[top++] = sl > sr ? nd->left : nd->right;
-            } else if (sl > 0.0) {
-                stack[top++] = nd->left;
-            } else if (sr > 0.0) {
-                stack[top++] = nd->right;
-            }
+            top = push_by_slack(stack, top, nd->left, nd->right, sl, sr);
         }
     }
     return AMP_FBVH_NONE;
@@ -442,14 +450,7 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
         } else if (top + 2 <= STACK_MAX) {
             double sl = act_slack(&b->act[nd->left].bx, reach, k2, &box);
             double sr = act_slack(&b->act[nd->right].bx, reach, k2, &box);
-            if (sl > 0.0 && sr > 0.0) {
-                stack[top++] = sl > sr ? nd->right : nd->left;
-                stack[top++] = sl > sr ? nd->left : nd->right;
-            } else if (sl > 0.0) {
-                stack[top++] = nd->left;
-            } else if (sr > 0.0) {
-                stack[top++] = nd->right;
-            }
+            top = push_by_slack(stack, top, nd->left, nd->right, sl, sr);
         }
     }
     return AMP_FBVH_NONE;

@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "ampath/polygon.h"
+#include "polygon_internal.h"
 
 static long row_of(const amp_polyindex *ix, double v)
 {
@@ -74,18 +75,6 @@ amp_status amp_polyindex_build(amp_polyindex *ix, const amp_polyset *P, amp_erro
 nomem:
     amp_polyindex_free(ix);
     return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing a polygon set");
-}
-
-static double seg_dist2(amp_vec2 q, amp_vec2 a, amp_vec2 b)
-{
-    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t = 0.0, ex, ey;
-    if (l2 > 0.0) {
-        t = ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2;
-        t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-    }
-    ex = a.x + t * dx - q.x;
-    ey = a.y + t * dy - q.y;
-    return ex * ex + ey * ey;
 }
 
 int amp_polyindex_contains(const amp_polyindex *ix, amp_vec2 q)

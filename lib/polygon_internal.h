@@ -1,4 +1,4 @@
-/* lib/polygon_internal.h — internal: what lib/polygon.c and lib/polygon_inset.c share. */
+/* lib/polygon_internal.h — internal: what lib/polygon.c, lib/polygon_inset.c and lib/polygon_index.c share. */
 #ifndef AMPATH_LIB_POLYGON_INTERNAL_H
 #define AMPATH_LIB_POLYGON_INTERNAL_H
 
