@@ -152,166 +152,162 @@ static int one_shot(const br_cfg *cfg, const char *job, long resume_from, int ke
     return rc;
 }
 
+/* The command line as cli_parse() leaves it; apply_options() checks what the table cannot and fills the
+ * configuration (only the options given: the rest keep br_cfg_default()'s values). */
+typedef struct bopts {
+    int daemon, keep_hot, quiet, no_resend_ok, resend_ok;
+    double client_timeout, ready_timeout, timeout, settle_ms, boot_wait, reconnect;
+    long baud, bufsize, rx_bytes, resume_from;
+    const char *printer, *on_error, *flavor, *window, *log, *socket;
+} bopts;
+
+static int given(const cli_opt *opts, const char *name)
+{
+    for (; opts->name; opts++)
+        if (strcmp(opts->name, name) == 0)
+            return opts->seen;
+    return 0;
+}
+
+/* A printer profile is checked now, so that a bad one is bad usage before the port is opened. */
+static int check_printer(const char *spec)
+{
+    amp_printer *pr = malloc(sizeof *pr);
+    amp_error err;
+    int rc = 0;
+    if (!pr)
+        return fail("out of memory%s", "");
+    if (amp_printer_load(pr, spec, &err) != AMP_OK)
+        rc = fail("%s", err.msg);
+    free(pr);
+    return rc;
+}
+
+static int apply_words(const bopts *o, const cli_opt *opts, br_cfg *cfg)
+{
+    double d;
+    if (o->on_error && strcmp(o->on_error, "stop") != 0 && strcmp(o->on_error, "continue") != 0)
+        return fail("bad --on-error %s (stop or continue)", o->on_error);
+    cfg->on_error_continue = o->on_error && strcmp(o->on_error, "continue") == 0;
+    if (given(opts, "flavor")) {
+        if (strcmp(o->flavor, "marlin") == 0)
+            cfg->flavor = AMP_PROTO_MARLIN;
+        else if (strcmp(o->flavor, "klipper") == 0)
+            cfg->flavor = AMP_PROTO_KLIPPER;
+        else if (strcmp(o->flavor, "auto") == 0)
+            cfg->flavor = -1;
+        else
+            return fail("bad --flavor %s (marlin, klipper or auto)", o->flavor);
+    }
+    if (given(opts, "window")) {
+        if (strcmp(o->window, "pingpong") == 0)
+            cfg->mode = AMP_PROTO_PINGPONG;
+        else if (strcmp(o->window, "advanced") == 0)
+            cfg->mode = AMP_PROTO_ADVANCED;
+        else if (cli_number(o->window, &d) == 0 && d == (int)d && d >= 1 && d <= AMP_PROTO_MAX_INFLIGHT) {
+            cfg->mode = AMP_PROTO_FIXED;
+            cfg->window = (int)d;
+        } else
+            return fail("bad --window %s (pingpong, advanced or 1..24)", o->window);
+    }
+    if (o->no_resend_ok && o->resend_ok)
+        return fail("%s", "--resend-ok and --no-resend-ok contradict each other");
+    if (o->no_resend_ok || o->resend_ok) {
+        cfg->resend_ok = o->resend_ok;
+        cfg->learn = 0;
+    }
+    if (o->printer && check_printer(o->printer) != 0)
+        return 2;
+    cfg->printer = o->printer ? o->printer : cfg->printer;
+    return 0;
+}
+
+static int apply_options(const bopts *o, const cli_opt *opts, br_cfg *cfg, br_daemon_opts *dopts)
+{
+    if (apply_words(o, opts, cfg) != 0)
+        return 2;
+    if (given(opts, "client-timeout"))
+        dopts->idle_s = o->client_timeout;
+    if (given(opts, "ready-timeout"))
+        cfg->ready_ms = (unsigned long)(o->ready_timeout * 1000);
+    if (given(opts, "baud"))
+        cfg->baud = o->baud;
+    if (given(opts, "bufsize"))
+        cfg->bufsize = (int)o->bufsize;
+    if (given(opts, "rx-bytes"))
+        cfg->rx_bytes = (int)o->rx_bytes;
+    if (given(opts, "timeout"))
+        cfg->timeout_ms = (unsigned long)(o->timeout * 1000);
+    if (given(opts, "settle-ms"))
+        cfg->settle_ms = (unsigned long)o->settle_ms;
+    if (given(opts, "boot-wait"))
+        cfg->boot_ms = (unsigned long)(o->boot_wait * 1000);
+    if (given(opts, "reconnect"))
+        cfg->reconnect_s = o->reconnect;
+    dopts->keep_hot = o->keep_hot;
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     br_cfg cfg;
     br_daemon_opts dopts;
-    const char *pos[2] = {NULL, NULL}, *logpath = NULL, *sockpath = NULL;
-    long resume_from = 1;
-    int npos = 0, i, daemon = 0, quiet = 0, rc;
+    const char *pos[2] = {NULL, NULL};
+    int npos = 0, i, rc;
+    bopts o;
+    cli_opt opts[] = {{"daemon", CLI_FLAG, &o.daemon, 0},
+                      {"keep-hot", CLI_FLAG, &o.keep_hot, 0},
+                      {"quiet", CLI_FLAG, &o.quiet, 0},
+                      {"no-resend-ok", CLI_FLAG, &o.no_resend_ok, 0},
+                      {"resend-ok", CLI_FLAG, &o.resend_ok, 0},
+                      {"client-timeout", CLI_DOUBLE, &o.client_timeout, 0},
+                      {"ready-timeout", CLI_DOUBLE, &o.ready_timeout, 0},
+                      {"timeout", CLI_DOUBLE, &o.timeout, 0},
+                      {"settle-ms", CLI_DOUBLE, &o.settle_ms, 0},
+                      {"boot-wait", CLI_DOUBLE, &o.boot_wait, 0},
+                      {"reconnect", CLI_DOUBLE, &o.reconnect, 0},
+                      {"baud", CLI_LONG, &o.baud, 0},
+                      {"bufsize", CLI_LONG, &o.bufsize, 0},
+                      {"rx-bytes", CLI_LONG, &o.rx_bytes, 0},
+                      {"resume-from", CLI_LONG, &o.resume_from, 0},
+                      {"printer", CLI_STR, &o.printer, 0},
+                      {"on-error", CLI_STR, &o.on_error, 0},
+                      {"flavor", CLI_STR, &o.flavor, 0},
+                      {"window", CLI_STR, &o.window, 0},
+                      {"log", CLI_STR, &o.log, 0},
+                      {"socket", CLI_STR, &o.socket, 0},
+                      {NULL, CLI_FLAG, NULL, 0}};
 
     if (argc > 1 && strcmp(argv[1], "--bench") == 0)
         return br_bench_main(argc - 1, argv + 1);
     br_cfg_default(&cfg);
     memset(&dopts, 0, sizeof dopts);
+    memset(&o, 0, sizeof o);
+    o.resume_from = 1;
     dopts.idle_s = 600;
-    for (i = 1; i < argc; i++) {
-        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
-        double d;
-#define NEEDVAL                                                                                                      \
-    do {                                                                                                             \
-        if (!val)                                                                                                    \
-            return fail("%s needs a value", a);                                                                      \
-        i++;                                                                                                         \
-    } while (0)
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+    for (i = 1; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             fputs(usage, stdout);
             return 0;
-        } else if (strcmp(a, "--daemon") == 0) {
-            daemon = 1;
-        } else if (strcmp(a, "--keep-hot") == 0) {
-            dopts.keep_hot = 1;
-        } else if (strcmp(a, "--client-timeout") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 86400)
-                return fail("bad --client-timeout %s", val);
-            dopts.idle_s = d;
-        } else if (strcmp(a, "--printer") == 0) {
-            amp_printer *pr;
-            amp_error err;
-            NEEDVAL;
-            /* checked now, so that a bad profile is bad usage before the port is opened */
-            pr = malloc(sizeof *pr);
-            if (!pr)
-                return fail("out of memory%s", "");
-            if (amp_printer_load(pr, val, &err) != AMP_OK) {
-                free(pr);
-                return fail("%s", err.msg);
-            }
-            free(pr);
-            cfg.printer = val;
-        } else if (strcmp(a, "--quiet") == 0) {
-            quiet = 1;
-        } else if (strcmp(a, "--no-resend-ok") == 0) {
-            cfg.resend_ok = 0;
-            cfg.learn = 0;
-        } else if (strcmp(a, "--resend-ok") == 0) {
-            cfg.resend_ok = 1;
-            cfg.learn = 0;
-        } else if (strcmp(a, "--ready-timeout") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 86400)
-                return fail("bad --ready-timeout %s", val);
-            cfg.ready_ms = (unsigned long)(d * 1000);
-        } else if (strcmp(a, "--on-error") == 0) {
-            NEEDVAL;
-            if (strcmp(val, "stop") == 0)
-                cfg.on_error_continue = 0;
-            else if (strcmp(val, "continue") == 0)
-                cfg.on_error_continue = 1;
-            else
-                return fail("bad --on-error %s (stop or continue)", val);
-        } else if (strcmp(a, "--baud") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 50 || d > 4000000)
-                return fail("bad --baud %s", val);
-            cfg.baud = (long)d;
-        } else if (strcmp(a, "--flavor") == 0) {
-            NEEDVAL;
-            if (strcmp(val, "marlin") == 0)
-                cfg.flavor = AMP_PROTO_MARLIN;
-            else if (strcmp(val, "klipper") == 0)
-                cfg.flavor = AMP_PROTO_KLIPPER;
-            else if (strcmp(val, "auto") == 0)
-                cfg.flavor = -1;
-            else
-                return fail("bad --flavor %s (marlin, klipper or auto)", val);
-        } else if (strcmp(a, "--window") == 0) {
-            NEEDVAL;
-            if (strcmp(val, "pingpong") == 0)
-                cfg.mode = AMP_PROTO_PINGPONG;
-            else if (strcmp(val, "advanced") == 0)
-                cfg.mode = AMP_PROTO_ADVANCED;
-            else if ((cli_number(val, &d) == 0) && d >= 1 && d <= AMP_PROTO_MAX_INFLIGHT) {
-                cfg.mode = AMP_PROTO_FIXED;
-                cfg.window = (int)d;
-            } else
-                return fail("bad --window %s (pingpong, advanced or 1..24)", val);
-        } else if (strcmp(a, "--bufsize") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 1 || d > AMP_PROTO_MAX_INFLIGHT)
-                return fail("bad --bufsize %s (1..24)", val);
-            cfg.bufsize = (int)d;
-        } else if (strcmp(a, "--rx-bytes") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < AMP_PROTO_LINE_MAX || d > 65536)
-                return fail("bad --rx-bytes %s (96..65536)", val);
-            cfg.rx_bytes = (int)d;
-        } else if (strcmp(a, "--timeout") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d <= 0 || d > 3600)
-                return fail("bad --timeout %s", val);
-            cfg.timeout_ms = (unsigned long)(d * 1000);
-        } else if (strcmp(a, "--settle-ms") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 0 || d > 10000)
-                return fail("bad --settle-ms %s", val);
-            cfg.settle_ms = (unsigned long)d;
-        } else if (strcmp(a, "--boot-wait") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 0 || d > 600)
-                return fail("bad --boot-wait %s", val);
-            cfg.boot_ms = (unsigned long)(d * 1000);
-        } else if (strcmp(a, "--reconnect") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 0)
-                return fail("bad --reconnect %s", val);
-            cfg.reconnect_s = d;
-        } else if (strcmp(a, "--resume-from") == 0) {
-            NEEDVAL;
-            if (!(cli_number(val, &d) == 0) || d < 1)
-                return fail("bad --resume-from %s", val);
-            resume_from = (long)d;
-        } else if (strcmp(a, "--log") == 0) {
-            NEEDVAL;
-            logpath = val;
-        } else if (strcmp(a, "--socket") == 0) {
-            NEEDVAL;
-            sockpath = val;
-        } else if (a[0] == '-' && a[1] == '-') {
-            return fail("unknown option %s (see --help)", a);
-        } else if (npos < 2) {
-            pos[npos++] = a;
-        } else {
-            return fail("too many arguments: %s", a);
         }
-#undef NEEDVAL
-    }
-    if (npos < 1)
-        return fail("%s", "missing DEVICE (see --help)");
-    if (!daemon && npos < 2)
+    /* ampath's option parser (tools/cli.c): numbers whole and within the ranges of its table */
+    if (cli_parse("ampath-bridge", argc, argv, opts, pos, 1, 2, &npos) != CLI_OK)
+        return 2;
+    if ((rc = apply_options(&o, opts, &cfg, &dopts)) != 0)
+        return rc;
+    if (!o.daemon && npos < 2)
         return fail("%s", "missing JOB (or use --daemon)");
     cfg.device = pos[0];
-    cfg.quiet = quiet;
-    cfg.progress = !quiet && isatty(2);
-    if (logpath && !(cfg.log = open_log(logpath)))
-        return fail("cannot write the log %s", logpath);
+    cfg.quiet = o.quiet;
+    cfg.progress = !o.quiet && isatty(2);
+    if (o.log && !(cfg.log = open_log(o.log)))
+        return fail("cannot write the log %s", o.log);
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     signal(SIGPIPE, SIG_IGN);
-    dopts.sockpath = sockpath;
-    rc = daemon ? run_daemon(&cfg, &dopts, npos == 2 ? pos[1] : NULL, resume_from)
-                : one_shot(&cfg, pos[1], resume_from, dopts.keep_hot);
+    dopts.sockpath = o.socket;
+    rc = o.daemon ? run_daemon(&cfg, &dopts, npos == 2 ? pos[1] : NULL, o.resume_from)
+                  : one_shot(&cfg, pos[1], o.resume_from, dopts.keep_hot);
     if (cfg.log)
         fclose(cfg.log);
     return rc;

@@ -10,10 +10,16 @@
 
 #include "cli.h"
 
+/* A program of its own ("ampath-bridge") or a command of ampath ("cover"). */
+static int is_program(const char *cmd)
+{
+    return strncmp(cmd, "ampath-", 7) == 0;
+}
+
 int cli_fail(const char *cmd, int code, const char *fmt, ...)
 {
     va_list ap;
-    fprintf(stderr, "ampath %s: ", cmd);
+    fprintf(stderr, is_program(cmd) ? "%s: " : "ampath %s: ", cmd);
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
     va_end(ap);
@@ -97,6 +103,17 @@ static const cli_range cli_ranges[] = {
     {NULL, "fan-off-layers", 0, 1e6},
     {NULL, "radius-tol", 0, 10},
     {NULL, "min-segment", 0, 10},
+    /* ampath-bridge (its own program: the ranges of its options) */
+    {"ampath-bridge", "client-timeout", 1e-3, 86400},
+    {"ampath-bridge", "ready-timeout", 1e-3, 86400},
+    {"ampath-bridge", "baud", 50, 4e6},
+    {"ampath-bridge", "bufsize", 1, AMP_PROTO_MAX_INFLIGHT},
+    {"ampath-bridge", "rx-bytes", AMP_PROTO_LINE_MAX, 65536},
+    {"ampath-bridge", "timeout", 1e-3, 3600},
+    {"ampath-bridge", "settle-ms", 0, 10000},
+    {"ampath-bridge", "boot-wait", 0, 600},
+    {"ampath-bridge", "reconnect", 0, 1e6},
+    {"ampath-bridge", "resume-from", 1, 1e15},
     /* work limits */
     {NULL, "max-curves", 1, 1e15},
     {NULL, "max-segments", 1, 1e15},
@@ -194,6 +211,14 @@ int cli_work_refuse(const char *cmd, const char *what, double estimate, double l
                     what, limit, option);
 }
 
+/* Where the usage of @p cmd is: 'ampath help CMD' or 'ampath-bridge --help' (one static buffer). */
+static const char *help_ref(const char *cmd)
+{
+    static char buf[96];
+    snprintf(buf, sizeof buf, is_program(cmd) ? "'%s --help'" : "'ampath help %s'", cmd);
+    return buf;
+}
+
 int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
               int *npos)
 {
@@ -213,7 +238,7 @@ int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char 
             if (!o || !o->name)
                 o = work_limit_opt(cmd, name, len);
             if (!o)
-                return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see 'ampath help %s')", a, cmd);
+                return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see %s)", a, help_ref(cmd));
             o->seen = 1;
             if (o->kind == CLI_FLAG) {
                 if (eq)
@@ -241,14 +266,14 @@ int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char 
                     continue;
                 }
             }
-            return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see 'ampath help %s')", a, cmd);
+            return cli_fail(cmd, CLI_USAGE, "unknown option '%s' (see %s)", a, help_ref(cmd));
         }
         if (n >= max_pos)
-            return cli_fail(cmd, CLI_USAGE, "unexpected argument '%s' (see 'ampath help %s')", a, cmd);
+            return cli_fail(cmd, CLI_USAGE, "unexpected argument '%s' (see %s)", a, help_ref(cmd));
         pos[n++] = a;
     }
     if (n < min_pos)
-        return cli_fail(cmd, CLI_USAGE, "missing argument (see 'ampath help %s')", cmd);
+        return cli_fail(cmd, CLI_USAGE, "missing argument (see %s)", help_ref(cmd));
     if (npos)
         *npos = n;
     return CLI_OK;
