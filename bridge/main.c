@@ -161,14 +161,6 @@ typedef struct bopts {
     const char *printer, *on_error, *flavor, *window, *log, *socket;
 } bopts;
 
-static int given(const cli_opt *opts, const char *name)
-{
-    for (; opts->name; opts++)
-        if (strcmp(opts->name, name) == 0)
-            return opts->seen;
-    return 0;
-}
-
 /* A printer profile is checked now, so that a bad one is bad usage before the port is opened. */
 static int check_printer(const char *spec)
 {
@@ -189,7 +181,7 @@ static int apply_words(const bopts *o, const cli_opt *opts, br_cfg *cfg)
     if (o->on_error && strcmp(o->on_error, "stop") != 0 && strcmp(o->on_error, "continue") != 0)
         return fail("bad --on-error %s (stop or continue)", o->on_error);
     cfg->on_error_continue = o->on_error && strcmp(o->on_error, "continue") == 0;
-    if (given(opts, "flavor")) {
+    if (cli_given(opts, "flavor")) {
         if (strcmp(o->flavor, "marlin") == 0)
             cfg->flavor = AMP_PROTO_MARLIN;
         else if (strcmp(o->flavor, "klipper") == 0)
@@ -199,7 +191,7 @@ static int apply_words(const bopts *o, const cli_opt *opts, br_cfg *cfg)
         else
             return fail("bad --flavor %s (marlin, klipper or auto)", o->flavor);
     }
-    if (given(opts, "window")) {
+    if (cli_given(opts, "window")) {
         if (strcmp(o->window, "pingpong") == 0)
             cfg->mode = AMP_PROTO_PINGPONG;
         else if (strcmp(o->window, "advanced") == 0)
@@ -226,23 +218,23 @@ static int apply_options(const bopts *o, const cli_opt *opts, br_cfg *cfg, br_da
 {
     if (apply_words(o, opts, cfg) != 0)
         return 2;
-    if (given(opts, "client-timeout"))
+    if (cli_given(opts, "client-timeout"))
         dopts->idle_s = o->client_timeout;
-    if (given(opts, "ready-timeout"))
+    if (cli_given(opts, "ready-timeout"))
         cfg->ready_ms = (unsigned long)(o->ready_timeout * 1000);
-    if (given(opts, "baud"))
+    if (cli_given(opts, "baud"))
         cfg->baud = o->baud;
-    if (given(opts, "bufsize"))
+    if (cli_given(opts, "bufsize"))
         cfg->bufsize = (int)o->bufsize;
-    if (given(opts, "rx-bytes"))
+    if (cli_given(opts, "rx-bytes"))
         cfg->rx_bytes = (int)o->rx_bytes;
-    if (given(opts, "timeout"))
+    if (cli_given(opts, "timeout"))
         cfg->timeout_ms = (unsigned long)(o->timeout * 1000);
-    if (given(opts, "settle-ms"))
+    if (cli_given(opts, "settle-ms"))
         cfg->settle_ms = (unsigned long)o->settle_ms;
-    if (given(opts, "boot-wait"))
+    if (cli_given(opts, "boot-wait"))
         cfg->boot_ms = (unsigned long)(o->boot_wait * 1000);
-    if (given(opts, "reconnect"))
+    if (cli_given(opts, "reconnect"))
         cfg->reconnect_s = o->reconnect;
     dopts->keep_hot = o->keep_hot;
     return 0;

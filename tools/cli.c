@@ -181,6 +181,18 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
         *(long *)o->dst = l;
         return CLI_OK;
     }
+    case CLI_LIST: {
+        cli_list *l = o->dst;
+        long v;
+        if (cli_integer(val, &v) != 0)
+            return cli_fail(cmd, CLI_USAGE, "--%s expects an integer, got '%s'", o->name, val);
+        if (l->n >= CLI_LIST_MAX)
+            return cli_fail(cmd, CLI_USAGE, "--%s given more than %d times", o->name, CLI_LIST_MAX);
+        if (check_range(cmd, o, (double)v, val) != CLI_OK)
+            return CLI_USAGE;
+        l->v[l->n++] = v;
+        return CLI_OK;
+    }
     case CLI_FLAG:
         break;
     }
@@ -209,6 +221,14 @@ int cli_work_refuse(const char *cmd, const char *what, double estimate, double l
     return cli_fail(cmd, CLI_USAGE,
                     "refused: about %.3g %s estimated, more than the limit of %.3g (raise it with --%s N)", estimate,
                     what, limit, option);
+}
+
+int cli_given(const cli_opt *opts, const char *name)
+{
+    for (; opts->name; opts++)
+        if (strcmp(opts->name, name) == 0)
+            return opts->seen;
+    return 0;
 }
 
 /* Where the usage of @p cmd is: 'ampath help CMD' or 'ampath-bridge --help' (one static buffer). */

@@ -19,13 +19,21 @@
 
 enum { CLI_OK = 0, CLI_FAILED = 1, CLI_USAGE = 2 };
 
-typedef enum cli_kind { CLI_FLAG, CLI_STR, CLI_DOUBLE, CLI_LONG } cli_kind;
+typedef enum cli_kind { CLI_FLAG, CLI_STR, CLI_DOUBLE, CLI_LONG, CLI_LIST } cli_kind;
 
-/** One option: "--name" (kind FLAG sets *(int *)dst = 1; others take the next argument or --name=value). */
+/** A repeatable option (kind CLI_LIST): every value in order; one more than CLI_LIST_MAX is refused. */
+#define CLI_LIST_MAX 16
+typedef struct cli_list {
+    long v[CLI_LIST_MAX]; /* whole numbers, validated and range-checked as CLI_LONG */
+    int n;
+} cli_list;
+
+/** One option: "--name" (kind FLAG sets *(int *)dst = 1; others take the next argument or --name=value;
+ *  LIST appends to a cli_list). */
 typedef struct cli_opt {
     const char *name; /* without the leading "--" */
     cli_kind kind;
-    void *dst;  /* int *, const char **, double * or long * */
+    void *dst;  /* int *, const char **, double *, long * or cli_list * */
     int seen;   /* set by cli_parse */
 } cli_opt;
 
@@ -40,6 +48,9 @@ typedef struct cli_opt {
  */
 int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
               int *npos);
+
+/** Was option @p name (without "--") on the command line of the last cli_parse() over @p opts? */
+int cli_given(const cli_opt *opts, const char *name);
 
 /*
  * Work limits: commands whose work grows without bound with a small

@@ -845,32 +845,67 @@ static void flush_out(vp *v, double now)
         v->out_free += (double)consumed * 10.0 / v->baud;
 }
 
-/* A repeatable option: one more whole number (validated as ampath's), at most LIST_MAX of them. */
-static int parse_list(long *l, int *n, const char *s)
+/* What cli_parse() cannot store in the printer directly (units, words, lists); apply_options() moves it. */
+typedef struct vopts {
+    const char *flavor, *dialect, *bed;
+    long bufsize, rx_bytes, planner, seed;
+    double turnaround_ms, boot_ms, wait_ms, ready_ms;
+    cli_list corrupt_line, lose_line, lose_ok, reset_after, hangup_after;
+} vopts;
+
+static void copy_list(long *dst, int *n, const cli_list *l)
 {
-    if (*n >= LIST_MAX || cli_integer(s, &l[*n]) != 0)
-        return -1;
-    (*n)++;
+    memcpy(dst, l->v, (size_t)l->n * sizeof *dst);
+    *n = l->n;
+}
+
+static int apply_words(vp *v, const vopts *o, const cli_opt *opts)
+{
+    if (cli_given(opts, "flavor") && strcmp(o->flavor, "klipper") != 0 && strcmp(o->flavor, "marlin") != 0)
+        return cli_fail("ampath-vprinter", -1, "bad --flavor %s (marlin or klipper)", o->flavor);
+    v->klipper = cli_given(opts, "flavor") && strcmp(o->flavor, "klipper") == 0;
+    if (cli_given(opts, "dialect")) {
+        if (strcmp(o->dialect, "2.1") == 0)
+            v->dialect = 21;
+        else if (strcmp(o->dialect, "2.0") == 0)
+            v->dialect = 20;
+        else if (strcmp(o->dialect, "bare") == 0 || strcmp(o->dialect, "prusa") == 0)
+            v->dialect = 1;
+        else if (strcmp(o->dialect, "rs") == 0)
+            v->dialect = 2;
+        else
+            return cli_fail("ampath-vprinter", -1, "bad --dialect %s (2.1, 2.0, prusa, bare or rs)", o->dialect);
+    }
+    if (cli_given(opts, "bed") && (sscanf(o->bed, "%lf,%lf,%lf", &v->bed[0], &v->bed[1], &v->bed[2]) != 3 ||
+                                   v->bed[0] <= 0 || v->bed[1] <= 0 || v->bed[2] <= 0))
+        return cli_fail("ampath-vprinter", -1, "bad --bed %s (X,Y,Z in mm, each > 0)", o->bed);
     return 0;
 }
 
-/* Option values, validated as ampath's are (tools/cli.c): -1 on anything but a whole number. */
-static int opt_int(const char *s, int *out)
+static int apply_options(vp *v, const vopts *o, const cli_opt *opts)
 {
-    long l;
-    if (cli_integer(s, &l) != 0 || l < -2147483647L || l > 2147483647L)
+    if (apply_words(v, o, opts) != 0)
         return -1;
-    *out = (int)l;
-    return 0;
-}
-
-/* A number divided by @p div (1: as given; 1000: milliseconds to seconds). */
-static int opt_num(const char *s, double div, double *out)
-{
-    double d;
-    if (cli_number(s, &d) != 0)
+    if (o->bufsize < 1 || o->bufsize > QMAX || o->planner < 1 || o->planner > PLAN_MAX || o->rx_bytes < 1 ||
+        o->rx_bytes > (long)sizeof v->rxq || v->busy_interval <= 0) {
+        fprintf(stderr, "ampath-vprinter: --bufsize 1..%d, --planner 1..%d, --rx-bytes 1..%d\n", QMAX, PLAN_MAX,
+                (int)sizeof v->rxq);
         return -1;
-    *out = d / div;
+    }
+    v->bufsize = (int)o->bufsize;
+    v->planner = (int)o->planner;
+    v->rx_bytes = (int)o->rx_bytes;
+    if (cli_given(opts, "seed"))
+        v->rng = (unsigned long long)o->seed * 2654435761ULL + 1;
+    v->turnaround = o->turnaround_ms / 1000.0;
+    v->boot = o->boot_ms / 1000.0;
+    v->wait_s = o->wait_ms / 1000.0;
+    v->ready_at = o->ready_ms / 1000.0;
+    copy_list(v->corrupt_line, &v->n_corrupt_line, &o->corrupt_line);
+    copy_list(v->lose_line, &v->n_lose_line, &o->lose_line);
+    copy_list(v->lose_ok, &v->n_lose_ok, &o->lose_ok);
+    copy_list(v->reset_after, &v->n_reset_after, &o->reset_after);
+    copy_list(v->hangup_after, &v->n_hangup, &o->hangup_after);
     return 0;
 }
 
@@ -880,6 +915,44 @@ int main(int argc, char **argv)
     vp *v = &V;
     int i;
     double last;
+    vopts o;
+    cli_opt opts[] = {{"advanced-ok", CLI_FLAG, &V.adv_ok, 0},
+                      {"hangup-reset", CLI_FLAG, &V.hangup_reset, 0},
+                      {"link", CLI_STR, &V.link, 0},
+                      {"log", CLI_STR, &V.logpath, 0},
+                      {"action", CLI_STR, &V.action, 0},
+                      {"flavor", CLI_STR, &o.flavor, 0},
+                      {"dialect", CLI_STR, &o.dialect, 0},
+                      {"bed", CLI_STR, &o.bed, 0},
+                      {"bufsize", CLI_LONG, &o.bufsize, 0},
+                      {"rx-bytes", CLI_LONG, &o.rx_bytes, 0},
+                      {"planner", CLI_LONG, &o.planner, 0},
+                      {"seed", CLI_LONG, &o.seed, 0},
+                      {"busy-at", CLI_LONG, &V.busy_at, 0},
+                      {"error-at", CLI_LONG, &V.error_at, 0},
+                      {"shutdown-after", CLI_LONG, &V.shutdown_after, 0},
+                      {"halt-after", CLI_LONG, &V.halt_after, 0},
+                      {"action-at", CLI_LONG, &V.action_at, 0},
+                      {"speed", CLI_DOUBLE, &V.speed, 0},
+                      {"baud", CLI_DOUBLE, &V.baud, 0},
+                      {"busy-secs", CLI_DOUBLE, &V.busy_secs, 0},
+                      {"busy-interval", CLI_DOUBLE, &V.busy_interval, 0},
+                      {"heat-secs", CLI_DOUBLE, &V.heat_secs, 0},
+                      {"hangup-secs", CLI_DOUBLE, &V.hangup_secs, 0},
+                      {"corrupt-in", CLI_DOUBLE, &V.corrupt_in, 0},
+                      {"corrupt-out", CLI_DOUBLE, &V.corrupt_out, 0},
+                      {"drop-in", CLI_DOUBLE, &V.drop_in, 0},
+                      {"drop-out", CLI_DOUBLE, &V.drop_out, 0},
+                      {"turnaround", CLI_DOUBLE, &o.turnaround_ms, 0},
+                      {"boot-ms", CLI_DOUBLE, &o.boot_ms, 0},
+                      {"wait-ms", CLI_DOUBLE, &o.wait_ms, 0},
+                      {"ready-after-ms", CLI_DOUBLE, &o.ready_ms, 0},
+                      {"corrupt-line", CLI_LIST, &o.corrupt_line, 0},
+                      {"lose-line", CLI_LIST, &o.lose_line, 0},
+                      {"lose-ok", CLI_LIST, &o.lose_ok, 0},
+                      {"reset-after", CLI_LIST, &o.reset_after, 0},
+                      {"hangup-after", CLI_LIST, &o.hangup_after, 0},
+                      {NULL, CLI_FLAG, NULL, 0}};
     memset(v, 0, sizeof *v);
     v->dialect = 21;
     v->bufsize = 4;
@@ -891,140 +964,18 @@ int main(int argc, char **argv)
     v->bed[0] = v->bed[1] = 220;
     v->bed[2] = 250;
     v->action = "cancel";
-    for (i = 1; i < argc; i++) {
-        const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
-#define OPT(name) (strcmp(a, name) == 0 && val && (i++, 1))
-        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+    memset(&o, 0, sizeof o);
+    o.bufsize = v->bufsize;
+    o.rx_bytes = v->rx_bytes;
+    o.planner = v->planner;
+    for (i = 1; i < argc; i++)
+        if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
             fputs(usage, stdout);
             return 0;
-        } else if (strcmp(a, "--advanced-ok") == 0)
-            v->adv_ok = 1;
-        else if (OPT("--link"))
-            v->link = val;
-        else if (OPT("--log"))
-            v->logpath = val;
-        else if (OPT("--flavor")) {
-            if (strcmp(val, "klipper") == 0)
-                v->klipper = 1;
-            else if (strcmp(val, "marlin") != 0)
-                goto bad;
-        } else if (OPT("--dialect")) {
-            if (strcmp(val, "2.1") == 0)
-                v->dialect = 21;
-            else if (strcmp(val, "2.0") == 0)
-                v->dialect = 20;
-            else if (strcmp(val, "bare") == 0 || strcmp(val, "prusa") == 0)
-                v->dialect = 1;
-            else if (strcmp(val, "rs") == 0)
-                v->dialect = 2;
-            else
-                goto bad;
-        } else if (OPT("--bufsize")) {
-            if (opt_int(val, &v->bufsize))
-                goto bad;
-        } else if (OPT("--rx-bytes")) {
-            if (opt_int(val, &v->rx_bytes))
-                goto bad;
-        } else if (OPT("--planner")) {
-            if (opt_int(val, &v->planner))
-                goto bad;
-        } else if (OPT("--speed")) {
-            if (opt_num(val, 1.0, &v->speed))
-                goto bad;
-        } else if (OPT("--baud")) {
-            if (opt_num(val, 1.0, &v->baud))
-                goto bad;
-        } else if (OPT("--turnaround")) {
-            if (opt_num(val, 1000.0, &v->turnaround))
-                goto bad;
-        } else if (OPT("--boot-ms")) {
-            if (opt_num(val, 1000.0, &v->boot))
-                goto bad;
-        } else if (OPT("--seed")) {
-            long seed;
-            if (cli_integer(val, &seed))
-                goto bad;
-            v->rng = (unsigned long long)seed * 2654435761ULL + 1;
-        } else if (OPT("--corrupt-in")) {
-            if (opt_num(val, 1.0, &v->corrupt_in))
-                goto bad;
-        } else if (OPT("--corrupt-out")) {
-            if (opt_num(val, 1.0, &v->corrupt_out))
-                goto bad;
-        } else if (OPT("--drop-in")) {
-            if (opt_num(val, 1.0, &v->drop_in))
-                goto bad;
-        } else if (OPT("--drop-out")) {
-            if (opt_num(val, 1.0, &v->drop_out))
-                goto bad;
-        } else if (OPT("--corrupt-line")) {
-            if (parse_list(v->corrupt_line, &v->n_corrupt_line, val))
-                goto bad;
-        } else if (OPT("--lose-line")) {
-            if (parse_list(v->lose_line, &v->n_lose_line, val))
-                goto bad;
-        } else if (OPT("--lose-ok")) {
-            if (parse_list(v->lose_ok, &v->n_lose_ok, val))
-                goto bad;
-        } else if (OPT("--reset-after")) {
-            if (parse_list(v->reset_after, &v->n_reset_after, val))
-                goto bad;
-        } else if (OPT("--busy-at")) {
-            if (cli_integer(val, &v->busy_at))
-                goto bad;
-        } else if (OPT("--busy-secs")) {
-            if (opt_num(val, 1.0, &v->busy_secs))
-                goto bad;
-        } else if (OPT("--busy-interval")) {
-            if (opt_num(val, 1.0, &v->busy_interval))
-                goto bad;
-        } else if (OPT("--heat-secs")) {
-            if (opt_num(val, 1.0, &v->heat_secs))
-                goto bad;
-        } else if (OPT("--wait-ms")) {
-            if (opt_num(val, 1000.0, &v->wait_s))
-                goto bad;
-        } else if (OPT("--hangup-after")) {
-            if (parse_list(v->hangup_after, &v->n_hangup, val))
-                goto bad;
-        } else if (strcmp(a, "--hangup-reset") == 0) {
-            v->hangup_reset = 1;
-        } else if (OPT("--hangup-secs")) {
-            if (opt_num(val, 1.0, &v->hangup_secs))
-                goto bad;
-        } else if (OPT("--error-at")) {
-            if (cli_integer(val, &v->error_at))
-                goto bad;
-        } else if (OPT("--shutdown-after")) {
-            if (cli_integer(val, &v->shutdown_after))
-                goto bad;
-        } else if (OPT("--ready-after-ms")) {
-            if (opt_num(val, 1000.0, &v->ready_at))
-                goto bad;
-        } else if (OPT("--halt-after")) {
-            if (cli_integer(val, &v->halt_after))
-                goto bad;
-        } else if (OPT("--action-at")) {
-            if (cli_integer(val, &v->action_at))
-                goto bad;
-        } else if (OPT("--action"))
-            v->action = val;
-        else if (OPT("--bed")) {
-            if (sscanf(val, "%lf,%lf,%lf", &v->bed[0], &v->bed[1], &v->bed[2]) != 3 || v->bed[0] <= 0 ||
-                v->bed[1] <= 0 || v->bed[2] <= 0)
-                goto bad;
         }
-        else {
-        bad:
-            fprintf(stderr, "ampath-vprinter: bad option or value: %s\n%s", a, usage);
-            return 2;
-        }
-#undef OPT
-    }
-    if (v->bufsize < 1 || v->bufsize > QMAX || v->planner < 1 || v->planner > PLAN_MAX || v->rx_bytes < 1 ||
-        v->rx_bytes > (int)sizeof v->rxq || v->busy_interval <= 0) {
-        fprintf(stderr, "ampath-vprinter: --bufsize 1..%d, --planner 1..%d, --rx-bytes 1..%d\n", QMAX, PLAN_MAX,
-                (int)sizeof v->rxq);
+    /* ampath's option parser (tools/cli.c) */
+    if (cli_parse("ampath-vprinter", argc, argv, opts, NULL, 0, 0, NULL) != CLI_OK || apply_options(v, &o, opts)) {
+        fprintf(stderr, "%s", usage);
         return 2;
     }
     v->out = malloc(OUT_MAX);
