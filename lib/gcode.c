@@ -800,7 +800,7 @@ static void travel_hull(amp_gcode_iter *it, double rb)
                     : -HUGE_VAL;
             if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
                 double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
-                /* from min(zs, ze) up: the hull of the lifted ends is never lower */
+                /* from min(zs, ze) up: the hull of the ends is never lower */
                 cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
                                 fmin(zs, ze), HUGE_VAL);
             }
@@ -1095,7 +1095,8 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
  * one straight move, no retraction, no lift (slicers' travel without z-hop
  * inside the part)? When it is at most direct_hop long and at every point the
  * head cone is clear (cone_clear) and, away from its ends, no printed
- * material rises above the nozzle, and it rises or falls by at most z_hop.
+ * material rises above the nozzle, whatever it rises or falls (the lifted
+ * travels ramp through their end zones on the cone test too: a band would only cost).
  * Within the bead radius and two grid cells
  * of either end the nozzle is in the bead it leaves or in the place of the one
  * it starts, where the cone test alone applies (the grid's cells there hold
