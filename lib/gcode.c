@@ -756,16 +756,27 @@ static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, 
 /*
  * The travel polyline from it->pos to it->travel_to (docs/interfaces.md §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
- * of the start and end lifted by z_hop and of the material tops + z_hop
- * sampled along the line within the corridor. Each sample's box covers half
- * a step either side, so its height holds over that interval; the hull is
- * the lowest polyline of straight moves above all of them.
+ * of the start and the end themselves, of the head-cone floor everywhere and,
+ * away from the ends, of the material tops sampled along the line within the
+ * corridor and the line between the ends, both + z_hop (over nothing it
+ * travels straight at z-hop height). Within the bead radius and two grid cells of either end
+ * (@p rb: the radius at the next path's start) the nozzle is in the bead it
+ * leaves or in the place of the one it starts — the rule of the direct hops
+ * (direct_ok) — so only the cone applies there: the head ramps up from the
+ * end it leaves and down onto the start instead of lifting and descending
+ * vertically (issue 14 item 4: at the z axis' 10 mm/s the vertical lifts over
+ * the beads' own tops were 40 % of the demo's travel time). With direct_hop 0
+ * there are no end zones and the ends are lifted by z_hop (the old rule). Each sample's box
+ * covers half a step either side, so its height holds over that interval;
+ * the hull is the lowest polyline of straight moves above all of them.
  */
-static void travel_hull(amp_gcode_iter *it)
+static void travel_hull(amp_gcode_iter *it, double rb)
 {
     amp_vec3 a = it->pos, b = it->travel_to;
     double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), hop = it->o.z_hop;
-    double zs = a.z + hop, ze = b.z + hop, w, dt, cf = -HUGE_VAL;
+    int ramp = it->o.direct_hop > 0.0; /* direct_hop 0: every travel lifts vertically by z_hop over all material */
+    double zs = ramp ? a.z : a.z + hop, ze = ramp ? b.z : b.z + hop, w, dt, cf = -HUGE_VAL;
+    double ea = ramp ? it->end_r + 2.0 * it->grid_cell : -1.0, eb = ramp ? rb + 2.0 * it->grid_cell : -1.0;
     long steps = (long)ceil(len / (0.5 * it->grid_cell)), s, maxs = (AMP_GCODE_HULL - 4) / 2 - 1;
     size_t n = 0;
     if (steps < 1)
@@ -783,12 +794,15 @@ static void travel_hull(amp_gcode_iter *it)
             z = ze;
         } else {
             t = (double)s / (double)steps;
-            z = grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w) + hop;
+            /* the material tops count wherever the sample's interval reaches out of both end zones */
+            z = (t + dt) * len > ea && (1.0 - t + dt) * len > eb
+                    ? fmax(grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w), a.z + t * (b.z - a.z)) + hop
+                    : -HUGE_VAL;
             if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
                 double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
-                /* from min(zs, ze) up: the hull of the lifted ends is never lower */
+                /* from min(zs, ze) up: the hull of the ends is never lower */
                 cf = cone_floor(it, a.x + tc * dx, a.y + tc * dy, (0.5 * GC_CONE_GROUP + 0.5) * len / (double)steps,
-                                fmin(a.z, b.z) + hop, HUGE_VAL);
+                                fmin(zs, ze), HUGE_VAL);
             }
             /* beyond the corridor: the head cone (docs/interfaces.md §2) clear of every printed centre line */
             z = fmax(z, cf);
@@ -1081,7 +1095,8 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
  * one straight move, no retraction, no lift (slicers' travel without z-hop
  * inside the part)? When it is at most direct_hop long and at every point the
  * head cone is clear (cone_clear) and, away from its ends, no printed
- * material rises above the nozzle, and it rises or falls by at most z_hop.
+ * material rises above the nozzle, whatever it rises or falls (the lifted
+ * travels ramp through their end zones on the cone test too: a band would only cost).
  * Within the bead radius and two grid cells
  * of either end the nozzle is in the bead it leaves or in the place of the one
  * it starts, where the cone test alone applies (the grid's cells there hold
@@ -1093,8 +1108,8 @@ static int direct_ok(const amp_gcode_iter *it, double dxy, double rb)
     double cell = it->grid_cell, hh, dz;
     double ea = it->end_r + 2.0 * cell, eb = rb + 2.0 * cell;
     long steps = (long)ceil(dxy / (0.5 * cell)), s;
-    /* within the z-hop band only: a steeper hop would pass its ends' zones unchecked */
-    if (!(dxy <= it->o.direct_hop) || !it->printed_any || it->have_pos != 2 || !(fabs(b.z - a.z) <= it->o.z_hop))
+    /* any rise or fall: the end zones are left to the cone test as in travel_hull's ramps */
+    if (!(dxy <= it->o.direct_hop) || !it->printed_any || it->have_pos != 2)
         return 0;
     if (steps < 1)
         steps = 1;
@@ -1136,7 +1151,7 @@ static int plan_travel(amp_gcode_iter *it, const amp_pvert *v)
         it->hull_n = 2;
         it->hull_i = 1;
     } else if (it->printed_any && it->have_pos == 2) {
-        travel_hull(it);
+        travel_hull(it, v[0].r);
     } else { /* the first approach: lift above the start, move, descend */
         double zt = fmin(fmax(it->travel_to.z, it->have_pos ? it->pos.z : it->travel_to.z) + it->o.z_hop, it->zmax);
         it->travel_from = it->have_pos == 2 ? it->pos : it->travel_to;
