@@ -277,6 +277,39 @@ START_TEST(layers_are_cut_at_mid_height_with_optional_first_layer)
 }
 END_TEST
 
+START_TEST(cli_refuses_a_mesh_in_metres_with_its_size)
+{
+    /* a 20 mm sphere exported in metres: 0.02 units across, no layer of
+     * 0.2 mm cuts it; exit 2, the size and the hint, no output file */
+    amp_mesh m;
+    amp_error err;
+    char args[512], out[4096];
+    const char *stl = fx_tmp("metres.stl"), *amp = fx_tmp("metres.amp");
+    FILE *f;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 0.01, 16, 8), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    remove(amp);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 2);
+    ck_assert_msg(strstr(out, "0.02 x 0.02 x 0.02 mm") && strstr(out, "metres"), "%s", out);
+    f = fopen(amp, "r");
+    ck_assert_msg(f == NULL, "no output for a refused mesh");
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    /* scaled to millimetres it slices */
+    {
+        size_t i;
+        for (i = 0; i < m.nverts; i++)
+            m.verts[i] = amp_v3(1000 * m.verts[i].x, 1000 * m.verts[i].y, 1000 * m.verts[i].z);
+    }
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(cli_writes_closed_oriented_polygons_per_layer)
 {
     amp_mesh m;
@@ -390,6 +423,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, cracked_mesh_is_sliced_as_if_welded);
     tcase_add_test(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
     tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
+    tcase_add_test(tc, cli_refuses_a_mesh_in_metres_with_its_size);
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     suite_add_tcase(s, tc);
     return s;
