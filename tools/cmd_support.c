@@ -3,6 +3,7 @@
 
 #include "checkers.h"
 #include "headopt.h"
+#include "slicetool.h"
 
 const char cmd_support_usage[] =
     "add support paths under the model and interleave them with the object paths (paper 5.3)\n"
@@ -121,7 +122,8 @@ int cmd_support(int argc, char **argv)
         }
         amp_spline_free(&v);
     }
-    if ((!tri && amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK) || amp_bvh_build(&b, &m, &err) != AMP_OK) {
+    if ((!tri && (amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK || slicetool_outward(&m, NULL, &err) != AMP_OK)) ||
+        amp_bvh_build(&b, &m, &err) != AMP_OK) {
         rc = cli_fail_err("support", &err);
         goto done;
     }

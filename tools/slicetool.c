@@ -18,6 +18,27 @@ double slicetool_estimate(const amp_mesh *m, double layer)
     return total;
 }
 
+amp_status slicetool_outward(amp_mesh *m, size_t *flipped, amp_error *err)
+{
+    size_t i, n = 0;
+    amp_status st = amp_mesh_orient(m, &n, err);
+    if (st != AMP_OK)
+        return st;
+    /* consistent now, but all of it may face inward (an STL written with
+     * the other winding): then the inside tests see no solid at all */
+    if (amp_mesh_volume(m) < 0) {
+        for (i = 0; i < m->ntris; i++) {
+            uint32_t t = m->tris[i].v[1];
+            m->tris[i].v[1] = m->tris[i].v[2];
+            m->tris[i].v[2] = t;
+        }
+        n = m->ntris - n;
+    }
+    if (flipped)
+        *flipped = n;
+    return AMP_OK;
+}
+
 /* A mesh with no section at all (flat, or far below one layer: a part
  * exported in metres or inches) is refused with its size, not sliced into
  * an empty job or met later as "no layer polygon". */
@@ -53,7 +74,7 @@ int slicetool_load(const char *cmd, const char *file, double layer, double first
         return cli_work_refuse(cmd, "section segments", slicetool_estimate(m, layer), cli_work.max_segments,
                                "max-segments");
     /* the slicer chains segments by their direction: orientation must agree */
-    if (amp_mesh_orient(m, flipped, &err) != AMP_OK)
+    if (slicetool_outward(m, flipped, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
     o.layer = layer;
     o.first_layer = first;
