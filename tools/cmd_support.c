@@ -108,6 +108,11 @@ int cmd_support(int argc, char **argv)
     memset(&hr, 0, sizeof hr);
     if ((rc = cli_load_paths("support", pos[0], &ps)) != CLI_OK)
         return rc;
+    if (ps.npaths == 0) {
+        /* nothing to hold (a field that missed the mesh); the library spun without end on it */
+        amp_pathset_free(&ps);
+        return cli_fail("support", CLI_USAGE, "%s holds no path to support", pos[0]);
+    }
     rc = CLI_USAGE;
     t0 = cli_now();
     if (tri) {
