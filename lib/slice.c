@@ -122,41 +122,176 @@ static amp_status link_segments(const amp_allocator *al, sseg *seg, size_t nseg,
     return AMP_OK;
 }
 
-/* The linked segments walked into rings: open chains first (from segments
- * nobody leads to; counted in st0->open_chains, not kept), then closed
- * loops, added to @p out. */
+/* Open chains (a mesh with cracks or a missing triangle, as exported STL
+ * often is) are joined end to head, shortest gaps first, into rings, as
+ * slicers close a section instead of losing the layer (a layer lost under
+ * closed ones would leave those printed in the air). */
+/* More open chains than this in one section: the mesh is too broken for the
+ * quadratic pairing below; they are dropped (and counted). */
+#define GAP_CHAINS_MAX 1024
+
+static double gap_dist(amp_vec2 a, amp_vec2 b)
+{
+    return hypot(a.x - b.x, a.y - b.y);
+}
+
+typedef struct ochain {
+    size_t first, n; /* points [first, first + n) of the open chains' buffer */
+} ochain;
+
+typedef struct gpair {
+    double d;
+    size_t tail, head;
+} gpair;
+
+static int cmp_gpair(const void *a, const void *b)
+{
+    const gpair *s = a, *t = b;
+    if (s->d != t->d)
+        return s->d < t->d ? -1 : 1;
+    return s->tail != t->tail ? (s->tail < t->tail ? -1 : 1) : (s->head < t->head ? -1 : (s->head > t->head));
+}
+
+/* Each chain's tail to the nearest free head (shortest gaps first) in
+ * nxt[]: a permutation, so every run is a cycle. */
+static amp_status pair_gaps(const amp_allocator *al, const amp_vec2 *pt, const ochain *c, size_t k, size_t *nxt)
+{
+    size_t i, j, np = 0;
+    gpair *pr = amp_alloc(al, k * k * sizeof *pr);
+    char *taken = amp_calloc(al, 2 * k, 1);
+    if (!pr || !taken) {
+        amp_free(al, pr);
+        amp_free(al, taken);
+        return AMP_ERR_NOMEM;
+    }
+    for (i = 0; i < k; i++)
+        for (j = 0; j < k; j++) {
+            pr[np].d = gap_dist(pt[c[i].first + c[i].n - 1], pt[c[j].first]);
+            pr[np].tail = i;
+            pr[np++].head = j;
+        }
+    qsort(pr, np, sizeof *pr, cmp_gpair);
+    for (i = 0; i < k; i++)
+        nxt[i] = SIZE_MAX;
+    for (i = 0; i < np; i++)
+        if (!taken[pr[i].tail] && !taken[k + pr[i].head]) {
+            taken[pr[i].tail] = taken[k + pr[i].head] = 1;
+            nxt[pr[i].tail] = pr[i].head;
+        }
+    amp_free(al, pr);
+    amp_free(al, taken);
+    return AMP_OK;
+}
+
+/* Open chains joined across their gaps into rings (added to @p out,
+ * counted in st0->gaps_closed); the chains of a run too short for a ring
+ * are dropped and counted in st0->open_chains. */
+static amp_status close_gaps(const amp_vec2 *pt, const ochain *c, size_t k, amp_polyset *out,
+                             amp_section_stats *st0, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    size_t *nxt, i, pass, cap = 0, len;
+    char *seen;
+    amp_vec2 *ring = NULL;
+    amp_status st = AMP_OK;
+    if (k == 0 || k > GAP_CHAINS_MAX) {
+        st0->open_chains += k;
+        return AMP_OK;
+    }
+    nxt = amp_alloc(al, k * sizeof *nxt);
+    seen = amp_calloc(al, 2 * k, 1); /* [0, k): walked; [k, 2k): has a predecessor */
+    if (!nxt || !seen || (st = pair_gaps(al, pt, c, k, nxt)) != AMP_OK) {
+        amp_free(al, nxt);
+        amp_free(al, seen);
+        return AMP_ERR_NOMEM;
+    }
+    for (i = 0; i < k; i++)
+        if (nxt[i] != SIZE_MAX)
+            seen[k + nxt[i]] = 1;
+    /* pass 0 walks the runs that start at a chain without predecessor (they
+     * stay open), pass 1 the cycles */
+    for (pass = 0; pass < 2 && st == AMP_OK; pass++)
+        for (i = 0; i < k && st == AMP_OK; i++) {
+            size_t at = i, nch = 0, q;
+            if (seen[i] || (pass == 0 && seen[k + i]))
+                continue;
+            for (len = 0; at != SIZE_MAX && !seen[at]; at = nxt[at], nch++) {
+                void *p = ring;
+                seen[at] = 1;
+                if (amp_grow(al, &p, &cap, len + c[at].n, sizeof *ring) != AMP_OK) {
+                    st = AMP_ERR_NOMEM;
+                    break;
+                }
+                ring = p;
+                for (q = 0; q < c[at].n; q++) /* a closed gap of length 0 gives no repeated point */
+                    if (len == 0 || gap_dist(ring[len - 1], pt[c[at].first + q]) > 0)
+                        ring[len++] = pt[c[at].first + q];
+            }
+            if (st == AMP_OK && pass == 1 && len >= 3) {
+                if (gap_dist(ring[len - 1], ring[0]) == 0)
+                    len--;
+                st0->gaps_closed += nch;
+                st = amp_polyset_add(out, ring, len, err);
+            } else if (st == AMP_OK)
+                st0->open_chains += nch;
+        }
+    amp_free(al, ring);
+    amp_free(al, nxt);
+    amp_free(al, seen);
+    return st;
+}
+
+/* The linked segments walked into rings: closed loops added to @p out;
+ * open chains (from segments nobody leads to) collected, with the point
+ * where their last segment ends, for close_gaps. */
 static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t nseg, amp_polyset *out,
                                  amp_section_stats *st0, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
     amp_vec2 *loop = NULL;
-    size_t i, pass, cap_loop = 0;
+    ochain *oc = NULL;
+    size_t i, pass, cap_loop = 0, cap_oc = 0, noc = 0, len = 0;
     amp_status st = AMP_OK;
     for (pass = 0; pass < 2 && st == AMP_OK; pass++)
         for (i = 0; i < nseg && st == AMP_OK; i++) {
-            size_t at = i, len = 0;
+            size_t at = i, last = i, start = len;
             int closed = 0;
+            void *p;
             if (seg[i].used || (pass == 0 && seg[i].has_prev))
                 continue;
-            while (at != SIZE_MAX && !seg[at].used) {
-                void *p = loop;
-                if (amp_grow(al, &p, &cap_loop, len + 1, sizeof *loop) != AMP_OK) {
-                    amp_free(al, loop);
-                    return AMP_ERR_NOMEM;
-                }
+            while (at != SIZE_MAX && !seg[at].used && st == AMP_OK) {
+                p = loop;
+                if (amp_grow(al, &p, &cap_loop, len + 2, sizeof *loop) != AMP_OK)
+                    st = AMP_ERR_NOMEM;
                 loop = p;
                 seg[at].used = 1;
                 loop[len++] = edge_point(m, seg[at].ks, z);
+                last = at;
                 at = seg[at].next;
                 if (at == i)
                     closed = 1;
             }
-            if (!closed)
-                st0->open_chains++;
-            else
-                st = amp_polyset_add(out, loop, len, err);
+            if (st != AMP_OK)
+                break;
+            if (closed) {
+                st = amp_polyset_add(out, loop + start, len - start, err);
+                len = start;
+                continue;
+            }
+            loop[len++] = edge_point(m, seg[last].ke, z);
+            p = oc;
+            if (amp_grow(al, &p, &cap_oc, noc + 1, sizeof *oc) != AMP_OK) {
+                st = AMP_ERR_NOMEM;
+                break;
+            }
+            oc = p;
+            oc[noc].first = start;
+            oc[noc++].n = len - start;
         }
+    if (st == AMP_OK)
+        st = close_gaps(loop, oc, noc, out, st0, err);
     amp_free(al, loop);
+    amp_free(al, oc);
     return st;
 }
 
@@ -237,6 +372,7 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
         if (st != AMP_OK)
             return st;
         out->open_chains += ss.open_chains;
+        out->gaps_closed += ss.gaps_closed;
         L->open_chains = ss.open_chains;
         out->nonmanifold += ss.nonmanifold;
     }

@@ -383,6 +383,26 @@ START_TEST(hangup_and_reappearance_lose_and_duplicate_nothing)
 }
 END_TEST
 
+START_TEST(klipper_printer_obeys_numbered_marlin_lines_as_klipper_does)
+{
+    /* a host left on --flavor marlin (the default) talks to a Klipper
+     * printer: Klipper's gcode.py skips the line number and ignores the
+     * checksum word, so every move runs once (the model answered every line
+     * "Unknown command" and ran nothing while the host reported success) */
+    vpr v;
+    char *out;
+    const char *job;
+    job_homes = 1;
+    job = make_job("job.gcode", 60, NULL);
+    job_homes = 0;
+    vp_start(&v, "--flavor klipper");
+    ck_assert_int_eq(bridge_run(&v, job, "--flavor marlin --timeout 1", &out), 0);
+    vp_stop(&v);
+    assert_executed_equals_job(&v, job, -1);
+    ck_assert_int_eq(count_in_file(fx_tmp("bridge-log"), "Unknown command"), 0);
+}
+END_TEST
+
 START_TEST(klipper_error_gets_ok_and_the_job_goes_on)
 {
     vpr v;
@@ -1077,6 +1097,7 @@ static Suite *bridge_suite(void)
     ADD_TEST(tc, advanced_ok_numbers_place_lost_oks_under_corrupted_bytes);
     ADD_TEST(tc, klipper_hangup_stops_the_job_naming_the_lines_that_may_have_run);
     ADD_TEST(tc, klipper_error_gets_ok_and_the_job_goes_on);
+    ADD_TEST(tc, klipper_printer_obeys_numbered_marlin_lines_as_klipper_does);
     ADD_TEST(tc, klipper_shutdown_stops_and_reports_the_last_line);
     ADD_TEST(tc, daemon_socket_is_private_and_m112_beats_a_full_queue);
     ADD_TEST(tc, amp_job_is_converted_on_the_fly_with_the_gcode_writer);

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fx_meshes.h"
 #include "meshfix.h"
 #include "runtool.h"
 #include "testutil.h"
@@ -288,6 +289,44 @@ START_TEST(sweep_field_along_a_leg_covers_the_leg)
     amp_mesh_free(&m);
     amp_pathset_free(&ps);
     amp_pathset_free(&sparse);
+}
+END_TEST
+
+START_TEST(cli_field_and_check_see_the_solid_of_an_inside_out_stl)
+{
+    /* the sphere written with the other winding (every normal inward, as
+     * some exporters do): field, support and check orient it outward; the
+     * covering is the same as for the right-handed file, not empty */
+    amp_mesh m;
+    amp_pathset ps;
+    amp_error err;
+    char args[1024], out[8192];
+    const char *stl = fx_tmp("field-inside-out.stl"), *amp = fx_tmp("field-inside-out.amp");
+    size_t i;
+    if (!getenv("AMP_TOOL"))
+        return;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 6), 6.0, 32, 16), AMP_OK);
+    for (i = 0; i < m.ntris; i++) {
+        uint32_t t = m.tris[i].v[1];
+        m.tris[i].v[1] = m.tris[i].v[2];
+        m.tris[i].v[2] = t;
+    }
+    ck_assert(amp_mesh_volume(&m) < 0);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "field '%s' --field box --spacing 2 --samples 500 --json -o '%s'", stl, amp);
+    fx_run_tool(args, out, sizeof out);
+    ck_assert_msg(strstr(out, "\"mesh_volume_mm3\":") && !strstr(out, "\"mesh_volume_mm3\":-"), "%s", out);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    ck_assert_uint_gt(ps.npaths, 10);
+    snprintf(args, sizeof args, "check '%s' --mesh '%s' --eps 2.5 --samples 2000 --no-gouge --json", amp, stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"vertices_outside\":0"), "%s", out);
+    remove(stl);
+    remove(amp);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
 }
 END_TEST
 
@@ -716,6 +755,7 @@ static Suite *field_suite(void)
     tcase_add_test(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     tcase_add_test(tc, field_errors_are_reported);
     tcase_add_test(tc, cli_field_reports_figures_and_writes_paths);
+    tcase_add_test(tc, cli_field_and_check_see_the_solid_of_an_inside_out_stl);
     tcase_add_test(tc, trivariate_field_is_covered_by_algorithm_1_within_its_bound);
     tcase_add_test(tc, cubic_box_field_meets_the_covering_radius_by_algorithm_1);
     tcase_add_test(tc, adaptive_seeding_inserts_curves_where_neighbours_drift_apart);

@@ -138,58 +138,104 @@ START_TEST(voxel_plate_gives_islands_holes_and_exact_areas)
 }
 END_TEST
 
-START_TEST(open_mesh_is_reported_as_open_chains)
+/* Index of a triangle of @p m crossed by the plane z = @p z (ntris if none). */
+static size_t tri_crossing(const amp_mesh *m, double z)
+{
+    size_t k;
+    for (k = 0; k < m->ntris; k++) {
+        amp_box3 b = amp_box3_empty();
+        b = amp_box3_add(b, m->verts[m->tris[k].v[0]]);
+        b = amp_box3_add(b, m->verts[m->tris[k].v[1]]);
+        b = amp_box3_add(b, m->verts[m->tris[k].v[2]]);
+        if (b.min.z < z && b.max.z > z)
+            break;
+    }
+    return k;
+}
+
+START_TEST(open_mesh_sections_are_closed_across_the_gap)
 {
     amp_mesh m;
-    amp_polyset ps;
+    amp_polyset ps, full;
     amp_section_stats ss;
+    size_t k;
     amp_mesh_init(&m, NULL);
     amp_polyset_init(&ps, NULL);
+    amp_polyset_init(&full, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 5.0, 32, 16), AMP_OK);
+    ck_assert_int_eq(amp_slice_plane(&m, 0.2, &full, &ss, NULL), AMP_OK);
+    /* remove a triangle crossed by the plane z = 0.2: an exported STL with
+     * a hole; the section's chain is closed by a straight edge, not dropped
+     * (a dropped layer under kept ones would leave those in the air) */
+    k = tri_crossing(&m, 0.2);
+    ck_assert_uint_lt(k, m.ntris);
+    m.tris[k] = m.tris[m.ntris - 1];
+    m.ntris--;
+    ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
+    ck_assert_uint_eq(ss.open_chains, 0);
+    ck_assert_uint_eq(ss.gaps_closed, 1);
+    ck_assert_uint_eq(ps.nrings, 1);
+    assert_oriented(&ps);
+    /* the straight edge replaces the chord of the missing facet: the area
+     * is the closed sphere's section's within a facet's share */
+    ck_assert_double_eq_tol(amp_polyset_area(&ps), amp_polyset_area(&full), 0.05 * amp_polyset_area(&full));
+    /* a second, closed sphere in the same plane is sliced as before */
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(20, 0, 0), 5.0, 32, 16), AMP_OK);
+    amp_polyset_free(&ps);
+    amp_polyset_init(&ps, NULL);
+    ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
+    ck_assert_uint_eq(ss.gaps_closed, 1);
+    ck_assert_uint_eq(ps.nrings, 2);
     {
-        size_t k;
-        amp_box3 b;
-        /* remove a triangle crossed by the plane z = 0.2 */
-        ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 5.0, 32, 16), AMP_OK);
-        for (k = 0; k < m.ntris; k++) {
-            b = amp_box3_empty();
-            b = amp_box3_add(b, m.verts[m.tris[k].v[0]]);
-            b = amp_box3_add(b, m.verts[m.tris[k].v[1]]);
-            b = amp_box3_add(b, m.verts[m.tris[k].v[2]]);
-            if (b.min.z < 0.2 && b.max.z > 0.2)
-                break;
-        }
-        ck_assert_uint_lt(k, m.ntris);
-        m.tris[k] = m.tris[m.ntris - 1];
-        m.ntris--;
-        ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
-        ck_assert_uint_eq(ss.open_chains, 1);
-        ck_assert_uint_eq(ps.nrings, 0);
-        /* a second, closed sphere in the same plane is still sliced */
-        ck_assert_int_eq(fx_sphere(&m, amp_v3(20, 0, 0), 5.0, 32, 16), AMP_OK);
-        ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
-        ck_assert_uint_eq(ss.open_chains, 1);
-        ck_assert_uint_eq(ps.nrings, 1);
-        /* all layers: the open chains are counted on the layers they are in
-         * (the removed triangle spans a few of them), the rest is closed */
-        {
-            amp_slices sl;
-            amp_slice_opts so = {0.1, 0};
-            size_t li, sum = 0, open_layers = 0;
-            amp_slices_init(&sl, NULL);
-            ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
-            for (li = 0; li < sl.nlayers; li++) {
-                sum += sl.layers[li].open_chains;
-                open_layers += sl.layers[li].open_chains > 0;
-                /* the closed sphere is there on every layer it spans */
-                ck_assert_uint_ge(sl.layers[li].polys.nislands, 1);
-            }
-            ck_assert_uint_eq(sum, sl.open_chains);
-            ck_assert_uint_ge(open_layers, 1);
-            ck_assert_uint_lt(open_layers, sl.nlayers / 4);
-            amp_slices_free(&sl);
-        }
+        /* all layers: every one has both discs, the gaps are counted */
+        amp_slices sl;
+        amp_slice_opts so = {0.1, 0};
+        size_t li;
+        amp_slices_init(&sl, NULL);
+        ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+        for (li = 0; li < sl.nlayers; li++)
+            ck_assert_uint_eq(sl.layers[li].polys.nislands, 2);
+        ck_assert_uint_eq(sl.open_chains, 0);
+        ck_assert_uint_ge(sl.gaps_closed, 1);
+        ck_assert_uint_lt(sl.gaps_closed, sl.nlayers / 4);
+        amp_slices_free(&sl);
     }
     amp_polyset_free(&ps);
+    amp_polyset_free(&full);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(cracked_mesh_is_sliced_as_if_welded)
+{
+    /* a facet whose corners are 1 um off its neighbours' (unwelded STL from
+     * a CAD export): two chains per section with 1 um gaps, joined */
+    amp_mesh m;
+    amp_polyset ps, full;
+    amp_section_stats ss;
+    size_t k;
+    int c;
+    uint32_t nv[3];
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    amp_polyset_init(&full, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 5.0, 32, 16), AMP_OK);
+    ck_assert_int_eq(amp_slice_plane(&m, 0.2, &full, &ss, NULL), AMP_OK);
+    k = tri_crossing(&m, 0.2);
+    ck_assert_uint_lt(k, m.ntris);
+    for (c = 0; c < 3; c++) {
+        amp_vec3 p = m.verts[m.tris[k].v[c]];
+        ck_assert_int_eq(amp_mesh_add_vertex(&m, amp_v3(p.x + 1e-3, p.y, p.z), &nv[c], NULL), AMP_OK);
+    }
+    for (c = 0; c < 3; c++)
+        m.tris[k].v[c] = nv[c];
+    ck_assert_int_eq(amp_slice_plane(&m, 0.2, &ps, &ss, NULL), AMP_OK);
+    ck_assert_uint_eq(ss.open_chains, 0);
+    ck_assert_uint_eq(ss.gaps_closed, 2);
+    ck_assert_uint_eq(ps.nrings, 1);
+    ck_assert_double_eq_tol(amp_polyset_area(&ps), amp_polyset_area(&full), 1e-3 * amp_polyset_area(&full));
+    amp_polyset_free(&ps);
+    amp_polyset_free(&full);
     amp_mesh_free(&m);
 }
 END_TEST
@@ -227,6 +273,39 @@ START_TEST(layers_are_cut_at_mid_height_with_optional_first_layer)
     ck_assert_int_eq(amp_slice_mesh(&m, &o, &sl, &err), AMP_ERR_ARG);
     ck_assert(strstr(err.msg, "layer") != NULL);
     amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(cli_refuses_a_mesh_in_metres_with_its_size)
+{
+    /* a 20 mm sphere exported in metres: 0.02 units across, no layer of
+     * 0.2 mm cuts it; exit 2, the size and the hint, no output file */
+    amp_mesh m;
+    amp_error err;
+    char args[512], out[4096];
+    const char *stl = fx_tmp("metres.stl"), *amp = fx_tmp("metres.amp");
+    FILE *f;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 0), 0.01, 16, 8), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    remove(amp);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 2);
+    ck_assert_msg(strstr(out, "0.02 x 0.02 x 0.02 mm") && strstr(out, "metres"), "%s", out);
+    f = fopen(amp, "r");
+    ck_assert_msg(f == NULL, "no output for a refused mesh");
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
+    /* scaled to millimetres it slices */
+    {
+        size_t i;
+        for (i = 0; i < m.nverts; i++)
+            m.verts[i] = amp_v3(1000 * m.verts[i].x, 1000 * m.verts[i].y, 1000 * m.verts[i].z);
+    }
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --polygons -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     amp_mesh_free(&m);
 }
 END_TEST
@@ -340,9 +419,11 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, sphere_sections_are_single_discs_with_analytic_area);
     tcase_add_test(tc, torus_sections_are_annuli_with_one_hole_and_analytic_area);
     tcase_add_test(tc, voxel_plate_gives_islands_holes_and_exact_areas);
-    tcase_add_test(tc, open_mesh_is_reported_as_open_chains);
+    tcase_add_test(tc, open_mesh_sections_are_closed_across_the_gap);
+    tcase_add_test(tc, cracked_mesh_is_sliced_as_if_welded);
     tcase_add_test(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
     tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
+    tcase_add_test(tc, cli_refuses_a_mesh_in_metres_with_its_size);
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     suite_add_tcase(s, tc);
     return s;

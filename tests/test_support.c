@@ -127,6 +127,33 @@ START_TEST(model_on_the_plate_needs_no_support_and_bad_options_fail)
 }
 END_TEST
 
+START_TEST(support_command_refuses_a_file_without_paths)
+{
+    /* a field that missed the mesh leaves a file with no path: support spun
+     * without end on it; now exit 2 with a reason and no output */
+    amp_mesh m;
+    amp_error err;
+    char args[2048], out[4096];
+    const char *stl = fx_tmp("slab0.stl"), *in = fx_tmp("empty0.amp"), *res = fx_tmp("empty0-sup.amp");
+    FILE *f;
+    amp_mesh_init(&m, NULL);
+    box_mesh(&m, amp_v3(0, 0, 3), amp_v3(10, 10, 5));
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    f = fopen(in, "w");
+    ck_assert_ptr_nonnull(f);
+    fputs("ampath-paths 1\n", f);
+    fclose(f);
+    remove(res);
+    snprintf(args, sizeof args, "support %s --mesh %s -o %s", in, stl, res);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 2);
+    f = fopen(res, "r");
+    ck_assert_msg(f == NULL, "no output written");
+    remove(stl);
+    remove(in);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(support_command_writes_interleaved_paths_and_rejects_bad_models)
 {
     amp_mesh m;
@@ -468,6 +495,7 @@ static Suite *support_suite(void)
     tcase_add_test(tc, floating_slab_gets_support_printed_before_the_paths_above);
     tcase_add_test(tc, model_on_the_plate_needs_no_support_and_bad_options_fail);
     tcase_add_test(tc, support_command_writes_interleaved_paths_and_rejects_bad_models);
+    tcase_add_test(tc, support_command_refuses_a_file_without_paths);
     tcase_add_test(tc, support_from_a_trivariate_matches_its_boundary_mesh);
     tcase_add_test(tc, helix_support_keeps_every_fragment_and_holds_every_path);
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);

@@ -7,6 +7,7 @@
 #include <math.h>
 
 #include "checkers.h"
+#include "slicetool.h"
 
 /* Vertices farther than this outside the mesh fail the check; --tol above it widens it, for
  * paths made on the exact model and checked against its tessellation. */
@@ -25,7 +26,8 @@ int check_mesh(const check_ctx *c, cli_json *j)
     int rc;
     amp_error_clear(&err);
     amp_mesh_init(&m, NULL);
-    if (amp_mesh_read_stl_file(&m, c->mesh, &err) != AMP_OK || amp_bvh_build(&b, &m, &err) != AMP_OK) {
+    if (amp_mesh_read_stl_file(&m, c->mesh, &err) != AMP_OK || slicetool_outward(&m, NULL, &err) != AMP_OK ||
+        amp_bvh_build(&b, &m, &err) != AMP_OK) {
         amp_mesh_free(&m);
         return cli_fail_err("check", &err);
     }

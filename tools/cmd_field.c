@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "checkers.h"
+#include "slicetool.h"
 
 const char cmd_field_usage[] =
     "cover a mesh with the curves of a direction field, clipped to the mesh (paper 4.2)\n"
@@ -135,7 +136,7 @@ static amp_status load_mesh(const char *path, amp_mesh *m, amp_bvh **b, amp_erro
     amp_status st;
     if (!path)
         return AMP_OK;
-    if ((st = amp_mesh_read_stl_file(m, path, err)) != AMP_OK)
+    if ((st = amp_mesh_read_stl_file(m, path, err)) != AMP_OK || (st = slicetool_outward(m, NULL, err)) != AMP_OK)
         return st;
     return amp_bvh_build(b, m, err);
 }

@@ -44,8 +44,8 @@ const char cmd_slice_usage[] =
     "  --z Z              draw the layer cut nearest to height Z mm instead\n"
     "  --json             figures as one JSON object (per layer with --polygons; strokes, starts,\n"
     "                     lengths, check results, overhangs with --continuous)\n"
-    "A mesh that is not closed is sliced anyway; chains that do not close are dropped and counted\n"
-    "(open_chains, per layer) with a warning on stderr. --continuous checks every path it writes\n"
+    "A mesh that is not closed is sliced anyway: section chains that do not close are joined end to\n"
+    "head, shortest gaps first (gaps_closed), with a warning on stderr. --continuous checks every path it writes\n"
     "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
 
 static int write_amp(const char *file, const amp_slices *sl, double radius, double layer)
@@ -494,6 +494,9 @@ int cmd_slice(int argc, char **argv)
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     rc = slicetool_load("slice", pos[0], layer, first, &m, &sl, &flipped);
+    if (rc == CLI_OK && sl.gaps_closed)
+        fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu section gaps closed by straight edges\n",
+                (unsigned long)sl.gaps_closed);
     if (rc == CLI_OK && sl.open_chains)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
                 (unsigned long)sl.open_chains);
@@ -528,6 +531,7 @@ int cmd_slice(int argc, char **argv)
         cli_json_int(&j, "islands", (long long)islands);
         cli_json_int(&j, "holes", (long long)holes);
         cli_json_int(&j, "open_chains", (long long)sl.open_chains);
+        cli_json_int(&j, "gaps_closed", (long long)sl.gaps_closed);
         cli_json_int(&j, "nonmanifold", (long long)sl.nonmanifold);
         cli_json_int(&j, "flipped_triangles", (long long)flipped);
         cli_json_int(&j, "triangles", (long long)m.ntris);

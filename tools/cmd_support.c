@@ -3,6 +3,7 @@
 
 #include "checkers.h"
 #include "headopt.h"
+#include "slicetool.h"
 
 const char cmd_support_usage[] =
     "add support paths under the model and interleave them with the object paths (paper 5.3)\n"
@@ -107,6 +108,11 @@ int cmd_support(int argc, char **argv)
     memset(&hr, 0, sizeof hr);
     if ((rc = cli_load_paths("support", pos[0], &ps)) != CLI_OK)
         return rc;
+    if (ps.npaths == 0) {
+        /* nothing to hold (a field that missed the mesh); the library spun without end on it */
+        amp_pathset_free(&ps);
+        return cli_fail("support", CLI_USAGE, "%s holds no path to support", pos[0]);
+    }
     rc = CLI_USAGE;
     t0 = cli_now();
     if (tri) {
@@ -121,7 +127,8 @@ int cmd_support(int argc, char **argv)
         }
         amp_spline_free(&v);
     }
-    if ((!tri && amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK) || amp_bvh_build(&b, &m, &err) != AMP_OK) {
+    if ((!tri && (amp_mesh_read_stl_file(&m, mesh, &err) != AMP_OK || slicetool_outward(&m, NULL, &err) != AMP_OK)) ||
+        amp_bvh_build(&b, &m, &err) != AMP_OK) {
         rc = cli_fail_err("support", &err);
         goto done;
     }

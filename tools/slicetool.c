@@ -18,6 +18,46 @@ double slicetool_estimate(const amp_mesh *m, double layer)
     return total;
 }
 
+amp_status slicetool_outward(amp_mesh *m, size_t *flipped, amp_error *err)
+{
+    size_t i, n = 0;
+    amp_status st = amp_mesh_orient(m, &n, err);
+    if (st != AMP_OK)
+        return st;
+    /* consistent now, but all of it may face inward (an STL written with
+     * the other winding): then the inside tests see no solid at all */
+    if (amp_mesh_volume(m) < 0) {
+        for (i = 0; i < m->ntris; i++) {
+            uint32_t t = m->tris[i].v[1];
+            m->tris[i].v[1] = m->tris[i].v[2];
+            m->tris[i].v[2] = t;
+        }
+        n = m->ntris - n;
+    }
+    if (flipped)
+        *flipped = n;
+    return AMP_OK;
+}
+
+/* A mesh with no section at all (flat, or far below one layer: a part
+ * exported in metres or inches) is refused with its size, not sliced into
+ * an empty job or met later as "no layer polygon". */
+static int slicetool_nonempty(const char *cmd, const amp_mesh *m, const amp_slices *sl, double layer)
+{
+    size_t i;
+    amp_box3 b;
+    for (i = 0; i < sl->nlayers; i++)
+        if (sl->layers[i].polys.nrings)
+            return CLI_OK;
+    b = amp_mesh_bbox(m);
+    return cli_fail(cmd, CLI_USAGE,
+                    "the mesh gives no layer: it is %.4g x %.4g x %.4g mm, %s layer of %g mm (a part in metres "
+                    "or inches must be scaled to millimetres)",
+                    b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z,
+                    b.max.z - b.min.z < 0.5 * layer ? "lower than half a" : "with no closed section in any",
+                    layer);
+}
+
 int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
                    size_t *flipped)
 {
@@ -34,13 +74,13 @@ int slicetool_load(const char *cmd, const char *file, double layer, double first
         return cli_work_refuse(cmd, "section segments", slicetool_estimate(m, layer), cli_work.max_segments,
                                "max-segments");
     /* the slicer chains segments by their direction: orientation must agree */
-    if (amp_mesh_orient(m, flipped, &err) != AMP_OK)
+    if (slicetool_outward(m, flipped, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
     o.layer = layer;
     o.first_layer = first;
     if (amp_slice_mesh(m, &o, sl, &err) != AMP_OK)
         return cli_fail_err(cmd, &err);
-    return CLI_OK;
+    return slicetool_nonempty(cmd, m, sl, layer);
 }
 
 long slicetool_pick(const char *cmd, const amp_slices *sl, long index, int have_z, double z)

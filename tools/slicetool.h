@@ -6,7 +6,7 @@
 #include "cli.h"
 
 /**
- * Read @p file, make its orientation consistent (amp_mesh_orient) and slice
+ * Read @p file, orient it consistently and outward (slicetool_outward) and slice
  * it with layer height @p layer and first layer @p first (<= 0: same).
  * Refuses (CLI_USAGE) when slicetool_estimate() exceeds cli_work.max_segments.
  * Prints its own error; returns CLI_OK or CLI_USAGE. *flipped receives the
@@ -14,6 +14,14 @@
  */
 int slicetool_load(const char *cmd, const char *file, double layer, double first, amp_mesh *m, amp_slices *sl,
                    size_t *flipped);
+
+/**
+ * Orient @p m consistently (amp_mesh_orient) and outward: when the enclosed
+ * volume comes out negative every triangle is reversed, so that the inside
+ * tests of field, support and check see the solid. *flipped (may be NULL)
+ * receives the number of triangles reversed in all. amp_mesh_orient's errors.
+ */
+amp_status slicetool_outward(amp_mesh *m, size_t *flipped, amp_error *err);
 
 /** Estimated section segments over all layers of slicing @p m at height @p layer (see cli_work). */
 double slicetool_estimate(const amp_mesh *m, double layer);

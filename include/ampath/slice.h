@@ -14,9 +14,10 @@
  * index pairs), and segments are chained through those edge ids, never by
  * comparing coordinates. Vertices exactly on the cutting plane are treated as
  * lying slightly above it (symbolic perturbation), so every crossing is a
- * proper sign change of an edge. Chains that do not close (open meshes) or
- * edges crossed by more than two segments (non-manifold) are dropped and
- * counted. Functions are reentrant; the mesh is only read.
+ * proper sign change of an edge. Chains that do not close (an open mesh:
+ * a crack, a missing triangle) are joined end to head, shortest gaps first,
+ * into rings and counted (gaps_closed); edges crossed by more than two
+ * segments (non-manifold) are counted. Functions are reentrant; the mesh is only read.
  */
 #ifndef AMPATH_SLICE_H
 #define AMPATH_SLICE_H
@@ -54,12 +55,14 @@ typedef struct amp_slices {
     double z0;               /**< lowest mesh z (subtract it to place the mesh on the plate) */
     size_t open_chains;      /**< chains that did not close, over all layers (open mesh) */
     size_t nonmanifold;      /**< edges crossed by more than two segments, over all layers */
+    size_t gaps_closed;      /**< open chains joined into rings, over all layers */
 } amp_slices;
 
 /** Counters of one section. */
 typedef struct amp_section_stats {
     size_t segments;    /**< triangle-plane segments */
-    size_t open_chains; /**< chains dropped because they did not close */
+    size_t open_chains; /**< chains dropped because they did not close (more than 1024 in a section, or too short for a ring) */
+    size_t gaps_closed; /**< open chains joined, shortest gaps first, into rings: cracks or holes of an unclosed mesh */
     size_t nonmanifold; /**< section points shared by more than two segments */
 } amp_section_stats;
 

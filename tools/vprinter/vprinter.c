@@ -11,6 +11,7 @@
 #define _XOPEN_SOURCE 600
 #define _DEFAULT_SOURCE
 
+#include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -72,7 +73,8 @@ static const char usage[] =
     "  --halt-after K       Marlin: thermal runaway and 'Error:Printer halted. kill() called!' after K commands\n"
     "  --action-at K --action NAME   '// action:NAME' (default cancel) after the K-th executed command\n"
     "Klipper mode refuses moves before G28 ('!! Must home axis first') and answers unknown commands with\n"
-    "'// Unknown command'; Marlin mode answers 'echo:Unknown command' (+ ok). Neither logs those as executed.\n";
+    "'// Unknown command'; Marlin mode answers 'echo:Unknown command' (+ ok). Neither logs those as executed.\n"
+    "Klipper mode skips a leading line number 'N<n> ' and drops a '*checksum' (unchecked), as Klipper does.\n";
 
 typedef struct plan_move {
     double dur;
@@ -552,6 +554,22 @@ static void klipper_line(vp *v, char *s)
     p = s + strlen(s);
     while (p > s && p[-1] == ' ')
         *--p = '\0';
+    /* as Klipper's gcode.py: a leading line number is skipped and a
+     * '*checksum' is a parameter nobody reads, so a host speaking Marlin's
+     * numbered lines is obeyed (unchecked), not answered "Unknown command" */
+    if (*s == 'N' && isdigit((unsigned char)s[1])) {
+        for (p = s + 1; isdigit((unsigned char)*p); p++)
+            ;
+        if (*p == ' ') {
+            for (s = p; *s == ' '; s++)
+                ;
+            if ((p = strrchr(s, '*')) != NULL) {
+                *p = '\0';
+                while (p > s && p[-1] == ' ')
+                    *--p = '\0';
+            }
+        }
+    }
     if (*s == '\0')
         return;
     v->received++;
