@@ -841,7 +841,8 @@ static amp_status merge_compact(orderer *o, const merger *m)
     for (i = 0; i < n; i++)
         if (m->seq[i] != NONE)
             np[k++] = o->pc[m->seq[i]];
-    memcpy(o->pc, np, k * sizeof *np);
+    if (k) /* an empty input has no sub-curve array at all */
+        memcpy(o->pc, np, k * sizeof *np);
     o->npc = k;
     amp_free(o->a, np);
     return AMP_OK;

@@ -693,6 +693,11 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         return amp_fail(err, AMP_ERR_RANGE, 0, "support spacing and layer height must be positive, radius and gap >= 0");
     if (in->npaths >= NOPATH)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "too many paths");
+    /* support exists for object paths; with none, the slots between them are undefined */
+    for (i = 0; i < in->npaths && in->paths[i].role != AMP_ROLE_OBJECT; i++)
+        ;
+    if (i == in->npaths)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: no object path to support");
     c.a = out->alloc;
     amp_pathset_init(&all, out->alloc);
     if ((stt = cast_rays(&c, model, o, &s, err)) != AMP_OK)

@@ -120,6 +120,11 @@ START_TEST(model_on_the_plate_needs_no_support_and_bad_options_fail)
     o.head.theta = 2.0;
     ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_ERR_RANGE);
     ck_assert_ptr_nonnull(strstr(err.msg, "theta"));
+    /* nothing to support: refused at once (it used to search slots forever) */
+    amp_support_opts_default(&o);
+    ps.npaths = ps.nverts = 0;
+    ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_ERR_ARG);
+    ck_assert_ptr_nonnull(strstr(err.msg, "no object path"));
     amp_bvh_free(b);
     amp_mesh_free(&m);
     amp_pathset_free(&ps);

@@ -66,7 +66,8 @@ typedef struct amp_support_stats {
  * order (object paths keep their order, some split in two or more; support
  * paths are interleaved as described above; support paths already in @p in
  * are kept in place). @p st may be NULL.
- * Errors: AMP_ERR_RANGE (bad options or head), AMP_ERR_LIMIT, AMP_ERR_NOMEM.
+ * Errors: AMP_ERR_ARG (NULL arguments, or @p in without an object path), AMP_ERR_RANGE (bad options or head),
+ * AMP_ERR_LIMIT, AMP_ERR_NOMEM.
  */
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
                        amp_support_stats *st, amp_error *err);
