@@ -259,6 +259,11 @@ class Slices(_Owner):
     def open_chains(self):
         return self._sl.open_chains
 
+    @property
+    def gaps_closed(self):
+        """Open section chains joined into rings across their gaps (an unclosed mesh), over all layers."""
+        return self._sl.gaps_closed
+
     def _rings(self, i):
         self._live()
         P = self._sl.layers[i].polys
