@@ -295,7 +295,8 @@ static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t 
     return st;
 }
 
-/* [P2 §2.2] step 1 at one height: cut, link, chain, organize. */
+/* [P2 §2.2] step 1 at one height: cut, link, chain, resolve overlapping
+ * shells (nonzero rule), organize. */
 amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
@@ -309,7 +310,8 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
     st = cut_triangles(m, z, al, &seg, &nseg);
     st0.segments = st == AMP_OK ? nseg : 0;
     if (st == AMP_OK && nseg > 0 && (st = link_segments(al, seg, nseg, &st0)) == AMP_OK &&
-        (st = chain_segments(m, z, seg, nseg, out, &st0, err)) == AMP_OK)
+        (st = chain_segments(m, z, seg, nseg, out, &st0, err)) == AMP_OK &&
+        (st = amp_polyset_union(out, &st0.overlaps, err)) == AMP_OK)
         st = amp_polyset_organize(out, err);
     amp_free(al, seg);
     if (stats)
@@ -373,6 +375,7 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
             return st;
         out->open_chains += ss.open_chains;
         out->gaps_closed += ss.gaps_closed;
+        out->overlaps += (size_t)ss.overlaps;
         L->open_chains = ss.open_chains;
         out->nonmanifold += ss.nonmanifold;
     }

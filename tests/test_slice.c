@@ -412,6 +412,96 @@ START_TEST(overhang_of_consecutive_layers_measures_eps_continuity)
 }
 END_TEST
 
+/* Box [x0,x1]x[y0,y1]x[z0,z1] as a closed shell of its own, outward or (for a
+ * cavity) inward, added to @p m: the bodies of a part exported without a
+ * boolean union. */
+static void add_box(amp_mesh *m, amp_vec3 lo, amp_vec3 hi, int inward)
+{
+    static const int f[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                 {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+    uint32_t v[8];
+    int i;
+    for (i = 0; i < 8; i++) {
+        amp_vec3 p = amp_v3((i & 1) ^ (i >> 1 & 1) ? hi.x : lo.x, i & 2 ? hi.y : lo.y, i & 4 ? hi.z : lo.z);
+        ck_assert_int_eq(amp_mesh_add_vertex(m, p, &v[i], NULL), AMP_OK);
+    }
+    for (i = 0; i < 12; i++)
+        ck_assert_int_eq(amp_mesh_add_tri(m, v[f[i][0]], v[f[i][inward ? 2 : 1]], v[f[i][inward ? 1 : 2]], NULL),
+                         AMP_OK);
+}
+
+static void add_overlapping_bodies(amp_mesh *m)
+{
+    add_box(m, amp_v3(0, 0, 0), amp_v3(20, 20, 10), 0);
+    add_box(m, amp_v3(10, 10, 5), amp_v3(30, 30, 15), 0); /* overlaps the first for z in [5, 10] */
+    add_box(m, amp_v3(2, 2, 2), amp_v3(6, 6, 4), 1);      /* a cavity: inward */
+    add_box(m, amp_v3(14, 2, 1), amp_v3(18, 6, 3), 0);    /* an insert, same orientation: solid */
+}
+
+START_TEST(overlapping_shells_are_sliced_as_their_union)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so = {0.5, 0};
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_slices_init(&sl, NULL);
+    add_overlapping_bodies(&m);
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+    ck_assert_uint_eq(sl.nlayers, 30);
+    for (i = 0; i < sl.nlayers; i++) {
+        const amp_polyset *P = &sl.layers[i].polys;
+        double z = sl.layers[i].z_cut, want = z < 5 ? 400 : (z < 10 ? 700 : 400);
+        int cavity = z > 2 && z < 4;
+        if (cavity)
+            want -= 16;
+        ck_assert_msg(fabs(amp_polyset_area(P) - want) < 1e-6, "layer %lu at z %g: area %g, want %g",
+                      (unsigned long)i, z, amp_polyset_area(P), want);
+        ck_assert_uint_eq(P->nislands, 1);
+        ck_assert_uint_eq(count_holes(P), (size_t)cavity);
+        assert_oriented(P);
+    }
+    /* resolved: the insert (z in [1, 3]) and the overlap (z in [5, 10]) */
+    ck_assert_uint_eq(sl.overlaps, 4 + 10);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
+START_TEST(cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer)
+{
+    amp_mesh m;
+    amp_error err;
+    char args[1024], out[1 << 16];
+    const char *stl = fx_tmp("bodies.stl"), *amp = fx_tmp("bodies.amp");
+    amp_mesh_init(&m, NULL);
+    add_overlapping_bodies(&m);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous --json -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"crossings\":0,") && strstr(out, "\"outside\":0,"), "%s", out);
+    ck_assert_msg(strstr(out, "\"islands\":30,") && strstr(out, "\"extrusion_starts\":30,"), "%s", out);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5", amp, stl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    {
+        /* the insert is printed solid (even-odd would leave it a hole) */
+        amp_pathset ps;
+        size_t i, k, inside = 0;
+        amp_pathset_init(&ps, NULL);
+        ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+        for (i = 0; i < ps.npaths; i++)
+            for (k = 0; k < ps.paths[i].n; k++) {
+                amp_vec3 p = ps.verts[ps.paths[i].first + k].p;
+                inside += p.z > 1.4 && p.z < 2.6 && p.x > 15 && p.x < 17 && p.y > 3 && p.y < 5;
+            }
+        ck_assert_uint_gt(inside, 10);
+        amp_pathset_free(&ps);
+    }
+    ck_assert_msg(strstr(out, "\"overlapping_layers\":14,") != NULL, "%s", out);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -425,6 +515,8 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
     tcase_add_test(tc, cli_refuses_a_mesh_in_metres_with_its_size);
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
+    tcase_add_test(tc, overlapping_shells_are_sliced_as_their_union);
+    tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -46,7 +46,9 @@ const char cmd_slice_usage[] =
     "                     lengths, check results, overhangs with --continuous)\n"
     "A mesh that is not closed is sliced anyway: section chains that do not close are joined end to\n"
     "head, shortest gaps first (gaps_closed), with a warning on stderr. --continuous checks every path it writes\n"
-    "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n";
+    "(crossings, edges printed twice, points outside the layer) and exits 1 when one fails.\n"
+    "Shells that overlap (bodies exported without a boolean union) are merged layer by layer: a point is\n"
+    "solid when the section rings wind around it a positive number of times (overlapping_layers).\n";
 
 static int write_amp(const char *file, const amp_slices *sl, double radius, double layer)
 {
@@ -236,6 +238,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_begin(&j, stdout);
     cli_json_int(&j, "layers", (long long)st->layers);
     cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
+    cli_json_int(&j, "overlapping_layers", (long long)sl->overlaps);
     cli_json_int(&j, "islands", (long long)st->islands);
     cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
     cli_json_int(&j, "neck_islands", (long long)st->neck_islands);
@@ -532,6 +535,7 @@ int cmd_slice(int argc, char **argv)
         cli_json_int(&j, "holes", (long long)holes);
         cli_json_int(&j, "open_chains", (long long)sl.open_chains);
         cli_json_int(&j, "gaps_closed", (long long)sl.gaps_closed);
+        cli_json_int(&j, "overlapping_layers", (long long)sl.overlaps);
         cli_json_int(&j, "nonmanifold", (long long)sl.nonmanifold);
         cli_json_int(&j, "flipped_triangles", (long long)flipped);
         cli_json_int(&j, "triangles", (long long)m.ntris);

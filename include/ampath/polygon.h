@@ -78,6 +78,22 @@ static inline const amp_vec2 *amp_polyset_ring(const amp_polyset *ps, size_t i) 
 amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err);
 
 /**
+ * Resolve rings that overlap by the nonzero rule, before
+ * amp_polyset_organize(): the region becomes the points around which the
+ * rings wind a positive number of times (counter-clockwise counts +1; when
+ * the rings' signed areas sum to less than zero, every ring counts reversed,
+ * as for a mesh facing inward). Rings that cross, share a stretch of edge,
+ * touch at a vertex, or lie inside a ring of the same orientation (parts
+ * exported as overlapping bodies) are replaced by the boundary of that
+ * region: disjoint rings, solid on their left, not yet organised. A set whose
+ * rings meet nowhere and each separate solid from empty is left untouched
+ * (byte for byte) and *changed (optional) stays 0; otherwise *changed = 1.
+ * About n log n time (a sweep over x, rows of edges for the winding numbers). AMP_ERR_ARG for a
+ * NULL set, AMP_ERR_NOMEM (the set is then unchanged).
+ */
+amp_status amp_polyset_union(amp_polyset *ps, int *changed, amp_error *err);
+
+/**
  * Copy island @p k of an organised set @p P (its outer ring and holes) into
  * @p out (cleared first), organised. AMP_ERR_NOMEM.
  */

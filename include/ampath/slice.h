@@ -56,6 +56,7 @@ typedef struct amp_slices {
     size_t open_chains;      /**< chains that did not close, over all layers (open mesh) */
     size_t nonmanifold;      /**< edges crossed by more than two segments, over all layers */
     size_t gaps_closed;      /**< open chains joined into rings, over all layers */
+    size_t overlaps;         /**< layers whose rings overlapped (shells exported without a union), resolved by the nonzero rule */
 } amp_slices;
 
 /** Counters of one section. */
@@ -64,14 +65,18 @@ typedef struct amp_section_stats {
     size_t open_chains; /**< chains dropped because they did not close (more than 1024 in a section, or too short for a ring) */
     size_t gaps_closed; /**< open chains joined, shortest gaps first, into rings: cracks or holes of an unclosed mesh */
     size_t nonmanifold; /**< section points shared by more than two segments */
+    int overlaps;       /**< 1 when the rings overlapped and were replaced by their nonzero union (amp_polyset_union) */
 } amp_section_stats;
 
 /**
  * Cut @p m with the plane z = @p z (mesh coordinates) and append the closed
  * section polygons to @p out, organised in islands (outer CCW, holes CW,
  * amp_polyset_organize). @p stats (optional) receives the counters.
- * Triangles are assumed oriented counter-clockwise from outside; inconsistent
- * orientation only affects the ring direction, which organize fixes.
+ * Triangles are assumed oriented counter-clockwise from outside (a mesh
+ * facing inward as a whole is read as if it faced outward). Rings that
+ * overlap (shells that cross or lie inside each other) are merged by the
+ * nonzero rule (amp_polyset_union); the orientation of each ring matters
+ * only there.
  * AMP_ERR_ARG for a non-finite z, AMP_ERR_NOMEM.
  */
 amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err);

@@ -200,7 +200,8 @@ class amp_layer(Structure):
 
 class amp_slices(Structure):
     _fields_ = [("alloc", c_void_p), ("layers", POINTER(amp_layer)), ("nlayers", c_size_t), ("z0", c_double),
-                ("open_chains", c_size_t), ("nonmanifold", c_size_t), ("gaps_closed", c_size_t)]
+                ("open_chains", c_size_t), ("nonmanifold", c_size_t), ("gaps_closed", c_size_t),
+                ("overlaps", c_size_t)]
 
 
 # amp_contpath_verify_fn (contpath.h): amp_check_path_stroke's signature; the stroke report is passed on as an

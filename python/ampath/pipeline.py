@@ -264,6 +264,11 @@ class Slices(_Owner):
         """Open section chains joined into rings across their gaps (an unclosed mesh), over all layers."""
         return self._sl.gaps_closed
 
+    @property
+    def overlapping_layers(self):
+        """Layers whose rings overlapped (bodies exported without a boolean union), merged by the nonzero rule."""
+        return self._sl.overlaps
+
     def _rings(self, i):
         self._live()
         P = self._sl.layers[i].polys
