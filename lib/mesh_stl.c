@@ -9,6 +9,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "ampath/mesh.h"
@@ -281,6 +282,143 @@ static amp_status read_ascii(stl_reader *r, const char *text, size_t len, amp_er
     return AMP_OK;
 }
 
+/* ------------------------------------------------------- duplicate facets */
+
+/*
+ * A mesh exported twice into one file, or two solids sharing a face, gives
+ * triangles with the same three welded corners. Copies in one orientation
+ * make every edge non-manifold; a face and its reverse are a zero-thickness
+ * double wall that encloses nothing. Either way the slicer sees no solid, so
+ * after welding a copy is dropped, and a face met in both orientations is
+ * dropped entirely. Identity is the sorted corner triple; the parity of the
+ * sort tells the orientation (a rotation is an even permutation, a reversal
+ * an odd one).
+ */
+typedef struct tri_key {
+    uint32_t v[3]; /* corners, ascending */
+    uint32_t odd;  /* 1: the stored order is an odd permutation of v */
+    size_t idx;    /* triangle index from the first triangle of this read */
+} tri_key;
+
+static void key_swap(uint32_t *a, uint32_t *b, uint32_t *odd)
+{
+    uint32_t t = *a;
+    *a = *b;
+    *b = t;
+    *odd ^= 1u;
+}
+
+static tri_key tri_key_of(const amp_tri *t, size_t idx)
+{
+    tri_key k;
+    k.v[0] = t->v[0];
+    k.v[1] = t->v[1];
+    k.v[2] = t->v[2];
+    k.odd = 0;
+    k.idx = idx;
+    /* three compare-swaps sort a triple; each swap is a transposition */
+    if (k.v[0] > k.v[1])
+        key_swap(&k.v[0], &k.v[1], &k.odd);
+    if (k.v[1] > k.v[2])
+        key_swap(&k.v[1], &k.v[2], &k.odd);
+    if (k.v[0] > k.v[1])
+        key_swap(&k.v[0], &k.v[1], &k.odd);
+    return k;
+}
+
+/* Corners, then file order: qsort is not stable, and the copy kept must be the first one. */
+static int cmp_tri_key(const void *pa, const void *pb)
+{
+    const tri_key *a = pa, *b = pb;
+    int i;
+    for (i = 0; i < 3; i++)
+        if (a->v[i] != b->v[i])
+            return a->v[i] < b->v[i] ? -1 : 1;
+    return a->idx < b->idx ? -1 : a->idx > b->idx;
+}
+
+/*
+ * Mark the triangles to drop in the sorted @p k (first corner set to
+ * WELD_EMPTY, which no vertex index reaches): all but the first of a group
+ * in one orientation, the whole group when both orientations occur (the two
+ * solids it separates merge). Returns the number marked; *cancelled says
+ * whether a whole group went (its corners may now be unused).
+ */
+static size_t mark_duplicates(amp_tri *tris, const tri_key *k, size_t n, int *cancelled)
+{
+    size_t i = 0, j, dropped = 0;
+    while (i < n) {
+        int both = 0;
+        for (j = i + 1; j < n && memcmp(k[j].v, k[i].v, sizeof k[i].v) == 0; j++)
+            both |= k[j].odd != k[i].odd;
+        if (j - i > 1) {
+            size_t q;
+            for (q = both ? i : i + 1; q < j; q++)
+                tris[k[q].idx].v[0] = WELD_EMPTY;
+            dropped += both ? j - i : j - i - 1;
+            *cancelled |= both;
+        }
+        i = j;
+    }
+    return dropped;
+}
+
+/* Drop the vertices from @p nv0 on that no triangle from @p nt0 on uses, keeping their order. */
+static amp_status drop_unused_vertices(amp_mesh *m, size_t nv0, size_t nt0, amp_error *err)
+{
+    size_t n = m->nverts - nv0, i, nv = 0;
+    uint32_t *map = amp_alloc(m->alloc, n * sizeof *map);
+    int c;
+    if (!map)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for dropping duplicate STL triangles");
+    memset(map, 0xff, n * sizeof *map);
+    for (i = nt0; i < m->ntris; i++)
+        for (c = 0; c < 3; c++)
+            map[m->tris[i].v[c] - nv0] = 0;
+    for (i = 0; i < n; i++)
+        if (map[i] != WELD_EMPTY) {
+            map[i] = (uint32_t)(nv0 + nv);
+            m->verts[nv0 + nv++] = m->verts[nv0 + i];
+        }
+    for (i = nt0; i < m->ntris; i++)
+        for (c = 0; c < 3; c++)
+            m->tris[i].v[c] = map[m->tris[i].v[c] - nv0];
+    m->nverts = nv0 + nv;
+    amp_free(m->alloc, map);
+    return AMP_OK;
+}
+
+/*
+ * Drop duplicate and cancelling triangles among those this read appended
+ * (from @p nt0 and @p nv0 on: the weld table was fresh, so they share no
+ * vertex with earlier content). The kept triangles keep their file order, so
+ * a file without duplicates reads exactly as before. O(n log n).
+ */
+static amp_status drop_duplicates(amp_mesh *m, size_t nv0, size_t nt0, size_t *dropped, amp_error *err)
+{
+    size_t n = m->ntris - nt0, i, nt = nt0;
+    tri_key *k;
+    int cancelled = 0;
+    *dropped = 0;
+    if (n < 2)
+        return AMP_OK;
+    if (!(k = amp_alloc(m->alloc, n * sizeof *k)))
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for finding duplicate STL triangles");
+    for (i = 0; i < n; i++)
+        k[i] = tri_key_of(&m->tris[nt0 + i], i);
+    qsort(k, n, sizeof *k, cmp_tri_key);
+    *dropped = mark_duplicates(m->tris + nt0, k, n, &cancelled);
+    amp_free(m->alloc, k);
+    if (*dropped == 0)
+        return AMP_OK;
+    for (i = nt0; i < m->ntris; i++)
+        if (m->tris[i].v[0] != WELD_EMPTY)
+            m->tris[nt++] = m->tris[i];
+    m->ntris = nt;
+    /* a cancelled face may have been the only user of a corner */
+    return cancelled ? drop_unused_vertices(m, nv0, nt0, err) : AMP_OK;
+}
+
 /* "solid" after optional leading white space. */
 static int starts_solid(const unsigned char *d, size_t len)
 {
@@ -294,7 +432,7 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
 {
     const unsigned char *d = data;
     stl_reader r;
-    size_t nv0, nt0;
+    size_t nv0, nt0, dups = 0;
     int binary;
     amp_status st;
     if (!m || (!data && len))
@@ -311,8 +449,15 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
     nv0 = m->nverts;
     nt0 = m->ntris;
     st = binary ? read_binary(&r, d, len, err) : read_ascii(&r, (const char *)d, len, err);
+    if (st == AMP_OK)
+        st = drop_duplicates(m, nv0, nt0, &dups, err);
     if (st == AMP_OK && m->ntris == nt0)
-        st = amp_fail(err, AMP_ERR_GEOMETRY, 0, "all %lu STL triangles have zero area", (unsigned long)r.triangles);
+        st = dups ? amp_fail(err, AMP_ERR_GEOMETRY, 0,
+                             "no STL triangle is left: %lu have zero area, %lu are duplicates or cancelling opposite "
+                             "faces",
+                             (unsigned long)r.degenerate, (unsigned long)dups)
+                  : amp_fail(err, AMP_ERR_GEOMETRY, 0, "all %lu STL triangles have zero area",
+                             (unsigned long)r.triangles);
     amp_weld_free(&r.wt);
     if (st != AMP_OK) {
         m->nverts = nv0;
@@ -323,6 +468,7 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
         stats->binary = binary;
         stats->triangles = r.triangles;
         stats->degenerate = r.degenerate;
+        stats->duplicates = dups;
         stats->vertices = m->nverts - nv0;
     }
     return AMP_OK;

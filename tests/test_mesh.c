@@ -116,6 +116,115 @@ START_TEST(degenerate_triangles_are_dropped_and_counted)
 }
 END_TEST
 
+/* Binary STL bytes of @p m into @p buf (initialised by the caller). */
+static void stl_bytes(const amp_mesh *m, amp_buf *buf)
+{
+    amp_error err;
+    ck_assert_int_eq(amp_mesh_write_stl(m, 1, amp_buf_sink, buf, &err), AMP_OK);
+}
+
+/* A 10 mm cube with every triangle written twice (a mesh exported twice into one file). */
+static void make_doubled_cube(amp_mesh *m)
+{
+    size_t i, n;
+    ck_assert_int_eq(fx_box(m, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    n = m->ntris;
+    for (i = 0; i < n; i++)
+        ck_assert_int_eq(amp_mesh_add_tri(m, m->tris[i].v[0], m->tris[i].v[1], m->tris[i].v[2], NULL), AMP_OK);
+}
+
+START_TEST(duplicate_triangles_are_dropped_and_counted)
+{
+    amp_mesh src, m;
+    amp_buf buf;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    amp_mesh_init(&src, NULL);
+    amp_buf_init(&buf, NULL);
+    make_doubled_cube(&src);
+    /* the second copy rotated (b, c, a): still the same facet */
+    src.tris[12].v[0] = src.tris[0].v[1];
+    src.tris[12].v[1] = src.tris[0].v[2];
+    src.tris[12].v[2] = src.tris[0].v[0];
+    stl_bytes(&src, &buf);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf.data, buf.len, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.triangles, 24);
+    ck_assert_uint_eq(st.duplicates, 12);
+    ck_assert_uint_eq(st.degenerate, 0);
+    ck_assert_uint_eq(m.ntris, 12);
+    ck_assert_uint_eq(m.nverts, 8);
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_msg(er.closed, "boundary %lu nonmanifold %lu", (unsigned long)er.boundary, (unsigned long)er.nonmanifold);
+    ck_assert_near(amp_mesh_volume(&m), 1000.0, 1e-9);
+    amp_mesh_free(&m);
+    amp_buf_free(&buf);
+    amp_mesh_free(&src);
+}
+END_TEST
+
+START_TEST(a_face_and_its_reverse_are_both_dropped)
+{
+    amp_mesh src, m;
+    amp_buf buf;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    amp_mesh_init(&src, NULL);
+    amp_buf_init(&buf, NULL);
+    ck_assert_int_eq(fx_box(&src, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    /* one facet added again with the opposite winding: a zero-thickness wall */
+    ck_assert_int_eq(amp_mesh_add_tri(&src, src.tris[5].v[0], src.tris[5].v[2], src.tris[5].v[1], NULL), AMP_OK);
+    stl_bytes(&src, &buf);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf.data, buf.len, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.triangles, 13);
+    ck_assert_uint_eq(st.duplicates, 2);
+    ck_assert_uint_eq(m.ntris, 11);
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_int_eq(er.closed, 0);
+    ck_assert_uint_eq(er.boundary, 3);
+    ck_assert_uint_eq(er.nonmanifold, 0);
+    amp_mesh_free(&m);
+    amp_buf_free(&buf);
+    amp_mesh_free(&src);
+}
+END_TEST
+
+START_TEST(cancelled_faces_leave_no_unused_vertices)
+{
+    /* the tetrahedron plus a stray facet written twice and once reversed: all three copies go, with their
+       corners; then a file of nothing but a facet and its reverse, which leaves no triangle */
+    static const float stray[] = {5, 5, 5, 6, 5, 5, 5, 6, 5, /* */ 5, 6, 5, 6, 5, 5, 5, 5, 5,
+                                  5, 5, 5, 6, 5, 5, 5, 6, 5};
+    float t[9 * 7];
+    unsigned char buf[84 + 50 * 7];
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    memcpy(t, stray, sizeof stray);
+    memcpy(t + 27, tet, sizeof tet);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, make_binary(buf, NULL, t, 7, 7), &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.duplicates, 3);
+    ck_assert_uint_eq(m.ntris, 4);
+    ck_assert_uint_eq(m.nverts, 4);
+    ck_assert_uint_eq(st.vertices, 4);
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_int_eq(er.closed, 1);
+    ck_assert_near(amp_mesh_volume(&m), 1.0 / 6.0, 1e-12);
+    amp_mesh_free(&m);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl(&m, buf, make_binary(buf, NULL, stray + 9, 2, 2), &err), AMP_ERR_GEOMETRY);
+    ck_assert_msg(strstr(err.msg, "2 are duplicates"), "message: %s", err.msg);
+    ck_assert_uint_eq(m.ntris, 0);
+    ck_assert_uint_eq(m.nverts, 0);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static void expect_bad(const void *data, size_t len, long line, long offset, const char *needle)
 {
     amp_mesh m;
@@ -494,6 +603,34 @@ START_TEST(cli_info_reports_mesh_closedness_and_volume)
 }
 END_TEST
 
+/* A doubled mesh slices and checks like the single one: the reader drops the copies. */
+START_TEST(cli_slices_and_checks_an_stl_with_every_facet_twice)
+{
+    amp_mesh m;
+    amp_pathset ps;
+    amp_error err;
+    char args[1400];
+    const char *f = fx_tmp("cube-twice.stl"), *amp = fx_tmp("cube-twice.amp");
+    if (!getenv("AMP_TOOL"))
+        return; /* run through make check, which sets AMP_TOOL */
+    amp_mesh_init(&m, NULL);
+    make_doubled_cube(&m);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, f, 1, &err), AMP_OK);
+    amp_mesh_free(&m);
+    snprintf(args, sizeof args, "slice '%s' --layer 0.2 --continuous -o '%s'", f, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "check '%s' --mesh '%s' --layer 0.2", amp, f);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    ck_assert_uint_eq(ps.npaths, 50); /* one stroke a layer, as for the single cube */
+    ck_assert(amp_pathset_length(&ps, -1) > 0);
+    amp_pathset_free(&ps);
+    remove(f);
+    remove(amp);
+}
+END_TEST
+
 /* The boundary of a trivariate (support rays are cast on it): closed, outward, and of the solid's volume. */
 START_TEST(trivariate_boundary_mesh_is_closed_with_the_solid_volume)
 {
@@ -543,6 +680,9 @@ static Suite *mesh_suite(void)
     tcase_add_test(tc, binary_stl_starting_with_solid_is_read_as_binary);
     tcase_add_test(tc, ascii_stl_with_crlf_and_uppercase_is_read);
     tcase_add_test(tc, degenerate_triangles_are_dropped_and_counted);
+    tcase_add_test(tc, duplicate_triangles_are_dropped_and_counted);
+    tcase_add_test(tc, a_face_and_its_reverse_are_both_dropped);
+    tcase_add_test(tc, cancelled_faces_leave_no_unused_vertices);
     tcase_add_test(tc, malformed_binary_stl_is_rejected_with_offsets);
     tcase_add_test(tc, malformed_ascii_stl_is_rejected_with_lines);
     tcase_add_test(tc, stl_roundtrip_binary_and_ascii_preserves_torus);
@@ -550,6 +690,7 @@ static Suite *mesh_suite(void)
     tcase_add_test(tc, edge_checker_flags_holes_and_flipped_triangles);
     tcase_add_test(tc, stl_reader_survives_allocation_failures);
     tcase_add_test(tc, cli_info_reports_mesh_closedness_and_volume);
+    tcase_add_test(tc, cli_slices_and_checks_an_stl_with_every_facet_twice);
     suite_add_tcase(s, tc);
     tc = tcase_create("models");
     tcase_set_timeout(tc, 120);

@@ -8,7 +8,8 @@ const char cmd_info_usage[] =
     "usage: ampath info FILE.amp|FILE.stl [--json]\n"
     "  FILE.amp   paths, support paths, vertices, length (mm), deposited volume (mm^3), radius range, bounding box\n"
     "  FILE.stl   (binary or ASCII, chosen by the .stl extension, any case) format, triangles in the file,\n"
-    "             triangles kept, degenerate (zero-area) triangles dropped, welded vertices, bounding box (mm),\n"
+    "             triangles kept, degenerate (zero-area) triangles dropped, duplicate triangles dropped (copies,\n"
+    "             and faces met in both orientations), welded vertices, bounding box (mm),\n"
     "             signed volume (mm^3), closedness: boundary, non-manifold and misoriented edges\n"
     "  --json     print one JSON object instead of text (default: off)\n"
     "exit status: 0 ok, 2 bad usage or unreadable/malformed file\n";
@@ -43,6 +44,7 @@ static int info_mesh(const char *file, int json)
         cli_json_int(&j, "triangles_in_file", (long long)st.triangles);
         cli_json_int(&j, "triangles", (long long)m.ntris);
         cli_json_int(&j, "degenerate", (long long)st.degenerate);
+        cli_json_int(&j, "duplicates", (long long)st.duplicates);
         cli_json_int(&j, "vertices", (long long)m.nverts);
         cli_json_num(&j, "volume_mm3", vol);
         cli_json_bool(&j, "closed", er.closed);
@@ -53,9 +55,10 @@ static int info_mesh(const char *file, int json)
         cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
     } else {
-        printf("%s: %s STL, %lu triangles (%lu degenerate dropped), %lu vertices after welding\n", file,
-               st.binary ? "binary" : "ASCII", (unsigned long)m.ntris, (unsigned long)st.degenerate,
-               (unsigned long)m.nverts);
+        printf("%s: %s STL, %lu triangles (%lu degenerate dropped, %lu duplicates dropped), %lu vertices after "
+               "welding\n",
+               file, st.binary ? "binary" : "ASCII", (unsigned long)m.ntris, (unsigned long)st.degenerate,
+               (unsigned long)st.duplicates, (unsigned long)m.nverts);
         printf("bbox (%.3f %.3f %.3f) .. (%.3f %.3f %.3f), volume %.3f mm^3\n", b.min.x, b.min.y, b.min.z, b.max.x,
                b.max.y, b.max.z, vol);
         printf("%s: %lu edges, %lu boundary, %lu non-manifold, %lu misoriented\n",

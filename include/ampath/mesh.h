@@ -92,6 +92,7 @@ typedef struct amp_stl_stats {
     size_t triangles;    /**< triangles in the file */
     size_t degenerate;   /**< triangles dropped: zero area (repeated or collinear corners) */
     size_t vertices;     /**< distinct vertices after exact welding */
+    size_t duplicates;   /**< triangles dropped: exact copies of another (same corners), or pairs of opposite faces */
 } amp_stl_stats;
 
 /** Largest STL accepted by amp_mesh_read_stl_file() (bytes). */
@@ -109,7 +110,10 @@ typedef struct amp_stl_stats {
  * vertex order). Vertices with bit-identical coordinates are merged (exact
  * welding via a hash; -0 equals +0); use amp_mesh_weld() for a tolerance.
  * Zero-area triangles (two equal corners or collinear corners) are dropped
- * and counted. Errors (AMP_ERR_PARSE; err->offset for binary, err->line for
+ * and counted. After welding, triangles with the same three corners (in any
+ * rotation) are duplicates: of copies in one orientation the first is kept;
+ * a face that also occurs reversed (a zero-thickness double wall) is dropped
+ * with all its copies; both are counted in `duplicates`. Errors (AMP_ERR_PARSE; err->offset for binary, err->line for
  * ASCII): empty file, truncated header or triangle, a count larger than the
  * file, NaN or Inf coordinates, malformed ASCII, lines over 4096 bytes, a file
  * with no usable triangle; AMP_ERR_NOMEM; AMP_ERR_LIMIT past 2^32-1 vertices.
