@@ -502,6 +502,49 @@ START_TEST(cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer)
 }
 END_TEST
 
+START_TEST(check_fails_a_job_with_a_layer_left_out_or_without_paths)
+{
+    /* a continuous job of the overlapping bodies passes; the same job with
+     * one layer's stroke removed (the layers above it would print one
+     * layer too high) and a job with no path at all fail, exit 1 */
+    amp_mesh m;
+    amp_pathset ps, cut;
+    amp_error err;
+    char args[1024], out[1 << 14];
+    const char *stl = fx_tmp("gap.stl"), *amp = fx_tmp("gap.amp"), *miss = fx_tmp("gap-miss.amp");
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&cut, NULL);
+    add_box(&m, amp_v3(0, 0, 0), amp_v3(12, 8, 4), 0);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.5 --continuous -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", amp, stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"layers_without_paths\":0") != NULL, "%s", out);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    ck_assert_uint_eq(ps.npaths, 8);
+    for (i = 0; i < ps.npaths; i++)
+        if (i != 3) {
+            ck_assert_int_eq(amp_pathset_add(&cut, ps.paths[i].role, amp_pathset_path_verts(&ps, i), ps.paths[i].n,
+                                             &err), AMP_OK);
+            ck_assert_int_eq(amp_pathset_set_height(&cut, ps.paths[i].h, &err), AMP_OK);
+        }
+    ck_assert_int_eq(amp_pathset_write_file(&cut, miss, "test", &err), AMP_OK);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.5 --json", miss, stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
+    ck_assert_msg(strstr(out, "\"layers_without_paths\":1") != NULL, "%s", out);
+    amp_pathset_clear(&cut);
+    ck_assert_int_eq(amp_pathset_write_file(&cut, miss, "test", &err), AMP_OK);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
+    ck_assert_msg(strstr(out, "nothing prints the layers") != NULL, "%s", out);
+    amp_pathset_free(&ps);
+    amp_pathset_free(&cut);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -517,6 +560,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     tcase_add_test(tc, overlapping_shells_are_sliced_as_their_union);
     tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
+    tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);
     suite_add_tcase(s, tc);
     return s;
 }

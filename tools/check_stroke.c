@@ -27,6 +27,24 @@ static int is_planar(const amp_pvert *v, size_t n)
     return n > 0;
 }
 
+/* Layers of the mesh with a section (1e-3 mm2 or more: the slicer prints even a cone's tip) but no
+ * planar path at their height: a layer left out lays everything above it one layer too high. */
+static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
+{
+    size_t li, i, missing = 0;
+    for (li = 0; li < sl->nlayers; li++) {
+        int found = 0;
+        if (amp_polyset_area(&sl->layers[li].polys) < 1e-3)
+            continue;
+        for (i = 0; i < ps->npaths && !found; i++) {
+            const amp_pvert *v = amp_pathset_path_verts(ps, i);
+            found = is_planar(v, ps->paths[i].n) && layer_at(sl, v[0].p.z) == (long)li;
+        }
+        missing += !found;
+    }
+    return missing;
+}
+
 int check_stroke(const check_ctx *c, cli_json *j)
 {
     int rc = CLI_OK;
@@ -39,6 +57,17 @@ int check_stroke(const check_ctx *c, cli_json *j)
     amp_slices_init(&sl, NULL);
     for (i = 0; i < ps->npaths; i++)
         planar += is_planar(amp_pathset_path_verts(ps, i), ps->paths[i].n);
+    if (planar == 0 && mesh) {
+        if (j) {
+            cli_json_bool(j, "ran", 1);
+            cli_json_bool(j, "ok", 0);
+            cli_json_str(j, "reason", "no planar paths: nothing prints the layers of the mesh");
+        } else {
+            printf("strokes: no planar paths: nothing prints the layers of the mesh: FAILED\n");
+        }
+        fprintf(stderr, "ampath check: no planar paths to print the layers of %s\n", mesh);
+        return CLI_FAILED;
+    }
     if (planar == 0) {
         if (j) {
             cli_json_bool(j, "ran", 0);
@@ -77,7 +106,8 @@ int check_stroke(const check_ctx *c, cli_json *j)
         outside += rep.outside;
     }
     if (rc == CLI_OK) {
-        int ok = failed == 0 && nolayer == 0;
+        size_t missing = mesh ? layers_without_paths(&sl, ps) : 0;
+        int ok = failed == 0 && nolayer == 0 && missing == 0;
         if (j) {
             cli_json_bool(j, "ran", 1);
             cli_json_bool(j, "ok", ok);
@@ -88,17 +118,22 @@ int check_stroke(const check_ctx *c, cli_json *j)
             cli_json_int(j, "repeated_edges", (long long)reps);
             cli_json_int(j, "outside", (long long)outside);
             cli_json_int(j, "paths_without_layer", (long long)nolayer);
+            cli_json_int(j, "layers_without_paths", (long long)missing);
             cli_json_int(j, "failed_paths", (long long)failed);
         } else {
-            printf("strokes: %lu planar paths, %lu crossings, %lu edges printed twice, %lu points outside%s: %s\n",
+            printf("strokes: %lu planar paths, %lu crossings, %lu edges printed twice, %lu points outside%s%s: %s\n",
                    (unsigned long)planar, (unsigned long)cross, (unsigned long)reps, (unsigned long)outside,
-                   nolayer ? " (some paths match no layer)" : "", ok ? "ok" : "FAILED");
+                   nolayer ? " (some paths match no layer)" : "", missing ? " (some layers have no path)" : "",
+                   ok ? "ok" : "FAILED");
         }
-        if (!ok) {
+        if (!ok && (failed || nolayer))
             fprintf(stderr, "ampath check: %lu of %lu planar paths fail the stroke check%s\n", (unsigned long)failed,
                     (unsigned long)planar, nolayer ? " or match no layer" : "");
+        if (missing)
+            fprintf(stderr, "ampath check: %lu layers of the mesh have a section but no path\n",
+                    (unsigned long)missing);
+        if (!ok)
             rc = CLI_FAILED;
-        }
     }
     amp_slices_free(&sl);
     amp_mesh_free(&m);

@@ -163,16 +163,30 @@ def _planar(ps, i):
     return p.n > 0 and all(abs(v[k].p.z - v[p.first].p.z) <= 1e-9 for k in range(p.first + 1, p.first + p.n))
 
 
-def _layer_at(sl, z):
+def _layer_index(sl, z):
     for i in range(sl._sl.nlayers):
         lay = sl._sl.layers[i]
         if abs(lay.z_print - z) < 1e-6 or abs(lay.z_cut - z) < 1e-6:
-            return ctypes.pointer(lay.polys)
+            return i
     return None
+
+
+def _layer_at(sl, z):
+    i = _layer_index(sl, z)
+    return None if i is None else ctypes.pointer(sl._sl.layers[i].polys)
+
+
+def _layers_without_paths(ps, sl, planar):
+    """Layers with a section (1e-3 mm2 or more) but no planar path at their height, as the tool counts them."""
+    printed = {_layer_index(sl, ps._ps.verts[ps._ps.paths[i].first].p.z) for i in planar}
+    return sum(1 for li in range(sl._sl.nlayers)
+               if lib.amp_polyset_area(ctypes.byref(sl._sl.layers[li].polys)) >= 1e-3 and li not in printed)
 
 
 def _strokes(ps, sl, tol):
     planar = [i for i in range(ps._ps.npaths) if _planar(ps, i)]
+    if not planar and sl is not None:
+        return {"ran": True, "ok": False, "reason": "no planar paths: nothing prints the layers of the mesh"}
     if not planar:
         return {"ran": False, "reason": "no planar paths"}
     tot = dict(segments=0, pseudo=0, crossings=0, repeated_edges=0, outside=0)
@@ -191,9 +205,11 @@ def _strokes(ps, sl, tol):
         failed += st != 0
         for k in tot:
             tot[k] += getattr(rep, k)
-    return {"ran": True, "ok": failed == 0 and nolayer == 0, "paths": len(planar), "segments": tot["segments"],
-            "pseudo_segments": tot["pseudo"], "crossings": tot["crossings"], "repeated_edges": tot["repeated_edges"],
-            "outside": tot["outside"], "paths_without_layer": nolayer, "failed_paths": failed}
+    missing = _layers_without_paths(ps, sl, planar) if sl is not None else 0
+    return {"ran": True, "ok": failed == 0 and nolayer == 0 and missing == 0, "paths": len(planar),
+            "segments": tot["segments"], "pseudo_segments": tot["pseudo"], "crossings": tot["crossings"],
+            "repeated_edges": tot["repeated_edges"], "outside": tot["outside"], "paths_without_layer": nolayer,
+            "layers_without_paths": missing, "failed_paths": failed}
 
 
 def _support(ps, required, overhang, max_gap, bridge):
