@@ -357,6 +357,12 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
         } else if (rc == AMP_OK)
             rc = run_region(c, li, &c->reg, skin, s0, err);
     }
+    /* without perimeters, an island too narrow for any infill would stay
+     * bare: its perimeter is printed after all (an empty first layer puts
+     * the whole part in the air) */
+    if (rc == AMP_OK && !o->perimeters && c->tmp.npaths == 0 &&
+        (rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err)) == AMP_OK)
+        rc = ring_paths(c, &c->ins, L->z_print, s0, err);
     /* step 6: corners from the bare stretches to the perimeter */
     if (rc == AMP_OK && nperim)
         rc = amp_cp_support_corners(&c->tmp, nperim, &c->bare, o->radius, 0.0, s0, err);

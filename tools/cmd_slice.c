@@ -238,7 +238,6 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_begin(&j, stdout);
     cli_json_int(&j, "layers", (long long)st->layers);
     cli_json_int(&j, "empty_layers", (long long)st->empty_layers);
-    cli_json_int(&j, "overlapping_layers", (long long)sl->overlaps);
     cli_json_int(&j, "islands", (long long)st->islands);
     cli_json_int(&j, "thin_islands", (long long)st->thin_islands);
     cli_json_int(&j, "neck_islands", (long long)st->neck_islands);
@@ -291,6 +290,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
         if (sl->layers[i].open_chains)
             cli_json_int(&j, NULL, (long long)i);
     cli_json_close(&j);
+    cli_json_int(&j, "overlapping_layers", (long long)sl->overlaps);
     cli_json_num(&j, "time_s", cli_now() - t0);
     cli_json_end(&j);
 }
