@@ -17,6 +17,7 @@
 #include <string.h>
 
 #include "ampath/polygon.h"
+#include "ampath/vec.h"
 
 typedef struct useg { /* one ring edge, between node ids */
     size_t na, nb;
@@ -486,7 +487,7 @@ static size_t next_piece(const uctx *c, const upiece *pc, size_t npc, const size
             continue;
         a = back - atan2(c->node[pc[k].nb].y - o.y, c->node[pc[k].nb].x - o.x);
         while (a <= 0.0)
-            a += 2.0 * 3.14159265358979323846;
+            a += 2.0 * AMP_PI;
         if (a < best_a) {
             best_a = a;
             best = k;

@@ -205,7 +205,7 @@ START_TEST(volume_and_gap_measurement_agree_with_closed_forms)
     amp_pathset ps;
     amp_coverage g;
     int i;
-    const double PI = 3.14159265358979323846;
+    const double PI = AMP_PI;
     ck_assert_int_eq(amp_trivariate_model("torus-quarter", NULL, &v, NULL), AMP_OK);
     ck_assert_near(amp_trivariate_volume(&v), PI * 100 * 2 * PI * 50 / 4, 1e-3);
     amp_pathset_init(&ps, NULL);

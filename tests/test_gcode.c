@@ -1495,7 +1495,7 @@ START_TEST(continuous_slices_of_the_builtin_meshes_print_on_the_bed)
         part = amp_mesh_volume(&m);
         sup = amp_pathset_volume(&ps, AMP_ROLE_SUPPORT);
         beads = amp_pathset_volume(&ps, -1);
-        ext = gsim_filament(&s) * 3.14159265358979 * 1.75 * 1.75 / 4;
+        ext = gsim_filament(&s) * AMP_PI * 1.75 * 1.75 / 4;
         ck_assert_msg(fabs(ext / beads - 1) < 0.03, "%s: extruded %g mm3, beads %g mm3", meshes[i], ext, beads);
         ck_assert_msg(ext <= 1.05 * (part + sup), "%s: extruded %g mm3, part %g + support %g", meshes[i], ext, part,
                       sup);

@@ -5,7 +5,7 @@
 
 #include "testutil.h"
 
-#define PI 3.14159265358979323846
+#define PI AMP_PI
 
 /* A fan of straight lines from a common hub: their spacing grows along them, so radii must vary. */
 static void fan(amp_pathset *ps, int nlines, double spread)

@@ -639,9 +639,9 @@ START_TEST(trivariate_boundary_mesh_is_closed_with_the_solid_volume)
         double volume, rel;
     } cases[] = {
         /* torus quarter: pi r^2 * (pi R / 2), r = 10, R = 50 */
-        {"torus-quarter", 3.14159265358979 * 100.0 * 3.14159265358979 * 50.0 / 2.0, 2e-3},
+        {"torus-quarter", AMP_PI * 100.0 * AMP_PI * 50.0 / 2.0, 2e-3},
         /* helix: pi r^2 * arc length, r = 5, length = sqrt((2 pi 20)^2 + 40^2) (Pappus, the disc stays normal) */
-        {"helix", 3.14159265358979 * 25.0 * 131.8763, 5e-3},
+        {"helix", AMP_PI * 25.0 * 131.8763, 5e-3},
         {"vase", 0, 0}, /* closed revolved wall: the seam faces must vanish */
     };
     size_t i;

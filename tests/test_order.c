@@ -10,7 +10,7 @@
 #include <omp.h>
 #endif
 
-#define PI 3.14159265358979323846
+#define PI AMP_PI
 
 static unsigned long long rng_state = 88172645463325252ULL;
 static double rnd(void)
