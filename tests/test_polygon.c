@@ -37,6 +37,20 @@ static void add_dumbbell(amp_polyset *ps, double w)
     ck_assert_int_eq(amp_polyset_add(ps, p, 12, NULL), AMP_OK);
 }
 
+/* Bounding box of the points of a set. */
+static void points_box(const amp_polyset *in, double *x0, double *y0, double *x1, double *y1)
+{
+    size_t i;
+    *x0 = *y0 = HUGE_VAL;
+    *x1 = *y1 = -HUGE_VAL;
+    for (i = 0; i < in->npts; i++) {
+        *x0 = fmin(*x0, in->pts[i].x);
+        *x1 = fmax(*x1, in->pts[i].x);
+        *y0 = fmin(*y0, in->pts[i].y);
+        *y1 = fmax(*y1, in->pts[i].y);
+    }
+}
+
 /*
  * Independent checker of an inset: on a fine grid of samples, a point of the
  * input region farther than r + band from its boundary must be inside the
@@ -45,15 +59,9 @@ static void add_dumbbell(amp_polyset *ps, double w)
  */
 static long inset_disagreements(const amp_polyset *in, double r, const amp_polyset *res, double step, double band)
 {
-    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL, x, y;
+    double x0, x1, y0, y1, x, y;
     long bad = 0;
-    size_t i;
-    for (i = 0; i < in->npts; i++) {
-        x0 = fmin(x0, in->pts[i].x);
-        x1 = fmax(x1, in->pts[i].x);
-        y0 = fmin(y0, in->pts[i].y);
-        y1 = fmax(y1, in->pts[i].y);
-    }
+    points_box(in, &x0, &y0, &x1, &y1);
     for (y = y0 - 1 + 0.5 * step; y < y1 + 1; y += step)
         for (x = x0 - 1 + 0.37 * step; x < x1 + 1; x += step) {
             amp_vec2 q = amp_v2(x, y);
@@ -386,15 +394,9 @@ static int ref_winding(const amp_polyset *ps, amp_vec2 q)
  * organised result disagrees with "winding > 0" of the input. */
 static long union_disagreements(const amp_polyset *in, const amp_polyset *res, double step, double band, int sign)
 {
-    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL, x, y;
+    double x0, x1, y0, y1, x, y;
     long bad = 0;
-    size_t i;
-    for (i = 0; i < in->npts; i++) {
-        x0 = fmin(x0, in->pts[i].x);
-        x1 = fmax(x1, in->pts[i].x);
-        y0 = fmin(y0, in->pts[i].y);
-        y1 = fmax(y1, in->pts[i].y);
-    }
+    points_box(in, &x0, &y0, &x1, &y1);
     for (y = y0 - 1 + 0.5 * step; y < y1 + 1; y += step)
         for (x = x0 - 1 + 0.37 * step; x < x1 + 1; x += step) {
             amp_vec2 q = amp_v2(x, y);
