@@ -38,6 +38,12 @@ static amp_status eval_box(const amp_field *f, const double uvw[3], amp_vec3 *ou
     return AMP_OK;
 }
 
+/* The box field once its lattice is centred (amp_field_cover): the same map. */
+static amp_status eval_box_centred(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
+{
+    return eval_box(f, uvw, out, err);
+}
+
 /* sweep: C(w) + u N(w) + v B(w), w the arc length along the spine (mm), straight beyond the ends. */
 static amp_status eval_sweep(const amp_field *f, const double uvw[3], amp_vec3 *out, amp_error *err)
 {
@@ -159,7 +165,9 @@ amp_status amp_field_builtin(amp_field *f, const char *name, amp_box3 box, amp_e
     if (strcmp(name, "box") == 0) {
         if (amp_box3_is_empty(box) || !amp_v3_finite(box.min) || !amp_v3_finite(box.max))
             return amp_fail(err, AMP_ERR_ARG, 0, "field 'box' needs the mesh's bounding box");
-        box = amp_box3_inflate(box, 1.0);
+        /* the curves run 1 mm beyond the part; across them, amp_field_cover centres the lattice on the box */
+        box.min.x -= 1.0;
+        box.max.x += 1.0;
         st = amp_field_custom(f, eval_box, NULL, lo, hi, 2, err);
         f->p[0] = box.min.x;
         f->p[1] = box.min.y;
@@ -566,6 +574,10 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
                 for (t = 0; t < nc; t++)
                     if (q->in[cand[t] * n + k])
                         d = fmin(d, amp_v3_dist(x3, q->pts[cand[t] * n + k]));
+                /* a grid point on the surface itself (a lattice plane through a face of a box) tests inside
+                 * while every curve along that face tests outside: the solid next to it decides, not it */
+                if (d == HUGE_VAL && amp_bvh_closest(q->b, x3, NULL, NULL) <= 1e-9 * (1.0 + amp_v3_len(x3)))
+                    continue;
                 *bound = fmax(*bound, d);
             }
     return AMP_OK;
@@ -815,6 +827,18 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
     S = o->spacing;
     if (!isfinite(S) || S <= 0)
         return amp_fail(err, AMP_ERR_ARG, 0, "spacing must be a positive number of mm");
+    if (f->eval == eval_box) {
+        /* curves half a spacing inside the part's faces, never on them: a curve on a face is half outside
+         * the part when printed, and curves along a box's faces (a lattice from the box's corner) test
+         * neither in nor out, so the covering bound failed on every box */
+        amp_field fb = *f;
+        fb.p[1] -= 0.5 * S;
+        fb.p[2] -= 0.5 * S;
+        fb.p[4] += 0.5 * S;
+        fb.p[5] += 0.5 * S;
+        fb.eval = eval_box_centred;
+        return amp_field_cover(&fb, b, o, out, stats, err);
+    }
     if (o->pattern != AMP_PATTERN_GRID && o->pattern != AMP_PATTERN_HEX)
         return amp_fail(err, AMP_ERR_ARG, 0, "unknown pattern");
     step = o->step > 0 ? o->step : fmin(0.5, S / 2);

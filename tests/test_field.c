@@ -166,6 +166,45 @@ START_TEST(box_field_gives_straight_x_lines_inside_the_bridge)
 }
 END_TEST
 
+START_TEST(box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces)
+{
+    /* a 10 x 6 x 4 mm box at integer coordinates, S = 1: a lattice from the
+     * box's corner put curves on its faces, where they test neither in nor
+     * out; the bound was missed on every box (exit 1 for the commonest part)
+     * and the curves on the faces were printed half outside it */
+    amp_mesh m;
+    amp_bvh *b;
+    amp_field f;
+    amp_field_opts o;
+    amp_field_stats st;
+    amp_pathset ps;
+    amp_error err;
+    double g;
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_box(&m, amp_v3(-5, -3, 0), amp_v3(5, 3, 4), 0), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    ck_assert_int_eq(amp_field_builtin(&f, "box", amp_mesh_bbox(&m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = 1.0;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    ck_assert_int_eq(st.bound_met, 1);
+    /* one curve per unit cell of the 6 x 4 cross-section, each half a spacing inside the faces */
+    ck_assert_uint_eq(ps.npaths, 24);
+    for (i = 0; i < ps.nverts; i++) {
+        double y = ps.verts[i].p.y + 3, z = ps.verts[i].p.z;
+        ck_assert_near(y - floor(y), 0.5, 1e-9);
+        ck_assert_near(z - floor(z), 0.5, 1e-9);
+    }
+    ck_assert_int_eq(mesh_gap(&ps, b, 20000, 3, 0.0, &g, &err), AMP_OK);
+    ck_assert_msg(g <= sqrt(2.0) / 2 + 1e-9, "gap %g", g);
+    amp_bvh_free(b);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(field_errors_are_reported)
 {
     amp_field f;
@@ -753,6 +792,7 @@ static Suite *field_suite(void)
     tcase_add_test(tc, sweep_field_along_a_leg_covers_the_leg);
     tcase_add_test(tc, gap_checker_fails_when_paths_are_missing);
     tcase_add_test(tc, box_field_gives_straight_x_lines_inside_the_bridge);
+    tcase_add_test(tc, box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces);
     tcase_add_test(tc, field_errors_are_reported);
     tcase_add_test(tc, cli_field_reports_figures_and_writes_paths);
     tcase_add_test(tc, cli_field_and_check_see_the_solid_of_an_inside_out_stl);
