@@ -55,12 +55,14 @@ static size_t find_key(const skey *s, size_t n, uint64_t k)
 }
 
 /* The section segments: one per triangle the plane z crosses, from the
- * mesh edge it enters by to the one it leaves by, into *seg (*nseg). */
-static amp_status cut_triangles(const amp_mesh *m, double z, const amp_allocator *al, sseg **seg, size_t *nseg)
+ * mesh edge it enters by to the one it leaves by, into *seg (*nseg).
+ * Triangles tri[0..ntri) in that order, or all of them when tri is NULL. */
+static amp_status cut_triangles(const amp_mesh *m, const uint32_t *tri, size_t ntri, double z, const amp_allocator *al,
+                                sseg **seg, size_t *nseg)
 {
     size_t i, cap = 0;
-    for (i = 0; i < m->ntris; i++) {
-        const uint32_t *v = m->tris[i].v;
+    for (i = 0; i < ntri; i++) {
+        const uint32_t *v = m->tris[tri ? tri[i] : i].v;
         /* symbolic perturbation: a vertex on the plane counts as above it */
         int s[3], k, kin = -1, kout = -1;
         void *p = *seg;
@@ -296,8 +298,10 @@ static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t 
 }
 
 /* [P2 §2.2] step 1 at one height: cut, link, chain, resolve overlapping
- * shells (nonzero rule), organize. */
-amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
+ * shells (nonzero rule), organize; the triangles @p tri (ascending, NULL:
+ * all) are those the plane may cross. */
+static amp_status slice_plane(const amp_mesh *m, const uint32_t *tri, size_t ntri, double z, amp_polyset *out,
+                              amp_section_stats *stats, amp_error *err)
 {
     const amp_allocator *al = out->alloc;
     sseg *seg = NULL;
@@ -307,7 +311,7 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
     memset(&st0, 0, sizeof st0);
     if (!isfinite(z))
         return amp_fail(err, AMP_ERR_ARG, 0, "cutting height is not finite");
-    st = cut_triangles(m, z, al, &seg, &nseg);
+    st = cut_triangles(m, tri, ntri, z, al, &seg, &nseg);
     st0.segments = st == AMP_OK ? nseg : 0;
     if (st == AMP_OK && nseg > 0 && (st = link_segments(al, seg, nseg, &st0)) == AMP_OK &&
         (st = chain_segments(m, z, seg, nseg, out, &st0, err)) == AMP_OK &&
@@ -319,6 +323,11 @@ amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_se
     if (st == AMP_ERR_NOMEM)
         return amp_fail(err, st, 0, "out of memory slicing at z = %g", z);
     return st;
+}
+
+amp_status amp_slice_plane(const amp_mesh *m, double z, amp_polyset *out, amp_section_stats *stats, amp_error *err)
+{
+    return slice_plane(m, NULL, m->ntris, z, out, stats, err);
 }
 
 void amp_slices_init(amp_slices *s, const amp_allocator *a)
@@ -338,13 +347,97 @@ void amp_slices_free(amp_slices *s)
     amp_slices_init(s, s->alloc);
 }
 
+/* The triangles a rising plane crosses, kept from layer to layer: every
+ * layer scanning the whole mesh cost more than the rest of slicing on a
+ * million-triangle scan. Triangles enter in the order of their lowest z and
+ * leave once the plane is above them; the active ones stay in index order,
+ * so segments come out in the order of a full scan (identical sections). */
+typedef struct zkey {
+    double zlo;
+    uint32_t t;
+} zkey;
+
+typedef struct tsweep {
+    zkey *byz;
+    uint32_t *act, *tmp;
+    size_t n, next, nact;
+} tsweep;
+
+static int cmp_zkey(const void *a, const void *b)
+{
+    const zkey *s = a, *t = b;
+    if (s->zlo != t->zlo)
+        return s->zlo < t->zlo ? -1 : 1;
+    return s->t < t->t ? -1 : (s->t > t->t ? 1 : 0);
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t s = *(const uint32_t *)a, t = *(const uint32_t *)b;
+    return s < t ? -1 : (s > t ? 1 : 0);
+}
+
+static double tri_zmax(const amp_mesh *m, uint32_t t)
+{
+    const uint32_t *v = m->tris[t].v;
+    return fmax(m->verts[v[0]].z, fmax(m->verts[v[1]].z, m->verts[v[2]].z));
+}
+
+static amp_status sweep_init(tsweep *w, const amp_mesh *m, const amp_allocator *al)
+{
+    size_t i;
+    memset(w, 0, sizeof *w);
+    w->n = m->ntris;
+    w->byz = amp_alloc(al, (w->n + 1) * sizeof *w->byz);
+    w->act = amp_alloc(al, (w->n + 1) * sizeof *w->act);
+    w->tmp = amp_alloc(al, (w->n + 1) * sizeof *w->tmp);
+    if (!w->byz || !w->act || !w->tmp)
+        return AMP_ERR_NOMEM;
+    for (i = 0; i < w->n; i++) {
+        const uint32_t *v = m->tris[i].v;
+        w->byz[i].zlo = fmin(m->verts[v[0]].z, fmin(m->verts[v[1]].z, m->verts[v[2]].z));
+        w->byz[i].t = (uint32_t)i;
+    }
+    qsort(w->byz, w->n, sizeof *w->byz, cmp_zkey);
+    return AMP_OK;
+}
+
+static void sweep_free(tsweep *w, const amp_allocator *al)
+{
+    amp_free(al, w->byz);
+    amp_free(al, w->act);
+    amp_free(al, w->tmp);
+}
+
+/* Move the plane up to z: a triangle is crossed when zlo < z <= zmax (a
+ * vertex on the plane counts as above it, as cut_triangles decides). */
+static void sweep_to(tsweep *w, const amp_mesh *m, double z)
+{
+    size_t i, j, k, nkeep = 0, nnew = 0;
+    for (i = 0; i < w->nact; i++)
+        if (tri_zmax(m, w->act[i]) >= z)
+            w->act[nkeep++] = w->act[i];
+    for (; w->next < w->n && w->byz[w->next].zlo < z; w->next++)
+        if (tri_zmax(m, w->byz[w->next].t) >= z)
+            w->tmp[nnew++] = w->byz[w->next].t;
+    qsort(w->tmp, nnew, sizeof *w->tmp, cmp_u32);
+    /* merge the kept and the new, both ascending, through the free end of tmp */
+    memmove(w->tmp + w->n - nnew, w->tmp, nnew * sizeof *w->tmp);
+    for (i = 0, j = w->n - nnew, k = 0; i < nkeep || j < w->n;)
+        w->tmp[k++] = j >= w->n || (i < nkeep && w->act[i] < w->tmp[j]) ? w->act[i++] : w->tmp[j++];
+    memcpy(w->act, w->tmp, k * sizeof *w->act);
+    w->nact = k;
+}
+
 amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices *out, amp_error *err)
 {
     amp_box3 b;
     double h, h0, top;
     size_t n, i;
     amp_status st;
+    tsweep w;
     amp_slices_free(out);
+    memset(&w, 0, sizeof w);
     if (!o || !(o->layer > 0) || !isfinite(o->layer))
         return amp_fail(err, AMP_ERR_ARG, 0, "layer height must be positive");
     if (!isfinite(o->first_layer))
@@ -361,25 +454,29 @@ amp_status amp_slice_mesh(const amp_mesh *m, const amp_slice_opts *o, amp_slices
         if (n >= 1000000)
             return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 1000000 layers (height %g, layer %g)", top, h);
     out->layers = amp_calloc(out->alloc, n ? n : 1, sizeof *out->layers);
-    if (!out->layers)
+    if (!out->layers || sweep_init(&w, m, out->alloc) != AMP_OK) {
+        sweep_free(&w, out->alloc);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu layers", (unsigned long)n);
-    for (i = 0; i < n; i++) {
+    }
+    for (i = 0, st = AMP_OK; i < n && st == AMP_OK; i++) {
         amp_layer *L = &out->layers[i];
         amp_section_stats ss;
         L->z_cut = i == 0 ? 0.5 * h0 : h0 + (i - 0.5) * h;
         L->z_print = i == 0 ? h0 : h0 + i * h;
         amp_polyset_init(&L->polys, out->alloc);
         out->nlayers = i + 1;
-        st = amp_slice_plane(m, b.min.z + L->z_cut, &L->polys, &ss, err);
+        sweep_to(&w, m, b.min.z + L->z_cut);
+        st = slice_plane(m, w.act, w.nact, b.min.z + L->z_cut, &L->polys, &ss, err);
         if (st != AMP_OK)
-            return st;
+            break;
         out->open_chains += ss.open_chains;
         out->gaps_closed += ss.gaps_closed;
         out->overlaps += (size_t)ss.overlaps;
         L->open_chains = ss.open_chains;
         out->nonmanifold += ss.nonmanifold;
     }
-    return AMP_OK;
+    sweep_free(&w, out->alloc);
+    return st;
 }
 
 /* Distance from q to the section P (0 inside), through its row index when
