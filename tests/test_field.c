@@ -205,6 +205,25 @@ START_TEST(box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces)
 }
 END_TEST
 
+START_TEST(cli_field_fails_a_part_smaller_than_the_spacing)
+{
+    /* a 0.3 mm cube at S = 1: every clipped piece is shorter than S/2 and
+     * dropped; an empty covering is a failed one (exit 1), not a success */
+    amp_mesh m;
+    amp_error err;
+    char args[1024];
+    const char *stl = fx_tmp("speck.stl"), *amp = fx_tmp("speck.amp");
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0, 0, 0), amp_v3(0.3, 0.3, 0.3), 0), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "field %s --field box --spacing 1 -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 1);
+    snprintf(args, sizeof args, "field %s --field box --spacing 0.2 -o %s", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(field_errors_are_reported)
 {
     amp_field f;
@@ -793,6 +812,7 @@ static Suite *field_suite(void)
     tcase_add_test(tc, gap_checker_fails_when_paths_are_missing);
     tcase_add_test(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     tcase_add_test(tc, box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces);
+    tcase_add_test(tc, cli_field_fails_a_part_smaller_than_the_spacing);
     tcase_add_test(tc, field_errors_are_reported);
     tcase_add_test(tc, cli_field_reports_figures_and_writes_paths);
     tcase_add_test(tc, cli_field_and_check_see_the_solid_of_an_inside_out_stl);

@@ -160,8 +160,14 @@ static int measure_gap(const amp_pathset *ps, const amp_bvh *b, long samples, do
 }
 
 /* Exit 1 when the field cannot meet the spacing or the measured gap exceeds the covering radius. */
-static int judge(const amp_field_stats *st, double spacing, double gap_all)
+static int judge(const amp_field_stats *st, double spacing, double gap_all, size_t npaths)
 {
+    if (npaths == 0) {
+        /* an empty covering covers nothing: a part smaller than the spacing, or a field beside the part */
+        fprintf(stderr, "ampath field: no curve piece long enough (--min-len, default S/2) lies inside the part "
+                        "(smaller than the spacing %g mm, or the field misses it): nothing to print\n", spacing);
+        return CLI_FAILED;
+    }
     if (st->bound_met == 0) {
         fprintf(stderr, "ampath field: the field cannot meet spacing %g mm: covering bound %.3f mm > %.3f mm\n",
                 spacing, st->bound, st->target);
@@ -279,7 +285,7 @@ int cmd_field(int argc, char **argv)
         print_report(&r, json);
     }
     if (rc == CLI_OK)
-        rc = judge(&st, spacing, gap_all);
+        rc = judge(&st, spacing, gap_all, ps.npaths);
 done:
     amp_bvh_free(b);
     amp_bvh_free(rb[0]);
