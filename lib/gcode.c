@@ -764,7 +764,7 @@ static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, 
  * leaves or in the place of the one it starts — the rule of the direct hops
  * (direct_ok) — so only the cone applies there: the head ramps up from the
  * end it leaves and down onto the start instead of lifting and descending
- * vertically (issue 14 item 4: at the z axis' 10 mm/s the vertical lifts over
+ * vertically (short travel: at the z axis' 10 mm/s the vertical lifts over
  * the beads' own tops were 40 % of the demo's travel time). With direct_hop 0
  * there are no end zones and the ends are lifted by z_hop (the old rule). Each sample's box
  * covers half a step either side, so its height holds over that interval;

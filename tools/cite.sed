@@ -1,4 +1,4 @@
-# tools/cite.sed — one form of citation (issue 19 item 4), for comments in any source file:
+# tools/cite.sed — one form of citation ([P1 §x], [P2 §x], docs/interfaces.md §N), for comments in any source file:
 #   sed -i -f tools/cite.sed FILE...
 # "SPEC §N" (an outside page) becomes the in-repository interface reference docs/interfaces.md §N
 # (same section numbers; the spline file, helix, layers and fields are §4.1-§4.4 there); the papers are
