@@ -115,25 +115,36 @@ static void yrows_free(const amp_allocator *al, yrows *y)
     amp_free(al, y->b);
 }
 
-static int yrows_build(yrows *y, const amp_polyset *R, const amp_allocator *al)
+/* The rows of the region's segments whose y-range meets [wy0, wy1], the
+ * band of the stroke: every crossing of a query's ray in that band is among
+ * them (a layer of 400 pins built all 400 rings for each pin's stroke). */
+static int yrows_build(yrows *y, const amp_polyset *R, double wy0, double wy1, const amp_allocator *al)
 {
-    size_t r, k, id = 0, round, n = R->npts;
+    size_t r, k, id = 0, round, n;
     double y1 = -HUGE_VAL;
     memset(y, 0, sizeof *y);
     y->y0 = HUGE_VAL;
-    y->a = amp_alloc(al, (n + 1) * sizeof *y->a);
-    y->b = amp_alloc(al, (n + 1) * sizeof *y->b);
+    y->a = amp_alloc(al, (R->npts + 1) * sizeof *y->a);
+    y->b = amp_alloc(al, (R->npts + 1) * sizeof *y->b);
     if (!y->a || !y->b)
         return 0;
     for (r = 0; r < R->nrings; r++) {
         const amp_vec2 *p = amp_polyset_ring(R, r);
         size_t m = R->rings[r].n;
-        for (k = 0; k < m; k++, id++) {
-            y->a[id] = p[k];
-            y->b[id] = p[(k + 1) % m];
-            y->y0 = fmin(y->y0, p[k].y);
-            y1 = fmax(y1, p[k].y);
+        for (k = 0; k < m; k++) {
+            amp_vec2 a = p[k], b = p[(k + 1) % m];
+            if (fmax(a.y, b.y) < wy0 || fmin(a.y, b.y) > wy1)
+                continue;
+            y->a[id] = a;
+            y->b[id++] = b;
+            y->y0 = fmin(y->y0, fmin(a.y, b.y));
+            y1 = fmax(y1, fmax(a.y, b.y));
         }
+    }
+    n = id;
+    if (n == 0) { /* nothing in the band: every query is outside */
+        y->y0 = wy0;
+        y1 = wy1;
     }
     y->nrow = (long)sqrt((double)n) + 1;
     y->h = fmax((y1 - y->y0) / (double)y->nrow, 1e-12);
@@ -348,6 +359,24 @@ static void count_outside(stroke_scan *s, const yrows *yr, double tol)
     }
 }
 
+static double band_lo(const amp_vec2 *pts, size_t n)
+{
+    double v = HUGE_VAL;
+    size_t i;
+    for (i = 0; i < n; i++)
+        v = fmin(v, pts[i].y);
+    return v;
+}
+
+static double band_hi(const amp_vec2 *pts, size_t n)
+{
+    double v = -HUGE_VAL;
+    size_t i;
+    for (i = 0; i < n; i++)
+        v = fmax(v, pts[i].y);
+    return v;
+}
+
 amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
                                   double tol, amp_stroke_report *rep, amp_error *err)
 {
@@ -378,7 +407,7 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
         vertex_ids(&s, vk);
         count_crossings(&s, sg, segments_and_repeats(&s, sg, ek));
         count_interleaved_passes(&s, ps);
-        if (region && region->npts && !yrows_build(&yr, region, al))
+        if (region && region->npts && !yrows_build(&yr, region, band_lo(pts, n) - tol, band_hi(pts, n) + tol, al))
             st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
         else if (region && region->npts)
             count_outside(&s, &yr, tol);

@@ -154,16 +154,36 @@ double amp_polyset_boundary_dist(const amp_polyset *ps, amp_vec2 q)
 
 /* ---- islands ---- */
 
+/* Bounding box of ring r: [0] min, [1] max. */
+static void ring_box(const amp_polyset *ps, size_t r, amp_vec2 *box)
+{
+    const amp_vec2 *p = amp_polyset_ring(ps, r);
+    size_t k;
+    box[0] = box[1] = p[0];
+    for (k = 1; k < ps->rings[r].n; k++) {
+        box[0] = amp_v2(fmin(box[0].x, p[k].x), fmin(box[0].y, p[k].y));
+        box[1] = amp_v2(fmax(box[1].x, p[k].x), fmax(box[1].y, p[k].y));
+    }
+}
+
+static int in_box(const amp_vec2 *box, amp_vec2 q)
+{
+    return q.x >= box[0].x && q.x <= box[1].x && q.y >= box[0].y && q.y <= box[1].y;
+}
+
 /* A point strictly inside or outside every other ring, for nesting tests:
- * first a vertex, else an edge midpoint pushed slightly inward. */
-static amp_vec2 ring_probe(const amp_polyset *ps, size_t r)
+ * first a vertex, else an edge midpoint pushed slightly inward. A ring
+ * whose box does not hold the point cannot touch it (a layer of 400 pins
+ * tested every pin against every other one). */
+static amp_vec2 ring_probe(const amp_polyset *ps, const amp_vec2 *box, size_t r)
 {
     const amp_vec2 *p = amp_polyset_ring(ps, r);
     size_t n = ps->rings[r].n, k, i;
     for (k = 0; k < n; k++) {
         int ok = 1;
         for (i = 0; i < ps->nrings && ok; i++)
-            if (i != r && amp_ring_contains(amp_polyset_ring(ps, i), ps->rings[i].n, p[k], 0.0) < 0)
+            if (i != r && in_box(box + 2 * i, p[k]) &&
+                amp_ring_contains(amp_polyset_ring(ps, i), ps->rings[i].n, p[k], 0.0) < 0)
                 ok = 0;
         if (ok)
             return p[k];
@@ -177,7 +197,7 @@ amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err)
     long *parent = NULL, *depth = NULL, nis = 0;
     double *area = NULL;
     amp_ring *rings = NULL;
-    amp_vec2 *pts = NULL;
+    amp_vec2 *pts = NULL, *box = NULL;
     if (n == 0) {
         ps->nislands = 0;
         return AMP_OK;
@@ -187,24 +207,28 @@ amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err)
     area = amp_calloc(ps->alloc, n, sizeof *area);
     rings = amp_calloc(ps->alloc, n, sizeof *rings);
     pts = amp_calloc(ps->alloc, ps->npts ? ps->npts : 1, sizeof *pts);
-    if (!parent || !depth || !area || !rings || !pts) {
+    box = amp_calloc(ps->alloc, 2 * n, sizeof *box);
+    if (!parent || !depth || !area || !rings || !pts || !box) {
         amp_free(ps->alloc, parent);
         amp_free(ps->alloc, depth);
         amp_free(ps->alloc, area);
         amp_free(ps->alloc, rings);
         amp_free(ps->alloc, pts);
+        amp_free(ps->alloc, box);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory organising polygons");
     }
-    for (i = 0; i < n; i++)
+    for (i = 0; i < n; i++) {
         area[i] = amp_ring_area(amp_polyset_ring(ps, i), ps->rings[i].n);
+        ring_box(ps, i, box + 2 * i);
+    }
     /* nesting: depth = number of rings containing the ring, parent = the
      * smallest of them (rings do not cross, so one probe point decides) */
     for (i = 0; i < n; i++) {
-        amp_vec2 q = ring_probe(ps, i);
+        amp_vec2 q = ring_probe(ps, box, i);
         parent[i] = -1;
         depth[i] = 0;
         for (j = 0; j < n; j++) {
-            if (j == i || fabs(area[j]) < fabs(area[i]))
+            if (j == i || fabs(area[j]) < fabs(area[i]) || !in_box(box + 2 * j, q))
                 continue;
             if (amp_ring_contains(amp_polyset_ring(ps, j), ps->rings[j].n, q, 0.0) == 1) {
                 depth[i]++;
@@ -247,6 +271,7 @@ amp_status amp_polyset_organize(amp_polyset *ps, amp_error *err)
     amp_free(ps->alloc, area);
     amp_free(ps->alloc, rings);
     amp_free(ps->alloc, pts);
+    amp_free(ps->alloc, box);
     return AMP_OK;
 }
 

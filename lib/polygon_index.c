@@ -34,7 +34,9 @@ amp_status amp_polyindex_build(amp_polyindex *ix, const amp_polyset *P, amp_erro
     ix->y0 = HUGE_VAL;
     ix->a = amp_alloc(al, (n + 1) * sizeof *ix->a);
     ix->b = amp_alloc(al, (n + 1) * sizeof *ix->b);
-    ix->nrow = (long)sqrt((double)n) + 1;
+    /* 4 sqrt(n) rows: a point test scans about sqrt(n) / 4 short edges (the skin test asks thousands
+     * of points per layer); the rows cost O(n + rows) to build */
+    ix->nrow = 4 * (long)sqrt((double)n) + 1;
     ix->start = amp_calloc(al, (size_t)ix->nrow + 1, sizeof *ix->start);
     if (!ix->a || !ix->b || !ix->start)
         goto nomem;

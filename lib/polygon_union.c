@@ -246,7 +246,7 @@ static amp_status meet(uctx *c, size_t i, size_t j)
 }
 
 typedef struct xspan {
-    double x0, x1;
+    double x0, x1, y0, y1;
     size_t seg;
 } xspan;
 
@@ -270,12 +270,15 @@ static amp_status find_meetings(uctx *c)
         amp_vec2 a = c->node[c->seg[i].na], b = c->node[c->seg[i].nb];
         x[i].x0 = fmin(a.x, b.x);
         x[i].x1 = fmax(a.x, b.x);
+        x[i].y0 = fmin(a.y, b.y);
+        x[i].y1 = fmax(a.y, b.y);
         x[i].seg = i;
     }
     qsort(x, c->nseg, sizeof *x, cmp_xspan);
     for (i = 0; i < c->nseg && st == AMP_OK; i++)
         for (j = i + 1; j < c->nseg && x[j].x0 <= x[i].x1 && st == AMP_OK; j++)
-            st = x[i].seg < x[j].seg ? meet(c, x[i].seg, x[j].seg) : meet(c, x[j].seg, x[i].seg);
+            if (x[j].y0 <= x[i].y1 && x[j].y1 >= x[i].y0)
+                st = x[i].seg < x[j].seg ? meet(c, x[i].seg, x[j].seg) : meet(c, x[j].seg, x[i].seg);
     amp_free(c->al, x);
     return st;
 }

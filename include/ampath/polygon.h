@@ -119,7 +119,7 @@ double amp_polyset_boundary_dist(const amp_polyset *ps, amp_vec2 q);
 /**
  * Row index of a polygon set for many point queries (a full ring scan per
  * sample point made the skin and overhang tests quadratic). Segments are listed
- * in horizontal rows (about sqrt(n) of them); a query scans one row, or
+ * in horizontal rows (about 4 sqrt(n) of them); a query scans one row, or
  * rows outward until the nearest segment is found. The set @p P is
  * borrowed and must outlive the index; memory through P's allocator.
  */
