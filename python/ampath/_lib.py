@@ -305,7 +305,8 @@ class amp_gcode_stats(Structure):
                 + [(n, _D) for n in ("print_length", "travel_length", "filament_length", "filament_volume", "time",
                                      "print_time", "travel_time", "max_travel_z")]
                 + [(n, c_size_t) for n in ("input_segments", "arcs", "travel_moves")]
-                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3), ("direct_hops", c_size_t)])
+                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3), ("direct_hops", c_size_t),
+                   ("first_layer_bbox", amp_box3), ("layers", c_size_t)])
 
 
 class amp_printer(Structure):
