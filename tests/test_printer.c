@@ -186,13 +186,18 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
         ck_assert_msg(strstr(err.msg, bad[i].why) != NULL, "case %lu: %s", (unsigned long)i, err.msg);
         ck_assert_int_eq(err.line, bad[i].line);
     }
-    /* the slicers' macro language is not evaluated: a conditional in a command is refused, in a comment kept */
+    /* an unknown variable in a command is refused with its line; in a comment it is kept as it is */
     ck_assert_int_eq(amp_printer_builtin(&p, "generic", &err), AMP_OK);
-    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>60}M190 S60{endif}\n", p.start_out,
-                                        sizeof p.start_out, &err),
+    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>60}M190 S{bed_temp}{endif}\n",
+                                        p.start_out, sizeof p.start_out, &err),
+                     AMP_OK); /* the branch is not taken: its variables are not looked up */
+    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>=60}M190 S{bed_temp}{endif}\n",
+                                        p.start_out, sizeof p.start_out, &err),
                      AMP_ERR_PARSE);
     ck_assert_int_eq(err.line, 2);
+    ck_assert_msg(strstr(err.msg, "unknown variable 'bed_temp'") != NULL, "%s", err.msg);
     ck_assert_int_eq(amp_printer_expand(&p, "G28 ; [whatever] {x}", p.start_out, sizeof p.start_out, &err), AMP_OK);
+    ck_assert_str_eq(p.start_out, "G28 ; [whatever] {x}");
     ck_assert_int_eq(amp_printer_expand(&p, "M104 S[temperature]", p.start_out, 8, &err), AMP_ERR_LIMIT);
 }
 END_TEST

@@ -65,6 +65,7 @@ AMP_ERROR_MSG_SIZE = 200
 AMP_PRINTER_NAME_MAX = 64
 AMP_PRINTER_GCODE_MAX = 8192
 AMP_PRINTER_UNKNOWN_MAX = 4096
+AMP_PRINTER_VARS_MAX = 32768
 AMP_OUT_PATH_MAX = 4096
 
 
@@ -322,7 +323,8 @@ class amp_printer(Structure):
                                      "max_feed_z", "max_feed_e", "max_volumetric_flow", "extrusion_multiplier")]
                 + [("start_gcode", c_char * AMP_PRINTER_GCODE_MAX), ("end_gcode", c_char * AMP_PRINTER_GCODE_MAX),
                    ("unknown", c_char * AMP_PRINTER_UNKNOWN_MAX), ("n_unknown", c_size_t), ("n_keys", c_size_t),
-                   ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX)])
+                   ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX),
+                   ("vars", c_char * AMP_PRINTER_VARS_MAX), ("vars_len", c_size_t), ("n_vars_dropped", c_size_t)])
 
 
 # C name -> mirror, for python/tests/test_layout.py

@@ -484,7 +484,13 @@ class Printer:
         return lib.amp_printer_bead_width(ctypes.byref(self._p))
 
     def as_dict(self):
-        return {n: getattr(self, n) for n, _ in L.amp_printer._fields_ if not n.endswith("_out")}
+        return {n: getattr(self, n) for n, _ in L.amp_printer._fields_ if not n.endswith("_out") and n != "vars"}
+
+    def variables(self):
+        """Every key of the `.ini` (but start_gcode/end_gcode) with its value as written, for the macros."""
+        raw = ctypes.string_at(ctypes.addressof(self._p) + L.amp_printer.vars.offset, self._p.vars_len)
+        parts = raw.split(b"\0")[:-1]
+        return {k.decode(): v.decode() for k, v in zip(parts[0::2], parts[1::2])}
 
     def __repr__(self):
         return "Printer(%r)" % self.name
