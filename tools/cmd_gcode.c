@@ -256,9 +256,9 @@ static int part_volume(const char *mesh, double *vol)
     return CLI_OK;
 }
 
-/* Load the paths, check that the job fits (before any file is touched), write it, report. */
-static int run_job(const char *in, const char *out, int json, const amp_printer *pr, const amp_gcode_opts *o,
-                   double part)
+/* Load the paths, expand the profile's start/end G-code for the placed job, check that the job fits (before
+ * any file is touched), write it, report. */
+static int run_job(const char *in, const char *out, int json, amp_printer *pr, amp_gcode_opts *o, double part)
 {
     static amp_gcode_iter it;
     amp_pathset ps;
@@ -270,6 +270,8 @@ static int run_job(const char *in, const char *out, int json, const amp_printer 
     amp_error_clear(&err);
     rc = cli_load_paths("gcode", in, &ps);
     t0 = cli_now();
+    if (rc == CLI_OK && amp_printer_gcode_job(pr, o, &ps, &it, &err) != AMP_OK)
+        rc = cli_fail_err("gcode", &err);
     if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, o, &err) != AMP_OK)
         rc = cli_fail_err("gcode", &err);
     st = it.est;

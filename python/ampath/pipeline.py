@@ -548,6 +548,8 @@ def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_
 
 def _gcode_held(paths, output, o, pr, keep):
     st, err = L.new(L.amp_gcode_stats), _err()
+    # the profile's start/end macros see the placed job, as in `ampath gcode` (the same bytes)
+    _check(lib.amp_printer_gcode_job(ctypes.byref(pr._p), ctypes.byref(o), paths._ref, None, ctypes.byref(err)), err)
     if output is None:
         from .core import _to_buf
         data = _to_buf(lambda sink, buf, e: lib.amp_gcode_write(paths._ref, ctypes.byref(o), sink, buf,
