@@ -540,7 +540,7 @@ static amp_status var_ref(amp_pr_ctx *c, const char **name, size_t *n, long *ind
     if (whole(c, &ix, at, "an index", &k) != AMP_OK)
         return c->st;
     if (k < 0)
-        return amp_pr_fail(c, AMP_ERR_PARSE, at, "index %lld out of range: negative", k);
+        return amp_pr_fail(c, AMP_ERR_PARSE, at, "index %ld out of range: negative", (long)k);
     *index = (long)k;
     return AMP_OK;
 }
@@ -1033,7 +1033,7 @@ static amp_status legacy_index(amp_pr_ctx *c, const char *ix, size_t ixn, long *
     if (amp_pr_var(c, ix, ixn, -1, ix, &v, NULL) != AMP_OK || whole(c, &v, ix, "an index", &k) != AMP_OK)
         return c->st;
     if (k < 0)
-        return amp_pr_fail(c, AMP_ERR_PARSE, ix, "index %lld out of range: negative", k);
+        return amp_pr_fail(c, AMP_ERR_PARSE, ix, "index %ld out of range: negative", (long)k);
     *index = (long)k;
     return AMP_OK;
 }
