@@ -908,6 +908,27 @@ static int assignment(const char *s)
     return *s == '=' && s[1] != '=' && s[1] != '~';
 }
 
+/*
+ * e_retracted[i] = x: PrusaSlicer's output variables (e_retracted, e_restart_extra, e_position) tell its
+ * writer the extruder's state after the sequence (the XL's start ends with one). Accepted and evaluated,
+ * without effect: ampath's writer keeps its own extruder state. Other assignments are refused.
+ */
+static amp_status output_assignment(amp_pr_ctx *c)
+{
+    amp_pr_val v;
+    const char *at = c->s, *name;
+    size_t n;
+    long index;
+    if (var_ref(c, &name, &n, &index) != AMP_OK)
+        return c->st;
+    if (!is_word(name, n, "e_retracted") && !is_word(name, n, "e_restart_extra") && !is_word(name, n, "e_position"))
+        return amp_pr_fail(c, AMP_ERR_PARSE, at, "assignments are not supported in the macros (but to e_retracted, "
+                           "e_restart_extra, e_position, which ampath ignores)");
+    if (expect(c, '=') != AMP_OK)
+        return c->st;
+    return expr(c, &v);
+}
+
 /* expression; expression; ... } : each value printed. */
 static amp_status statements(amp_pr_ctx *c)
 {
@@ -924,11 +945,12 @@ static amp_status statements(amp_pr_ctx *c)
             c->s++;
             return AMP_OK;
         }
-        if (assignment(c->s))
-            return amp_pr_fail(c, AMP_ERR_PARSE, NULL, "assignments are not supported in the macros");
-        if (expr(c, &v) != AMP_OK)
+        if (assignment(c->s)) {
+            if (output_assignment(c) != AMP_OK)
+                return c->st;
+        } else if (expr(c, &v) != AMP_OK) {
             return c->st;
-        if (!c->skip) {
+        } else if (!c->skip) {
             size_t n = amp_pr_text(&v, buf, &t);
             if (put(c, t, n) != AMP_OK)
                 return c->st;

@@ -319,7 +319,7 @@ static void field_value(const amp_pr_ctx *c, int f, amp_pr_val *v)
 /* ---------------------------------------------------------------- runtime variables */
 
 enum { R_TOOL, R_LAYER_NUM, R_LAYER_Z, R_MAX_Z, R_LAYERS, R_FL_MIN, R_FL_MAX, R_FL_SIZE, R_BED_MIN, R_BED_MAX,
-       R_BED_SIZE, R_USED, R_WIPE, R_TOOLCHANGES, R_EXTRUDERS };
+       R_BED_SIZE, R_USED, R_WIPE, R_TOOLCHANGES, R_EXTRUDERS, R_ZHOP };
 
 static int runtime_id(const char *name, size_t n)
 {
@@ -332,7 +332,7 @@ static int runtime_id(const char *name, size_t n)
                 {"first_layer_print_max", R_FL_MAX}, {"first_layer_print_size", R_FL_SIZE},
                 {"print_bed_min", R_BED_MIN}, {"print_bed_max", R_BED_MAX}, {"print_bed_size", R_BED_SIZE},
                 {"is_extruder_used", R_USED}, {"has_wipe_tower", R_WIPE}, {"total_toolchanges", R_TOOLCHANGES},
-                {"num_extruders", R_EXTRUDERS}};
+                {"num_extruders", R_EXTRUDERS}, {"zhop", R_ZHOP}};
     size_t i;
     for (i = 0; i < sizeof keys / sizeof keys[0]; i++)
         if (strlen(keys[i].key) == n && memcmp(keys[i].key, name, n) == 0)
@@ -367,7 +367,8 @@ static double xy_value(const amp_pr_ctx *c, int r, size_t k)
     }
 }
 
-/* Runtime variable @p r, value @p k: ampath prints with one extruder, no wipe tower, no tool changes. */
+/* Runtime variable @p r, value @p k: ampath prints with the first extruder only (the others unused), no wipe
+ * tower, no tool changes. */
 static void runtime_value(amp_pr_ctx *c, int r, size_t k, amp_pr_val *v)
 {
     const amp_printer_job *j = c->job;
@@ -377,9 +378,10 @@ static void runtime_value(amp_pr_ctx *c, int r, size_t k, amp_pr_val *v)
     case R_LAYERS: v->i = j ? j->layers : 0; break;
     case R_LAYER_Z: v->t = MV_NUM; v->d = j ? j->layer_z : 0.0; break;
     case R_MAX_Z: v->t = MV_NUM; v->d = j ? j->max_layer_z : 0.0; break;
+    case R_ZHOP: v->t = MV_NUM; v->d = 0.0; break; /* the lift in effect: none before and after the job */
     case R_USED: v->t = MV_BOOL; v->i = k == 0; break;
     case R_WIPE: v->t = MV_BOOL; v->i = 0; break;
-    case R_EXTRUDERS: v->i = 1; break;
+    case R_EXTRUDERS: v->i = (long long)extruders(c->p); break; /* the printer's, as PrusaSlicer's */
     case R_TOOL: case R_TOOLCHANGES: v->i = 0; break;
     default: v->t = MV_NUM; v->d = xy_value(c, r, k); break;
     }

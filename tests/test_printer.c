@@ -361,10 +361,13 @@ START_TEST(macro_functions_and_variables)
         /* runtime variables without a job */
         {"{initial_tool}{initial_extruder}{current_extruder}{layer_num}", "0000"},
         {"{num_extruders} {total_toolchanges} {has_wipe_tower} {is_extruder_used[0]} {is_extruder_used[1]}",
-         "1 0 false true false"},
+         "2 0 false true false"}, /* the profile has two extruders (nozzle_diameter); the job uses the first */
         {"{print_bed_min[0]},{print_bed_max[1]} {print_bed_size[0]}x{print_bed_size[1]}", "0,210 250x210"},
         {"{first_layer_print_min[0]},{first_layer_print_max[1]} {first_layer_print_size[0]}", "0,210 250"},
         {"{max_layer_z} {layer_z} {total_layer_count}", "0 0 0"},
+        {"M217 Z{max(zhop, 2.0)}", "M217 Z2"}, /* the XL's start: no lift in effect */
+        {"G1 E-1\n{e_retracted[initial_tool] = retract_length[initial_tool]}\nG92 E0", "G1 E-1\n\nG92 E0"},
+        {"{if false}{e_restart_extra[0] = undefined_z}{endif}", ""},
     };
     static amp_printer twice;
     static const char ini[] = "print_settings_id = A\nnotes = n\nprint_settings_id = B C\n";
@@ -463,6 +466,8 @@ START_TEST(macro_errors_name_the_line_and_column)
         {"{year}", "refused", 1, 2},
         {"{random(1, 2)}", "refused", 1, 2},
         {"{x = 1}", "assignments", 1, 2},
+        {"{e_retracted[0] = foo}", "unknown variable 'foo'", 1, 19},
+        {"{e_retracted[0] = }", "expected a value before", 1, 19},
         {"{local x = 1}", "not supported", 1, 2},
         {"{1 + true}", "needs numbers", 1, 4},
         {"{-\"a\"}", "needs a number", 1, 2},
@@ -707,6 +712,7 @@ START_TEST(built_in_sequences_expand_as_before)
     ck_assert_ptr_null(o.end_gcode);
     /* built-in profiles have the keys every slicer export has, empty */
     expands_to(&p, "<{print_settings_id}|{filament_settings_id[0]}|{printer_notes}>{z_offset}", "<||>0");
+    expands_to(&p, "{num_extruders} {size(is_extruder_used)} {is_extruder_used[0]}", "1 1 true");
 }
 END_TEST
 
