@@ -47,7 +47,8 @@ const char cmd_gcode_usage[] =
     "  --z-offs Z, --theta DEG head cone of the direct-hop test (docs/interfaces.md §2: 0.5 mm, 72 degrees)\n"
     "  --junction-deviation J  junction deviation of the time estimate, mm (0.05)\n"
     "  --relative-e / --absolute-e   M83 or M82 (default: klipper relative, marlin absolute)\n"
-    "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's\n"
+    "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's (taken as it is;\n"
+    "                          the profile's are expanded in the slicers' macro language for the placed job)\n"
     "  -o, --output FILE       write the G-code to FILE (replaced atomically; nothing written on an error)\n"
     "  --json                  the figures as one JSON object (see docs/gcode.md)\n"
     "A job that does not fit the printer's bed volume is refused (exit 2) and nothing is written.\n";
