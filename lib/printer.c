@@ -367,6 +367,18 @@ static amp_status gcode_job_in(amp_printer *p, amp_gcode_opts *o, const amp_path
     return AMP_OK;
 }
 
+/* Without the caller's iterator, one on the stack (as amp_gcode_write). Kept out of line so that a caller
+ * that passes its own (small targets) does not get this frame too. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static amp_status gcode_job_on_stack(amp_printer *p, amp_gcode_opts *o, const amp_pathset *ps, int which,
+                                     amp_error *err)
+{
+    amp_gcode_iter it;
+    return gcode_job_in(p, o, ps, &it, which, err);
+}
+
 amp_status amp_printer_gcode_job(amp_printer *p, amp_gcode_opts *o, const amp_pathset *ps, amp_gcode_iter *scratch,
                                  amp_error *err)
 {
@@ -377,9 +389,5 @@ amp_status amp_printer_gcode_job(amp_printer *p, amp_gcode_opts *o, const amp_pa
             (own_seq(o->end_gcode, p->end_out, p->end_gcode) ? 2 : 0);
     if (!which)
         return AMP_OK;
-    if (!scratch) {
-        amp_gcode_iter it; /* as amp_gcode_write: the writer's state is plain data */
-        return gcode_job_in(p, o, ps, &it, which, err);
-    }
-    return gcode_job_in(p, o, ps, scratch, which, err);
+    return scratch ? gcode_job_in(p, o, ps, scratch, which, err) : gcode_job_on_stack(p, o, ps, which, err);
 }
