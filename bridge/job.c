@@ -157,7 +157,9 @@ static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const 
         return -1;
     }
     j->go.flavor = flavor == AMP_PROTO_KLIPPER ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN;
-    if (amp_gcode_iter_init(&j->it, &j->ps, &j->go, &err) != AMP_OK) {
+    /* the profile's start/end macros see the placed job, as in `ampath gcode` */
+    if (amp_printer_gcode_job(&j->pr, &j->go, &j->ps, &j->it, &err) != AMP_OK ||
+        amp_gcode_iter_init(&j->it, &j->ps, &j->go, &err) != AMP_OK) {
         snprintf(why, whylen, "%s: %s", path, err.msg);
         amp_pathset_free(&j->ps);
         return -1;

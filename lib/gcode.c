@@ -476,7 +476,7 @@ static void reset_run(amp_gcode_iter *it, int pass)
     memset(&it->stats, 0, sizeof it->stats);
     it->stats.max_travel_z = -HUGE_VAL;
     it->stats.first_layer_z = HUGE_VAL;
-    it->stats.bbox = amp_box3_empty();
+    it->stats.bbox = it->stats.first_layer_bbox = amp_box3_empty();
     memset(&it->last, 0, sizeof it->last);
 }
 
@@ -677,6 +677,9 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     if (de > 0.0 && !it->printed_any)
         it->stats.first_layer_z = fmin(a.z, b.z) + it->off.z;
     it->stats.bbox = amp_box3_add(amp_box3_add(it->stats.bbox, amp_v3_add(a, it->off)), amp_v3_add(b, it->off));
+    if (it->path_first) /* for the start G-code's first_layer_print_min/max (printer.h) */
+        it->stats.first_layer_bbox = amp_box3_add(amp_box3_add(it->stats.first_layer_bbox, amp_v3_add(a, it->off)),
+                                                  amp_v3_add(b, it->off));
     /* an arc enters the planner as one block of its length along its chord */
     amp_gc_plan_move(it, arc && amp_v3_len(d) > 0.0 ? amp_v3_scale(d, len / amp_v3_len(d)) : d, len, feed, de, 0);
     it->pos = b;
@@ -1088,6 +1091,8 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
         if (lay > it->layer)
             it->layer = lay > 100000 ? 100000 : (int)lay;
     }
+    if ((size_t)it->layer + 1 > it->stats.layers) /* total_layer_count of the printer macros */
+        it->stats.layers = (size_t)it->layer + 1;
 }
 
 /*

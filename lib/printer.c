@@ -1,13 +1,15 @@
 /*
  * Printer profiles (docs/interfaces.md §5): the built-in machines, range checks, the
- * placeholder expansion of start/end G-code, and the mapping onto the G-code
- * writer's options. The `.ini` reader is in printer_ini.c.
+ * expansion of start/end G-code for a job, and the mapping onto the G-code
+ * writer's options. The `.ini` reader is in printer_ini.c, the macro
+ * language in printer_macro.c (with printer_vars.c and printer_regex.c).
  */
 #include <math.h>
 #include <string.h>
 
 #include "ampath/io.h"
 #include "ampath/printer.h"
+#include "printer_internal.h"
 
 typedef struct builtin {
     const char *name, *about;
@@ -198,154 +200,41 @@ amp_status amp_printer_check(const amp_printer *p, amp_error *err)
     return AMP_OK;
 }
 
-/* ---------------------------------------------------------------- placeholders */
+/* ---------------------------------------------------------------- start and end G-code */
 
-/* Value of placeholder @p name (length @p n): 1 number in *v, 2 the string *s, 0 unknown. */
-static int placeholder(const amp_printer *p, const char *name, size_t n, double *v, const char **s)
+void amp_printer_job_none(const amp_printer *p, amp_printer_job *job)
 {
-    static const struct {
-        const char *key;
-        int field;
-    } keys[] = {{"temperature", 0},
-                {"nozzle_temperature", 0},
-                {"first_layer_temperature", 1},
-                {"nozzle_temperature_initial_layer", 1},
-                {"bed_temperature", 2},
-                {"hot_plate_temp", 2},
-                {"first_layer_bed_temperature", 3},
-                {"hot_plate_temp_initial_layer", 3},
-                {"bed_temperature_initial_layer_single", 3},
-                {"nozzle_diameter", 4},
-                {"filament_diameter", 5},
-                {"layer_height", 6},
-                {"first_layer_height", 7},
-                {"initial_layer_print_height", 7},
-                {"max_print_height", 8},
-                {"travel_speed", 9},
-                {"retract_length", 10},
-                {"initial_extruder", 11},
-                {"current_extruder", 11},
-                {"initial_tool", 11},
-                {"printer_model", 12}};
-    size_t i;
-    for (i = 0; i < sizeof keys / sizeof keys[0]; i++) {
-        if (strlen(keys[i].key) != n || strncmp(keys[i].key, name, n) != 0)
-            continue;
-        switch (keys[i].field) {
-        case 0: *v = p->temp; return 1;
-        case 1: *v = p->first_layer_temp; return 1;
-        case 2: *v = p->bed_temp; return 1;
-        case 3: *v = p->first_layer_bed_temp; return 1;
-        case 4: *v = p->nozzle_diameter; return 1;
-        case 5: *v = p->filament_diameter; return 1;
-        case 6: *v = p->layer_height; return 1;
-        case 7: *v = p->first_layer_height; return 1;
-        case 8: *v = p->max_height; return 1;
-        case 9: *v = p->travel_speed; return 1;
-        case 10: *v = p->retract_length; return 1;
-        case 11: *v = 0.0; return 1;
-        default: *s = p->model; return 2;
-        }
+    memset(job, 0, sizeof *job);
+    if (p) { /* without a job the first layer may lie anywhere on the bed */
+        job->first_layer_min[0] = p->bed_min_x;
+        job->first_layer_min[1] = p->bed_min_y;
+        job->first_layer_max[0] = p->bed_max_x;
+        job->first_layer_max[1] = p->bed_max_y;
     }
-    return 0;
 }
 
-/* A number with at most 3 decimals, trailing zeros dropped (no float printf: the library builds for newlib-nano). */
-static size_t fmt_num(char *buf, double v)
+amp_status amp_printer_expand_job(const amp_printer *p, const amp_printer_job *job, const char *tmpl, char *out,
+                                  size_t cap, amp_error *err)
 {
-    long long u = llround(fabs(v) * 1000.0);
-    char tmp[32];
-    size_t k = 0, n = 0;
-    int i, frac = (int)(u % 1000);
-    long long ip = u / 1000;
-    if (v < 0 && u > 0)
-        buf[n++] = '-';
-    do {
-        tmp[k++] = (char)('0' + (int)(ip % 10));
-        ip /= 10;
-    } while (ip && k < sizeof tmp);
-    while (k)
-        buf[n++] = tmp[--k];
-    if (frac) {
-        buf[n++] = '.';
-        for (i = 100; i > 0 && frac; i /= 10) {
-            buf[n++] = (char)('0' + frac / i);
-            frac %= i;
-        }
-    }
-    buf[n] = '\0';
-    return n;
-}
-
-/* Name part of a placeholder body "key", "key[0]" or "key_0": its length. */
-static size_t placeholder_name(const char *b, size_t n)
-{
-    size_t k = 0, j;
-    while (k < n && b[k] != '[')
-        k++;
-    if (k < n) /* key[digits] */
-        return k;
-    for (j = n; j > 0 && b[j - 1] >= '0' && b[j - 1] <= '9'; j--)
-        ;
-    if (j < n && j > 1 && b[j - 1] == '_') /* key_digits */
-        return j - 1;
-    return n;
-}
-
-static amp_status put(char *out, size_t cap, size_t *o, const char *s, size_t n, amp_error *err)
-{
-    if (*o + n + 1 > cap)
-        return amp_fail(err, AMP_ERR_LIMIT, 0, "expanded G-code longer than %lu bytes", (unsigned long)cap - 1);
-    memcpy(out + *o, s, n);
-    *o += n;
-    out[*o] = '\0';
-    return AMP_OK;
+    return amp_pr_expand(p, job, tmpl, out, cap, NULL, err);
 }
 
 amp_status amp_printer_expand(const amp_printer *p, const char *tmpl, char *out, size_t cap, amp_error *err)
 {
-    size_t o = 0;
-    long line = 1;
-    int comment = 0;
-    const char *s;
-    if (!p || !tmpl || !out || cap == 0)
-        return amp_fail(err, AMP_ERR_ARG, 0, "printer: NULL argument to expand");
-    out[0] = '\0';
-    for (s = tmpl; *s; s++) {
-        char close = *s == '[' ? ']' : *s == '{' ? '}' : 0;
-        const char *e = close ? strchr(s + 1, close) : NULL;
-        const char *nl = strchr(s, '\n');
-        amp_status st;
-        if (*s == '\n') {
-            line++;
-            comment = 0;
-        } else if (*s == ';') {
-            comment = 1;
-        }
-        if (e && (!nl || e < nl) && e > s + 1) {
-            size_t body = (size_t)(e - s - 1), nn = placeholder_name(s + 1, body);
-            double v = 0.0;
-            const char *str = NULL;
-            int kind = placeholder(p, s + 1, nn, &v, &str);
-            if (kind == 0 && !comment)
-                return amp_fail(err, AMP_ERR_PARSE, line,
-                                "G-code line %ld: placeholder %.*s is not supported (ampath expands the temperatures, "
-                                "diameters and heights; no {if} blocks): replace it in the profile", line,
-                                (int)(body + 2 > 60 ? 60 : body + 2), s);
-            if (kind != 0) {
-                char num[40];
-                st = kind == 1 ? put(out, cap, &o, num, fmt_num(num, v), err) : put(out, cap, &o, str, strlen(str), err);
-                if (st != AMP_OK)
-                    return st;
-                s = e;
-                continue;
-            }
-        }
-        st = put(out, cap, &o, s, 1, err);
-        if (st != AMP_OK)
-            return st;
+    return amp_pr_expand(p, NULL, tmpl, out, cap, NULL, err);
+}
+
+/* Expand one of p's sequences; the message names it ("start G-code line 3, ..."). */
+static amp_status expand_seq(amp_printer *p, const amp_printer_job *job, int end, int *used, amp_error *err)
+{
+    amp_status st = amp_pr_expand(p, job, end ? p->end_gcode : p->start_gcode, end ? p->end_out : p->start_out,
+                                  AMP_PRINTER_GCODE_MAX, used, err);
+    if (st != AMP_OK && err) {
+        char msg[AMP_ERROR_MSG_SIZE];
+        copy_str(msg, sizeof msg, err->msg);
+        amp_fail(err, st, err->line, "printer '%s': %s %s", p->name, end ? "end" : "start", msg);
     }
-    return AMP_OK;
+    return st;
 }
 
 /* ---------------------------------------------------------------- the writer's options */
@@ -359,9 +248,9 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
         return amp_fail(err, AMP_ERR_ARG, 0, "printer: NULL profile or options");
     st = amp_printer_check(p, err);
     if (st == AMP_OK)
-        st = amp_printer_expand(p, p->start_gcode, p->start_out, sizeof p->start_out, err);
+        st = expand_seq(p, NULL, 0, NULL, err);
     if (st == AMP_OK)
-        st = amp_printer_expand(p, p->end_gcode, p->end_out, sizeof p->end_out, err);
+        st = expand_seq(p, NULL, 1, NULL, err);
     if (st != AMP_OK)
         return st;
     amp_gcode_opts_default(o, p->flavor);
@@ -395,4 +284,110 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
     o->start_gcode = p->start_out[0] ? p->start_out : NULL;
     o->end_gcode = p->end_out[0] ? p->end_out : NULL;
     return AMP_OK;
+}
+
+/* Is o's sequence (@p cur) still p's own (@p own, its template @p tmpl), not one the caller replaced? */
+static int own_seq(const char *cur, const char *own, const char *tmpl)
+{
+    return tmpl[0] && (cur == own || (!cur && !own[0]));
+}
+
+/* The job of the start and end macros from the writer's dry run (it->est). */
+static void job_of(const amp_gcode_iter *it, amp_printer_job *job)
+{
+    const amp_gcode_stats *e = &it->est;
+    amp_box3 fl = e->first_layer_bbox;
+    if (!(fl.min.x <= fl.max.x)) /* no first layer (a job placed at its own coordinates, above the bed) */
+        fl = e->bbox;
+    job->max_layer_z = e->bbox.max.z;
+    job->layers = (long)e->layers;
+    job->first_layer_min[0] = fl.min.x;
+    job->first_layer_min[1] = fl.min.y;
+    job->first_layer_max[0] = fl.max.x;
+    job->first_layer_max[1] = fl.max.y;
+    job->layer_z = e->first_layer_z;
+    job->layer_num = 0;
+}
+
+/* Expand p's own sequences (@p which: 1 start, 2 end) with @p job; *used = a job variable was read. */
+static amp_status expand_both(amp_printer *p, amp_printer_job *job, int which, int *used, amp_error *err)
+{
+    int u = 0;
+    amp_status st = AMP_OK;
+    double z1 = job->layer_z;
+    *used = 0;
+    if (which & 1)
+        st = expand_seq(p, job, 0, &u, err);
+    *used |= u;
+    job->layer_num = job->layers > 0 ? job->layers - 1 : 0; /* the end runs after the last layer */
+    job->layer_z = job->max_layer_z;
+    if (st == AMP_OK && (which & 2))
+        st = expand_seq(p, job, 1, &u, err);
+    *used |= u;
+    job->layer_num = 0;
+    job->layer_z = z1;
+    return st;
+}
+
+/* The dry run of the writer in @p it: the placed job (start/end left out: they are what is being made). */
+static amp_status dry_run(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, amp_error *err)
+{
+    amp_gcode_opts d = *o;
+    d.start_gcode = d.end_gcode = NULL;
+    return amp_gcode_iter_init(it, ps, &d, err);
+}
+
+static amp_status gcode_job_in(amp_printer *p, amp_gcode_opts *o, const amp_pathset *ps, amp_gcode_iter *it,
+                               int which, amp_error *err)
+{
+    amp_printer_job job;
+    amp_status st;
+    int used = 0;
+    amp_printer_job_none(p, &job);
+    job.opts = o;
+    job.first_layer_min[0] = o->bed_min_x;
+    job.first_layer_min[1] = o->bed_min_y;
+    job.first_layer_max[0] = o->bed_max_x;
+    job.first_layer_max[1] = o->bed_max_y;
+    /* most sequences read no job variable: then the writer's dry run is not needed */
+    st = expand_both(p, &job, which, &used, err);
+    if (used) {
+        st = dry_run(it, ps, o, err);
+        if (st == AMP_OK) {
+            job_of(it, &job);
+            st = expand_both(p, &job, which, &used, err);
+        }
+    }
+    if (st != AMP_OK)
+        return st;
+    if (which & 1)
+        o->start_gcode = p->start_out[0] ? p->start_out : NULL;
+    if (which & 2)
+        o->end_gcode = p->end_out[0] ? p->end_out : NULL;
+    return AMP_OK;
+}
+
+/* Without the caller's iterator, one on the stack (as amp_gcode_write). Kept out of line so that a caller
+ * that passes its own (small targets) does not get this frame too. */
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+static amp_status gcode_job_on_stack(amp_printer *p, amp_gcode_opts *o, const amp_pathset *ps, int which,
+                                     amp_error *err)
+{
+    amp_gcode_iter it;
+    return gcode_job_in(p, o, ps, &it, which, err);
+}
+
+amp_status amp_printer_gcode_job(amp_printer *p, amp_gcode_opts *o, const amp_pathset *ps, amp_gcode_iter *scratch,
+                                 amp_error *err)
+{
+    int which;
+    if (!p || !o || !ps)
+        return amp_fail(err, AMP_ERR_ARG, 0, "printer: NULL profile, options or paths");
+    which = (own_seq(o->start_gcode, p->start_out, p->start_gcode) ? 1 : 0) |
+            (own_seq(o->end_gcode, p->end_out, p->end_gcode) ? 2 : 0);
+    if (!which)
+        return AMP_OK;
+    return scratch ? gcode_job_in(p, o, ps, scratch, which, err) : gcode_job_on_stack(p, o, ps, which, err);
 }

@@ -4,13 +4,15 @@
  * slicers' own key names (OrcaSlicer's as aliases), the first value of a
  * multi-extruder list, C-style escapes in the G-code strings. Unknown keys
  * are collected, not fatal: a full slicer export has hundreds of keys that
- * only matter to a slicer.
+ * only matter to a slicer. Every value is also kept as written for the
+ * start/end G-code macros (printer_vars.c).
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ampath/printer.h"
+#include "printer_internal.h"
 
 enum {
     K_BED_SHAPE, K_MAX_HEIGHT, K_NOZZLE, K_FILAMENT, K_LAYER, K_FIRST_LAYER, K_TEMP, K_TEMP1, K_BED, K_BED1,
@@ -243,6 +245,8 @@ static amp_status ini_line(amp_printer *p, ini_ctx *c, const char *s, size_t n, 
         v++, vn--;
     p->n_keys++;
     id = key_id(s, kn);
+    if (id != K_START && id != K_END) /* every value for the macros: they may read any key */
+        amp_pr_vars_set(p, s, kn, v, vn);
     if (id < 0) {
         note_unknown(p, s, kn);
         return AMP_OK;

@@ -186,13 +186,18 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
         ck_assert_msg(strstr(err.msg, bad[i].why) != NULL, "case %lu: %s", (unsigned long)i, err.msg);
         ck_assert_int_eq(err.line, bad[i].line);
     }
-    /* the slicers' macro language is not evaluated: a conditional in a command is refused, in a comment kept */
+    /* an unknown variable in a command is refused with its line; in a comment it is kept as it is */
     ck_assert_int_eq(amp_printer_builtin(&p, "generic", &err), AMP_OK);
-    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>60}M190 S60{endif}\n", p.start_out,
-                                        sizeof p.start_out, &err),
+    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>60}M190 S{bed_temp}{endif}\n",
+                                        p.start_out, sizeof p.start_out, &err),
+                     AMP_OK); /* the branch is not taken: its variables are not looked up */
+    ck_assert_int_eq(amp_printer_expand(&p, "G28\n{if bed_temperature[0]>=60}M190 S{bed_temp}{endif}\n",
+                                        p.start_out, sizeof p.start_out, &err),
                      AMP_ERR_PARSE);
     ck_assert_int_eq(err.line, 2);
+    ck_assert_msg(strstr(err.msg, "unknown variable 'bed_temp'") != NULL, "%s", err.msg);
     ck_assert_int_eq(amp_printer_expand(&p, "G28 ; [whatever] {x}", p.start_out, sizeof p.start_out, &err), AMP_OK);
+    ck_assert_str_eq(p.start_out, "G28 ; [whatever] {x}");
     ck_assert_int_eq(amp_printer_expand(&p, "M104 S[temperature]", p.start_out, 8, &err), AMP_ERR_LIMIT);
 }
 END_TEST
@@ -251,6 +256,497 @@ START_TEST(gcode_with_an_ini_profile_uses_its_bed_temperatures_and_start)
 }
 END_TEST
 
+/* ---------------------------------------------------------------- the macro language */
+
+/* Keys as PrusaSlicer exports them: lists of numbers (,) and of strings (; quoted when they have blanks), nil,
+ * booleans as 0/1, a string with escaped line ends. */
+static const char macro_ini[] =
+    "bed_shape = 0x0,250x0,250x210,0x210\n"
+    "max_print_height = 210\n"
+    "nozzle_diameter = 0.4,0.6\n"
+    "temperature = 215,220\n"
+    "first_layer_temperature = 215,225\n"
+    "layer_height = 0.15\n"
+    "printer_model = MK3S\n"
+    "filament_type = PLA;PETG\n"
+    "filament_settings_id = \"Prusament PLA\";\"Generic PETG\"\n"
+    "print_settings_id = 0.15mm QUALITY @MK3\n"
+    "printer_notes = Don't remove the following keywords!\\nPRINTER_VENDOR_PRUSA3D\\nPRINTER_MODEL_MK3S\n"
+    "fan_always_on = 1\n"
+    "idle_temperature = nil,170\n"
+    "z_offset = 0.1\n"
+    "compatible_printers = \n"
+    "wipe_tower_x = 170\n";
+
+static amp_printer *macro_profile(void)
+{
+    static amp_printer p;
+    amp_error err;
+    ck_assert_msg(amp_printer_parse_ini(&p, macro_ini, strlen(macro_ini), "macro", &err) == AMP_OK, "%s", err.msg);
+    return &p;
+}
+
+/* Expand @p tmpl with @p p (no job) and compare with @p want. */
+static void expands_to(const amp_printer *p, const char *tmpl, const char *want)
+{
+    static char out[4096];
+    amp_error err;
+    amp_error_clear(&err);
+    ck_assert_msg(amp_printer_expand(p, tmpl, out, sizeof out, &err) == AMP_OK, "%s: %s", tmpl, err.msg);
+    ck_assert_msg(strcmp(out, want) == 0, "%s: got '%s', want '%s'", tmpl, out, want);
+}
+
+typedef struct macro_case {
+    const char *tmpl, *want;
+} macro_case;
+
+static void expand_table(const amp_printer *p, const macro_case *t, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        expands_to(p, t[i].tmpl, t[i].want);
+}
+
+START_TEST(macro_operators_and_number_formats)
+{
+    static const macro_case t[] = {
+        {"{1+2}", "3"}, {"{7/2}", "3"}, {"{-7/2}", "-3"}, {"{7.0/2}", "3.5"}, {"{7%3}", "1"}, {"{7.5%2}", "1.5"},
+        {"{-3*2}", "-6"}, {"{+5}", "5"}, {"{- -5}", "5"}, {"{2+3*4}", "14"}, {"{(2+3)*4}", "20"},
+        {"{10-4-3}", "3"}, {"{2*3%4}", "2"}, {"{1.5e2}", "150"}, {"{.5}", "0.5"}, {"{0.1+0.2}", "0.3"},
+        {"{1/3.0}", "0.333333"}, {"{2/3.0}", "0.666667"}, {"{100000*10.0}", "1e+06"}, {"{123456.7}", "123457"},
+        {"{0.00001}", "1e-05"}, {"{0.0001}", "0.0001"}, {"{-0.25}", "-0.25"}, {"{0*-1.5}", "0"},
+        {"{2147483647+1}", "2.14748e+09"}, {"{3000000000}", "3e+09"},
+        {"{\"a\" + \"b\"}", "ab"}, {"{\"T\" + 5}", "T5"}, {"{1.5 + \"mm\"}", "1.5mm"}, {"{\"\" + true}", "true"},
+        {"{\"q\\\"x\\\\\"}", "q\"x\\"}, {"{\"a\\nb\"}", "a\nb"}, {"{\"{}[];\"}", "{}[];"},
+        {"{1 < 2}", "true"}, {"{2 <= 2}", "true"}, {"{3 >= 4}", "false"}, {"{3 > 2}", "true"}, {"{2 > 3}", "false"},
+        {"{1 == 1.0}", "true"}, {"{0.1 + 0.2 == 0.3}", "true"}, {"{1 != 2}", "true"}, {"{1 <> 1}", "false"},
+        {"{\"abc\" < \"abd\"}", "true"}, {"{\"ab\" < \"abc\"}", "true"}, {"{\"b\" > \"abc\"}", "true"},
+        {"{\"5\" == 5}", "true"}, {"{true == true}", "true"}, {"{true != false}", "true"},
+        {"{true and false}", "false"}, {"{true or false}", "true"}, {"{not true}", "false"}, {"{!false}", "true"},
+        {"{true && !false}", "true"}, {"{false || true}", "true"}, {"{1 < 2 and 3 < 4}", "true"},
+        {"{false and true or true}", "true"}, {"{not (1 > 2)}", "true"}, {"{fan_always_on and true}", "true"},
+        {"{1 < 2 ? \"yes\" : \"no\"}", "yes"}, {"{1 > 2 ? \"yes\" : \"no\"}", "no"},
+        {"{false ? undefined_thing : 3}", "3"}, {"{true ? 1 : false ? 2 : 3}", "1"},
+        {"{1; 2;3}", "123"}, {"{ 1 + \n 2 }", "3"}, {"G1 X{1}Y{2}", "G1 X1Y2"}, {"{}", "{}"}, {"a}b", "a}b"},
+    };
+    expand_table(macro_profile(), t, sizeof t / sizeof t[0]);
+}
+END_TEST
+
+START_TEST(macro_functions_and_variables)
+{
+    static const macro_case t[] = {
+        {"{min(3, 5)}", "3"}, {"{max(3, 5.5)}", "5.5"}, {"{min(2.5, 1)}", "1"}, {"{max(-1, -2)}", "-1"},
+        {"{int(3.7)}", "3"}, {"{int(-3.7)}", "-3"}, {"{int(4)}", "4"}, {"{round(2.5)}", "3"}, {"{round(-2.5)}", "-3"},
+        {"{round(2.4)}", "2"}, {"{digits(5, 3)}", "  5"}, {"{zdigits(5, 3)}", "005"}, {"{digits(2.6, 0)}", "3"},
+        {"{digits(3.14159, 6, 2)}", "  3.14"}, {"{zdigits(-1.5, 6, 1)}", "-001.5"}, {"{zdigits(-7, 4)}", "-007"},
+        {"{digits(1234, 2)}", "1234"}, {"{digits(0.125, 0, 3)}", "0.125"}, {"{digits(2, 1, 2)}", "2.00"},
+        {"{is_nil(idle_temperature[0])}", "true"}, {"{is_nil(idle_temperature[1])}", "false"},
+        {"{is_nil(temperature[0])}", "false"}, {"{one_of(filament_type[1], \"PLA\", \"PETG\")}", "true"},
+        {"{one_of(\"ABS\", \"PLA\", /P.*/)}", "false"}, {"{one_of(\"PETG\", /PE.*/)}", "true"},
+        {"{one_of(\"x\", ~\"x|y\")}", "true"}, {"{one_of(\"x\")}", "false"}, {"{size(nozzle_diameter)}", "2"},
+        {"{size(layer_height)}", "1"}, {"{empty(compatible_printers)}", "true"}, {"{empty(temperature)}", "false"},
+        /* lists: by index, and the first value without one */
+        {"{nozzle_diameter[1]}", "0.6"}, {"{nozzle_diameter}", "0.4"}, {"{temperature[1]}", "220"},
+        {"{temperature[1] / 3}", "73"}, {"{nozzle_diameter[1] / 2}", "0.3"}, {"{nozzle_diameter[1-1]}", "0.4"},
+        {"{temperature[initial_tool]}", "215"}, {"{filament_settings_id[1]}", "Generic PETG"},
+        {"{filament_settings_id[0] + \"!\"}", "Prusament PLA!"}, {"{filament_type[1]}", "PETG"},
+        {"{print_settings_id}", "0.15mm QUALITY @MK3"}, {"{printer_model}", "MK3S"}, {"{layer_height*2}", "0.3"},
+        {"{wipe_tower_x + 1}", "171"}, {"{z_offset}", "0.1"}, {"{first_layer_temperature[1]}", "225"},
+        /* the legacy placeholders */
+        {"[temperature]", "215"}, {"[temperature_1]", "220"}, {"[temperature[1]]", "220"},
+        {"[nozzle_diameter_0]", "0.4"}, {"[temperature[initial_extruder]]", "215"}, {"[printer_model]", "MK3S"},
+        {"[has_wipe_tower]", "0"}, {"[first_layer_temperature_1]", "225"}, {"M104 S[temperature];x", "M104 S215;x"},
+        {"a[ b", "a[ b"}, {"[", "["},
+        /* runtime variables without a job */
+        {"{initial_tool}{initial_extruder}{current_extruder}{layer_num}", "0000"},
+        {"{num_extruders} {total_toolchanges} {has_wipe_tower} {is_extruder_used[0]} {is_extruder_used[1]}",
+         "2 0 false true false"}, /* the profile has two extruders (nozzle_diameter); the job uses the first */
+        {"{print_bed_min[0]},{print_bed_max[1]} {print_bed_size[0]}x{print_bed_size[1]}", "0,210 250x210"},
+        {"{first_layer_print_min[0]},{first_layer_print_max[1]} {first_layer_print_size[0]}", "0,210 250"},
+        {"{max_layer_z} {layer_z} {total_layer_count}", "0 0 0"},
+        {"M217 Z{max(zhop, 2.0)}", "M217 Z2"}, /* the XL's start: no lift in effect */
+        {"G1 E-1\n{e_retracted[initial_tool] = retract_length[initial_tool]}\nG92 E0", "G1 E-1\n\nG92 E0"},
+        {"{if false}{e_restart_extra[0] = undefined_z}{endif}", ""},
+    };
+    static amp_printer twice;
+    static const char ini[] = "print_settings_id = A\nnotes = n\nprint_settings_id = B C\n";
+    amp_error err;
+    expand_table(macro_profile(), t, sizeof t / sizeof t[0]);
+    /* concatenated files: a later key replaces an earlier one, as in the slicers */
+    ck_assert_int_eq(amp_printer_parse_ini(&twice, ini, strlen(ini), "twice", &err), AMP_OK);
+    expands_to(&twice, "{print_settings_id}|{notes}", "B C|n");
+    ck_assert_uint_eq(twice.vars_len, strlen("notes") + strlen("n") + strlen("print_settings_id") + strlen("B C") + 4);
+}
+END_TEST
+
+START_TEST(macro_regular_expressions)
+{
+    static const macro_case t[] = {
+        {"{print_settings_id =~ /.*QUALITY.*/}", "true"}, {"{print_settings_id !~ /.*QUALITY.*/}", "false"},
+        {"{print_settings_id =~ /.*(DETAIL @MK3|QUALITY @MK3).*/}", "true"},
+        {"{print_settings_id =~ /.*(SPEED @MK3|DRAFT @MK3).*/}", "false"},
+        {"{printer_notes =~ /.*PRINTER_VENDOR_PRUSA3D.*/}", "true"}, /* `.` takes line ends too */
+        {"{\"abc\" =~ /a.c/}", "true"}, {"{\"abc\" =~ /ab/}", "false"}, {"{\"aaa\" =~ /a+/}", "true"},
+        {"{\"\" =~ /a*/}", "true"}, {"{\"\" =~ /a+/}", "false"}, {"{\"ac\" =~ /ab?c/}", "true"},
+        {"{\"abbc\" =~ /ab?c/}", "false"}, {"{\"x1\" =~ /[a-z]\\d/}", "true"}, {"{\"X1\" =~ /[^a-z]\\d/}", "true"},
+        {"{\"x1\" =~ /[^a-z]\\d/}", "false"}, {"{\"a|b\" =~ /a\\|b/}", "true"}, {"{\"0.25 nozzle\" =~ /0\\.25 .*/}", "true"},
+        {"{\"0x25 nozzle\" =~ /0\\.25 .*/}", "false"}, {"{\"cat\" =~ /^(cat|dog)$/}", "true"},
+        {"{\"dog\" =~ /(c|d)(a|o)(t|g)/}", "true"}, {"{\"a/b\" =~ /a\\/b/}", "true"}, {"{\"aab\" =~ /(a|aa)*b/}", "true"},
+        {"{\"_w9\" =~ /\\w+/}", "true"}, {"{\" \" =~ /\\s/}", "true"}, {"{\"ab!?\" =~ /\\S\\D\\W*/}", "true"},
+        {"{\"abc\" =~ /(?:ab)c/}", "true"}, {"{\"ab\" =~ /a(b|)/}", "true"}, {"{\"a\" =~ /a(b|)/}", "true"},
+        {"{\"b-]\" =~ /[a-c][-]]/}", "true"}, {"{\"]\" =~ /[]]/}", "true"}, {"{\"aaaa\" =~ /(a*)*b/}", "false"},
+        {"{\"ab\" =~ /a*?b+?/}", "true"}, {"{\"MK4IS\" =~ /MK4(IS)?/}", "true"}, {"{\"MK4S\" =~ /MK4(IS)?/}", "false"},
+        {"{\"x.y\" =~ /[.]\\.*/}", "false"}, {"{\".\" =~ /[.]/}", "true"}, {"{\"a\\nb\" =~ /a\\nb/}", "true"},
+    };
+    expand_table(macro_profile(), t, sizeof t / sizeof t[0]);
+}
+END_TEST
+
+START_TEST(macro_conditionals_nest_span_lines_and_sit_inline)
+{
+    static const macro_case t[] = {
+        {"{if 1 > 2}A{elsif 2 > 1}B{else}C{endif}", "B"}, {"{if false}A{elsif false}B{else}C{endif}", "C"},
+        {"{if true}A{elsif true}B{else}C{endif}", "A"}, {"{if false}A{endif}", ""},
+        {"{if true}A{else}{if undefined_x}B{endif}{endif}", "A"}, {"{if true}{if false}X{else}Y{endif}Z{endif}", "YZ"},
+        {"{if false}{if true}X{else}Y{endif}Z{else}W{endif}", "W"},
+        {"{if true}A{elsif undefined_y}B{endif}", "A"}, /* no condition is evaluated after a branch was taken */
+        {"G1\n{if true}\nA\n{endif}\nB", "G1\n\nA\n\nB"}, {"G1\n{if false}\nA\n{else}\nC\n{endif}\nB", "G1\n\nC\n\nB"},
+        {"M104 S{if layer_height < 0.2}200{else}210{endif} ; x", "M104 S200 ; x"},
+        {"{if fan_always_on}F{endif}", "F"}, {"{ if true }A{ else }B{ endif }", "A"},
+        {"{if is_nil(idle_temperature[0])}none{else}{idle_temperature[0]}{endif}", "none"},
+        {"{if filament_type[0] == \"PLA\" and nozzle_diameter[0] < 0.5}pla{endif}", "pla"},
+        /* in comments the macros run as well; what does not evaluate there stays as it is */
+        {"G28 ; [unknown] {unknown2} [temperature]", "G28 ; [unknown] {unknown2} 215"},
+        {"G28 ; {if true}A{else}B{endif}", "G28 ; A"}, {"G28 ; {1/0} {2}", "G28 ; {1/0} 2"},
+        {"G28 ; a { b\nG1", "G28 ; a { b\nG1"}, {"G28 ; [50%]", "G28 ; [50%]"},
+        {"{if true}M907 E430 ; current{endif}\nG1", "M907 E430 ; current\nG1"},
+    };
+    expand_table(macro_profile(), t, sizeof t / sizeof t[0]);
+}
+END_TEST
+
+/* A template that must be refused: the status, line and column, and a word of the message. */
+typedef struct macro_error {
+    const char *tmpl, *why;
+    long line, col;
+} macro_error;
+
+START_TEST(macro_errors_name_the_line_and_column)
+{
+    static char deep_if[512], deep_expr[512];
+    static const macro_error t[] = {
+        {"G28\nM104 S{foo}", "unknown variable 'foo'", 2, 8},
+        {"G28\n[bar]", "unknown variable 'bar'", 2, 2},
+        {"{if true}\nA", "{if} without {endif}", 1, 1},
+        {"A\n{else}", "{else} without {if}", 2, 1},
+        {"{endif}", "{endif} without {if}", 1, 1},
+        {"{elsif true}", "{elsif} without {if}", 1, 1},
+        {"{if true}{else}{else}{endif}", "{else} after {else}", 1, 16},
+        {"{\"a\" =~ /(a/}", "bad regular expression /(a/: missing )", 1, 6},
+        {"{\"a\" =~ /a)/}", "unmatched )", 1, 6},
+        {"{\"a\" =~ /[a/}", "missing ]", 1, 6},
+        {"{\"a\" =~ /*a/}", "nothing to repeat", 1, 6},
+        {"{\"a\" =~ /a{2}/}", "not supported", 1, 6},
+        {"{\"a\" =~ /(a)\\1/}", "back-references", 1, 6},
+        {"{\"a\" =~ /a}", "unterminated regular expression", 1, 9},
+        {"{1/0}", "division by zero", 1, 3},
+        {"{1.5 % 0.0}", "division by zero", 1, 6},
+        {"G1\nG1 E{nozzle_diameter[2]}", "index 2 out of range: 'nozzle_diameter' has 2 values", 2, 6},
+        {"{layer_height[1]}", "index 1 out of range: 'layer_height' has 1 value", 1, 2},
+        {"{nozzle_diameter[-1]}", "negative", 1, 18},
+        {"{nozzle_diameter[0.5]}", "an index must be an integer", 1, 18},
+        {"[temperature_5]", "index 5 out of range", 1, 2},
+        {deep_if, "nested deeper than 16", 1, 145},
+        {deep_expr, "nested too deeply", 1, 0},
+        {"{1 +}", "expected a value before '}'", 1, 5},
+        {"{(1}", "expected ')' before '}'", 1, 4},
+        {"{1 2}", "expected '}' before '2}'", 1, 4},
+        {"{timestamp}", "refused", 1, 2},
+        {"{year}", "refused", 1, 2},
+        {"{random(1, 2)}", "refused", 1, 2},
+        {"{x = 1}", "assignments", 1, 2},
+        {"{e_retracted[0] = foo}", "unknown variable 'foo'", 1, 19},
+        {"{e_retracted[0] = }", "expected a value before", 1, 19},
+        {"{local x = 1}", "not supported", 1, 2},
+        {"{1 + true}", "needs numbers", 1, 4},
+        {"{-\"a\"}", "needs a number", 1, 2},
+        {"{\"abc}", "unterminated string", 1, 2},
+        {"{\"a\\q\"}", "invalid escape", 1, 4},
+        {"M117 {1", "'{' without a closing '}'", 1, 6},
+        {"M117 [1]", "expected a variable name in [1]", 1, 6},
+        {"{if \"abc\"}x{endif}", "expected a boolean expression, got a string", 1, 5},
+        {"{idle_temperature[0]}", "nil", 1, 2},
+        {"{3 =~ /3/}", "must be a string", 1, 4},
+        {"{digits(1.5, 2.5)}", "width must be an integer", 1, 2},
+        {"{if true}{foo}{endif}", "unknown variable 'foo'", 1, 11},
+    };
+    static amp_printer big;
+    const amp_printer *p = macro_profile();
+    char out[256];
+    amp_error err;
+    size_t i;
+    for (i = 0; i < 17; i++)
+        strcat(deep_if, "{if true}");
+    for (i = 0; i < 70; i++)
+        strcat(deep_expr, i == 0 ? "{(" : "(");
+    strcat(deep_expr, "1");
+    for (i = 0; i < 70; i++)
+        strcat(deep_expr, i == 69 ? ")}" : ")");
+    for (i = 0; i < sizeof t / sizeof t[0]; i++) {
+        amp_error_clear(&err);
+        ck_assert_msg(amp_printer_expand(p, t[i].tmpl, out, sizeof out, &err) == AMP_ERR_PARSE, "%s accepted: %s",
+                      t[i].tmpl, out);
+        ck_assert_msg(strstr(err.msg, t[i].why) != NULL, "%s: %s", t[i].tmpl, err.msg);
+        ck_assert_msg(err.line == t[i].line, "%s: line %ld", t[i].tmpl, err.line);
+        if (t[i].col) {
+            char where[64];
+            snprintf(where, sizeof where, "G-code line %ld, column %ld:", t[i].line, t[i].col);
+            ck_assert_msg(strncmp(err.msg, where, strlen(where)) == 0, "%s: %s", t[i].tmpl, err.msg);
+        }
+    }
+    /* a value that did not fit in the profile: named, and why */
+    {
+        static char ini[40000];
+        memcpy(ini, "huge = ", 7);
+        memset(ini + 7, 'x', sizeof ini - 9);
+        ini[sizeof ini - 2] = '\n';
+        ck_assert_int_eq(amp_printer_parse_ini(&big, ini, strlen(ini), "big", &err), AMP_OK);
+        ck_assert_uint_eq(big.n_vars_dropped, 1);
+        ck_assert_int_eq(amp_printer_expand(&big, "{huge}", out, sizeof out, &err), AMP_ERR_PARSE);
+        ck_assert_msg(strstr(err.msg, "'huge': its value did not fit") != NULL, "%s", err.msg);
+        ck_assert_int_eq(amp_printer_expand(&big, "{huge2}", out, sizeof out, &err), AMP_ERR_PARSE);
+        ck_assert_msg(strstr(err.msg, "unknown variable 'huge2' (1 .ini values did not fit") != NULL, "%s", err.msg);
+    }
+    /* the output buffer also holds the temporary strings: too small is AMP_ERR_LIMIT */
+    ck_assert_int_eq(amp_printer_expand(p, "{\"abcdefghij\" + \"abcdefghij\"}", out, 16, &err), AMP_ERR_LIMIT);
+}
+END_TEST
+
+/* PrusaSlicer 2.7's stock Original Prusa MK3S start and end G-code, as its config export writes them. */
+static const char mk3s_ini[] =
+    "bed_shape = 0x0,250x0,250x210,0x210\n"
+    "max_print_height = 210\n"
+    "nozzle_diameter = 0.4\n"
+    "first_layer_temperature = 215\n"
+    "temperature = 210\n"
+    "first_layer_bed_temperature = 60\n"
+    "bed_temperature = 60\n"
+    "layer_height = 0.15\n"
+    "first_layer_height = 0.2\n"
+    "printer_model = MK3S\n"
+    "print_settings_id = 0.15mm QUALITY @MK3\n"
+    "filament_settings_id = \"Prusament PLA\"\n"
+    "printer_settings_id = Original Prusa i3 MK3S & MK3S+\n"
+    "z_offset = 0\n"
+    "start_gcode = M862.3 P \"[printer_model]\" ; printer model check\\nM862.1 P[nozzle_diameter] ; nozzle diameter "
+    "check\\nM115 U3.13.0 ; tell printer latest fw version\\nG90 ; use absolute coordinates\\nM83 ; extruder relative "
+    "mode\\nM104 S[first_layer_temperature] ; set extruder temp\\nM140 S[first_layer_bed_temperature] ; set bed temp\\n"
+    "M190 S[first_layer_bed_temperature] ; wait for bed temp\\nM109 S[first_layer_temperature] ; wait for extruder "
+    "temp\\nG28 W ; home all without mesh bed level\\nG80 ; mesh bed leveling\\n{if filament_settings_id[initial_tool]"
+    "=~/.*Prusament PA11.*/}\\nG1 Z0.3 F720\\nG1 Y-3 F1000 ; go outside print area\\nG92 E0\\nG1 X60 E9 F1000 ; intro "
+    "line\\nG1 X100 E9 F1000 ; intro line\\n{else}\\nG1 Z0.2 F720\\nG1 Y-3 F1000 ; go outside print area\\nG92 E0\\nG1 "
+    "X60 E9 F1000 ; intro line\\nG1 X100 E12.5 F1000 ; intro line\\n{endif}\\nG92 E0\\nM221 S{if layer_height<0.075}"
+    "100{else}95{endif}\\n\\n; Don't change E values below. Excessive value can damage the printer.\\n{if "
+    "print_settings_id=~/.*(DETAIL @MK3|QUALITY @MK3).*/}M907 E430 ; set extruder motor current{endif}\\n{if "
+    "print_settings_id=~/.*(SPEED @MK3|DRAFT @MK3).*/}M907 E538 ; set extruder motor current{endif}\n"
+    "end_gcode = {if max_layer_z < max_print_height}G1 Z{z_offset+min(max_layer_z+1, max_print_height)} F720 ; Move "
+    "print head up{endif}\\nG1 X0 Y200 F3600 ; park\\n{if max_layer_z < max_print_height}G1 Z{z_offset+min(max_layer_z"
+    "+49, max_print_height)} F720 ; Move print head further up{endif}\\nG4 ; wait\\nM221 S100 ; reset flow\\nM900 K0 ; "
+    "reset LA\\n{if print_settings_id=~/.*(DETAIL @MK3|QUALITY @MK3|@0.25 nozzle MK3).*/}M907 E538 ; reset extruder "
+    "motor current{endif}\\nM104 S0 ; turn off temperature\\nM140 S0 ; turn off heatbed\\nM107 ; turn off fan\\nM84 ; "
+    "disable motors\n";
+
+/* What PrusaSlicer makes of it for PLA and the 0.15 mm QUALITY print settings (the lines of the {if}, {else} and
+ * {endif} stay as empty lines, which the G-code writer drops). */
+static const char mk3s_start_want[] = "M862.3 P \"MK3S\" ; printer model check\n"
+                                      "M862.1 P0.4 ; nozzle diameter check\n"
+                                      "M115 U3.13.0 ; tell printer latest fw version\n"
+                                      "G90 ; use absolute coordinates\n"
+                                      "M83 ; extruder relative mode\n"
+                                      "M104 S215 ; set extruder temp\n"
+                                      "M140 S60 ; set bed temp\n"
+                                      "M190 S60 ; wait for bed temp\n"
+                                      "M109 S215 ; wait for extruder temp\n"
+                                      "G28 W ; home all without mesh bed level\n"
+                                      "G80 ; mesh bed leveling\n"
+                                      "\n"
+                                      "G1 Z0.2 F720\n"
+                                      "G1 Y-3 F1000 ; go outside print area\n"
+                                      "G92 E0\n"
+                                      "G1 X60 E9 F1000 ; intro line\n"
+                                      "G1 X100 E12.5 F1000 ; intro line\n"
+                                      "\n"
+                                      "G92 E0\n"
+                                      "M221 S95\n"
+                                      "\n"
+                                      "; Don't change E values below. Excessive value can damage the printer.\n"
+                                      "M907 E430 ; set extruder motor current\n";
+/* ... and of the end without a job (max_layer_z = 0, `ampath printer show`) */
+static const char mk3s_end_want[] = "G1 Z1 F720 ; Move print head up\n"
+                                    "G1 X0 Y200 F3600 ; park\n"
+                                    "G1 Z49 F720 ; Move print head further up\n"
+                                    "G4 ; wait\n"
+                                    "M221 S100 ; reset flow\n"
+                                    "M900 K0 ; reset LA\n"
+                                    "M907 E538 ; reset extruder motor current\n"
+                                    "M104 S0 ; turn off temperature\n"
+                                    "M140 S0 ; turn off heatbed\n"
+                                    "M107 ; turn off fan\n"
+                                    "M84 ; disable motors";
+
+/* Two planar layers: a 10 mm square at z 0.2 and a 6 mm one at z 0.4 (bead 0.2 mm high). */
+static void two_layers(amp_pathset *ps)
+{
+    static const double c[5][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}, {-1, -1}};
+    int layer, k;
+    amp_pathset_init(ps, NULL);
+    for (layer = 0; layer < 2; layer++) {
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, 0.2, NULL);
+        for (k = 0; k < 5; k++)
+            amp_pathset_push(ps, amp_v3((layer ? 3 : 5) * c[k][0], (layer ? 3 : 5) * c[k][1], 0.2 * (layer + 1)),
+                             0.225, NULL);
+    }
+}
+
+START_TEST(mk3s_stock_start_and_end_expand_as_prusaslicer_writes_them)
+{
+    static amp_printer p;
+    amp_gcode_opts o;
+    amp_error err;
+    const char *ini = fx_tmp("mk3s.ini"), *in = fx_tmp("mk3s.amp"), *outf = fx_tmp("mk3s.gcode");
+    char args[2048], *text = NULL;
+    size_t len;
+    amp_pathset ps;
+    ck_assert_msg(amp_printer_parse_ini(&p, mk3s_ini, strlen(mk3s_ini), "mk3s", &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_printer_gcode_opts(&p, &o, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_str_eq(o.start_gcode, mk3s_start_want);
+    ck_assert_str_eq(o.end_gcode, mk3s_end_want);
+    /* a PA11 filament takes the other branch; a DRAFT print the other motor current */
+    ck_assert_int_eq(amp_printer_expand(&p, "{if filament_settings_id[initial_tool]=~/.*Prusament PA11.*/}PA{else}"
+                                            "other{endif}", p.start_out, sizeof p.start_out, &err), AMP_OK);
+    ck_assert_str_eq(p.start_out, "other");
+    /* end to end: the end's lifts follow the placed job's top, 0.4 mm */
+    write_text(ini, mk3s_ini);
+    two_layers(&ps);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    snprintf(args, sizeof args, "gcode %s --printer %s -o %s", in, ini, outf);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(amp_read_file(outf, NULL, 0, &text, &len, NULL), AMP_OK);
+    ck_assert_ptr_nonnull(strstr(text, "\nM862.3 P \"MK3S\" ; printer model check\nM862.1 P0.4 ; nozzle diameter check\n"));
+    ck_assert_ptr_nonnull(strstr(text, "\nG80 ; mesh bed leveling\nG1 Z0.2 F720\n")); /* the empty lines dropped */
+    ck_assert_ptr_nonnull(strstr(text, "\nG1 X100 E12.5 F1000 ; intro line\nG92 E0\nM221 S95\n"));
+    ck_assert_ptr_nonnull(strstr(text, "\nM907 E430 ; set extruder motor current\n"));
+    ck_assert_ptr_null(strstr(text, "E9 F1000 ; intro line\nG1 X100 E9 F1000"));
+    ck_assert_ptr_nonnull(strstr(text, "\nG1 Z1.4 F720 ; Move print head up\nG1 X0 Y200 F3600 ; park\n"
+                                       "G1 Z49.4 F720 ; Move print head further up\nG4 ; wait\n"));
+    ck_assert_ptr_nonnull(strstr(text, "\nM907 E538 ; reset extruder motor current\nM104 S0 ; turn off temperature\n"));
+    ck_assert_ptr_null(strstr(text, "{"));
+    amp_free(NULL, text);
+    remove(ini);
+    remove(in);
+    remove(outf);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(job_variables_come_from_the_placed_job_and_the_options)
+{
+    static amp_printer p;
+    static const char ini[] = "start_gcode = PRINT_START MIN={first_layer_print_min[0]},{first_layer_print_min[1]} "
+                              "MAX={first_layer_print_max[0]},{first_layer_print_max[1]} SIZE={first_layer_print_size[0]}"
+                              "\\nLAYERS={total_layer_count} TOP={max_layer_z} Z={layer_z} N={layer_num}\\n"
+                              "M109 S[first_layer_temperature] T{temperature[0]} R{retract_length}\n"
+                              "end_gcode = END Z={layer_z} N={layer_num} BED={print_bed_max[0]}\n";
+    amp_gcode_opts o;
+    amp_error err;
+    amp_pathset ps;
+    ck_assert_int_eq(amp_printer_parse_ini(&p, ini, strlen(ini), "job", &err), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
+    ck_assert_str_eq(o.start_gcode, "PRINT_START MIN=0,0 MAX=220,220 SIZE=220\nLAYERS=0 TOP=0 Z=0 N=0\n"
+                                    "M109 S215 T210 R1"); /* without a job: the bed */
+    two_layers(&ps);
+    o.first_layer_hotend_temp = 230; /* options override the profile's values, in the macros too */
+    o.hotend_temp = 225;
+    o.retract_length = 0.6;
+    o.place = AMP_PLACE_AT;
+    o.place_x = 50;
+    o.place_y = 60;
+    ck_assert_msg(amp_printer_gcode_job(&p, &o, &ps, NULL, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_str_eq(o.start_gcode, "PRINT_START MIN=45,55 MAX=55,65 SIZE=10\nLAYERS=2 TOP=0.4 Z=0.2 N=0\n"
+                                    "M109 S230 T225 R0.6");
+    ck_assert_str_eq(o.end_gcode, "END Z=0.4 N=1 BED=220");
+    /* a sequence the caller replaced is left alone */
+    o.start_gcode = "G28";
+    ck_assert_int_eq(amp_printer_gcode_job(&p, &o, &ps, NULL, &err), AMP_OK);
+    ck_assert_str_eq(o.start_gcode, "G28");
+    ck_assert_str_eq(o.end_gcode, "END Z=0.4 N=1 BED=220");
+    /* a job that does not fit is refused by the dry run */
+    o.place_x = 500;
+    ck_assert_int_eq(amp_printer_gcode_job(&p, &o, &ps, NULL, &err), AMP_ERR_RANGE);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+START_TEST(built_in_sequences_expand_as_before)
+{
+    static amp_printer p;
+    amp_gcode_opts o;
+    amp_error err;
+    ck_assert_int_eq(amp_printer_builtin(&p, "prusa-mk3s", &err), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
+    ck_assert_str_eq(o.start_gcode, "M140 S60 ; bed\nM104 S215 ; hot end\nG28 W ; home all without mesh bed levelling\n"
+                                    "G80 ; mesh bed levelling\nM190 S60 ; wait for the bed\nM109 S215 ; wait for the "
+                                    "hot end\nG1 Z0.2 F720\nG1 X10 Y1 F3000\nM83 ; relative E for the intro line\n"
+                                    "G1 X70 Y1 E9 F1000 ; intro line\nG1 X110 Y1 E12.5 F1000 ; intro line\nG92 E0\n");
+    ck_assert_str_eq(o.end_gcode, "M104 S0 ; hot end off\nM140 S0 ; bed off\nM107 ; fan off\nG1 X0 Y200 F3000 ; "
+                                  "present the print\nM84 ; motors off\n");
+    ck_assert_int_eq(amp_printer_builtin(&p, "ender3", &err), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
+    ck_assert_str_eq(o.start_gcode, "M140 S60 ; bed\nM104 S205 ; hot end\nG28 ; home all axes\nM190 S60 ; wait for "
+                                    "the bed\nM109 S205 ; wait for the hot end\nM82 ; absolute E for the purge lines\n"
+                                    "G92 E0\nG1 Z2 F300\nG1 X0.5 Y20 Z0.3 F5000 ; purge line start\nG1 X0.5 Y200 Z0.3 "
+                                    "F1500 E15 ; purge line\nG1 X0.8 Y200 Z0.3 F5000\nG1 X0.8 Y20 Z0.3 F1500 E30 ; "
+                                    "second purge line\nG92 E0\nG1 Z2 F300\n");
+    ck_assert_ptr_null(o.end_gcode);
+    /* built-in profiles have the keys every slicer export has, empty */
+    expands_to(&p, "<{print_settings_id}|{filament_settings_id[0]}|{printer_notes}>{z_offset}", "<||>0");
+    expands_to(&p, "{num_extruders} {size(is_extruder_used)} {is_extruder_used[0]}", "1 1 true");
+}
+END_TEST
+
+START_TEST(gcode_refuses_a_profile_whose_macros_do_not_evaluate)
+{
+    const char *ini = fx_tmp("bad-macro.ini"), *in = fx_tmp("bad-macro.amp"), *outf = fx_tmp("bad-macro.gcode");
+    char args[2048], out[4096];
+    amp_pathset ps;
+    FILE *f;
+    write_text(ini, "start_gcode = G28\\nM104 S{first_layer_temprature[0]}\\n\n");
+    two_layers(&ps);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    remove(outf);
+    snprintf(args, sizeof args, "gcode %s --printer %s -o %s", in, ini, outf);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 2);
+    ck_assert_msg(strstr(out, "start G-code line 2, column 8: unknown variable 'first_layer_temprature'") != NULL, "%s",
+                  out);
+    ck_assert_ptr_null(f = fopen(outf, "r"));
+    snprintf(args, sizeof args, "printer show %s", ini);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 2);
+    ck_assert_ptr_nonnull(strstr(out, "unknown variable 'first_layer_temprature'"));
+    /* an end G-code that fails only with the job's values (the end here divides by the layers above the first) */
+    write_text(ini, "end_gcode = M117 {100 / (total_layer_count - 2)}\n");
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 0); /* no job: 100 / -2 */
+    snprintf(args, sizeof args, "gcode %s --printer %s -o %s", in, ini, outf);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 2);
+    ck_assert_msg(strstr(out, "end G-code line 1, column 11: division by zero") != NULL, "%s", out);
+    ck_assert_ptr_null(f = fopen(outf, "r"));
+    remove(ini);
+    remove(in);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *printer_suite(void)
 {
     Suite *s = suite_create("printer");
@@ -261,6 +757,15 @@ static Suite *printer_suite(void)
     tcase_add_test(tc, bad_ini_and_placeholders_are_refused_with_the_line);
     tcase_add_test(tc, printer_command_lists_and_shows_profiles);
     tcase_add_test(tc, gcode_with_an_ini_profile_uses_its_bed_temperatures_and_start);
+    tcase_add_test(tc, macro_operators_and_number_formats);
+    tcase_add_test(tc, macro_functions_and_variables);
+    tcase_add_test(tc, macro_regular_expressions);
+    tcase_add_test(tc, macro_conditionals_nest_span_lines_and_sit_inline);
+    tcase_add_test(tc, macro_errors_name_the_line_and_column);
+    tcase_add_test(tc, mk3s_stock_start_and_end_expand_as_prusaslicer_writes_them);
+    tcase_add_test(tc, job_variables_come_from_the_placed_job_and_the_options);
+    tcase_add_test(tc, built_in_sequences_expand_as_before);
+    tcase_add_test(tc, gcode_refuses_a_profile_whose_macros_do_not_evaluate);
     tcase_set_timeout(tc, 120);
     suite_add_tcase(s, tc);
     return s;

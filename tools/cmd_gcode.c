@@ -47,7 +47,8 @@ const char cmd_gcode_usage[] =
     "  --z-offs Z, --theta DEG head cone of the direct-hop test (docs/interfaces.md §2: 0.5 mm, 72 degrees)\n"
     "  --junction-deviation J  junction deviation of the time estimate, mm (0.05)\n"
     "  --relative-e / --absolute-e   M83 or M82 (default: klipper relative, marlin absolute)\n"
-    "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's\n"
+    "  --start FILE, --end FILE      start / end sequence from FILE instead of the profile's (taken as it is;\n"
+    "                          the profile's are expanded in the slicers' macro language for the placed job)\n"
     "  -o, --output FILE       write the G-code to FILE (replaced atomically; nothing written on an error)\n"
     "  --json                  the figures as one JSON object (see docs/gcode.md)\n"
     "A job that does not fit the printer's bed volume is refused (exit 2) and nothing is written.\n";
@@ -256,9 +257,9 @@ static int part_volume(const char *mesh, double *vol)
     return CLI_OK;
 }
 
-/* Load the paths, check that the job fits (before any file is touched), write it, report. */
-static int run_job(const char *in, const char *out, int json, const amp_printer *pr, const amp_gcode_opts *o,
-                   double part)
+/* Load the paths, expand the profile's start/end G-code for the placed job, check that the job fits (before
+ * any file is touched), write it, report. */
+static int run_job(const char *in, const char *out, int json, amp_printer *pr, amp_gcode_opts *o, double part)
 {
     static amp_gcode_iter it;
     amp_pathset ps;
@@ -270,6 +271,8 @@ static int run_job(const char *in, const char *out, int json, const amp_printer 
     amp_error_clear(&err);
     rc = cli_load_paths("gcode", in, &ps);
     t0 = cli_now();
+    if (rc == CLI_OK && amp_printer_gcode_job(pr, o, &ps, &it, &err) != AMP_OK)
+        rc = cli_fail_err("gcode", &err);
     if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, o, &err) != AMP_OK)
         rc = cli_fail_err("gcode", &err);
     st = it.est;

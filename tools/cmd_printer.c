@@ -10,8 +10,9 @@ const char cmd_printer_usage[] =
     "       ampath printer show NAME|FILE.ini [--json]\n"
     "  NAME is a built-in profile (generic, prusa-mk3s, ender3, voron-350); FILE a PrusaSlicer,\n"
     "  SuperSlicer or OrcaSlicer printer/filament/print .ini (or several concatenated).\n"
-    "  show prints every value ampath uses, the expanded start and end G-code, and the keys of the\n"
-    "  file that ampath ignores (\"unknown_keys\" in --json).\n";
+    "  show prints every value ampath uses, the start and end G-code expanded without a job\n"
+    "  (max_layer_z 0, the first layer the whole bed), and the keys of the file that ampath does not\n"
+    "  use for the machine (\"unknown_keys\" in --json; the start/end macros may still read them).\n";
 
 static void json_profile(const amp_printer *p)
 {
@@ -77,8 +78,8 @@ static void human_profile(const amp_printer *p)
     if (p->end_out[0])
         printf("%s\n", p->end_out);
     if (p->n_keys)
-        printf("  %lu keys read, %lu ignored: %s\n", (unsigned long)p->n_keys, (unsigned long)p->n_unknown,
-               p->unknown);
+        printf("  %lu keys read, %lu not used for the machine (the start/end macros may read them): %s\n",
+               (unsigned long)p->n_keys, (unsigned long)p->n_unknown, p->unknown);
 }
 
 int cmd_printer(int argc, char **argv)

@@ -223,6 +223,8 @@ typedef struct amp_gcode_stats {
     double first_layer_z;         /**< placed z of the first extrusion */
     amp_box3 bbox;                /**< placed bounding box of the printed vertices */
     size_t direct_hops;           /**< travels written as one straight move without retraction or lift */
+    amp_box3 first_layer_bbox;    /**< placed bounding box of the first layer's printed vertices (empty if none) */
+    size_t layers;                /**< layers as the fan counts them (last layer index + 1; 0 before any path) */
 } amp_gcode_stats;
 
 /** The motion of the last line (for callers that follow the head; kind 0 = the line was not a move). */

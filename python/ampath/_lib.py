@@ -65,6 +65,7 @@ AMP_ERROR_MSG_SIZE = 200
 AMP_PRINTER_NAME_MAX = 64
 AMP_PRINTER_GCODE_MAX = 8192
 AMP_PRINTER_UNKNOWN_MAX = 4096
+AMP_PRINTER_VARS_MAX = 32768
 AMP_OUT_PATH_MAX = 4096
 
 
@@ -305,7 +306,8 @@ class amp_gcode_stats(Structure):
                 + [(n, _D) for n in ("print_length", "travel_length", "filament_length", "filament_volume", "time",
                                      "print_time", "travel_time", "max_travel_z")]
                 + [(n, c_size_t) for n in ("input_segments", "arcs", "travel_moves")]
-                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3), ("direct_hops", c_size_t)])
+                + [("bead_volume", _D), ("first_layer_z", _D), ("bbox", amp_box3), ("direct_hops", c_size_t),
+                   ("first_layer_bbox", amp_box3), ("layers", c_size_t)])
 
 
 class amp_printer(Structure):
@@ -321,7 +323,8 @@ class amp_printer(Structure):
                                      "max_feed_z", "max_feed_e", "max_volumetric_flow", "extrusion_multiplier")]
                 + [("start_gcode", c_char * AMP_PRINTER_GCODE_MAX), ("end_gcode", c_char * AMP_PRINTER_GCODE_MAX),
                    ("unknown", c_char * AMP_PRINTER_UNKNOWN_MAX), ("n_unknown", c_size_t), ("n_keys", c_size_t),
-                   ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX)])
+                   ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX),
+                   ("vars", c_char * AMP_PRINTER_VARS_MAX), ("vars_len", c_size_t), ("n_vars_dropped", c_size_t)])
 
 
 # C name -> mirror, for python/tests/test_layout.py
@@ -430,6 +433,7 @@ _PROTOS = {
     "amp_printer_load": (c_int, [P(amp_printer), c_char_p, E]),
     "amp_printer_check": (c_int, [P(amp_printer), E]),
     "amp_printer_gcode_opts": (c_int, [P(amp_printer), P(amp_gcode_opts), E]),
+    "amp_printer_gcode_job": (c_int, [P(amp_printer), P(amp_gcode_opts), P(amp_pathset), c_void_p, E]),
     "amp_printer_bead_width": (c_double, [P(amp_printer)]),
     "amp_gcode_opts_default": (None, [P(amp_gcode_opts), c_int]),
     "amp_gcode_write": (c_int, [P(amp_pathset), P(amp_gcode_opts), c_void_p, c_void_p, P(amp_gcode_stats), E]),

@@ -484,7 +484,13 @@ class Printer:
         return lib.amp_printer_bead_width(ctypes.byref(self._p))
 
     def as_dict(self):
-        return {n: getattr(self, n) for n, _ in L.amp_printer._fields_ if not n.endswith("_out")}
+        return {n: getattr(self, n) for n, _ in L.amp_printer._fields_ if not n.endswith("_out") and n != "vars"}
+
+    def variables(self):
+        """Every key of the `.ini` (but start_gcode/end_gcode) with its value as written, for the macros."""
+        raw = ctypes.string_at(ctypes.addressof(self._p) + L.amp_printer.vars.offset, self._p.vars_len)
+        parts = raw.split(b"\0")[:-1]
+        return {k.decode(): v.decode() for k, v in zip(parts[0::2], parts[1::2])}
 
     def __repr__(self):
         return "Printer(%r)" % self.name
@@ -542,6 +548,8 @@ def gcode(paths, output=None, printer="generic", flavor=None, place=None, start_
 
 def _gcode_held(paths, output, o, pr, keep):
     st, err = L.new(L.amp_gcode_stats), _err()
+    # the profile's start/end macros see the placed job, as in `ampath gcode` (the same bytes)
+    _check(lib.amp_printer_gcode_job(ctypes.byref(pr._p), ctypes.byref(o), paths._ref, None, ctypes.byref(err)), err)
     if output is None:
         from .core import _to_buf
         data = _to_buf(lambda sink, buf, e: lib.amp_gcode_write(paths._ref, ctypes.byref(o), sink, buf,

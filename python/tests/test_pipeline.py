@@ -86,6 +86,36 @@ class ContinuousSlice(TmpCase):
         self.assertEqual(job.printer.name, "ender3")
 
 
+# a profile whose start and end G-code read the placed job (PrusaSlicer's macro language)
+MACRO_INI = ("bed_shape = 0x0,250x0,250x210,0x210\nmax_print_height = 210\nprinter_model = MK3S\n"
+             "print_settings_id = 0.15mm QUALITY @MK3\n"
+             "start_gcode = M862.3 P \"[printer_model]\"\\nM555 X{first_layer_print_min[0]} Y{first_layer_print_min[1]}"
+             " W{first_layer_print_size[0]} H{first_layer_print_size[1]}\\n"
+             "{if print_settings_id=~/.*(DETAIL|QUALITY) @MK3.*/}M907 E430{endif}\\nM109 S[first_layer_temperature]\n"
+             "end_gcode = {if max_layer_z < max_print_height}G1 Z{min(max_layer_z+1, max_print_height)} F720{endif}"
+             "\\nM117 {total_layer_count} layers\\nM84\n")
+
+
+class PrinterMacros(TmpCase):
+    def test_start_and_end_macros_see_the_placed_job_as_in_the_tool(self):
+        with open(self.p("m.ini"), "w") as f:
+            f.write(MACRO_INI)
+        with ampath.PathSet() as ps:
+            for z, a in ((0.2, 5), (0.4, 3)):  # two layers: a 10 mm square, a 6 mm one
+                ps.add([(-a, -a, z), (a, -a, z), (a, a, z), (-a, a, z), (-a, -a, z)], radius=0.225, h=0.2)
+            ps.write(self.p("m.amp"))
+        tool("gcode", self.p("m.amp"), "--printer", self.p("m.ini"), "--place", "60,70", "--hotend", 230,
+             "-o", self.p("m.gcode"))
+        with ampath.PathSet.read(self.p("m.amp")) as ps:
+            job = ampath.gcode(ps, printer=self.p("m.ini"), place=(60, 70), hotend_temp=230,
+                               first_layer_hotend_temp=230)
+        self.assertSameBytes(job.text.encode(), read(self.p("m.gcode")), "G-code with macros")
+        for line in ("M862.3 P \"MK3S\"", "M555 X55 Y65 W10 H10", "M907 E430", "M109 S230", "G1 Z1.4 F720",
+                     "M117 2 layers"):
+            self.assertIn("\n%s\n" % line, job.text)
+        self.assertEqual(ampath.Printer(self.p("m.ini")).variables()["print_settings_id"], "0.15mm QUALITY @MK3")
+
+
 # (tool options, the same as Python keyword arguments): every option of `slice --continuous`
 OPTION_SETS = [
     (("--printer", "{ini}", "--infill", 30, "--tour", "merge", "--bottom", 0, "--top", 1.2, "--no-corners",
