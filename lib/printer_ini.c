@@ -93,43 +93,39 @@ static int first_number(const char *v, size_t n, double *out, int *pct)
     return k > 0 && *end == '\0' && isfinite(*out);
 }
 
-/* A decimal number up to @p stop (strtod alone would read "0x0" as hexadecimal); advances *s. */
-static int dec_number(const char **s, char stop, double *out)
+/* A decimal number up to @p stop or @p end (strtod alone would read "0x0" as hexadecimal); advances *s. */
+static int dec_number(const char **s, const char *end, char stop, double *out)
 {
-    char buf[48], *end;
+    char buf[48], *e;
     size_t k = 0;
-    while (**s == ' ' || **s == '"')
+    while (*s < end && (**s == ' ' || **s == '"'))
         (*s)++;
-    while (**s && **s != stop && **s != ',' && **s != 'x' && **s != 'X' && k + 1 < sizeof buf)
+    while (*s < end && **s != stop && **s != ',' && **s != 'x' && **s != 'X' && k + 1 < sizeof buf)
         buf[k++] = *(*s)++;
     while (k > 0 && (buf[k - 1] == ' ' || buf[k - 1] == '"'))
         k--;
     buf[k] = '\0';
-    *out = strtod(buf, &end);
-    return k > 0 && *end == '\0' && isfinite(*out);
+    *out = strtod(buf, &e);
+    return k > 0 && *e == '\0' && isfinite(*out);
 }
 
-/* bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline. */
+/* bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline,
+ * read in place (a delta's round bed is 72 points in exponent notation). */
 static int bed_shape(amp_printer *p, const char *v, size_t n)
 {
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-    char buf[1024];
-    const char *s;
+    const char *s = v, *end = v + n;
     int pts = 0;
-    if (n >= sizeof buf)
-        return 0;
-    memcpy(buf, v, n);
-    buf[n] = '\0';
-    for (s = buf; *s;) {
+    while (s < end) {
         double x, y;
-        while (*s == ' ' || *s == ',' || *s == '"')
+        while (s < end && (*s == ' ' || *s == ',' || *s == '"'))
             s++;
-        if (!*s)
+        if (s == end)
             break;
-        if (!dec_number(&s, 'x', &x) || (*s != 'x' && *s != 'X'))
+        if (!dec_number(&s, end, 'x', &x) || s == end || (*s != 'x' && *s != 'X'))
             return 0;
         s++;
-        if (!dec_number(&s, ',', &y))
+        if (!dec_number(&s, end, ',', &y))
             return 0;
         x0 = x < x0 ? x : x0;
         x1 = x > x1 ? x : x1;
@@ -168,15 +164,34 @@ static amp_status gcode_string(char *dst, size_t cap, const char *v, size_t n, l
     return AMP_OK;
 }
 
+static int is_word(const char *v, size_t n, const char *w)
+{
+    return strlen(w) == n && strncmp(v, w, n) == 0;
+}
+
+/* The firmwares whose G-code is Marlin's for every command ampath writes
+ * (G0/G1/G2/G3, G28, G90, G92, M82/M83, M104/M109, M140/M190, M106/M107,
+ * M204, M84) and whose serial protocol takes Marlin's numbered lines:
+ * RepRapFirmware (Duet), Repetier, Smoothieware, Sprinter and Teacup
+ * profiles are written as Marlin jobs rather than refused. */
+static int marlin_dialect(const char *v, size_t n)
+{
+    return (n >= 6 && strncmp(v, "marlin", 6) == 0) || is_word(v, n, "prusa") || is_word(v, n, "reprap") ||
+           is_word(v, n, "reprapfirmware") || is_word(v, n, "repetier") || is_word(v, n, "smoothie") ||
+           is_word(v, n, "sprinter") || is_word(v, n, "teacup");
+}
+
 static amp_status flavor_of(amp_printer *p, const char *v, size_t n, long line, amp_error *err)
 {
-    if ((n >= 6 && strncmp(v, "marlin", 6) == 0) || (n == 5 && strncmp(v, "prusa", 5) == 0))
-        p->flavor = AMP_FLAVOR_MARLIN; /* marlin, marlin2, marlinlegacy */
-    else if (n == 7 && strncmp(v, "klipper", 7) == 0)
+    if (marlin_dialect(v, n))
+        p->flavor = AMP_FLAVOR_MARLIN;
+    else if (is_word(v, n, "klipper"))
         p->flavor = AMP_FLAVOR_KLIPPER;
-    else
-        return amp_fail(err, AMP_ERR_PARSE, line, "gcode_flavor %.*s is not supported (marlin, marlin2, marlinlegacy, "
-                        "klipper)", (int)(n > 40 ? 40 : n), v);
+    else /* makerware, sailfish (x3g), mach3, machinekit, no-extrusion: not a 3D printer's text G-code */
+        return amp_fail(err, AMP_ERR_PARSE, line,
+                        "gcode_flavor %.*s is not supported (marlin, marlin2, marlinlegacy, klipper; reprap, "
+                        "reprapfirmware, repetier, smoothie, sprinter and teacup are written as Marlin)",
+                        (int)(n > 40 ? 40 : n), v);
     return AMP_OK;
 }
 

@@ -409,6 +409,18 @@ static int default_value(const char *name, size_t n, amp_pr_val *v)
         v->d = 0.0;
         return 1;
     }
+    if (n == 42 && memcmp(name, "has_single_extruder_multi_material_priming", 42) == 0) {
+        v->t = MV_BOOL; /* one extruder, no priming tower: the MMU profiles' plain branch */
+        v->i = 0;
+        return 1;
+    }
+    if ((n == 14 && memcmp(name, "input_filename", 14) == 0) ||
+        (n == 19 && memcmp(name, "input_filename_base", 19) == 0)) {
+        v->t = MV_STR; /* a display message ("M117 Print [input_filename]"): the job has no model file name here */
+        v->s = n == 14 ? "ampath.gcode" : "ampath";
+        v->n = strlen(v->s);
+        return 1;
+    }
     for (i = 0; i < sizeof empty / sizeof empty[0]; i++)
         if (strlen(empty[i]) == n && memcmp(empty[i], name, n) == 0) {
             v->t = MV_STR;

@@ -173,7 +173,7 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
         long line;
     } bad[] = {
         {"nozzle_diameter = 0.4\ntemperature = hot\n", "not a number", 2},
-        {"# c\n\ngcode_flavor = reprapfirmware\n", "not supported", 3},
+        {"# c\n\ngcode_flavor = makerware\n", "not supported", 3},
         {"bed_shape = 0x0,220\n", "bed_shape", 1},
         {"just a line\n", "key = value", 1},
         {"nozzle_diameter = 9\n", "nozzle_diameter", 0},
@@ -201,6 +201,7 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
     ck_assert_int_eq(amp_printer_expand(&p, "M104 S[temperature]", p.start_out, 8, &err), AMP_ERR_LIMIT);
 }
 END_TEST
+
 
 START_TEST(printer_command_lists_and_shows_profiles)
 {
@@ -610,6 +611,51 @@ static void two_layers(amp_pathset *ps)
     }
 }
 
+START_TEST(stock_profiles_of_other_firmwares_round_beds_and_long_lines_are_taken)
+{
+    /* from the printer profiles PrusaSlicer ships: a Duet delta (RepRapFirmware, a round bed of 72 points
+     * in exponent notation) and a start sequence whose comments run past the line limit */
+    static amp_printer p;
+    static char ini[16384];
+    amp_error err;
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_buf mb;
+    size_t n = 0, i;
+    const char *flavors[] = {"reprapfirmware", "reprap", "repetier", "smoothie", "sprinter", "teacup"};
+    for (i = 0; i < sizeof flavors / sizeof flavors[0]; i++) {
+        char one[64];
+        snprintf(one, sizeof one, "gcode_flavor = %s\n", flavors[i]);
+        ck_assert_msg(amp_printer_parse_ini(&p, one, strlen(one), "fw", &err) == AMP_OK, "%s: %s", flavors[i],
+                      err.msg);
+        ck_assert_int_eq(p.flavor, AMP_FLAVOR_MARLIN);
+    }
+    n += (size_t)snprintf(ini + n, sizeof ini - n, "gcode_flavor = reprapfirmware\nmax_print_height = 300\nbed_shape = ");
+    for (i = 0; i < 72; i++) {
+        double a = 2 * AMP_PI * (double)(i + 1) / 72.0;
+        n += (size_t)snprintf(ini + n, sizeof ini - n, "%s%.6gx%.6g", i ? "," : "", 115 * cos(a), 115 * sin(a));
+    }
+    n += (size_t)snprintf(ini + n, sizeof ini - n,
+                          "\nstart_gcode = G28 ; home all towers\\nM201 X1000 Y1000 Z1000 E5000 ; sets maximum "
+                          "accelerations, mm/sec^2, as the stock profile writes it\\nG1 Z5 F5000\\n\n");
+    ck_assert_uint_gt(n, 1024); /* the bed_shape alone: it had to fit a 1 KB buffer */
+    ck_assert(strstr(ini, "e-15x115") != NULL);
+    ck_assert_msg(amp_printer_parse_ini(&p, ini, n, "A very long exported profile name - Duet delta 0.4 nozzle", &err) ==
+                      AMP_OK, "%s", err.msg);
+    ck_assert_double_eq_tol(p.bed_min_x, -115, 1e-3);
+    ck_assert_double_eq_tol(p.bed_max_y, 115, 1e-3);
+    ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
+    two_layers(&ps);
+    amp_buf_init(&mb, NULL);
+    ck_assert_msg(amp_gcode_write(&ps, &o, amp_buf_sink, &mb, NULL, &err) == AMP_OK, "%s", err.msg);
+    /* the long line keeps its command, the header its bed */
+    ck_assert_msg(strstr(mb.data, "\nM201 X1000 Y1000 Z1000 E5000\n") != NULL, "%s", mb.data);
+    ck_assert_msg(strstr(mb.data, "...: bed -115..115 x -115..115, height 300 mm\n") != NULL, "%.300s", mb.data);
+    amp_buf_free(&mb);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(mk3s_stock_start_and_end_expand_as_prusaslicer_writes_them)
 {
     static amp_printer p;
@@ -755,6 +801,7 @@ static Suite *printer_suite(void)
     tcase_add_test(tc, prusaslicer_ini_is_read_with_unknown_keys_listed);
     tcase_add_test(tc, orcaslicer_names_and_klipper_flavor_are_understood);
     tcase_add_test(tc, bad_ini_and_placeholders_are_refused_with_the_line);
+    tcase_add_test(tc, stock_profiles_of_other_firmwares_round_beds_and_long_lines_are_taken);
     tcase_add_test(tc, printer_command_lists_and_shows_profiles);
     tcase_add_test(tc, gcode_with_an_ini_profile_uses_its_bed_temperatures_and_start);
     tcase_add_test(tc, macro_operators_and_number_formats);
