@@ -15,11 +15,6 @@ typedef struct raw_seg {
     size_t na, nb; /* node ids of the end points */
 } raw_seg;
 
-typedef struct split {
-    size_t seg;
-    double t;
-    size_t node;
-} split;
 
 typedef struct inset_ctx {
     const amp_allocator *al;
@@ -27,8 +22,7 @@ typedef struct inset_ctx {
     size_t nseg, cap_seg;
     amp_vec2 *node;
     size_t nnode, cap_node;
-    split *spl;
-    size_t nspl, cap_spl;
+    pg_splits spl;
 } inset_ctx;
 
 static amp_status new_node(inset_ctx *c, amp_vec2 p, size_t *id)
@@ -60,15 +54,7 @@ static amp_status add_seg(inset_ctx *c, size_t na, size_t nb)
 
 static amp_status add_split(inset_ctx *c, size_t s, double t, size_t node)
 {
-    void *v = c->spl;
-    if (amp_grow(c->al, &v, &c->cap_spl, c->nspl + 1, sizeof *c->spl) != AMP_OK)
-        return AMP_ERR_NOMEM;
-    c->spl = v;
-    c->spl[c->nspl].seg = s;
-    c->spl[c->nspl].t = t;
-    c->spl[c->nspl].node = node;
-    c->nspl++;
-    return AMP_OK;
+    return pg_splits_add(c->al, &c->spl, s, t, node);
 }
 
 /* Raw offset curve of one ring to its interior side (left when @p left):
@@ -137,14 +123,6 @@ static int cmp_seg_x(const void *a, const void *b)
     const raw_seg *s = a, *t = b;
     double x = fmin(s->a.x, s->b.x), y = fmin(t->a.x, t->b.x);
     return x < y ? -1 : (x > y ? 1 : 0);
-}
-
-static int cmp_split(const void *a, const void *b)
-{
-    const split *s = a, *t = b;
-    if (s->seg != t->seg)
-        return s->seg < t->seg ? -1 : 1;
-    return s->t < t->t ? -1 : (s->t > t->t ? 1 : 0);
 }
 
 /* Intersect segments i and j once; the crossing becomes one shared node. */
@@ -510,13 +488,13 @@ static amp_status boundary_pieces(inset_ctx *c, const egrid *g, double r, piece_
 {
     double lim = r * (1.0 - 1e-9);
     size_t i, k;
-    if (c->nspl > 1)
-        qsort(c->spl, c->nspl, sizeof *c->spl, cmp_split);
+    if (c->spl.n > 1)
+        qsort(c->spl.v, c->spl.n, sizeof *c->spl.v, pg_split_cmp);
     for (i = 0, k = 0; i < c->nseg; i++) {
         size_t cur = c->seg[i].na, nxt;
         for (;;) {
-            if (k < c->nspl && c->spl[k].seg == i)
-                nxt = c->spl[k++].node;
+            if (k < c->spl.n && c->spl.v[k].seg == i)
+                nxt = c->spl.v[k++].node;
             else
                 nxt = c->seg[i].nb;
             if (nxt != cur) {
@@ -533,7 +511,7 @@ static amp_status boundary_pieces(inset_ctx *c, const egrid *g, double r, piece_
                 }
             }
             cur = nxt;
-            if (nxt == c->seg[i].nb && !(k < c->nspl && c->spl[k].seg == i))
+            if (nxt == c->seg[i].nb && !(k < c->spl.n && c->spl.v[k].seg == i))
                 break;
         }
     }
@@ -652,7 +630,7 @@ static amp_status inset_core(const amp_polyset *in, double r, double arc_tol, am
         st = amp_polyset_organize(out, err);
     amp_free(c.al, c.seg);
     amp_free(c.al, c.node);
-    amp_free(c.al, c.spl);
+    amp_free(c.al, c.spl.v);
     amp_free(c.al, pl.pc);
     egrid_free(&g, c.al);
     if (st == AMP_ERR_NOMEM)

@@ -18,16 +18,12 @@
 
 #include "ampath/polygon.h"
 #include "ampath/vec.h"
+#include "polygon_internal.h"
 
 typedef struct useg { /* one ring edge, between node ids */
     size_t na, nb;
 } useg;
 
-typedef struct usplit {
-    size_t seg;
-    double t;
-    size_t node;
-} usplit;
 
 typedef struct upiece {
     size_t na, nb;
@@ -41,8 +37,7 @@ typedef struct uctx {
     size_t nnode, cap_node, cap_junction;
     useg *seg;
     size_t nseg;
-    usplit *spl;
-    size_t nspl, cap_spl;
+    pg_splits spl;
     /* rows of the edges for winding queries: row k lists the edges whose
      * y-range meets [y0 + k h, y0 + (k + 1) h] */
     double y0, h;
@@ -69,16 +64,8 @@ static amp_status add_node(uctx *c, amp_vec2 p, size_t *id)
 
 static amp_status add_split(uctx *c, size_t s, double t, size_t node)
 {
-    void *v = c->spl;
-    if (amp_grow(c->al, &v, &c->cap_spl, c->nspl + 1, sizeof *c->spl) != AMP_OK)
-        return AMP_ERR_NOMEM;
-    c->spl = v;
-    c->spl[c->nspl].seg = s;
-    c->spl[c->nspl].t = t;
-    c->spl[c->nspl].node = node;
-    c->nspl++;
     c->junction[node] = 1;
-    return AMP_OK;
+    return pg_splits_add(c->al, &c->spl, s, t, node);
 }
 
 /* Nodes and edges of the rings: one node per ring vertex (rings that touch
@@ -326,8 +313,8 @@ static amp_status merge_nodes(uctx *c)
         c->seg[i].na = rep[c->seg[i].na];
         c->seg[i].nb = rep[c->seg[i].nb];
     }
-    for (i = 0; i < c->nspl; i++)
-        c->spl[i].node = rep[c->spl[i].node];
+    for (i = 0; i < c->spl.n; i++)
+        c->spl.v[i].node = rep[c->spl.v[i].node];
     amp_free(c->al, k);
     amp_free(c->al, rep);
     return AMP_OK;
@@ -363,14 +350,6 @@ static int sides(const uctx *c, amp_vec2 a, amp_vec2 b)
     return left << 1 | right;
 }
 
-static int cmp_split(const void *a, const void *b)
-{
-    const usplit *s = a, *t = b;
-    if (s->seg != t->seg)
-        return s->seg < t->seg ? -1 : 1;
-    return s->t < t->t ? -1 : (s->t > t->t ? 1 : 0);
-}
-
 static amp_status add_piece(const amp_allocator *al, upiece **pc, size_t *n, size_t *cap, size_t na, size_t nb)
 {
     void *v = *pc;
@@ -389,17 +368,17 @@ static amp_status add_piece(const amp_allocator *al, upiece **pc, size_t *n, siz
 static amp_status cut_pieces(uctx *c, const amp_polyset *ps, upiece **pc, size_t *npc, size_t *ring_piece)
 {
     size_t r, i, k = 0, s = 0, cap = 0;
-    if (c->nspl > 1)
-        qsort(c->spl, c->nspl, sizeof *c->spl, cmp_split);
+    if (c->spl.n > 1)
+        qsort(c->spl.v, c->spl.n, sizeof *c->spl.v, pg_split_cmp);
     for (r = 0; r < ps->nrings; r++) {
         ring_piece[r] = *npc;
         for (i = 0; i < ps->rings[r].n; i++, s++) {
             size_t cur = c->seg[s].na;
-            for (; k < c->nspl && c->spl[k].seg == s; k++)
-                if (c->spl[k].node != cur) {
-                    if (add_piece(c->al, pc, npc, &cap, cur, c->spl[k].node) != AMP_OK)
+            for (; k < c->spl.n && c->spl.v[k].seg == s; k++)
+                if (c->spl.v[k].node != cur) {
+                    if (add_piece(c->al, pc, npc, &cap, cur, c->spl.v[k].node) != AMP_OK)
                         return AMP_ERR_NOMEM;
-                    cur = c->spl[k].node;
+                    cur = c->spl.v[k].node;
                 }
             if (cur != c->seg[s].nb && add_piece(c->al, pc, npc, &cap, cur, c->seg[s].nb) != AMP_OK)
                 return AMP_ERR_NOMEM;
@@ -590,7 +569,7 @@ static void uctx_free(uctx *c)
     amp_free(c->al, c->node);
     amp_free(c->al, c->junction);
     amp_free(c->al, c->seg);
-    amp_free(c->al, c->spl);
+    amp_free(c->al, c->spl.v);
     amp_free(c->al, c->rstart);
     amp_free(c->al, c->ritem);
 }
