@@ -359,22 +359,16 @@ static void count_outside(stroke_scan *s, const yrows *yr, double tol)
     }
 }
 
-static double band_lo(const amp_vec2 *pts, size_t n)
+/* The band of y the stroke spans: [*lo, *hi]. */
+static void band_of(const amp_vec2 *pts, size_t n, double *lo, double *hi)
 {
-    double v = HUGE_VAL;
     size_t i;
-    for (i = 0; i < n; i++)
-        v = fmin(v, pts[i].y);
-    return v;
-}
-
-static double band_hi(const amp_vec2 *pts, size_t n)
-{
-    double v = -HUGE_VAL;
-    size_t i;
-    for (i = 0; i < n; i++)
-        v = fmax(v, pts[i].y);
-    return v;
+    *lo = HUGE_VAL;
+    *hi = -HUGE_VAL;
+    for (i = 0; i < n; i++) {
+        *lo = fmin(*lo, pts[i].y);
+        *hi = fmax(*hi, pts[i].y);
+    }
 }
 
 amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t n, const amp_polyset *region,
@@ -388,6 +382,7 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
     pass *ps = NULL;
     amp_status st = AMP_OK;
     yrows yr;
+    double lo = 0, hi = 0;
     memset(&s, 0, sizeof s);
     memset(&yr, 0, sizeof yr);
     s.pts = pts;
@@ -407,7 +402,9 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
         vertex_ids(&s, vk);
         count_crossings(&s, sg, segments_and_repeats(&s, sg, ek));
         count_interleaved_passes(&s, ps);
-        if (region && region->npts && !yrows_build(&yr, region, band_lo(pts, n) - tol, band_hi(pts, n) + tol, al))
+        if (region && region->npts)
+            band_of(pts, n, &lo, &hi);
+        if (region && region->npts && !yrows_build(&yr, region, lo - tol, hi + tol, al))
             st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
         else if (region && region->npts)
             count_outside(&s, &yr, tol);

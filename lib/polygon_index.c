@@ -102,6 +102,26 @@ int amp_polyindex_contains(const amp_polyindex *ix, amp_vec2 q)
     return in;
 }
 
+int amp_polyindex_winding(const amp_polyindex *ix, amp_vec2 q)
+{
+    long rq;
+    size_t k;
+    int w = 0;
+    if (!ix->item || ix->P->npts == 0 || q.y < ix->y0 || q.y > ix->y0 + ix->h * (double)ix->nrow)
+        return 0;
+    rq = row_of(ix, q.y);
+    /* Sunday's rule: an upward edge with q on its left counts +1, a downward one with q on its right -1 */
+    for (k = ix->start[rq]; k < ix->start[rq + 1]; k++) {
+        amp_vec2 a = ix->a[ix->item[k]], b = ix->b[ix->item[k]];
+        if (a.y <= q.y) {
+            if (b.y > q.y && amp_v2_orient(a, b, q) > 0)
+                w++;
+        } else if (b.y <= q.y && amp_v2_orient(a, b, q) < 0)
+            w--;
+    }
+    return w;
+}
+
 double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q)
 {
     double best = HUGE_VAL;

@@ -38,11 +38,7 @@ typedef struct uctx {
     useg *seg;
     size_t nseg;
     pg_splits spl;
-    /* rows of the edges for winding queries: row k lists the edges whose
-     * y-range meets [y0 + k h, y0 + (k + 1) h] */
-    double y0, h;
-    long nrow;
-    size_t *rstart, *ritem;
+    amp_polyindex ix; /* rows of the input's edges, for winding queries */
     double delta; /* side offset of a winding sample */
     int sign;     /* -1 when the rings are all reversed (a mesh facing inward) */
 } uctx;
@@ -92,56 +88,19 @@ static amp_status build_nodes(uctx *c, const amp_polyset *ps)
     return AMP_OK;
 }
 
-static long clampl(double v, long n)
+/* The row index of the input rings and the side offset of the winding samples. */
+static amp_status index_rings(uctx *c, const amp_polyset *ps)
 {
-    long k = (long)floor(v);
-    return k < 0 ? 0 : (k >= n ? n - 1 : k);
-}
-
-/* The rows (about sqrt(n) of them) and the side offset of the winding
- * samples; pass 0 counts, pass 1 fills. */
-static amp_status build_rows(uctx *c)
-{
-    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-    size_t i, pass, n;
-    c->y0 = HUGE_VAL;
+    double x0 = HUGE_VAL, x1 = -HUGE_VAL, y0 = HUGE_VAL, y1 = -HUGE_VAL;
+    size_t i;
     for (i = 0; i < c->nnode; i++) {
         x0 = fmin(x0, c->node[i].x);
         x1 = fmax(x1, c->node[i].x);
-        c->y0 = fmin(c->y0, c->node[i].y);
+        y0 = fmin(y0, c->node[i].y);
         y1 = fmax(y1, c->node[i].y);
     }
-    c->delta = 1e-7 * (1.0 + (x1 - x0) + (y1 - c->y0) + fmax(fmax(fabs(x0), fabs(x1)), fmax(fabs(c->y0), fabs(y1))));
-    c->nrow = (long)sqrt((double)c->nseg) + 1;
-    c->h = (y1 - c->y0) / (double)c->nrow + 1e-300;
-    n = (size_t)c->nrow;
-    if (!(c->rstart = amp_calloc(c->al, n + 1, sizeof *c->rstart)))
-        return AMP_ERR_NOMEM;
-    for (pass = 0; pass < 2; pass++) {
-        for (i = 0; i < c->nseg; i++) {
-            amp_vec2 a = c->node[c->seg[i].na], b = c->node[c->seg[i].nb];
-            long r = clampl((fmin(a.y, b.y) - c->y0) / c->h, c->nrow), r1 = clampl((fmax(a.y, b.y) - c->y0) / c->h, c->nrow);
-            for (; r <= r1; r++) {
-                if (pass == 0)
-                    c->rstart[r + 1]++;
-                else
-                    c->ritem[c->rstart[r]++] = i;
-            }
-        }
-        if (pass == 0) {
-            size_t k;
-            for (k = 0; k < n; k++)
-                c->rstart[k + 1] += c->rstart[k];
-            if (!(c->ritem = amp_alloc(c->al, (c->rstart[n] + 1) * sizeof *c->ritem)))
-                return AMP_ERR_NOMEM;
-        } else { /* the fill advanced each start to the next row's: shift back */
-            size_t k;
-            for (k = n; k > 0; k--)
-                c->rstart[k] = c->rstart[k - 1];
-            c->rstart[0] = 0;
-        }
-    }
-    return AMP_OK;
+    c->delta = 1e-7 * (1.0 + (x1 - x0) + (y1 - y0) + fmax(fmax(fabs(x0), fabs(x1)), fmax(fabs(y0), fabs(y1))));
+    return amp_polyindex_build(&c->ix, ps, NULL) == AMP_OK ? AMP_OK : AMP_ERR_NOMEM;
 }
 
 /* Parameter of point p along the edge a -> b. */
@@ -320,33 +279,14 @@ static amp_status merge_nodes(uctx *c)
     return AMP_OK;
 }
 
-/* Winding number of the rings around q (Sunday's crossing rule over the
- * edges of q's row), times c->sign. */
-static int winding(const uctx *c, amp_vec2 q)
-{
-    long row = clampl((q.y - c->y0) / c->h, c->nrow);
-    size_t k;
-    int w = 0;
-    for (k = c->rstart[row]; k < c->rstart[row + 1]; k++) {
-        const useg *s = &c->seg[c->ritem[k]];
-        amp_vec2 a = c->node[s->na], b = c->node[s->nb];
-        if (a.y <= q.y) {
-            if (b.y > q.y && amp_v2_orient(a, b, q) > 0)
-                w++;
-        } else if (b.y <= q.y && amp_v2_orient(a, b, q) < 0)
-            w--;
-    }
-    return c->sign * w;
-}
-
 /* Solid (winding > 0) on the left and right of the piece a -> b, sampled
  * beside its midpoint: bit 1 left, bit 0 right. */
 static int sides(const uctx *c, amp_vec2 a, amp_vec2 b)
 {
     double dx = b.x - a.x, dy = b.y - a.y, l = hypot(dx, dy), d = fmin(c->delta, 0.25 * l);
     amp_vec2 m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
-    int left = winding(c, amp_v2(m.x - d * dy / l, m.y + d * dx / l)) > 0;
-    int right = winding(c, amp_v2(m.x + d * dy / l, m.y - d * dx / l)) > 0;
+    int left = c->sign * amp_polyindex_winding(&c->ix, amp_v2(m.x - d * dy / l, m.y + d * dx / l)) > 0;
+    int right = c->sign * amp_polyindex_winding(&c->ix, amp_v2(m.x + d * dy / l, m.y - d * dx / l)) > 0;
     return left << 1 | right;
 }
 
@@ -570,8 +510,7 @@ static void uctx_free(uctx *c)
     amp_free(c->al, c->junction);
     amp_free(c->al, c->seg);
     amp_free(c->al, c->spl.v);
-    amp_free(c->al, c->rstart);
-    amp_free(c->al, c->ritem);
+    amp_polyindex_free(&c->ix);
 }
 
 amp_status amp_polyset_union(amp_polyset *ps, int *changed, amp_error *err)
@@ -592,7 +531,7 @@ amp_status amp_polyset_union(amp_polyset *ps, int *changed, amp_error *err)
     amp_polyset_init(&out, ps->alloc);
     st = build_nodes(&c, ps);
     if (st == AMP_OK)
-        st = build_rows(&c);
+        st = index_rings(&c, ps);
     if (st == AMP_OK)
         st = find_meetings(&c);
     if (st == AMP_OK && (any_junction(&c) || !rings_separate(&c, ps))) {

@@ -136,6 +136,8 @@ amp_status amp_polyindex_build(amp_polyindex *ix, const amp_polyset *P, amp_erro
 void amp_polyindex_free(amp_polyindex *ix);
 /** As amp_polyset_contains(P, q, 0): 1 inside, 0 outside, -1 on an edge (even-odd, half-open rule). */
 int amp_polyindex_contains(const amp_polyindex *ix, amp_vec2 q);
+/** Winding number of the rings of P around q: counter-clockwise rings count +1, clockwise -1 (the nonzero rule). */
+int amp_polyindex_winding(const amp_polyindex *ix, amp_vec2 q);
 /** As amp_polyset_boundary_dist(P, q): distance to the nearest edge (HUGE_VAL when empty). */
 double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q);
 
