@@ -10,37 +10,56 @@
  * The connectors are printed; they must not cross any segment of the island,
  * which is tested before a splice is taken. */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "contpath_internal.h"
 
-/* A cyclic loop (no repeated last vertex) owned by the joiner. */
+#define JNONE 0xffffffffu
+
+/* The loops are cyclic lists of vertices in one pool: a splice relinks a
+ * handful of vertices, and the segment grid changes only there (rebuilding
+ * it after every splice was a third of `slice --continuous` on many-island
+ * parts). A vertex keeps the loop it was made for: its union-find root is
+ * the live loop it is in now (the absorbing loop stays its set's root). */
+typedef struct jvert {
+    amp_pvert v;
+    uint32_t next, prev;
+    uint32_t loop;
+    int32_t c[4]; /* the grid cells of its segment while listed (x0, y0, x1, y1); c[0] < 0: not listed */
+} jvert;
+
 typedef struct jloop {
-    amp_pvert *v;
+    uint32_t head; /* where the loop is written from */
     size_t n;
     int alive;
     int wall; /* a ring of the island's section: connectors must not cross it */
 } jloop;
 
-typedef struct jseg {
-    size_t loop, i; /* segment i -> i + 1 (cyclic) of loop */
-} jseg;
+typedef struct jcell {
+    uint32_t *s; /* the vertices whose segment (s -> next) passes the cell's box */
+    uint32_t n, cap;
+} jcell;
 
-/* Uniform grid of all segments of the live loops (cell >= connector length). */
+/* Uniform grid over the segments of the live loops (cell >= connector length), fixed at the start: splices
+ * only cut into segments, so nothing leaves its box. */
 typedef struct jgrid {
     double x0, y0, cell;
     long nx, ny;
-    size_t *start;
-    jseg *item;
+    jcell *c;
 } jgrid;
 
 typedef struct joiner {
     const amp_allocator *al;
+    jvert *v;
+    size_t nv, capv;
     jloop *lp;
     size_t nl;
     jgrid g;
     double r, dmax;
+    uint32_t touched[16]; /* vertices whose segment a splice changed (re-listed at its end) */
+    size_t ntouched;
 } joiner;
 
 static long cell_of(const jgrid *g, double v, double o, long n)
@@ -51,97 +70,159 @@ static long cell_of(const jgrid *g, double v, double o, long n)
 
 static void grid_free(const amp_allocator *al, jgrid *g)
 {
-    amp_free(al, g->start);
-    amp_free(al, g->item);
+    long i;
+    for (i = 0; g->c && i < g->nx * g->ny; i++)
+        amp_free(al, g->c[i].s);
+    amp_free(al, g->c);
     memset(g, 0, sizeof *g);
 }
 
-/* Every segment is listed in the cells of its bounding box. */
+/* Take the segment of vertex s out of the grid (nothing when it is not listed). */
+static void grid_del(joiner *J, uint32_t s)
+{
+    jvert *V = &J->v[s];
+    long x, y;
+    if (V->c[0] < 0)
+        return;
+    for (y = V->c[1]; y <= V->c[3]; y++)
+        for (x = V->c[0]; x <= V->c[2]; x++) {
+            jcell *c = &J->g.c[y * J->g.nx + x];
+            uint32_t k;
+            for (k = 0; k < c->n && c->s[k] != s; k++)
+                ;
+            if (k < c->n)
+                c->s[k] = c->s[--c->n];
+        }
+    V->c[0] = -1;
+}
+
+/* List the segment of vertex s in the cells of its bounding box. */
+static amp_status grid_add(joiner *J, uint32_t s)
+{
+    jgrid *g = &J->g;
+    jvert *V = &J->v[s];
+    amp_vec3 a = V->v.p, b = J->v[V->next].v.p;
+    long x, y;
+    V->c[0] = (int32_t)cell_of(g, a.x < b.x ? a.x : b.x, g->x0, g->nx);
+    V->c[2] = (int32_t)cell_of(g, a.x < b.x ? b.x : a.x, g->x0, g->nx);
+    V->c[1] = (int32_t)cell_of(g, a.y < b.y ? a.y : b.y, g->y0, g->ny);
+    V->c[3] = (int32_t)cell_of(g, a.y < b.y ? b.y : a.y, g->y0, g->ny);
+    for (y = V->c[1]; y <= V->c[3]; y++)
+        for (x = V->c[0]; x <= V->c[2]; x++) {
+            jcell *c = &g->c[y * g->nx + x];
+            size_t cap = c->cap;
+            void *q = c->s;
+            if (amp_grow(J->al, &q, &cap, (size_t)c->n + 1, sizeof *c->s) != AMP_OK)
+                return AMP_ERR_NOMEM;
+            c->s = q;
+            c->cap = (uint32_t)cap;
+            c->s[c->n++] = s;
+        }
+    return AMP_OK;
+}
+
+/* The grid over the bounding box of every loop, every segment listed. */
 static amp_status grid_build(joiner *J)
 {
     jgrid *g = &J->g;
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
-    size_t l, i, pass, total = 0;
-    grid_free(J->al, g);
-    for (l = 0; l < J->nl; l++)
-        for (i = 0; J->lp[l].alive && i < J->lp[l].n; i++) {
-            x0 = fmin(x0, J->lp[l].v[i].p.x);
-            y0 = fmin(y0, J->lp[l].v[i].p.y);
-            x1 = fmax(x1, J->lp[l].v[i].p.x);
-            y1 = fmax(y1, J->lp[l].v[i].p.y);
-        }
+    size_t i;
+    amp_status st = AMP_OK;
+    for (i = 0; i < J->nv; i++) {
+        x0 = fmin(x0, J->v[i].v.p.x);
+        y0 = fmin(y0, J->v[i].v.p.y);
+        x1 = fmax(x1, J->v[i].v.p.x);
+        y1 = fmax(y1, J->v[i].v.p.y);
+    }
     g->cell = fmax(J->dmax, fmax(x1 - x0, y1 - y0) / 512.0);
     g->x0 = x0;
     g->y0 = y0;
     g->nx = (long)((x1 - x0) / g->cell) + 1;
     g->ny = (long)((y1 - y0) / g->cell) + 1;
-    g->start = amp_calloc(J->al, (size_t)(g->nx * g->ny) + 1, sizeof *g->start);
-    if (!g->start)
+    if (!(g->c = amp_calloc(J->al, (size_t)(g->nx * g->ny), sizeof *g->c)))
         return AMP_ERR_NOMEM;
-    for (pass = 0; pass < 2; pass++) {
-        for (l = 0; l < J->nl; l++)
-            for (i = 0; J->lp[l].alive && i < J->lp[l].n; i++) {
-                amp_vec3 a = J->lp[l].v[i].p, b = J->lp[l].v[(i + 1) % J->lp[l].n].p;
-                long cx0 = cell_of(g, fmin(a.x, b.x), g->x0, g->nx), cx1 = cell_of(g, fmax(a.x, b.x), g->x0, g->nx);
-                long cy0 = cell_of(g, fmin(a.y, b.y), g->y0, g->ny), cy1 = cell_of(g, fmax(a.y, b.y), g->y0, g->ny);
-                long x, y;
-                for (y = cy0; y <= cy1; y++)
-                    for (x = cx0; x <= cx1; x++) {
-                        size_t c = (size_t)(y * g->nx + x);
-                        if (pass == 0)
-                            g->start[c + 1]++;
-                        else {
-                            g->item[g->start[c]].loop = l;
-                            g->item[g->start[c]++].i = i;
-                        }
-                    }
-            }
-        if (pass == 0) {
-            for (i = 0; i < (size_t)(g->nx * g->ny); i++)
-                g->start[i + 1] += g->start[i];
-            total = g->start[g->nx * g->ny];
-            g->item = amp_alloc(J->al, (total + 1) * sizeof *g->item);
-            if (!g->item)
-                return AMP_ERR_NOMEM;
-        }
-    }
-    for (i = (size_t)(g->nx * g->ny); i > 0; i--)
-        g->start[i] = g->start[i - 1];
-    g->start[0] = 0;
-    return AMP_OK;
+    for (i = 0; i < J->nv && st == AMP_OK; i++)
+        st = grid_add(J, (uint32_t)i);
+    return st;
 }
 
 static amp_vec2 P2v(amp_vec3 p) { return amp_v2(p.x, p.y); }
 
+/* The live loop vertex s is in. */
+static size_t loop_of(const joiner *J, size_t *uf, uint32_t s) { return amp_uf_find(uf, J->v[s].loop); }
+
+/* Does segment a come before segment b in the loop written from @p head? */
+static int comes_before(const joiner *J, uint32_t head, uint32_t a, uint32_t b)
+{
+    uint32_t s;
+    if (a == head || b == head)
+        return a == head;
+    if (J->v[a].next == b || J->v[b].next == a)
+        return J->v[a].next == b;
+    for (s = J->v[head].next; s != a && s != b; s = J->v[s].next)
+        ;
+    return s == a;
+}
+
+/* Which segment wins a tie of distances: the one met first by a scan of the
+ * 3 x 3 cells row by row, each cell's segments by loop and by place in the
+ * loop (the order the grid had when it was rebuilt after every splice; the
+ * walls fix its box, so the cells stay the same). */
+typedef struct jkey {
+    long rank;
+    size_t loop;
+    uint32_t s;
+} jkey;
+
+static int key_before(const joiner *J, const jkey *x, const jkey *y)
+{
+    if (x->rank != y->rank)
+        return x->rank < y->rank;
+    if (x->loop != y->loop)
+        return x->loop < y->loop;
+    return comes_before(J, J->lp[x->loop].head, x->s, y->s);
+}
+
 /* Nearest point to q on a printed segment of a live loop other than those
- * with uf root @p skip, within dmax: loop, segment, parameter. 0 if none. */
-static int nearest(const joiner *J, const size_t *uf, size_t skip, amp_vec2 q, size_t *ol, size_t *oi, double *ot,
+ * with uf root @p skip, within dmax: loop, segment (its first vertex),
+ * parameter. 0 if none. */
+static int nearest(const joiner *J, size_t *uf, size_t skip, amp_vec2 q, size_t *ol, uint32_t *oi, double *ot,
                    double *od)
 {
     const jgrid *g = &J->g;
     long cx = cell_of(g, q.x, g->x0, g->nx), cy = cell_of(g, q.y, g->y0, g->ny), x, y;
     double best = J->dmax;
     int found = 0;
-    size_t k;
+    uint32_t k;
+    jkey bk = {0, 0, 0};
     for (y = cy - 1; y <= cy + 1; y++)
         for (x = cx - 1; x <= cx + 1; x++) {
+            const jcell *c;
             if (x < 0 || y < 0 || x >= g->nx || y >= g->ny)
                 continue;
-            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
-                const jloop *L = &J->lp[g->item[k].loop];
-                size_t i = g->item[k].i, j = (i + 1) % L->n;
-                amp_vec2 a = P2v(L->v[i].p), b = P2v(L->v[j].p);
+            c = &g->c[y * g->nx + x];
+            for (k = 0; k < c->n; k++) {
+                uint32_t s = c->s[k];
+                const jvert *A = &J->v[s], *B = &J->v[A->next];
+                size_t l = loop_of(J, uf, s);
+                amp_vec2 a = P2v(A->v.p), b = P2v(B->v.p);
                 double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d;
-                if (L->wall || amp_uf_find((size_t *)uf, g->item[k].loop) == skip || !(L->v[i].r == J->r) ||
-                    !(L->v[j].r == J->r))
+                if (J->lp[l].wall || l == skip || !(A->v.r == J->r) || !(B->v.r == J->r))
                     continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
                 t = fmin(fmax(t, 0.0), 1.0);
                 d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
-                if (d < best) {
+                if (d < best || (d == best && found)) {
+                    jkey key;
+                    key.rank = (A->c[1] > cy - 1 ? A->c[1] - (cy - 1) : 0) * 3 + (A->c[0] > cx - 1 ? A->c[0] - (cx - 1) : 0);
+                    key.loop = l;
+                    key.s = s;
+                    if (d == best && !key_before(J, &key, &bk))
+                        continue;
+                    bk = key;
                     best = d;
-                    *ol = g->item[k].loop;
-                    *oi = i;
+                    *ol = l;
+                    *oi = s;
                     *ot = t;
                     found = 1;
                 }
@@ -159,23 +240,23 @@ static int proper_cross(amp_vec2 a, amp_vec2 b, amp_vec2 c, amp_vec2 d)
 }
 
 /* Does connector a-b touch any segment of the live loops other than the
- * segments (la, ia) and (lb, ib) it ends on? Touching includes passing
+ * segments @p sa and @p sb it ends on? Touching includes passing
  * within a tiny distance of a vertex (collinear cases). */
-static int connector_blocked(const joiner *J, amp_vec2 a, amp_vec2 b, size_t la, size_t ia, size_t lb, size_t ib)
+static int connector_blocked(const joiner *J, amp_vec2 a, amp_vec2 b, uint32_t sa, uint32_t sb)
 {
     const jgrid *g = &J->g;
     long cx0 = cell_of(g, fmin(a.x, b.x), g->x0, g->nx), cx1 = cell_of(g, fmax(a.x, b.x), g->x0, g->nx);
     long cy0 = cell_of(g, fmin(a.y, b.y), g->y0, g->ny), cy1 = cell_of(g, fmax(a.y, b.y), g->y0, g->ny), x, y;
     double tiny = 1e-7 * J->r;
-    size_t k;
+    amp_vec3 A3 = amp_v3(a.x, a.y, 0), B3 = amp_v3(b.x, b.y, 0);
+    uint32_t k;
     for (y = cy0; y <= cy1; y++)
-        for (x = cx0; x <= cx1; x++)
-            for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
-                const jloop *L = &J->lp[g->item[k].loop];
-                size_t i = g->item[k].i, j = (i + 1) % L->n;
-                amp_vec2 c = P2v(L->v[i].p), d = P2v(L->v[j].p);
-                amp_vec3 A3 = amp_v3(a.x, a.y, 0), B3 = amp_v3(b.x, b.y, 0);
-                if ((g->item[k].loop == la && i == ia) || (g->item[k].loop == lb && i == ib))
+        for (x = cx0; x <= cx1; x++) {
+            const jcell *cl = &g->c[y * g->nx + x];
+            for (k = 0; k < cl->n; k++) {
+                uint32_t s = cl->s[k];
+                amp_vec2 c = P2v(J->v[s].v.p), d = P2v(J->v[J->v[s].next].v.p);
+                if (s == sa || s == sb)
                     continue;
                 if (proper_cross(a, b, c, d))
                     return 1;
@@ -185,127 +266,237 @@ static int connector_blocked(const joiner *J, amp_vec2 a, amp_vec2 b, size_t la,
                     amp_v3_seg_dist2(amp_v3(d.x, d.y, 0), A3, B3, NULL) < tiny * tiny)
                     return 1;
             }
+        }
     return 0;
 }
 
-/* Append v unless it repeats the last vertex exactly (position and radius:
- * a vertex written twice with two radii marks a pseudo edge and stays). */
-static size_t wpush(amp_pvert *w, size_t m, amp_pvert v)
+/* Point at parameter t of the segment of vertex s. */
+static amp_pvert seg_point(const joiner *J, uint32_t s, double t)
 {
-    if (m && w[m - 1].p.x == v.p.x && w[m - 1].p.y == v.p.y && w[m - 1].p.z == v.p.z && w[m - 1].r == v.r)
-        return m;
-    w[m++] = v;
-    return m;
-}
-
-/* Point at parameter t of segment i of loop L. */
-static amp_pvert seg_point(const jloop *L, size_t i, double t)
-{
-    amp_pvert a = L->v[i], b = L->v[(i + 1) % L->n], p;
+    amp_pvert a = J->v[s].v, b = J->v[J->v[s].next].v, p;
     p.p = amp_v3_add(a.p, amp_v3_scale(amp_v3_sub(b.p, a.p), t));
     p.r = a.r;
     return p;
 }
 
+static double seg_len(const joiner *J, uint32_t s) { return amp_v3_dist(J->v[s].v.p, J->v[J->v[s].next].v.p); }
+
 /* A splice: X is left between (sx, t1) and (sx2, t2) (forward), Y between
- * (j1, u1) and (j2, u2) (forward when ybackward, else backward). */
+ * (j1, u1) and (j2, u2) (forward when ybackward, else backward); sx, sx2,
+ * j1, j2 are the segments' first vertices. */
 typedef struct cut {
-    size_t lx, sx, sx2, ly, j1, j2;
+    size_t lx, ly;
+    uint32_t sx, sx2, j1, j2;
     double t1, t2, u1, u2;
+    size_t xk, fw, bw; /* forward segments sx -> sx2 on X, j1 -> j2 and j2 -> j1 on Y */
     int ybackward;
 } cut;
 
-/* Splice loop Y into X (see the file comment); X becomes the joined loop. */
+/* A new vertex of loop @p loop, unlinked (the pool has room: see splice). */
+static uint32_t vnew(joiner *J, amp_pvert p, size_t loop)
+{
+    jvert *V = &J->v[J->nv];
+    V->v = p;
+    V->next = V->prev = (uint32_t)J->nv;
+    V->loop = (uint32_t)loop;
+    V->c[0] = -1;
+    return (uint32_t)J->nv++;
+}
+
+static int same_vert(amp_pvert a, amp_pvert b) { return a.p.x == b.p.x && a.p.y == b.p.y && a.p.z == b.p.z && a.r == b.r; }
+
+/* a's segment now ends at b: a is re-listed at the end of the splice. */
+static void link(joiner *J, uint32_t a, uint32_t b)
+{
+    grid_del(J, a);
+    J->v[a].next = b;
+    J->v[b].prev = a;
+    J->touched[J->ntouched++] = a;
+}
+
+/* Drop vertex s (a left-out stretch, or a repeat of the vertex before it). */
+static void drop(joiner *J, uint32_t s)
+{
+    grid_del(J, s);
+    J->v[s].loop = JNONE;
+}
+
+/* Drop the vertices after @p from up to @p to (forward); nothing when from == to. */
+static void drop_stretch(joiner *J, uint32_t from, uint32_t to)
+{
+    while (from != to) {
+        from = J->v[from].next;
+        drop(J, from);
+    }
+}
+
+/* Append the linked run s .. e (forward) after *tail, the run's first vertex dropped when it repeats *tail
+ * (wpush's rule: the runs themselves hold no repeats); *m counts the vertices kept. */
+static void append_run(joiner *J, uint32_t *tail, uint32_t s, uint32_t e, size_t len, size_t *m)
+{
+    if (same_vert(J->v[*tail].v, J->v[s].v)) {
+        drop(J, s);
+        if (s == e)
+            return;
+        s = J->v[s].next;
+        len--;
+    }
+    link(J, *tail, s);
+    *tail = e;
+    *m += len;
+}
+
+/* Turn the run s .. e (forward) round: it then runs e .. s. Its segments are re-listed. */
+static amp_status reverse_run(joiner *J, uint32_t s, uint32_t e)
+{
+    uint32_t x = s;
+    amp_status st = AMP_OK;
+    for (;;) {
+        uint32_t nx = J->v[x].next;
+        grid_del(J, x);
+        if (x == e)
+            break;
+        x = nx;
+    }
+    for (x = s;; x = J->v[x].prev) {
+        uint32_t t = J->v[x].next;
+        J->v[x].next = J->v[x].prev;
+        J->v[x].prev = t;
+        if (x == e)
+            break;
+    }
+    /* inner links now run e .. s; the ends are linked by the caller, which lists them */
+    for (x = e; x != s && st == AMP_OK; x = J->v[x].next)
+        st = grid_add(J, x);
+    return st;
+}
+
+/* Splice loop Y into X (see the file comment); X becomes the joined loop,
+ * written from p2: X from p2 round to p1, the connector to q1, Y the long
+ * way round to q2, the connector back. Vertices that repeat the one before
+ * them are dropped (and the last one when it closes onto p2). */
 static amp_status splice(joiner *J, const cut *c)
 {
     jloop *X = &J->lp[c->lx], *Y = &J->lp[c->ly];
-    size_t n = X->n + Y->n + 8, m = 0, i;
-    amp_pvert *w = amp_alloc(J->al, n * sizeof *w);
-    if (!w)
-        return AMP_ERR_NOMEM;
-    /* X from p2 round to p1 */
-    m = wpush(w, m, seg_point(X, c->sx2, c->t2));
-    for (i = (c->sx2 + 1) % X->n;; i = (i + 1) % X->n) {
-        m = wpush(w, m, X->v[i]);
-        if (i == c->sx)
-            break;
-    }
-    m = wpush(w, m, seg_point(X, c->sx, c->t1));
-    /* Y from q1 the long way round to q2 */
-    m = wpush(w, m, seg_point(Y, c->j1, c->u1));
+    uint32_t p2, p1, q1, q2, xs = J->v[c->sx2].next, ys, ye, tail;
+    size_t m = 1, k, xrun = X->n - c->xk, yrun = Y->n - (c->ybackward ? c->fw : c->bw);
+    amp_status st = AMP_OK;
+    J->ntouched = 0;
+    p2 = vnew(J, seg_point(J, c->sx2, c->t2), c->lx);
+    p1 = vnew(J, seg_point(J, c->sx, c->t1), c->lx);
+    q1 = vnew(J, seg_point(J, c->j1, c->u1), c->lx);
+    q2 = vnew(J, seg_point(J, c->j2, c->u2), c->lx);
+    drop_stretch(J, c->sx, c->sx2);
     if (c->ybackward) {
-        /* the short stretch q1 -> q2 runs forward: go backward from j1 to j2 + 1 */
-        for (i = c->j1;; i = (i + Y->n - 1) % Y->n) {
-            m = wpush(w, m, Y->v[i]);
-            if (i == (c->j2 + 1) % Y->n)
-                break;
-        }
+        /* Y's run is j1 back to j2 + 1: the short stretch q1 -> q2 runs forward */
+        uint32_t after = J->v[c->j2].next;
+        drop_stretch(J, c->j1, c->j2);
+        if ((st = reverse_run(J, after, c->j1)) != AMP_OK)
+            return st;
+        ys = c->j1;
+        ye = after;
     } else {
-        for (i = (c->j1 + 1) % Y->n;; i = (i + 1) % Y->n) {
-            m = wpush(w, m, Y->v[i]);
-            if (i == c->j2)
-                break;
-        }
+        ys = J->v[c->j1].next;
+        ye = c->j2;
+        drop_stretch(J, c->j2, c->j1);
     }
-    m = wpush(w, m, seg_point(Y, c->j2, c->u2));
-    if (m > 1 && w[m - 1].p.x == w[0].p.x && w[m - 1].p.y == w[0].p.y && w[m - 1].r == w[0].r)
+    tail = p2;
+    append_run(J, &tail, xs, c->sx, xrun, &m);
+    append_run(J, &tail, p1, p1, 1, &m);
+    append_run(J, &tail, q1, q1, 1, &m);
+    append_run(J, &tail, ys, ye, yrun, &m);
+    append_run(J, &tail, q2, q2, 1, &m);
+    if (m > 1 && J->v[tail].v.p.x == J->v[p2].v.p.x && J->v[tail].v.p.y == J->v[p2].v.p.y &&
+        J->v[tail].v.r == J->v[p2].v.r) {
+        uint32_t t = J->v[tail].prev;
+        drop(J, tail);
+        tail = t;
         m--;
-    amp_free(J->al, X->v);
-    amp_free(J->al, Y->v);
-    Y->v = NULL;
+    }
+    link(J, tail, p2);
+    for (k = 0; k < J->ntouched && st == AMP_OK; k++) {
+        uint32_t s = J->touched[k];
+        grid_del(J, s); /* listed twice when linked twice */
+        if (J->v[s].loop != JNONE)
+            st = grid_add(J, s);
+    }
+    X->head = p2;
+    X->n = m;
     Y->n = 0;
     Y->alive = 0;
-    X->v = w;
-    X->n = m;
-    return AMP_OK;
+    return st;
 }
 
-/* Forward segment count from (j1, u1) to (j2, u2) on a loop of n segments. */
-static size_t forward_span(size_t n, size_t j1, double u1, size_t j2, double u2)
+/* Forward segment counts (j1, u1) -> (j2, u2) and back on a loop of n
+ * segments, when one of them is at most 8 (the left-out stretch of Y is
+ * short); 0 when both are longer. */
+static int spans(const joiner *J, size_t n, uint32_t j1, double u1, uint32_t j2, double u2, size_t *fw, size_t *bw)
 {
-    if (j1 == j2 && u2 >= u1)
-        return 0;
-    return (j2 + n - j1) % n == 0 ? n : (j2 + n - j1) % n;
+    uint32_t s;
+    size_t k;
+    if (j1 == j2) {
+        *fw = u2 >= u1 ? 0 : n;
+        *bw = u1 >= u2 ? 0 : n;
+        return 1;
+    }
+    for (k = 1, s = J->v[j1].next; k <= 8 && s != j2; k++)
+        s = J->v[s].next;
+    if (s == j2 && k <= 8) {
+        *fw = k;
+        *bw = n - k;
+        return 1;
+    }
+    for (k = 1, s = J->v[j2].next; k <= 8 && s != j1; k++)
+        s = J->v[s].next;
+    if (s == j1 && k <= 8) {
+        *bw = k;
+        *fw = n - k;
+        return 1;
+    }
+    return 0;
 }
 
-/* Segments from..from+cnt (cyclic) of L all printed at the nominal radius r? */
-static int all_printed(const jloop *L, size_t from, size_t cnt, double r)
+/* Segments from..from+cnt (forward) all printed at the nominal radius r? */
+static int all_printed(const joiner *J, uint32_t from, size_t cnt)
 {
     size_t i;
-    for (i = 0; i <= cnt + 1; i++)
-        if (!(L->v[(from + i) % L->n].r == r))
+    for (i = 0; i <= cnt + 1; i++, from = J->v[from].next)
+        if (!(J->v[from].v.r == J->r))
             return 0; /* a pseudo edge (0) or a corner's tip (tagged) */
     return 1;
 }
 
-/* p2: the point at arc length ell after the midpoint p1 of segment sx of X,
- * at most 8 segments on; 0 if the loop turns away or is too short. */
-static int second_point(const jloop *X, size_t sx, double ell, size_t *sx2, double *t2)
+/* p2: the point at arc length ell after the midpoint p1 of segment sx of a
+ * loop of n segments, at most 8 segments on (*steps of them); 0 if the loop
+ * turns away or is too short. */
+static int second_point(const joiner *J, size_t n, uint32_t sx, double ell, uint32_t *sx2, double *t2, size_t *steps)
 {
     double need = ell, len;
-    size_t i = sx, k;
+    uint32_t i = sx;
+    size_t k;
     double t = 0.5;
-    for (k = 0; k < 8 && k < X->n; k++) {
-        amp_vec3 a = X->v[i].p, b = X->v[(i + 1) % X->n].p;
-        len = amp_v3_dist(a, b) * (1 - t);
+    for (k = 0; k < 8 && k < n; k++) {
+        double l = seg_len(J, i);
+        len = l * (1 - t);
         if (len >= need) {
             *sx2 = i;
-            *t2 = t + need / amp_v3_dist(a, b);
+            *t2 = t + need / l;
+            *steps = k;
             return 1;
         }
         need -= len;
-        i = (i + 1) % X->n;
+        i = J->v[i].next;
         t = 0;
     }
     return 0;
 }
 
-/* Parameter @p u on segment i of L moved off its ends by a tenth of the
+/* Parameter @p u on the segment of s moved off its ends by a tenth of the
  * segment or a tenth of a bead radius, whichever is less. */
-static double into_segment(const jloop *L, size_t i, double u, double r)
+static double into_segment(const joiner *J, uint32_t s, double u)
 {
-    double len = amp_v3_dist(L->v[i].p, L->v[(i + 1) % L->n].p);
-    double m = fmin(0.1, 0.1 * r / fmax(len, 1e-12));
+    double len = seg_len(J, s);
+    double m = fmin(0.1, 0.1 * J->r / fmax(len, 1e-12));
     return fmin(fmax(u, m), 1 - m);
 }
 
@@ -317,15 +508,14 @@ static double into_segment(const jloop *L, size_t i, double u, double r)
  * stretch a connector across the strips beside it). */
 static void straddle_corner(const joiner *J, cut *c, amp_vec2 p1, amp_vec2 p2, double ell)
 {
-    const jloop *Y = &J->lp[c->ly];
-    size_t a = c->u1 >= 0.5 ? c->j1 : (c->j1 + Y->n - 1) % Y->n, b = (a + 1) % Y->n;
-    double la = amp_v3_dist(Y->v[a].p, Y->v[b].p), lb = amp_v3_dist(Y->v[b].p, Y->v[(b + 1) % Y->n].p);
+    uint32_t a = c->u1 >= 0.5 ? c->j1 : J->v[c->j1].prev, b = J->v[a].next;
+    double la = seg_len(J, a), lb = seg_len(J, b);
     c->j1 = a;
     c->u1 = 1 - fmin(0.5 * ell, 0.4 * la) / fmax(la, 1e-12);
     c->j2 = b;
     c->u2 = fmin(0.5 * ell, 0.4 * lb) / fmax(lb, 1e-12);
-    if (proper_cross(p1, P2v(seg_point(Y, c->j1, c->u1).p), p2, P2v(seg_point(Y, c->j2, c->u2).p))) {
-        size_t j = c->j1;
+    if (proper_cross(p1, P2v(seg_point(J, c->j1, c->u1).p), p2, P2v(seg_point(J, c->j2, c->u2).p))) {
+        uint32_t j = c->j1;
         double u = c->u1;
         c->j1 = c->j2;
         c->u1 = c->u2;
@@ -335,57 +525,51 @@ static void straddle_corner(const joiner *J, cut *c, amp_vec2 p1, amp_vec2 p2, d
 }
 
 /* Try a splice of the loop holding segment sx of lx with another set. */
-static int try_segment(joiner *J, size_t *uf, size_t lx, size_t sx, double ell, amp_status *st)
+static int try_segment(joiner *J, size_t *uf, size_t lx, uint32_t sx, double ell, amp_status *st)
 {
-    const jloop *X = &J->lp[lx];
     double d1, d2;
-    size_t l2, rx = amp_uf_find(uf, lx), fw, bw;
-    amp_pvert P1, P2, Q1, Q2;
+    size_t l2, rx = amp_uf_find(uf, lx);
+    uint32_t j2;
     amp_vec2 p1, p2, q1, q2;
     cut c;
     c.lx = lx;
     c.sx = sx;
     c.t1 = 0.5;
-    if (amp_v3_dist(X->v[sx].p, X->v[(sx + 1) % X->n].p) < 1e-6 * J->r ||
-        !second_point(X, sx, ell, &c.sx2, &c.t2) || !all_printed(X, sx, forward_span(X->n, sx, 0, c.sx2, 0), J->r))
+    if (seg_len(J, sx) < 1e-6 * J->r || !second_point(J, J->lp[lx].n, sx, ell, &c.sx2, &c.t2, &c.xk) ||
+        !all_printed(J, sx, c.xk))
         return 0;
-    P1 = seg_point(X, sx, c.t1);
-    P2 = seg_point(X, c.sx2, c.t2);
-    p1 = P2v(P1.p);
-    p2 = P2v(P2.p);
-    if (!nearest(J, uf, rx, p1, &c.ly, &c.j1, &c.u1, &d1) || !nearest(J, uf, rx, p2, &l2, &c.j2, &c.u2, &d2) ||
+    p1 = P2v(seg_point(J, sx, c.t1).p);
+    p2 = P2v(seg_point(J, c.sx2, c.t2).p);
+    if (!nearest(J, uf, rx, p1, &c.ly, &c.j1, &c.u1, &d1) || !nearest(J, uf, rx, p2, &l2, &j2, &c.u2, &d2) ||
         l2 != c.ly || d1 < 1e-3 * J->r || d2 < 1e-3 * J->r)
         return 0;
+    c.j2 = j2;
     /* a nearest point at a corner of Y (its vertex cone) moves into the
      * segment: a connector ending on a vertex would touch the segment
      * before it too. The move is a tenth of a bead at most: on a long
      * segment (a skin strip) a tenth of its length would stretch the
      * connector across the strips beside it */
-    c.u1 = into_segment(&J->lp[c.ly], c.j1, c.u1, J->r);
-    c.u2 = into_segment(&J->lp[c.ly], c.j2, c.u2, J->r);
-    Q1 = seg_point(&J->lp[c.ly], c.j1, c.u1);
-    Q2 = seg_point(&J->lp[c.ly], c.j2, c.u2);
-    if (hypot(Q1.p.x - Q2.p.x, Q1.p.y - Q2.p.y) < 1e-3 * ell)
+    c.u1 = into_segment(J, c.j1, c.u1);
+    c.u2 = into_segment(J, c.j2, c.u2);
+    q1 = P2v(seg_point(J, c.j1, c.u1).p);
+    q2 = P2v(seg_point(J, c.j2, c.u2).p);
+    if (hypot(q1.x - q2.x, q1.y - q2.y) < 1e-3 * ell)
         straddle_corner(J, &c, p1, p2, ell);
     /* the left-out stretch of Y must be short and printed throughout */
-    fw = forward_span(J->lp[c.ly].n, c.j1, c.u1, c.j2, c.u2);
-    bw = forward_span(J->lp[c.ly].n, c.j2, c.u2, c.j1, c.u1);
-    if (fw > 8 && bw > 8)
+    if (!spans(J, J->lp[c.ly].n, c.j1, c.u1, c.j2, c.u2, &c.fw, &c.bw))
         return 0;
-    c.ybackward = fw <= bw;
-    if (!all_printed(&J->lp[c.ly], c.ybackward ? c.j1 : c.j2, c.ybackward ? fw : bw, J->r))
+    c.ybackward = c.fw <= c.bw;
+    if (!all_printed(J, c.ybackward ? c.j1 : c.j2, c.ybackward ? c.fw : c.bw))
         return 0;
-    q1 = P2v(seg_point(&J->lp[c.ly], c.j1, c.u1).p);
-    q2 = P2v(seg_point(&J->lp[c.ly], c.j2, c.u2).p);
+    q1 = P2v(seg_point(J, c.j1, c.u1).p);
+    q2 = P2v(seg_point(J, c.j2, c.u2).p);
     if (proper_cross(p1, q1, p2, q2))
         return 0;
-    if (connector_blocked(J, p1, q1, lx, sx, c.ly, c.j1) || connector_blocked(J, p2, q2, lx, c.sx2, c.ly, c.j2))
+    if (connector_blocked(J, p1, q1, sx, c.j1) || connector_blocked(J, p2, q2, c.sx2, c.j2))
         return 0;
     *st = splice(J, &c);
-    if (*st == AMP_OK) {
+    if (*st == AMP_OK)
         amp_uf_union(uf, c.ly, lx);
-        *st = grid_build(J);
-    }
     return 1;
 }
 
@@ -412,9 +596,35 @@ static int closed_object(const amp_pathset *in, size_t i)
     return in->paths[i].role == AMP_ROLE_OBJECT && n >= 4 && v[0].p.x == v[n - 1].p.x && v[0].p.y == v[n - 1].p.y;
 }
 
+/* A new loop of the n vertices v (a repeat of the vertex before dropped: wpush's rule), a set of its own in @p uf. */
+static void add_loop(joiner *J, size_t *uf, const amp_pvert *v, size_t n, int wall)
+{
+    jloop *L = &J->lp[J->nl];
+    size_t k;
+    uint32_t first = (uint32_t)J->nv, last = first;
+    L->n = 0;
+    for (k = 0; k < n; k++) {
+        if (L->n && same_vert(J->v[last].v, v[k]))
+            continue;
+        last = vnew(J, v[k], J->nl);
+        if (L->n) {
+            J->v[last - 1].next = last;
+            J->v[last].prev = last - 1;
+        }
+        L->n++;
+    }
+    J->v[last].next = first;
+    J->v[first].prev = last;
+    L->head = first;
+    L->alive = 1;
+    L->wall = wall;
+    uf[J->nl] = J->nl;
+    J->nl++;
+}
+
 /* The closed object loops of paths [first, npaths) of @p in into J's loops,
  * each a set of its own in @p uf; specks left out are counted in *nspeck. */
-static amp_status collect_loops(joiner *J, size_t *uf, const amp_pathset *in, size_t first, size_t *nspeck)
+static void collect_loops(joiner *J, size_t *uf, const amp_pathset *in, size_t first, size_t *nspeck)
 {
     size_t i;
     int big = 0;
@@ -430,45 +640,40 @@ static amp_status collect_loops(joiner *J, size_t *uf, const amp_pathset *in, si
     for (i = first; i < in->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(in, i);
         size_t n = in->paths[i].n;
-        jloop *L = &J->lp[J->nl];
         if (!closed_object(in, i))
             continue;
         if (speck(v, n, big ? J->r : 0.25 * J->r)) {
             (*nspeck)++; /* a loop smaller than a quarter bead: inside the beads around it */
             continue;
         }
-        if (!(L->v = amp_alloc(J->al, n * sizeof *L->v)))
-            return AMP_ERR_NOMEM;
         /* the cyclic loop drops the closing vertex unless it carries
          * another radius (a tour ending on a pseudo edge) */
-        L->n = v[n - 1].r == v[0].r ? n - 1 : n;
-        memcpy(L->v, v, L->n * sizeof *v);
-        L->alive = 1;
-        uf[J->nl] = J->nl;
-        J->nl++;
+        add_loop(J, uf, v, v[n - 1].r == v[0].r ? n - 1 : n, 0);
     }
-    return AMP_OK;
 }
 
 /* The section's rings, as walls in the grid: connectors may not cross them. */
-static amp_status add_walls(joiner *J, size_t *uf, const amp_polyset *walls)
+static void add_walls(joiner *J, size_t *uf, const amp_polyset *walls)
 {
     size_t i, k;
     for (i = 0; i < walls->nrings; i++) {
         const amp_vec2 *p = amp_polyset_ring(walls, i);
         jloop *L = &J->lp[J->nl];
+        uint32_t first = (uint32_t)J->nv;
         L->n = walls->rings[i].n;
-        if (!(L->v = amp_alloc(J->al, (L->n + 1) * sizeof *L->v)))
-            return AMP_ERR_NOMEM;
         for (k = 0; k < L->n; k++) {
-            L->v[k].p = amp_v3(p[k].x, p[k].y, 0);
-            L->v[k].r = 0;
+            amp_pvert w;
+            w.p = amp_v3(p[k].x, p[k].y, 0);
+            w.r = 0;
+            vnew(J, w, J->nl);
+            J->v[first + k].next = (uint32_t)(k + 1 < L->n ? first + k + 1 : first);
+            J->v[first + k].prev = (uint32_t)(k > 0 ? first + k - 1 : first + L->n - 1);
         }
+        L->head = first;
         L->alive = L->wall = 1;
         uf[J->nl] = J->nl;
         J->nl++;
     }
-    return AMP_OK;
 }
 
 /* Splices until one set is left or none is found: connectors 2r apart (their
@@ -484,9 +689,13 @@ static amp_status splice_all(joiner *J, size_t *uf, size_t sets)
         progress = 1;
         while (sets > 1 && progress && st == AMP_OK) {
             progress = 0;
-            for (k = 0; k < J->nl && !progress && st == AMP_OK; k++)
-                for (i = 0; J->lp[k].alive && !J->lp[k].wall && i < J->lp[k].n && !progress && st == AMP_OK; i++)
-                    progress = try_segment(J, uf, k, i, ell, &st);
+            for (k = 0; k < J->nl && !progress && st == AMP_OK; k++) {
+                uint32_t s = J->lp[k].head;
+                for (i = 0; J->lp[k].alive && !J->lp[k].wall && i < J->lp[k].n && !progress && st == AMP_OK; i++) {
+                    progress = try_segment(J, uf, k, s, ell, &st);
+                    s = J->v[s].next;
+                }
+            }
             sets -= (size_t)progress;
         }
     }
@@ -504,9 +713,10 @@ static amp_status write_joined(const joiner *J, const amp_pathset *in, size_t fi
         const jloop *L = &J->lp[k];
         if (!L->alive || L->wall)
             continue;
+        uint32_t s = L->head;
         st = amp_pathset_begin(out, AMP_ROLE_OBJECT, err);
-        for (i = 0; i <= L->n && st == AMP_OK; i++)
-            st = amp_pathset_push(out, L->v[i % L->n].p, L->v[i % L->n].r, err);
+        for (i = 0; i <= L->n && st == AMP_OK; i++, s = J->v[s].next)
+            st = amp_pathset_push(out, J->v[s].v.p, J->v[s].v.r, err);
         if (st == AMP_OK && h > 0)
             st = amp_pathset_set_height(out, h, err);
         (*nout)++;
@@ -526,23 +736,35 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_poly
                              amp_pathset *out, size_t *nout, size_t *nspeck, amp_error *err)
 {
     joiner J;
-    size_t *uf = NULL, k, sets;
-    amp_status st;
+    size_t *uf = NULL, i, sets, nloops = in->npaths - first + walls->nrings + 1;
+    amp_status st = AMP_OK;
     memset(&J, 0, sizeof J);
     J.al = out->alloc;
     J.r = r;
     J.dmax = 4.5 * r;
     *nout = 0;
-    J.lp = amp_calloc(J.al, in->npaths - first + walls->nrings + 1, sizeof *J.lp);
-    uf = amp_alloc(J.al, (in->npaths - first + walls->nrings + 1) * sizeof *uf);
-    st = !J.lp || !uf ? AMP_ERR_NOMEM : collect_loops(&J, uf, in, first, nspeck);
+    /* every vertex the join can make: the loops', the walls', and four per splice (at most one per loop) */
+    J.capv = 4 * nloops;
+    for (i = first; i < in->npaths; i++)
+        J.capv += in->paths[i].n;
+    for (i = 0; i < walls->nrings; i++)
+        J.capv += walls->rings[i].n;
+    J.lp = amp_calloc(J.al, nloops, sizeof *J.lp);
+    J.v = J.capv < JNONE ? amp_alloc(J.al, J.capv * sizeof *J.v) : NULL;
+    uf = amp_alloc(J.al, nloops * sizeof *uf);
+    if (!J.lp || !J.v || !uf)
+        st = AMP_ERR_NOMEM;
+    else
+        collect_loops(&J, uf, in, first, nspeck);
     sets = J.nl;
-    if (st == AMP_OK && sets > 1 && (st = add_walls(&J, uf, walls)) == AMP_OK && (st = grid_build(&J)) == AMP_OK)
-        st = splice_all(&J, uf, sets);
+    if (st == AMP_OK && sets > 1) {
+        add_walls(&J, uf, walls);
+        if ((st = grid_build(&J)) == AMP_OK)
+            st = splice_all(&J, uf, sets);
+    }
     if (st == AMP_OK)
         st = write_joined(&J, in, first, h, out, nout, err);
-    for (k = 0; J.lp && k < J.nl; k++)
-        amp_free(J.al, J.lp[k].v);
+    amp_free(J.al, J.v);
     amp_free(J.al, J.lp);
     amp_free(J.al, uf);
     grid_free(J.al, &J.g);
