@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "contpath_internal.h"
+#include "numtext.h"
 
 /* Work state of amp_contpath_layers(). */
 typedef struct lctx {
@@ -63,51 +64,7 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
 /* v as the .amp writer will write it (10 significant digits, docs/interfaces.md §3): the
  * checks then judge the coordinates the printer gets, and a touch that
  * rounding would turn into a crossing is caught before the file exists. */
-static double as_written_slow(double v)
-{
-    char buf[40];
-    snprintf(buf, sizeof buf, "%.10g", v);
-    return strtod(buf, NULL);
-}
-
-/* The same without formatting (a tenth of the run on large parts): with
- * the 10 significant digits as an integer m < 2^53 and a power of ten
- * p = 10^k, k <= 22, both exact in a double, m / p (or m * p) is rounded
- * once, as strtod rounds the decimal m 10^-k. Only the rounding of v to m
- * can differ from printf's (v 10^k is itself rounded, by at most 2e-6 at
- * m < 1e10), so values within 1e-4 of a half step take the slow path. */
-static double as_written(double v)
-{
-    static const double p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
-                                   1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-    double a = fabs(v), m, f;
-    int e;
-    if (!(a > 1e-12) || !(a < 1e12))
-        return v == 0 ? v : as_written_slow(v);
-    e = (int)floor(log10(a));
-    if (e < 9) {
-        m = a * p10[9 - e];
-        if (m >= 1e10) {
-            e++;
-            if (e > 9)
-                return as_written_slow(v);
-            m = a * p10[9 - e];
-        } else if (m < 1e9) {
-            e--;
-            if (9 - e > 22)
-                return as_written_slow(v);
-            m = a * p10[9 - e];
-        }
-    } else
-        return as_written_slow(v);
-    if (m < 1e9 || m >= 1e10)
-        return as_written_slow(v);
-    f = m - floor(m);
-    if (fabs(f - 0.5) < 1e-4)
-        return as_written_slow(v);
-    m = floor(m + 0.5);
-    return copysign(m / p10[9 - e], v);
-}
+static double as_written(double v) { return amp_g10_round(v); }
 
 /* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
  * than @p tol to the last kept one (same radius): micro-segments from

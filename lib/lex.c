@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "lex.h"
+#include "numtext.h"
 
 void amp_lex_init(amp_lex *lx, const char *buf, size_t len, int strip_comments)
 {
@@ -106,6 +107,8 @@ amp_status amp_lex_double(const amp_lex *lx, int i, double *out, amp_error *err)
     double v;
     if (i >= lx->ntok)
         return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: missing field %d", lx->line, i + 1);
+    if (i < lx->ntok && amp_dec_parse(lx->tok[i], lx->toklen[i], out))
+        return AMP_OK; /* a plain decimal: strtod's value without its cost */
     if (!tok_copy(lx, i, s, sizeof s))
         return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: field %d is not a number", lx->line, i + 1);
     errno = 0;

@@ -5,6 +5,7 @@
 
 #include "ampath/paths.h"
 #include "lex.h"
+#include "numtext.h"
 
 void amp_pathset_init(amp_pathset *ps, const amp_allocator *a)
 {
@@ -292,8 +293,19 @@ amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sin
             st = amp_sinkf(sink, user, "path %s %lu %.10g\n", role, (unsigned long)ps->paths[i].n, ps->paths[i].h);
         else
             st = amp_sinkf(sink, user, "path %s %lu\n", role, (unsigned long)ps->paths[i].n);
-        for (k = 0; st == AMP_OK && k < ps->paths[i].n; k++)
-            st = amp_sinkf(sink, user, "%.10g %.10g %.10g %.10g\n", v[k].p.x, v[k].p.y, v[k].p.z, v[k].r);
+        for (k = 0; st == AMP_OK && k < ps->paths[i].n; k++) {
+            /* "%.10g %.10g %.10g %.10g\n", without printf's cost on the hot path */
+            char line[4 * AMP_G10_MAX + 1];
+            size_t n = amp_g10_format(v[k].p.x, line);
+            line[n++] = ' ';
+            n += amp_g10_format(v[k].p.y, line + n);
+            line[n++] = ' ';
+            n += amp_g10_format(v[k].p.z, line + n);
+            line[n++] = ' ';
+            n += amp_g10_format(v[k].r, line + n);
+            line[n++] = '\n';
+            st = sink(user, line, n);
+        }
     }
     if (st != AMP_OK)
         return amp_fail(err, st, 0, "writing paths failed: %s", amp_strerror(st));
