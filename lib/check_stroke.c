@@ -193,9 +193,14 @@ static int yrows_contains(const yrows *y, amp_vec2 q, double tol)
     size_t k;
     int in = 0;
     for (r = r0; r <= r1; r++)
-        for (k = y->start[r]; k < y->start[r + 1]; k++)
-            if (dist2(q, y->a[y->item[k]], y->b[y->item[k]]) <= tol * tol)
+        for (k = y->start[r]; k < y->start[r + 1]; k++) {
+            amp_vec2 a = y->a[y->item[k]], b = y->b[y->item[k]];
+            /* a segment within tol is within 2 tol of q in x (whatever the rounding): most are not */
+            if ((q.x < a.x - 2 * tol && q.x < b.x - 2 * tol) || (q.x > a.x + 2 * tol && q.x > b.x + 2 * tol))
+                continue;
+            if (dist2(q, a, b) <= tol * tol)
                 return -1;
+        }
     for (k = y->start[rq]; k < y->start[rq + 1]; k++) {
         amp_vec2 a = y->a[y->item[k]], b = y->b[y->item[k]];
         if ((a.y > q.y) != (b.y > q.y) && q.x < a.x + (q.y - a.y) * (b.x - a.x) / (b.y - a.y))
