@@ -71,8 +71,9 @@ BRIDGE_CORE_OBJ := $(BRIDGE_CORE:%.c=$(B)/%.o)
 BRIDGE_MAIN_OBJ := $(BRIDGE_MAIN:%.c=$(B)/%.o)
 FIXTURE_OBJ := $(FIXTURE_SRC:%.c=$(B)/%.o)
 TEST_BIN := $(TEST_SRC:tests/%.c=$(B)/tests/%)
-# tests/run.sh runs the programs side by side, started in this order: the longest first, so that the
-# suite's wall time is about its total over the processors
+# tests/run.sh runs the programs side by side (one more than the processors: test_bridge mostly waits on
+# its printers), started in this order: the longest first, so that the suite's wall time is about its
+# total over the processors; the Python binding's tests (plain build) go first of all
 TEST_SLOW := $(addprefix $(B)/tests/,test_field test_bridge test_contpath test_gcode test_slice test_order)
 TEST_RUN := $(filter $(TEST_SLOW),$(TEST_BIN)) $(filter-out $(TEST_SLOW),$(TEST_BIN))
 
@@ -199,8 +200,8 @@ TEST_ENV := AMP_TOOL=$(abspath $(AMPATH)) AMP_VPRINTER=$(abspath $(OUTBIN)/tools
 
 test-run: $(TEST_BIN) $(AMPATH) $(VPRINTER) $(BRIDGE) $(LIBSO)
 	@echo "== test suite ($(if $(filter 1,$(SAN)),ASan+UBSan,plain) build)"
-	@$(TEST_ENV) ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 sh tests/run.sh $(TEST_RUN)
-	$(if $(filter 1,$(SAN)),,@$(TEST_ENV) AMPATH_LIBRARY=$(abspath $(LIBSO)) python3 python/tests/run.py)
+	@$(TEST_ENV) AMPATH_LIBRARY=$(abspath $(LIBSO)) ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+		sh tests/run.sh $(if $(filter 1,$(SAN)),,python/tests/run.py) $(TEST_RUN)
 
 # make check compiles on every processor (JOBS=N to change)
 JOBS ?= $(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)

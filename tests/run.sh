@@ -3,13 +3,14 @@
 # finish with one summary line "checks: N passed, N failed" (exit 1 on failure).
 # One fresh scratch directory per run (fx_tmpdir()): a run never reads an earlier run's files.
 #
-# The programs run AMP_TEST_JOBS at a time (default: the number of processors), started in the order
+# The programs run AMP_TEST_JOBS at a time (default: one more than the processors, for the programs that
+# mostly wait on a virtual printer), started in the order
 # given (the Makefile names the longest first); each one's output is shown as it finishes. Every program
 # is independent: its files carry its pid, its printers are its own pseudo-terminals.
 AMP_TEST_TMP=$(mktemp -d "${TMPDIR:-/tmp}/ampath-check.XXXXXX") || exit 1
 export AMP_TEST_TMP
 trap 'rm -rf "$AMP_TEST_TMP"' EXIT
-jobs=${AMP_TEST_JOBS:-$(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1)}
+jobs=${AMP_TEST_JOBS:-$(($(getconf _NPROCESSORS_ONLN 2>/dev/null || echo 1) + 1))}
 out="$AMP_TEST_TMP/out"
 mkdir "$out" || exit 1
 
