@@ -452,7 +452,48 @@ typedef struct qctx {
     double worst;          /* largest cell bound among the leaves */
     size_t deep;           /* leaves stopped by QDEPTH (or maxcur) above the target */
     size_t maxcur;         /* most curves kept in memory */
+    struct qsample *sc;    /* the bound's grid points met so far (open addressing, x = 0: empty) */
+    size_t sccap, scn;
 } qctx;
+
+/* A grid point of the cell bound: lattice coordinates in quarters of the finest cell (x + 1, y), c-sample k,
+ * its point and whether it is a member. Neighbouring cells share their edges' points, and a split cell half of
+ * its parent's: each one is evaluated and classified once. */
+typedef struct qsample {
+    uint64_t x, y;
+    size_t k;
+    amp_vec3 p;
+    int in;
+} qsample;
+
+#define QSAMPLE_MAX ((size_t)1 << 24) /* beyond this many points, evaluate without keeping (about 0.8 GB) */
+
+static size_t qs_slot(const qctx *q, uint64_t x, uint64_t y, size_t k)
+{
+    uint64_t h = (x * 0x9E3779B97F4A7C15ULL) ^ (y * 0xC2B2AE3D27D4EB4FULL) ^ ((uint64_t)k * 0x165667B19E3779F9ULL);
+    size_t i = (size_t)(h >> 17) & (q->sccap - 1);
+    while (q->sc[i].x && (q->sc[i].x != x || q->sc[i].y != y || q->sc[i].k != k))
+        i = (i + 1) & (q->sccap - 1);
+    return i;
+}
+
+/* Room for one more point: the table doubled at half load; 0 when it may not grow (then nothing is kept). */
+static int qs_room(qctx *q)
+{
+    qsample *old = q->sc, *nw;
+    size_t oldcap = q->sccap, i, cap = oldcap ? 2 * oldcap : 4096;
+    if (q->sccap && 2 * (q->scn + 1) <= q->sccap)
+        return 1;
+    if (cap > 2 * QSAMPLE_MAX || !(nw = amp_calloc(q->a, cap, sizeof *nw)))
+        return 0;
+    q->sc = nw;
+    q->sccap = cap;
+    for (i = 0; i < oldcap; i++)
+        if (old[i].x)
+            q->sc[qs_slot(q, old[i].x, old[i].y, old[i].k)] = old[i];
+    amp_free(q->a, old);
+    return 1;
+}
 
 static void q_uvw(const qctx *q, uint64_t ia, uint64_t ib, double c, double uvw[3])
 {
@@ -563,13 +604,33 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
             for (i = 0; i <= QS; i++) {
                 double uvw[3], d = HUGE_VAL;
                 amp_vec3 x3;
+                uint64_t X = QS * ia + sa * (uint64_t)i + 1, Y = QS * ib + sb * (uint64_t)j;
+                size_t slot = 0;
+                int in;
                 if ((i == 0 || i == QS) && (j == 0 || j == QS))
                     continue; /* a corner: on its curve */
-                to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
-                       ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
-                if ((st = q->f->eval(q->f, uvw, &x3, q->err)) != AMP_OK)
-                    return st;
-                if (!member(q->b, q->o, x3))
+                if (q->sccap && q->sc[slot = qs_slot(q, X, Y, k)].x) {
+                    x3 = q->sc[slot].p;
+                    in = q->sc[slot].in;
+                } else {
+                    /* the same lattice point gives the same uvw whichever cell asks (sa i / QS is exact) */
+                    to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
+                           ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs,
+                           uvw);
+                    if ((st = q->f->eval(q->f, uvw, &x3, q->err)) != AMP_OK)
+                        return st;
+                    in = member(q->b, q->o, x3);
+                    if (q->scn < QSAMPLE_MAX && qs_room(q)) {
+                        qsample *e = &q->sc[qs_slot(q, X, Y, k)];
+                        e->x = X;
+                        e->y = Y;
+                        e->k = k;
+                        e->p = x3;
+                        e->in = in;
+                        q->scn++;
+                    }
+                }
+                if (!in)
                     continue;
                 for (t = 0; t < nc; t++)
                     if (q->in[cand[t] * n + k])
@@ -697,6 +758,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
     amp_free(q.a, q.pts);
     amp_free(q.a, q.in);
     amp_free(q.a, q.ck);
+    amp_free(q.a, q.sc);
     return st;
 }
 
