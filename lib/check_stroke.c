@@ -146,7 +146,7 @@ static int yrows_build(yrows *y, const amp_polyset *R, double wy0, double wy1, c
         y->y0 = wy0;
         y1 = wy1;
     }
-    y->nrow = (long)sqrt((double)n) + 1;
+    y->nrow = 4 * (long)sqrt((double)n) + 1; /* rows of about sqrt(n) / 4 edges: a query scans one or two */
     y->h = fmax((y1 - y->y0) / (double)y->nrow, 1e-12);
     y->start = amp_calloc(al, (size_t)y->nrow + 1, sizeof *y->start);
     if (!y->start)
