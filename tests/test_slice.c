@@ -412,6 +412,37 @@ START_TEST(overhang_of_consecutive_layers_measures_eps_continuity)
 }
 END_TEST
 
+/* A plate on two legs and a block floating 2 mm above the plate (1 mm cells). */
+static int floating(int i, int j, int k, void *u)
+{
+    (void)u;
+    (void)j;
+    return k < 2 ? (i < 2 || i >= 8) : k < 4 ? 1 : k >= 6 && i >= 3 && i < 7;
+}
+
+START_TEST(cli_slice_names_a_piece_that_starts_in_mid_air)
+{
+    /* the layer over an empty one overhangs without bound: the warning says where the piece begins, not
+     * "inf mm" */
+    amp_mesh m;
+    amp_error err;
+    char out[4096];
+    char args[600];
+    const char *stl = fx_tmp("floating.stl"), *amp = fx_tmp("floating.amp");
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_voxels(&m, 10, 4, 8, 1.0, floating, NULL), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice '%s' --layer 0.5 --continuous -o '%s'", stl, amp);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "starts over an empty layer (a piece of the part begins in mid-air)"), "%s", out);
+    ck_assert_msg(strstr(out, "layer 12 at z 6.5 "), "%s", out); /* the block starts at z 6: layer 12 cuts it at 6.25 */
+    ck_assert_msg(!strstr(out, "inf"), "%s", out);
+    remove(stl);
+    remove(amp);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 /* Box [x0,x1]x[y0,y1]x[z0,z1] as a closed shell of its own, outward or (for a
  * cavity) inward, added to @p m: the bodies of a part exported without a
  * boolean union. */
@@ -558,6 +589,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
     tcase_add_test(tc, cli_refuses_a_mesh_in_metres_with_its_size);
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
+    tcase_add_test(tc, cli_slice_names_a_piece_that_starts_in_mid_air);
     tcase_add_test(tc, overlapping_shells_are_sliced_as_their_union);
     tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
     tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);

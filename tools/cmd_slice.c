@@ -362,11 +362,16 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         return cli_fail_err("slice", &err);
     }
     over = overhangs(sl, epsc, o->radius, per, &worst, &at);
-    if (over)
+    if (over && worst < HUGE_VAL)
         fprintf(stderr,
                 "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm; worst %.3g mm "
                 "under layer %lu at z %.4g): the layer above may sag\n",
                 (unsigned long)over, epsc, epsc * o->radius, worst, (unsigned long)at, sl->layers[at].z_print);
+    else if (over) /* a section over an empty layer: a piece of the part that starts in mid-air */
+        fprintf(stderr,
+                "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm); layer %lu at "
+                "z %.4g starts over an empty layer (a piece of the part begins in mid-air): it needs support\n",
+                (unsigned long)over, epsc, epsc * o->radius, (unsigned long)at, sl->layers[at].z_print);
     if (check_paths(sl, &ps, &crossings, &repeats, &outside, &failed, &err) != AMP_OK) {
         amp_pathset_free(&ps);
         free(per);
