@@ -249,12 +249,25 @@ static amp_status raw_value(amp_pr_ctx *c, const char *name, size_t n, const cha
 enum { F_TEMP, F_TEMP1, F_BED, F_BED1, F_NOZZLE, F_FILAMENT, F_LAYER, F_LAYER1, F_HEIGHT, F_TRAVEL, F_RETRACT,
        F_RETRACT_SPEED, F_LIFT, F_BEFORE, F_MULT, F_FAN_OFF, F_MODEL };
 
+/* A name and the id it stands for: the profile's fields and the runtime variables. */
+typedef struct kw_id {
+    const char *key;
+    int id;
+} kw_id;
+
+/* The id of the @p n characters at @p name in @p keys, -1 if none. */
+static int kw_find(const kw_id *keys, size_t nk, const char *name, size_t n)
+{
+    size_t i;
+    for (i = 0; i < nk; i++)
+        if (strlen(keys[i].key) == n && memcmp(keys[i].key, name, n) == 0)
+            return keys[i].id;
+    return -1;
+}
+
 static int field_id(const char *name, size_t n)
 {
-    static const struct {
-        const char *key;
-        int f;
-    } keys[] = {{"temperature", F_TEMP}, {"nozzle_temperature", F_TEMP}, {"first_layer_temperature", F_TEMP1},
+    static const kw_id keys[] = {{"temperature", F_TEMP}, {"nozzle_temperature", F_TEMP}, {"first_layer_temperature", F_TEMP1},
                 {"nozzle_temperature_initial_layer", F_TEMP1}, {"bed_temperature", F_BED},
                 {"hot_plate_temp", F_BED}, {"first_layer_bed_temperature", F_BED1},
                 {"hot_plate_temp_initial_layer", F_BED1}, {"bed_temperature_initial_layer_single", F_BED1},
@@ -267,11 +280,7 @@ static int field_id(const char *name, size_t n)
                 {"retraction_minimum_travel", F_BEFORE}, {"extrusion_multiplier", F_MULT},
                 {"filament_flow_ratio", F_MULT}, {"disable_fan_first_layers", F_FAN_OFF},
                 {"close_fan_the_first_x_layers", F_FAN_OFF}, {"printer_model", F_MODEL}};
-    size_t i;
-    for (i = 0; i < sizeof keys / sizeof keys[0]; i++)
-        if (strlen(keys[i].key) == n && memcmp(keys[i].key, name, n) == 0)
-            return keys[i].f;
-    return -1;
+    return kw_find(keys, sizeof keys / sizeof keys[0], name, n);
 }
 
 /* A field, or the option that overrides it when the job has options. */
@@ -323,21 +332,14 @@ enum { R_TOOL, R_LAYER_NUM, R_LAYER_Z, R_MAX_Z, R_LAYERS, R_FL_MIN, R_FL_MAX, R_
 
 static int runtime_id(const char *name, size_t n)
 {
-    static const struct {
-        const char *key;
-        int r;
-    } keys[] = {{"initial_tool", R_TOOL}, {"initial_extruder", R_TOOL}, {"current_extruder", R_TOOL},
+    static const kw_id keys[] = {{"initial_tool", R_TOOL}, {"initial_extruder", R_TOOL}, {"current_extruder", R_TOOL},
                 {"layer_num", R_LAYER_NUM}, {"layer_z", R_LAYER_Z}, {"max_layer_z", R_MAX_Z},
                 {"total_layer_count", R_LAYERS}, {"first_layer_print_min", R_FL_MIN},
                 {"first_layer_print_max", R_FL_MAX}, {"first_layer_print_size", R_FL_SIZE},
                 {"print_bed_min", R_BED_MIN}, {"print_bed_max", R_BED_MAX}, {"print_bed_size", R_BED_SIZE},
                 {"is_extruder_used", R_USED}, {"has_wipe_tower", R_WIPE}, {"total_toolchanges", R_TOOLCHANGES},
                 {"num_extruders", R_EXTRUDERS}, {"zhop", R_ZHOP}};
-    size_t i;
-    for (i = 0; i < sizeof keys / sizeof keys[0]; i++)
-        if (strlen(keys[i].key) == n && memcmp(keys[i].key, name, n) == 0)
-            return keys[i].r;
-    return -1;
+    return kw_find(keys, sizeof keys / sizeof keys[0], name, n);
 }
 
 /* Extruders the profile describes: the values of nozzle_diameter (ampath prints with the first). */
