@@ -2,7 +2,6 @@
  * regions, one stroke per island, bead heights, stroke starts
  * ([P2 §2.2]; print-ready G-code and fewer starts than a slicer). */
 #include <math.h>
-#include <stdio.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -60,11 +59,6 @@ static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *er
     amp_free(ps->alloc, w);
     return AMP_OK;
 }
-
-/* v as the .amp writer will write it (10 significant digits, docs/interfaces.md §3): the
- * checks then judge the coordinates the printer gets, and a touch that
- * rounding would turn into a crossing is caught before the file exists. */
-static double as_written(double v) { return amp_g10_round(v); }
 
 /* Paths [first, npaths) of @p ps (the last ones) lose the vertices closer
  * than @p tol to the last kept one (same radius): micro-segments from
@@ -376,8 +370,11 @@ static amp_status island_once(lctx *c, size_t li, double h, amp_pathset *out, si
     for (i = out->npaths > first ? out->paths[first].first : out->nverts; i < out->nverts; i++) {
         if (out->verts[i].r == AMP_CP_TOOTH_R(c->o->radius))
             out->verts[i].r = c->o->radius;
-        out->verts[i].p.x = as_written(out->verts[i].p.x);
-        out->verts[i].p.y = as_written(out->verts[i].p.y);
+        /* as the .amp writer will write them (10 significant digits, docs/interfaces.md §3): the checks then
+         * judge the coordinates the printer gets, and a touch that rounding would turn into a crossing is
+         * caught before the file exists */
+        out->verts[i].p.x = amp_g10_round(out->verts[i].p.x);
+        out->verts[i].p.y = amp_g10_round(out->verts[i].p.y);
     }
     compact_tail(out, first, 1e-3);
     return rc;
