@@ -40,6 +40,7 @@ struct amp_bvh {
     const amp_allocator *alloc;
     bvh_tri *tris;
     size_t ntris, flipped;
+    int closed; /* every edge shared by two oppositely oriented triangles (after orienting): see ray_winding */
     bvh_node *nodes;
     size_t nnodes;
     amp_box3 bbox; /* of the triangles (node boxes are slightly inflated) */
@@ -254,6 +255,18 @@ static int tri_ok(amp_vec3 a, amp_vec3 b, amp_vec3 c)
     return amp_v3_len(amp_v3_cross(ab, ac)) > 1e-12 * l;
 }
 
+/* Whether the oriented copy @p tris of @p m's triangles is closed (amp_mesh_edges() on a view of it). */
+static amp_status closed_after_orienting(const amp_mesh *m, amp_tri *tris, int *closed, amp_error *err)
+{
+    amp_mesh view = *m;
+    amp_mesh_edge_report r;
+    amp_status st;
+    view.tris = tris;
+    st = amp_mesh_edges(&view, &r, err);
+    *closed = st == AMP_OK && r.closed;
+    return st;
+}
+
 amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
 {
     amp_bvh *b;
@@ -286,6 +299,8 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     }
     b->alloc = m->alloc;
     st = amp_orient_tris(m->alloc, m->verts, tris, m->ntris, &b->flipped, err);
+    if (st == AMP_OK)
+        st = closed_after_orienting(m, tris, &b->closed, err);
     if (st != AMP_OK) {
         amp_free(m->alloc, tris);
         amp_free(m->alloc, b);
@@ -351,25 +366,31 @@ void amp_bvh_free(amp_bvh *b)
 
 size_t amp_bvh_triangles(const amp_bvh *b) { return b->ntris; }
 size_t amp_bvh_flipped(const amp_bvh *b) { return b->flipped; }
+int amp_bvh_closed(const amp_bvh *b) { return b->closed; }
 amp_box3 amp_bvh_bbox(const amp_bvh *b) { return b->bbox; }
 
 /* ------------------------------------------------------------------- rays */
 
-/* Slab test; fmin/fmax drop the NaN of 0 * inf when the origin lies on a slab plane. */
+/* fmin and fmax by comparisons, NaN dropped as they drop it: the compiler inlines these and not the libm calls
+ * (the sign of a zero result may differ, which no comparison below sees) */
+static double min_nan(double a, double b) { return a < b || b != b ? a : b; }
+static double max_nan(double a, double b) { return a > b || b != b ? a : b; }
+
+/* Slab test; min_nan/max_nan drop the NaN of 0 * inf when the origin lies on a slab plane. */
 static int ray_box(amp_box3 bx, amp_vec3 o, amp_vec3 inv, double tmax)
 {
     double t1 = (bx.min.x - o.x) * inv.x, t2 = (bx.max.x - o.x) * inv.x;
-    double lo = fmin(t1, t2), hi = fmax(t1, t2);
+    double lo = min_nan(t1, t2), hi = max_nan(t1, t2);
     t1 = (bx.min.y - o.y) * inv.y;
     t2 = (bx.max.y - o.y) * inv.y;
-    lo = fmax(lo, fmin(t1, t2));
-    hi = fmin(hi, fmax(t1, t2));
+    lo = max_nan(lo, min_nan(t1, t2));
+    hi = min_nan(hi, max_nan(t1, t2));
     t1 = (bx.min.z - o.z) * inv.z;
     t2 = (bx.max.z - o.z) * inv.z;
-    lo = fmax(lo, fmin(t1, t2));
-    hi = fmin(hi, fmax(t1, t2));
+    lo = max_nan(lo, min_nan(t1, t2));
+    hi = min_nan(hi, max_nan(t1, t2));
     /* exact comparison: node boxes are inflated at build time, so touching hits are kept */
-    return hi >= fmax(lo, 0.0) && lo <= tmax;
+    return hi >= max_nan(lo, 0.0) && lo <= tmax;
 }
 
 /*
@@ -532,9 +553,9 @@ void amp_bvh_hits_free(const amp_bvh *b, amp_bvh_hit *hits)
 
 static double box_dist2(amp_box3 b, amp_vec3 p)
 {
-    double dx = fmax(fmax(b.min.x - p.x, 0.0), p.x - b.max.x);
-    double dy = fmax(fmax(b.min.y - p.y, 0.0), p.y - b.max.y);
-    double dz = fmax(fmax(b.min.z - p.z, 0.0), p.z - b.max.z);
+    double dx = max_nan(max_nan(b.min.x - p.x, 0.0), p.x - b.max.x);
+    double dy = max_nan(max_nan(b.min.y - p.y, 0.0), p.y - b.max.y);
+    double dz = max_nan(max_nan(b.min.z - p.z, 0.0), p.z - b.max.z);
     return dx * dx + dy * dy + dz * dz;
 }
 
@@ -659,7 +680,89 @@ double amp_bvh_winding(const amp_bvh *b, amp_vec3 p)
     return s / (4.0 * AMP_PI);
 }
 
-int amp_bvh_inside(const amp_bvh *b, amp_vec3 p) { return amp_bvh_winding(b, p) >= 0.5; }
+/* ------------------------------------------------ winding number by a ray */
+
+/*
+ * Six ray directions, one per side of the box, each tilted off its axis by irrational-looking amounts so that
+ * the grid points and axis-aligned faces of a CAD part do not line up with them. Unit length.
+ */
+static const double RAY_DIRS[6][3] = {
+    {0.99982, 0.01730, 0.00815},  {-0.99982, 0.00815, -0.01730}, {0.01151, 0.99980, 0.01629},
+    {-0.01629, -0.99980, 0.01151}, {0.01366, 0.00922, 0.99986},  {0.00922, -0.01366, -0.99986},
+};
+
+/* Smallest barycentric coordinate of a crossing that proves it passes through the inside of its triangle. */
+#define RAY_MARGIN 1e-9
+
+/*
+ * The signed count of the surface crossings of the ray o + t d, t > 0: +1 where it leaves through a face
+ * (d along the oriented normal), -1 where it enters. Returns 0 when the count proves nothing: the ray meets
+ * an edge or a vertex (a crossing might be counted twice or not at all) or o lies on the surface.
+ */
+static int ray_count(const amp_bvh *b, amp_vec3 o, amp_vec3 d, int *w)
+{
+    uint32_t stack[STACK_SIZE];
+    int sp = 0, sum = 0;
+    amp_vec3 inv = inv_dir(d);
+    double tmin = 1e-9 * (1.0 + amp_v3_len(o));
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const bvh_node *nd = &b->nodes[stack[--sp]];
+        if (!ray_box(nd->box, o, inv, HUGE_VAL))
+            continue;
+        if (nd->count) {
+            uint32_t i;
+            for (i = nd->first; i < nd->first + nd->count; i++) {
+                const bvh_tri *t = &b->tris[i];
+                double s, u, v;
+                amp_vec3 n;
+                if (!ray_tri(t, o, d, HUGE_VAL, &s, &u, &v))
+                    continue;
+                if (s <= tmin || u < RAY_MARGIN || v < RAY_MARGIN || 1.0 - u - v < RAY_MARGIN)
+                    return 0;
+                n = amp_v3_cross(amp_v3_sub(t->p[1], t->p[0]), amp_v3_sub(t->p[2], t->p[0]));
+                sum += amp_v3_dot(n, d) > 0 ? 1 : -1;
+            }
+        } else {
+            stack[sp++] = nd->left;
+            stack[sp++] = nd->right;
+        }
+    }
+    *w = sum;
+    return 1;
+}
+
+/*
+ * The winding number at @p p. On a closed, consistently oriented mesh it is an integer off the surface, the
+ * signed crossing count of any ray from p: one walk down the tree, where the generalised winding number
+ * evaluates a solid angle per near triangle (on a coarse mesh, nearly all of them). The ray leaves through
+ * the nearest side of the box; when it proves nothing (see ray_count) the next direction is tried, and after
+ * the sixth, or on an open mesh, the generalised winding number decides.
+ */
+static double winding_of(const amp_bvh *b, amp_vec3 p)
+{
+    double side[6];
+    int k, first = 0, w;
+    if (!b->closed || !amp_v3_finite(p))
+        return amp_bvh_winding(b, p);
+    side[0] = b->bbox.max.x - p.x;
+    side[1] = p.x - b->bbox.min.x;
+    side[2] = b->bbox.max.y - p.y;
+    side[3] = p.y - b->bbox.min.y;
+    side[4] = b->bbox.max.z - p.z;
+    side[5] = p.z - b->bbox.min.z;
+    for (k = 1; k < 6; k++)
+        if (side[k] < side[first])
+            first = k;
+    for (k = 0; k < 6; k++) {
+        const double *d = RAY_DIRS[(first + k) % 6];
+        if (ray_count(b, p, amp_v3(d[0], d[1], d[2]), &w))
+            return (double)w;
+    }
+    return amp_bvh_winding(b, p);
+}
+
+int amp_bvh_inside(const amp_bvh *b, amp_vec3 p) { return winding_of(b, p) >= 0.5; }
 
 /* --------------------------------------------------------------- clipping */
 
@@ -746,7 +849,7 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
             if (s1 - s0 <= 1e-12)
                 continue; /* a duplicate hit on a shared edge, or a hit at a vertex */
             mid = amp_v3_madd(a, d, 0.5 * (s0 + s1));
-            wlast = amp_bvh_winding(b, mid);
+            wlast = winding_of(b, mid);
             known = 1;
             in = wlast >= 0.5;
             if (in) {

@@ -166,6 +166,73 @@ START_TEST(inside_test_is_right_on_torus_with_holes_and_flips)
 }
 END_TEST
 
+/*
+ * On a closed mesh amp_bvh_inside() counts the crossings of a ray. Its hard cases are the points whose rays
+ * meet an edge or a vertex: a lattice of points aligned with the faces, edges and corners of a box with a
+ * cavity (so that rays from the cavity and the wall cross both shells), and points on
+ * the lines through a coarse torus's vertices along the axes. Every point off the surface must get the
+ * answer of the exact winding number.
+ */
+static size_t disagreements(const amp_bvh *b, const amp_vec3 *p, size_t n, size_t *tested)
+{
+    size_t i, bad = 0;
+    for (i = 0; i < n; i++) {
+        if (amp_bvh_closest(b, p[i], NULL, NULL) < 1e-6)
+            continue; /* on the surface: either answer is right */
+        (*tested)++;
+        bad += amp_bvh_inside(b, p[i]) != (amp_bvh_winding_exact(b, p[i]) >= 0.5);
+    }
+    return bad;
+}
+
+START_TEST(ray_inside_test_agrees_with_exact_winding_where_rays_meet_edges)
+{
+    amp_mesh box, tor;
+    amp_bvh *b;
+    amp_vec3 *p = malloc(40000 * sizeof *p);
+    size_t n = 0, tested = 0, i;
+    int x, y, z, a;
+    ck_assert_ptr_nonnull(p);
+    amp_mesh_init(&box, NULL);
+    amp_mesh_init(&tor, NULL);
+    ck_assert_int_eq(fx_box(&box, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&box, amp_v3(2, 3, 4), amp_v3(7, 7, 7), 1), AMP_OK); /* a cavity: rays cross shells */
+    ck_assert_int_eq(fx_torus(&tor, amp_v3(0, 0, 0), TR, Tr, 12, 6), AMP_OK);
+    b = build(&box);
+    ck_assert_int_eq(amp_bvh_closed(b), 1);
+    for (x = -2; x <= 22; x++)
+        for (y = -2; y <= 22; y++)
+            for (z = -2; z <= 22; z += 2)
+                p[n++] = amp_v3(0.5 * x, 0.5 * y, 0.5 * z);
+    ck_assert_uint_eq(disagreements(b, p, n, &tested), 0);
+    ck_assert_uint_gt(tested, 6000);
+    amp_bvh_free(b);
+    b = build(&tor);
+    ck_assert_int_eq(amp_bvh_closed(b), 1);
+    for (i = n = 0; i < tor.nverts; i++)
+        for (a = -8; a <= 8; a++) {
+            amp_vec3 v = tor.verts[i];
+            p[n++] = amp_v3(v.x + 0.75 * a, v.y, v.z);
+            p[n++] = amp_v3(v.x, v.y + 0.75 * a, v.z);
+            p[n++] = amp_v3(v.x, v.y, v.z + 0.75 * a);
+        }
+    tested = 0;
+    ck_assert_uint_eq(disagreements(b, p, n, &tested), 0);
+    ck_assert_uint_gt(tested, 2500);
+    amp_bvh_free(b);
+    /* a missing triangle opens the mesh: the winding number decides, and still rightly far from the hole */
+    tor.tris[0] = tor.tris[--tor.ntris];
+    b = build(&tor);
+    ck_assert_int_eq(amp_bvh_closed(b), 0);
+    ck_assert_int_eq(amp_bvh_inside(b, amp_v3(TR, 0, 0)), 1);
+    ck_assert_int_eq(amp_bvh_inside(b, amp_v3(0, 0, 0)), 0);
+    amp_bvh_free(b);
+    amp_mesh_free(&box);
+    amp_mesh_free(&tor);
+    free(p);
+}
+END_TEST
+
 START_TEST(inward_inner_shell_is_a_cavity_not_flipped)
 {
     amp_mesh m;
@@ -384,6 +451,7 @@ static Suite *bvh_suite(void)
     tcase_add_test(tc, closest_point_matches_brute_force);
     tcase_add_test(tc, hierarchical_winding_number_matches_exact);
     tcase_add_test(tc, inside_test_is_right_on_torus_with_holes_and_flips);
+    tcase_add_test(tc, ray_inside_test_agrees_with_exact_winding_where_rays_meet_edges);
     tcase_add_test(tc, inward_inner_shell_is_a_cavity_not_flipped);
     tcase_add_test(tc, concurrent_queries_match_serial);
     tcase_add_test(tc, clip_straight_line_through_torus_gives_two_exact_pieces);

@@ -59,6 +59,8 @@ void amp_bvh_free(amp_bvh *b);
 size_t amp_bvh_triangles(const amp_bvh *b);
 /** Number of triangles whose orientation the build reversed (see the file comment). */
 size_t amp_bvh_flipped(const amp_bvh *b);
+/** 1 when every edge is shared by exactly two oppositely oriented triangles after the build's orienting. */
+int amp_bvh_closed(const amp_bvh *b);
 /** Bounding box of the indexed triangles. */
 amp_box3 amp_bvh_bbox(const amp_bvh *b);
 
@@ -106,7 +108,13 @@ double amp_bvh_winding(const amp_bvh *b, amp_vec3 p);
 /** Exact winding number (every triangle evaluated, O(n)): the reference for amp_bvh_winding(). */
 double amp_bvh_winding_exact(const amp_bvh *b, amp_vec3 p);
 
-/** Non-zero when amp_bvh_winding(b, p) >= 0.5: robust on meshes with small holes and flipped triangles. */
+/**
+ * Non-zero when the winding number at @p p is >= 0.5: robust on meshes with small holes and flipped
+ * triangles. On a closed mesh (amp_bvh_closed()) the winding number is an integer off the surface and is
+ * taken from the signed crossings of one ray (up to six directions when a ray meets an edge or a vertex);
+ * on an open mesh, or for a point on the surface, amp_bvh_winding() decides. The answers agree wherever
+ * both are defined; the ray costs about log n where the solid angles cost every near triangle.
+ */
 int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
 
 /**
@@ -114,7 +122,7 @@ int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
  * @p out as paths of @p role ([P1 §4.2]: "keep the parts inside the mesh").
  * Every segment is cut exactly where it crosses a triangle (segment–triangle
  * intersection through the BVH); each sub-segment is then classified by the
- * winding number at its midpoint, so that crossings through holes or flipped
+ * winding number at its midpoint (by a ray on a closed mesh, as in amp_bvh_inside()), so that crossings through holes or flipped
  * triangles do not toggle the state wrongly. Cut points lie on the surface;
  * radii are interpolated linearly. Pieces shorter than @p min_len (mm, >= 0)
  * are dropped. On error @p out keeps the pieces appended before the error.
