@@ -454,43 +454,61 @@ typedef struct qctx {
     size_t maxcur;         /* most curves kept in memory */
     struct qsample *sc;    /* the bound's grid points met so far (open addressing, x = 0: empty) */
     size_t sccap, scn;
+    amp_vec3 *sp;          /* their samples: ncs + 1 points per grid point, in order of arrival */
+    unsigned char *sin;    /* and whether each is a member */
+    size_t spcap;          /* grid points sp has room for */
+    amp_vec3 *tp;          /* one grid point's samples when the table is full (ncs + 1) */
+    unsigned char *tin;
 } qctx;
 
-/* A grid point of the cell bound: lattice coordinates in quarters of the finest cell (x + 1, y), c-sample k,
- * its point and whether it is a member. Neighbouring cells share their edges' points, and a split cell half of
- * its parent's: each one is evaluated and classified once. */
+/* A grid point of the cell bound: lattice coordinates in quarters of the finest cell (x + 1, y); its ncs + 1
+ * c-samples and their membership start at sp[at], sin[at]. Neighbouring cells share their edges' points, and a
+ * split cell half of its parent's: each one is evaluated and classified once, and looked up once per cell. */
 typedef struct qsample {
     uint64_t x, y;
-    size_t k;
-    amp_vec3 p;
-    int in;
+    size_t at;
 } qsample;
 
-#define QSAMPLE_MAX ((size_t)1 << 24) /* beyond this many points, evaluate without keeping (about 0.8 GB) */
+#define QSAMPLE_MAX ((size_t)1 << 24) /* beyond this many samples, evaluate without keeping (about 0.4 GB) */
 
-static size_t qs_slot(const qctx *q, uint64_t x, uint64_t y, size_t k)
+static size_t qs_slot(const qctx *q, uint64_t x, uint64_t y)
 {
-    uint64_t h = (x * 0x9E3779B97F4A7C15ULL) ^ (y * 0xC2B2AE3D27D4EB4FULL) ^ ((uint64_t)k * 0x165667B19E3779F9ULL);
+    uint64_t h = (x * 0x9E3779B97F4A7C15ULL) ^ (y * 0xC2B2AE3D27D4EB4FULL);
     size_t i = (size_t)(h >> 17) & (q->sccap - 1);
-    while (q->sc[i].x && (q->sc[i].x != x || q->sc[i].y != y || q->sc[i].k != k))
+    while (q->sc[i].x && (q->sc[i].x != x || q->sc[i].y != y))
         i = (i + 1) & (q->sccap - 1);
     return i;
 }
 
-/* Room for one more point: the table doubled at half load; 0 when it may not grow (then nothing is kept). */
+/* Room for one more grid point: the table doubled at half load, the samples grown; 0 when they may not grow
+ * (then nothing more is kept). */
 static int qs_room(qctx *q)
 {
     qsample *old = q->sc, *nw;
-    size_t oldcap = q->sccap, i, cap = oldcap ? 2 * oldcap : 4096;
+    size_t oldcap = q->sccap, i, cap = oldcap ? 2 * oldcap : 1024, n = q->ncs + 1;
+    if ((q->scn + 1) * n > QSAMPLE_MAX)
+        return 0;
+    if (q->scn + 1 > q->spcap) {
+        size_t c = q->spcap ? 2 * q->spcap : 512;
+        amp_vec3 *p = amp_realloc_array(q->a, q->sp, c * n, sizeof *p);
+        unsigned char *in;
+        if (!p)
+            return 0;
+        q->sp = p;
+        if (!(in = amp_realloc_array(q->a, q->sin, c * n, 1)))
+            return 0;
+        q->sin = in;
+        q->spcap = c;
+    }
     if (q->sccap && 2 * (q->scn + 1) <= q->sccap)
         return 1;
-    if (cap > 2 * QSAMPLE_MAX || !(nw = amp_calloc(q->a, cap, sizeof *nw)))
+    if (!(nw = amp_calloc(q->a, cap, sizeof *nw)))
         return 0;
     q->sc = nw;
     q->sccap = cap;
     for (i = 0; i < oldcap; i++)
         if (old[i].x)
-            q->sc[qs_slot(q, old[i].x, old[i].y, old[i].k)] = old[i];
+            q->sc[qs_slot(q, old[i].x, old[i].y)] = old[i];
     amp_free(q->a, old);
     return 1;
 }
@@ -563,6 +581,50 @@ static amp_status q_curve(qctx *q, uint64_t ia, uint64_t ib, size_t *out)
 }
 
 /*
+ * The c-samples of grid point (i, j) of the cell (ia, ib, sa, sb) and their membership, from the table or
+ * evaluated (and kept while there is room). The pointers hold until the next call.
+ */
+static amp_status q_samples(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64_t sb, int i, int j,
+                            const amp_vec3 **pts, const unsigned char **in)
+{
+    uint64_t X = QS * ia + sa * (uint64_t)i + 1, Y = QS * ib + sb * (uint64_t)j;
+    size_t slot = 0, k, n = q->ncs + 1;
+    amp_vec3 *p;
+    unsigned char *m;
+    amp_status st;
+    if (q->sccap && q->sc[slot = qs_slot(q, X, Y)].x) {
+        *pts = q->sp + q->sc[slot].at * n;
+        *in = q->sin + q->sc[slot].at * n;
+        return AMP_OK;
+    }
+    if (qs_room(q)) {
+        qsample *e = &q->sc[qs_slot(q, X, Y)];
+        e->x = X;
+        e->y = Y;
+        e->at = q->scn++;
+        p = q->sp + e->at * n;
+        m = q->sin + e->at * n;
+    } else {
+        if (!q->tp && (!(q->tp = amp_calloc(q->a, n, sizeof *q->tp)) || !(q->tin = amp_calloc(q->a, n, 1))))
+            return amp_fail(q->err, AMP_ERR_NOMEM, 0, "out of memory for field curves");
+        p = q->tp;
+        m = q->tin;
+    }
+    for (k = 0; k < n; k++) {
+        double uvw[3];
+        /* the same lattice point gives the same uvw whichever cell asks (sa i / QS is exact) */
+        to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
+               ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
+        if ((st = q->f->eval(q->f, uvw, &p[k], q->err)) != AMP_OK)
+            return st;
+        m[k] = (unsigned char)member(q->b, q->o, p[k]);
+    }
+    *pts = p;
+    *in = m;
+    return AMP_OK;
+}
+
+/*
  * Bound of a cell: over the QS x QS grid points of the cell at every c-sample that lie
  * inside the mesh, the largest distance to the nearest candidate curve at the
  * same c (an upper bound on the distance to that curve), counting only
@@ -599,48 +661,28 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
             if (member(q->b, q->o, mid) || amp_bvh_closest(q->b, mid, NULL, NULL) <= len / 2)
                 *bound = len / 2;
         }
-    for (k = 0; k <= q->ncs; k++)
-        for (j = 0; j <= QS; j++)
-            for (i = 0; i <= QS; i++) {
-                double uvw[3], d = HUGE_VAL;
-                amp_vec3 x3;
-                uint64_t X = QS * ia + sa * (uint64_t)i + 1, Y = QS * ib + sb * (uint64_t)j;
-                size_t slot = 0;
-                int in;
-                if ((i == 0 || i == QS) && (j == 0 || j == QS))
-                    continue; /* a corner: on its curve */
-                if (q->sccap && q->sc[slot = qs_slot(q, X, Y, k)].x) {
-                    x3 = q->sc[slot].p;
-                    in = q->sc[slot].in;
-                } else {
-                    /* the same lattice point gives the same uvw whichever cell asks (sa i / QS is exact) */
-                    to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
-                           ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs,
-                           uvw);
-                    if ((st = q->f->eval(q->f, uvw, &x3, q->err)) != AMP_OK)
-                        return st;
-                    in = member(q->b, q->o, x3);
-                    if (q->scn < QSAMPLE_MAX && qs_room(q)) {
-                        qsample *e = &q->sc[qs_slot(q, X, Y, k)];
-                        e->x = X;
-                        e->y = Y;
-                        e->k = k;
-                        e->p = x3;
-                        e->in = in;
-                        q->scn++;
-                    }
-                }
-                if (!in)
+    for (j = 0; j <= QS; j++)
+        for (i = 0; i <= QS; i++) {
+            const amp_vec3 *x3 = NULL;
+            const unsigned char *in = NULL;
+            if ((i == 0 || i == QS) && (j == 0 || j == QS))
+                continue; /* a corner: on its curve */
+            if ((st = q_samples(q, ia, ib, sa, sb, i, j, &x3, &in)) != AMP_OK)
+                return st;
+            for (k = 0; k <= q->ncs; k++) {
+                double d = HUGE_VAL;
+                if (!in[k])
                     continue;
                 for (t = 0; t < nc; t++)
                     if (q->in[cand[t] * n + k])
-                        d = fmin(d, amp_v3_dist(x3, q->pts[cand[t] * n + k]));
+                        d = fmin(d, amp_v3_dist(x3[k], q->pts[cand[t] * n + k]));
                 /* a grid point on the surface itself (a lattice plane through a face of a box) tests inside
                  * while every curve along that face tests outside: the solid next to it decides, not it */
-                if (d == HUGE_VAL && amp_bvh_closest(q->b, x3, NULL, NULL) <= 1e-9 * (1.0 + amp_v3_len(x3)))
+                if (d == HUGE_VAL && amp_bvh_closest(q->b, x3[k], NULL, NULL) <= 1e-9 * (1.0 + amp_v3_len(x3[k])))
                     continue;
                 *bound = fmax(*bound, d);
             }
+        }
     return AMP_OK;
 }
 
@@ -759,6 +801,10 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
     amp_free(q.a, q.in);
     amp_free(q.a, q.ck);
     amp_free(q.a, q.sc);
+    amp_free(q.a, q.sp);
+    amp_free(q.a, q.sin);
+    amp_free(q.a, q.tp);
+    amp_free(q.a, q.tin);
     return st;
 }
 
