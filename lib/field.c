@@ -625,6 +625,22 @@ static amp_status q_samples(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint
 }
 
 /*
+ * A grid point inside the solid where no candidate curve is inside at the same c (a sliver of the solid, thin
+ * along the curves, between their samples): its distance to the nearest inside sample of a candidate at any c
+ * still bounds its distance to printed material, where "infinitely far" made the finest cells fail the target.
+ */
+static double nearest_inside_any_c(const qctx *q, const size_t *cand, size_t nc, amp_vec3 x)
+{
+    size_t t, k, n = q->ncs + 1;
+    double d = HUGE_VAL;
+    for (t = 0; t < nc; t++)
+        for (k = 0; k < n; k++)
+            if (q->in[cand[t] * n + k])
+                d = fmin(d, amp_v3_dist(x, q->pts[cand[t] * n + k]));
+    return d;
+}
+
+/*
  * Bound of a cell: over the QS x QS grid points of the cell at every c-sample that lie
  * inside the mesh, the largest distance to the nearest candidate curve at the
  * same c (an upper bound on the distance to that curve), counting only
@@ -680,6 +696,8 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
                  * while every curve along that face tests outside: the solid next to it decides, not it */
                 if (d == HUGE_VAL && amp_bvh_closest(q->b, x3[k], NULL, NULL) <= 1e-9 * (1.0 + amp_v3_len(x3[k])))
                     continue;
+                if (d == HUGE_VAL)
+                    d = nearest_inside_any_c(q, cand, nc, x3[k]);
                 *bound = fmax(*bound, d);
             }
         }
