@@ -12,6 +12,7 @@
 #include "ampath/cover.h"
 #include "ampath/field.h"
 #include "ampath/spline.h"
+#include "field_internal.h"
 
 
 /* ------------------------------------------------------------ built-ins */
@@ -218,7 +219,7 @@ void amp_field_opts_default(amp_field_opts *o)
 /* ------------------------------------------------------------- covering */
 
 /* Parameters (a, b, c) = (across 1, across 2, along) mapped to (u, v, w) by the field's curve direction. */
-static void to_uvw(const amp_field *f, double a, double b, double c, double uvw[3])
+void amp_field_to_uvw(const amp_field *f, double a, double b, double c, double uvw[3])
 {
     int da = (f->dir + 1) % 3, db = (f->dir + 2) % 3;
     uvw[da] = f->lo[da] + a * (f->hi[da] - f->lo[da]);
@@ -243,11 +244,11 @@ static amp_status max_iso_length(const amp_field *f, int which, int nseg, double
                 double t = (double)k / nseg;
                 amp_status st;
                 if (which == 0)
-                    to_uvw(f, t, x, y, uvw);
+                    amp_field_to_uvw(f, t, x, y, uvw);
                 else if (which == 1)
-                    to_uvw(f, x, t, y, uvw);
+                    amp_field_to_uvw(f, x, t, y, uvw);
                 else
-                    to_uvw(f, x, y, t, uvw);
+                    amp_field_to_uvw(f, x, y, t, uvw);
                 if ((st = f->eval(f, uvw, &p, err)) != AMP_OK)
                     return st;
                 if (!amp_v3_finite(p))
@@ -265,7 +266,7 @@ static amp_status max_iso_length(const amp_field *f, int which, int nseg, double
 /* ------------------------------------------------ regions (several fields) */
 
 /* Is p in the part of the solid this field covers: inside the mesh, inside `within` (if any), in no `without`? */
-static int member(const amp_bvh *b, const amp_field_opts *o, amp_vec3 p)
+int amp_field_member(const amp_bvh *b, const amp_field_opts *o, amp_vec3 p)
 {
     size_t i;
     if (!amp_bvh_inside(b, p) || (o->within && !amp_bvh_inside(o->within, p)))
@@ -286,7 +287,7 @@ static amp_status keep_member_runs(const amp_bvh *b, const amp_field_opts *o, co
     size_t cap = 0, m = 0, k;
     double len = 0.0;
     amp_status st = AMP_OK;
-    int prev = n ? member(b, o, v[0].p) : 0;
+    int prev = n ? amp_field_member(b, o, v[0].p) : 0;
     if (prev && amp_grow(out->alloc, (void **)&run, &cap, 1, sizeof *run) == AMP_OK)
         run[m++] = v[0];
     for (k = 0; st == AMP_OK && k + 1 < n; k++) {
@@ -295,11 +296,11 @@ static amp_status keep_member_runs(const amp_bvh *b, const amp_field_opts *o, co
         for (j = 1; st == AMP_OK && j <= (ns ? ns : 1); j++) {
             double t1 = ns ? (double)j / (double)ns : 1.0, a = t0, c = t1;
             amp_pvert x;
-            int cur = member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, t1)), it;
+            int cur = amp_field_member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, t1)), it;
             if (cur != prev) /* bisect the crossing between t0 and t1 */
                 for (it = 0; it < 20; it++) {
                     double mid = 0.5 * (a + c);
-                    if (member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, mid)) == prev)
+                    if (amp_field_member(b, o, amp_v3_lerp(v[k].p, v[k + 1].p, mid)) == prev)
                         a = mid;
                     else
                         c = mid;
@@ -334,8 +335,8 @@ static amp_status keep_member_runs(const amp_bvh *b, const amp_field_opts *o, co
 }
 
 /* Clip a curve to the solid and, with regions, to this field's part of it. */
-static amp_status clip_part(const amp_bvh *b, const amp_field_opts *o, const amp_pvert *v, size_t n, double min_len,
-                            amp_pathset *out, amp_error *err)
+amp_status amp_field_clip(const amp_bvh *b, const amp_field_opts *o, const amp_pvert *v, size_t n, double min_len,
+                          amp_pathset *out, amp_error *err)
 {
     amp_pathset tmp;
     amp_status st;
@@ -413,7 +414,7 @@ static amp_status cover_spline_field(const amp_spline *v, int dir, const amp_bvh
     if (st == AMP_OK)
         st = amp_cover_trivariate(dir == 0 ? &sw : v, &co, &tmp, &cs, err);
     for (i = 0; st == AMP_OK && i < tmp.npaths; i++)
-        st = clip_part(b, o, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, min_len, out, err);
+        st = amp_field_clip(b, o, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, min_len, out, err);
     s->curves = cs.curves;
     s->length_before = cs.length;
     s->bound = eps;
@@ -515,7 +516,7 @@ static int qs_room(qctx *q)
 
 static void q_uvw(const qctx *q, uint64_t ia, uint64_t ib, double c, double uvw[3])
 {
-    to_uvw(q->f, (double)ia / (double)(q->na << QDEPTH), (double)ib / (double)(q->nb << QDEPTH), c, uvw);
+    amp_field_to_uvw(q->f, (double)ia / (double)(q->na << QDEPTH), (double)ib / (double)(q->nb << QDEPTH), c, uvw);
 }
 
 static amp_status q_grow(qctx *q)
@@ -574,7 +575,7 @@ static amp_status q_curve(qctx *q, uint64_t ia, uint64_t ib, size_t *out)
         q_uvw(q, ia, ib, (double)k / (double)q->ncs, uvw);
         if ((st = q->f->eval(q->f, uvw, p, q->err)) != AMP_OK)
             return st;
-        q->in[q->ncur * (q->ncs + 1) + k] = (unsigned char)member(q->b, q->o, *p);
+        q->in[q->ncur * (q->ncs + 1) + k] = (unsigned char)amp_field_member(q->b, q->o, *p);
     }
     *out = q->ncur++;
     return AMP_OK;
@@ -613,11 +614,11 @@ static amp_status q_samples(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint
     for (k = 0; k < n; k++) {
         double uvw[3];
         /* the same lattice point gives the same uvw whichever cell asks (sa i / QS is exact) */
-        to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
+        amp_field_to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
                ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
         if ((st = q->f->eval(q->f, uvw, &p[k], q->err)) != AMP_OK)
             return st;
-        m[k] = (unsigned char)member(q->b, q->o, p[k]);
+        m[k] = (unsigned char)amp_field_member(q->b, q->o, p[k]);
     }
     *pts = p;
     *in = m;
@@ -674,7 +675,7 @@ static amp_status q_bound(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint64
             if (len <= 2.0 * q->target * (1 + 1e-9) || len / 2 <= *bound)
                 continue;
             mid = amp_v3_lerp(p0, p1, 0.5);
-            if (member(q->b, q->o, mid) || amp_bvh_closest(q->b, mid, NULL, NULL) <= len / 2)
+            if (amp_field_member(q->b, q->o, mid) || amp_bvh_closest(q->b, mid, NULL, NULL) <= len / 2)
                 *bound = len / 2;
         }
     for (j = 0; j <= QS; j++)
@@ -801,8 +802,19 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
                 s->length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
         }
         if (st == AMP_OK)
-            st = clip_part(b, o, curve, nc + 1, min_len, out, err);
+            st = amp_field_clip(b, o, curve, nc + 1, min_len, out, err);
         s->curves++;
+    }
+    if (st == AMP_OK) {
+        /* features finer than the cell samples: the field's curves through the measured gaps */
+        amp_field_seeds sd;
+        sd.pts = q.pts;
+        sd.key = q.ck;
+        sd.ncur = q.ncur;
+        sd.ncs = q.ncs;
+        sd.da = (double)(na << QDEPTH);
+        sd.db = (double)(nb << QDEPTH);
+        st = amp_field_fill_gaps(f, b, o, &sd, nc, target, r, min_len, out, &s->gap_curves, &s->gap_after, err);
     }
     s->bound = q.worst;
     s->bound_met = q.deep == 0;
@@ -859,7 +871,7 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_f
                     double uvw[3], dist, sd, len = 0;
                     int ok = 0;
                     if (k <= nc) {
-                        to_uvw(f, (double)i / (double)na, (double)j / (double)nb, (double)k / (double)nc, uvw);
+                        amp_field_to_uvw(f, (double)i / (double)na, (double)j / (double)nb, (double)k / (double)nc, uvw);
                         if ((st = f->eval(f, uvw, &p, err)) != AMP_OK)
                             break;
                         dist = amp_bvh_closest(b, p, &q, NULL);
@@ -868,7 +880,7 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_f
                             /* inward direction: towards p from q when p is inside, away from p otherwise */
                             amp_vec3 in = amp_v3_scale(amp_v3_sub(p, q), (sd < 0 ? 1.0 : -1.0) / dist);
                             x = amp_v3_madd(q, in, d);
-                            ok = member(b, o, x) && amp_bvh_closest(b, x, NULL, NULL) >= 0.9 * d;
+                            ok = amp_field_member(b, o, x) && amp_bvh_closest(b, x, NULL, NULL) >= 0.9 * d;
                         }
                     }
                     if (ok && (n == 0 || amp_v3_dist(run[n - 1].p, x) > 1e-6)) {
@@ -918,14 +930,14 @@ static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_
             double a = ((double)i + (odd ? 0.0 : 0.5)) / (double)na, bb = ((double)j + 0.5) / (double)nb;
             for (k = 0; k <= nc && st == AMP_OK; k++) {
                 double uvw[3];
-                to_uvw(f, a, bb, (double)k / (double)nc, uvw);
+                amp_field_to_uvw(f, a, bb, (double)k / (double)nc, uvw);
                 st = f->eval(f, uvw, &curve[k].p, err);
                 curve[k].r = r;
                 if (k > 0)
                     s.length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
             }
             if (st == AMP_OK)
-                st = clip_part(b, o, curve, nc + 1, min_len, out, err);
+                st = amp_field_clip(b, o, curve, nc + 1, min_len, out, err);
             s.curves++;
         }
     }

@@ -255,7 +255,8 @@ class amp_field_stats(Structure):
     _fields_ = [("curves", c_size_t), ("pieces", c_size_t), ("grid_a", c_size_t), ("grid_b", c_size_t),
                 ("length_before", c_double), ("length_after", c_double), ("radius", c_double), ("target", c_double),
                 ("bound", c_double), ("bound_met", c_int), ("inserted", c_size_t), ("route", c_int),
-                ("shell_paths", c_size_t), ("shell_length", c_double)]
+                ("shell_paths", c_size_t), ("shell_length", c_double), ("gap_curves", c_size_t),
+                ("gap_after", c_double)]
 
 
 AMP_SWEEP_MAX = 256
