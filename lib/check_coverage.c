@@ -239,29 +239,8 @@ static amp_status coverage_trivariate(const amp_spline *v, const amp_pathset *ps
     return st;
 }
 
-/* The samples farther than a limit from every path (amp_check_coverage_gaps), gathered as they are met. */
-typedef struct gap_list {
-    double limit;
-    amp_check_gap *g;
-    size_t n, cap;
-    int oom;
-} gap_list;
-
-static void gap_add(const amp_allocator *a, gap_list *gl, amp_vec3 p, double d)
-{
-    void *m = gl->g;
-    if (gl->oom || amp_grow(a, &m, &gl->cap, gl->n + 1, sizeof *gl->g) != AMP_OK) {
-        gl->oom = 1;
-        return;
-    }
-    gl->g = m;
-    gl->g[gl->n].p = p;
-    gl->g[gl->n].gap = d;
-    gl->n++;
-}
-
 static amp_status coverage_mesh(const amp_bvh *b, double margin, const amp_pathset *ps, size_t samples,
-                                unsigned long seed, gap_list *gl, amp_coverage *out, amp_error *err)
+                                unsigned long seed, amp_coverage *out, amp_error *err)
 {
     seg_grid g;
     amp_box3 box = amp_bvh_bbox(b);
@@ -286,8 +265,6 @@ static amp_status coverage_mesh(const amp_bvh *b, double margin, const amp_paths
         if (!amp_bvh_inside(b, p) || (margin > 0 && amp_bvh_closest(b, p, NULL, NULL) < margin))
             continue;
         d = grid_nearest(&g, p);
-        if (gl && d > gl->limit)
-            gap_add(ps->alloc, gl, p, d);
         if (got == 0 || d > out->gap) {
             out->gap = d;
             out->worst = p;
@@ -296,8 +273,6 @@ static amp_status coverage_mesh(const amp_bvh *b, double margin, const amp_paths
         got++;
     }
     grid_free(&g);
-    if (gl && gl->oom)
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory listing the coverage gaps");
     if (got == 0)
         return amp_fail(err, AMP_ERR_GEOMETRY, 0, "no sample point fell inside the mesh");
     out->samples = got;
@@ -315,42 +290,8 @@ amp_status amp_check_coverage(const amp_pathset *ps, const amp_coverage_domain *
     if (d->trivariate)
         st = coverage_trivariate(d->trivariate, ps, samples, seed, out, err);
     else
-        st = coverage_mesh(d->mesh, d->margin, ps, samples, seed, NULL, out, err);
+        st = coverage_mesh(d->mesh, d->margin, ps, samples, seed, out, err);
     if (st == AMP_OK)
         out->deposited = amp_pathset_volume(ps, -1);
     return st;
-}
-
-static int gap_cmp(const void *x, const void *y)
-{
-    const amp_check_gap *a = x, *b = y;
-    return a->gap > b->gap ? -1 : (a->gap < b->gap);
-}
-
-amp_status amp_check_coverage_gaps(const amp_pathset *ps, const amp_bvh *mesh, size_t samples, unsigned long seed,
-                                   double limit, amp_check_gap **gaps, size_t *n, amp_coverage *out, amp_error *err)
-{
-    gap_list gl;
-    amp_coverage cov;
-    amp_status st;
-    if (!ps || !mesh || !gaps || !n || !(limit >= 0))
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_coverage_gaps: NULL argument or a negative limit");
-    *gaps = NULL;
-    *n = 0;
-    memset(&gl, 0, sizeof gl);
-    memset(&cov, 0, sizeof cov);
-    gl.limit = limit;
-    st = coverage_mesh(mesh, 0.0, ps, samples, seed, &gl, &cov, err);
-    if (st != AMP_OK) {
-        amp_free(ps->alloc, gl.g);
-        return st;
-    }
-    /* farthest first; equal gaps keep the order they were sampled in (qsort is not stable: the point breaks it) */
-    qsort(gl.g, gl.n, sizeof *gl.g, gap_cmp);
-    cov.deposited = amp_pathset_volume(ps, -1);
-    if (out)
-        *out = cov;
-    *gaps = gl.g;
-    *n = gl.n;
-    return AMP_OK;
 }

@@ -814,7 +814,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
         sd.ncs = q.ncs;
         sd.da = (double)(na << QDEPTH);
         sd.db = (double)(nb << QDEPTH);
-        st = amp_field_fill_gaps(f, b, o, &sd, nc, target, r, min_len, out, &s->gap_curves, &s->gap_after, err);
+        st = amp_field_fill_gaps(f, b, o, &sd, nc, target, r, min_len, out, &s->gap_curves, &s->gap_left, err);
     }
     s->bound = q.worst;
     s->bound_met = q.deep == 0;

@@ -4,21 +4,127 @@
  * The adaptive lattice (lib/field.c) checks its covering radius on a 5 x 5 grid per cell at samples along
  * the curves: a sampled bound. Features finer than those samples (a screw's threads, a recycling symbol's
  * strokes, a bed's ribs) can still leave solid farther than the radius from every printed curve, and
- * `ampath check` then measures a gap above it. Here the covering is measured the way the checker measures
- * it (uniform samples of the solid, exact distance to the nearest segment), and the field's own curve
- * through each gap is added: the paths stay curves of the field ([P1 §4.2]), only more of them.
+ * `ampath check` then measures a gap above it. Here the solid is sampled uniformly, each sample is tested
+ * against the paths (is a segment within the covering radius?), and the field's own curve through each
+ * sample that fails is added: the paths stay curves of the field ([P1 §4.2]), only more of them. The test
+ * is this file's own (a hash of points along the paths), not the checker's: `check` stays independent.
  */
 #include <math.h>
 #include <string.h>
 
-#include "ampath/check.h"
 #include "field_internal.h"
 
-#define GAP_ROUNDS 4          /* measure, add curves; the last measurement only reports */
-#define GAP_SAMPLES 20000     /* samples of the solid per measurement (the checker's default count) */
-#define GAP_SEED 0x6A9C0F3Bul /* a stream of our own: the checker's samples stay independent */
-#define GAP_POINTS_MAX 4096   /* gaps looked at per round, farthest first */
+#define GAP_ROUNDS 6          /* sample, add curves; a last sampling only counts what is left */
+#define GAP_SAMPLES 100000    /* samples of the solid in the first round (five times the checker's default) */
+#define GAP_SAMPLES_MAX 800000 /* each round that still finds gaps samples twice as many, up to this */
+#define GAP_SEED 0x6A9C0F3Bull
+#define GAP_POINTS_MAX 4096   /* gaps looked at per round */
 #define GAP_SEEDS_MAX 65536   /* curve samples tried as Newton's starting point */
+
+/* ------------------------------------------- which samples are near a path */
+
+/*
+ * Points along every path segment at most `target` apart, hashed by a cell of 1.5 target, each naming its
+ * segment. A sample within `target` of a segment is within 1.5 target of one of its points, so the 27 cells
+ * around the sample hold that segment; the distance to each segment met there is exact.
+ */
+typedef struct near_entry {
+    size_t seg;  /* index in ps->verts of the segment's first vertex */
+    size_t next; /* next entry of the bucket + 1 (0: last) */
+} near_entry;
+
+typedef struct near_index {
+    const amp_pathset *ps;
+    double target, cell;
+    size_t *bucket, nbucket; /* first entry + 1 (0: empty); nbucket a power of two */
+    near_entry *e;
+    size_t n, cap;
+    size_t paths; /* paths indexed so far */
+} near_index;
+
+static size_t bucket_of(const near_index *x, long long cx, long long cy, long long cz)
+{
+    unsigned long long h = (unsigned long long)cx * 0x9E3779B97F4A7C15ULL ^
+                           (unsigned long long)cy * 0xC2B2AE3D27D4EB4FULL ^
+                           (unsigned long long)cz * 0x165667B19E3779F9ULL;
+    return (size_t)(h >> 20) & (x->nbucket - 1);
+}
+
+static long long cell_coord(const near_index *x, double v) { return (long long)floor(v / x->cell); }
+
+/* Index the paths added since the last call. */
+static amp_status near_add(near_index *x, const amp_allocator *a, amp_error *err)
+{
+    const amp_pathset *ps = x->ps;
+    for (; x->paths < ps->npaths; x->paths++) {
+        size_t first = (size_t)(amp_pathset_path_verts(ps, x->paths) - ps->verts), k;
+        for (k = 0; k + 1 < ps->paths[x->paths].n; k++) {
+            amp_vec3 p0 = ps->verts[first + k].p, p1 = ps->verts[first + k + 1].p;
+            size_t m = (size_t)ceil(amp_v3_dist(p0, p1) / x->target), j;
+            for (j = 0; j <= m; j++) {
+                amp_vec3 p = m ? amp_v3_lerp(p0, p1, (double)j / (double)m) : p0;
+                size_t b = bucket_of(x, cell_coord(x, p.x), cell_coord(x, p.y), cell_coord(x, p.z));
+                void *mem = x->e;
+                if (x->bucket[b] && x->e[x->bucket[b] - 1].seg == first + k)
+                    continue; /* the segment's previous point fell in the same bucket */
+                if (amp_grow(a, &mem, &x->cap, x->n + 1, sizeof *x->e) != AMP_OK)
+                    return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gap curves");
+                x->e = mem;
+                x->e[x->n].seg = first + k;
+                x->e[x->n].next = x->bucket[b];
+                x->bucket[b] = ++x->n;
+            }
+        }
+    }
+    return AMP_OK;
+}
+
+static amp_status near_init(near_index *x, const amp_pathset *ps, double target, const amp_allocator *a,
+                            amp_error *err)
+{
+    double len = 0.0;
+    size_t i, want;
+    memset(x, 0, sizeof *x);
+    x->ps = ps;
+    x->target = target;
+    x->cell = 1.5 * target;
+    for (i = 0; i < ps->npaths; i++)
+        len += amp_path_length(ps, i);
+    want = (size_t)(len / target) + (size_t)ps->nverts;
+    for (x->nbucket = 4096; x->nbucket < want && x->nbucket < ((size_t)1 << 26); x->nbucket *= 2)
+        ;
+    if (!(x->bucket = amp_calloc(a, x->nbucket, sizeof *x->bucket)))
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gap curves");
+    return near_add(x, a, err);
+}
+
+static void near_free(near_index *x, const amp_allocator *a)
+{
+    amp_free(a, x->bucket);
+    amp_free(a, x->e);
+}
+
+/* Is some path segment within target of @p p? */
+static int near_material(const near_index *x, amp_vec3 p)
+{
+    long long cx = cell_coord(x, p.x), cy = cell_coord(x, p.y), cz = cell_coord(x, p.z);
+    double t2 = x->target * x->target;
+    int c;
+    /* the sample's own cell first (c = 13 there, then skipped): it holds the nearest segment most often */
+    for (c = -1; c < 27; c++)
+        if (c != 13) {
+            long long dx = c < 0 ? 0 : c % 3 - 1, dy = c < 0 ? 0 : c / 3 % 3 - 1, dz = c < 0 ? 0 : c / 9 - 1;
+            size_t id = x->bucket[bucket_of(x, cx + dx, cy + dy, cz + dz)];
+            for (; id; id = x->e[id - 1].next) {
+                size_t s = x->e[id - 1].seg;
+                if (amp_v3_seg_dist2(p, x->ps->verts[s].p, x->ps->verts[s + 1].p, NULL) <= t2)
+                    return 1;
+            }
+        }
+    return 0;
+}
+
+/* -------------------------------------------------- the field, inverted */
 
 /* F at lattice position x = (a, b, c). */
 static amp_status field_at(const amp_field *f, const double x[3], amp_vec3 *p, amp_error *err)
@@ -60,7 +166,7 @@ static int invert(const amp_field *f, const amp_field_seeds *sd, amp_vec3 p, dou
     nearest_seed(sd, p, x);
     for (it = 0; it < 30; it++) {
         amp_vec3 g, col[3], e;
-        double det, rhs[3], dx[3];
+        double det;
         if (field_at(f, x, &g, &err) != AMP_OK)
             return 0;
         e = amp_v3_sub(g, p);
@@ -75,24 +181,19 @@ static int invert(const amp_field *f, const amp_field_seeds *sd, amp_vec3 p, dou
                 return 0;
             col[d] = amp_v3_scale(amp_v3_sub(gh, g), 1.0 / h);
         }
-        /* J dx = -e by Cramer's rule: columns col[0..2] */
+        /* J dx = -e by Cramer's rule, J's columns col[0..2] */
         det = amp_v3_dot(col[0], amp_v3_cross(col[1], col[2]));
         if (!(fabs(det) > 1e-300))
             return 0;
-        rhs[0] = -e.x;
-        rhs[1] = -e.y;
-        rhs[2] = -e.z;
-        {
-            amp_vec3 r = amp_v3(rhs[0], rhs[1], rhs[2]);
-            dx[0] = amp_v3_dot(r, amp_v3_cross(col[1], col[2])) / det;
-            dx[1] = amp_v3_dot(col[0], amp_v3_cross(r, col[2])) / det;
-            dx[2] = amp_v3_dot(col[0], amp_v3_cross(col[1], r)) / det;
-        }
-        for (d = 0; d < 3; d++)
-            x[d] = clamp01(x[d] + dx[d]);
+        e = amp_v3_scale(e, -1.0);
+        x[0] = clamp01(x[0] + amp_v3_dot(e, amp_v3_cross(col[1], col[2])) / det);
+        x[1] = clamp01(x[1] + amp_v3_dot(col[0], amp_v3_cross(e, col[2])) / det);
+        x[2] = clamp01(x[2] + amp_v3_dot(col[0], amp_v3_cross(col[1], e)) / det);
     }
     return 0;
 }
+
+/* ----------------------------------------------------------- the curves */
 
 /* Is @p p within @p lim of path @p i of @p ps? */
 static int near_path(const amp_pathset *ps, size_t i, amp_vec3 p, double lim)
@@ -102,19 +203,6 @@ static int near_path(const amp_pathset *ps, size_t i, amp_vec3 p, double lim)
     for (k = 0; k + 1 < ps->paths[i].n; k++)
         if (amp_v3_seg_dist2(p, v[k].p, v[k + 1].p, NULL) <= lim * lim)
             return 1;
-    return 0;
-}
-
-/* Is @p p within @p lim of a path of @p ps from @p from on (box[j]: the box of path from + j)? */
-static int near_paths(const amp_pathset *ps, size_t from, const amp_box3 *box, amp_vec3 p, double lim)
-{
-    size_t i;
-    for (i = from; i < ps->npaths; i++) {
-        const amp_box3 *b = &box[i - from];
-        if (p.x >= b->min.x - lim && p.x <= b->max.x + lim && p.y >= b->min.y - lim && p.y <= b->max.y + lim &&
-            p.z >= b->min.z - lim && p.z <= b->max.z + lim && near_path(ps, i, p, lim))
-            return 1;
-    }
     return 0;
 }
 
@@ -138,73 +226,115 @@ static amp_status add_curve(const amp_field *f, const amp_bvh *b, const amp_fiel
         return st;
     amp_pathset_init(&tmp, out->alloc);
     st = amp_field_clip(b, o, curve, nc + 1, 0.0, &tmp, err);
-    for (i = 0; st == AMP_OK && i < tmp.npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(&tmp, i);
+    for (i = 0; st == AMP_OK && i < tmp.npaths; i++)
         if (amp_path_length(&tmp, i) >= min_len || near_path(&tmp, i, gap, target))
-            st = amp_pathset_add(out, AMP_ROLE_OBJECT, v, tmp.paths[i].n, err);
-    }
+            st = amp_pathset_add(out, AMP_ROLE_OBJECT, amp_pathset_path_verts(&tmp, i), tmp.paths[i].n, err);
     amp_pathset_free(&tmp);
     return st;
 }
 
-/* The boxes of the paths added since @p from that *nbox does not hold yet (for near_paths). */
-static amp_status boxes_since(const amp_pathset *ps, size_t from, amp_box3 **box, size_t *cap, size_t *nbox,
-                              amp_error *err)
+/* splitmix64: the samples of one round (another generator than the checker's, on seeds of its own). */
+static double rnd(unsigned long long *s)
 {
-    size_t i, k;
-    void *m = *box;
-    if (ps->npaths > from && amp_grow(ps->alloc, &m, cap, ps->npaths - from, sizeof **box) != AMP_OK)
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gap curves");
-    *box = m;
-    for (i = from + *nbox; i < ps->npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        (*box)[i - from] = amp_box3_empty();
-        for (k = 0; k < ps->paths[i].n; k++)
-            (*box)[i - from] = amp_box3_add((*box)[i - from], v[k].p);
+    unsigned long long z = (*s += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    z ^= z >> 31;
+    return (double)(z >> 11) / 9007199254740992.0;
+}
+
+/* What one round works with. */
+typedef struct gap_ctx {
+    const amp_field *f;
+    const amp_bvh *b;
+    const amp_field_opts *o;
+    const amp_field_seeds *sd;
+    size_t nc;
+    double target, r, min_len;
+    near_index *nx;
+    amp_pvert *curve;
+    amp_pathset *out;
+    size_t *added, tried;
+    amp_error *err;
+} gap_ctx;
+
+/* The curve through gap @p p: 1 when added (the index knows it), 0 when the field does not reach p. */
+static int close_gap(gap_ctx *c, amp_vec3 p, amp_status *st)
+{
+    double x[3];
+    if (c->tried++ >= GAP_POINTS_MAX || !invert(c->f, c->sd, p, 1e-3 * c->target, x))
+        return 0;
+    if ((*st = add_curve(c->f, c->b, c->o, x, c->nc, c->r, c->min_len, p, c->target, c->curve, c->out, c->err)) ==
+        AMP_OK)
+        *st = near_add(c->nx, c->out->alloc, c->err);
+    (*c->added)++;
+    return 1;
+}
+
+/* One round: sample the covered part uniformly and close each sample left far from the paths (the index
+ * learns every curve at once, so a gap it closes is not filled twice). *left counts the samples found far
+ * (before this round's curves). */
+static amp_status gap_round(gap_ctx *c, int add, size_t samples, unsigned long long seed, size_t *left)
+{
+    amp_box3 box = amp_bvh_bbox(c->b);
+    size_t got = 0, tries = 0;
+    amp_status st = AMP_OK;
+    *left = 0;
+    c->tried = 0;
+    while (st == AMP_OK && got < samples && tries < 100 * samples) {
+        amp_vec3 p = amp_v3(box.min.x + rnd(&seed) * (box.max.x - box.min.x),
+                            box.min.y + rnd(&seed) * (box.max.y - box.min.y),
+                            box.min.z + rnd(&seed) * (box.max.z - box.min.z));
+        tries++;
+        if (!amp_field_member(c->b, c->o, p))
+            continue;
+        got++;
+        if (near_material(c->nx, p))
+            continue;
+        (*left)++;
+        if (add)
+            close_gap(c, p, &st);
     }
-    *nbox = ps->npaths - from;
-    return AMP_OK;
+    return st;
 }
 
 amp_status amp_field_fill_gaps(const amp_field *f, const amp_bvh *b, const amp_field_opts *o,
                                const amp_field_seeds *sd, size_t nc, double target, double r, double min_len,
-                               amp_pathset *out, size_t *added, double *gap_after, amp_error *err)
+                               amp_pathset *out, size_t *added, size_t *left, amp_error *err)
 {
-    amp_pvert *curve = amp_calloc(out->alloc, nc + 1, sizeof *curve);
-    amp_box3 *box = NULL;
-    size_t boxcap = 0;
+    gap_ctx c;
+    near_index nx;
     int round;
-    amp_status st = AMP_OK;
-    *added = 0;
-    *gap_after = 0.0;
-    if (!curve)
+    amp_status st;
+    *added = *left = 0;
+    if (sd->ncur == 0 || out->npaths == 0)
+        return AMP_OK;
+    memset(&c, 0, sizeof c);
+    c.f = f;
+    c.b = b;
+    c.o = o;
+    c.sd = sd;
+    c.nc = nc;
+    c.target = target;
+    c.r = r;
+    c.min_len = min_len;
+    c.nx = &nx;
+    c.out = out;
+    c.added = added;
+    c.err = err;
+    if (!(c.curve = amp_calloc(out->alloc, nc + 1, sizeof *c.curve)))
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gap curves");
-    for (round = 0; st == AMP_OK && sd->ncur > 0 && out->npaths > 0; round++) {
-        amp_check_gap *g = NULL;
-        amp_coverage cov;
-        size_t ng = 0, i, from = out->npaths, before = *added, nbox = 0;
-        st = amp_check_coverage_gaps(out, b, GAP_SAMPLES, GAP_SEED + (unsigned long)round, target, &g, &ng, &cov,
-                                     err);
-        if (st != AMP_OK)
-            break;
-        *gap_after = cov.gap;
-        for (i = 0; st == AMP_OK && round < GAP_ROUNDS && i < ng && i < GAP_POINTS_MAX; i++) {
-            double x[3];
-            /* a gap within reach of a curve added in this round is closed by it */
-            if (!amp_field_member(b, o, g[i].p) ||
-                (out->npaths > from && ((st = boxes_since(out, from, &box, &boxcap, &nbox, err)) != AMP_OK ||
-                                        near_paths(out, from, box, g[i].p, target))))
-                continue;
-            if (!invert(f, sd, g[i].p, 1e-3 * target, x))
-                continue;
-            st = add_curve(f, b, o, x, nc, r, min_len, g[i].p, target, curve, out, err);
-            (*added)++;
-        }
-        amp_free(out->alloc, g);
-        if (round >= GAP_ROUNDS || *added == before)
+    st = near_init(&nx, out, target, out->alloc, err);
+    /* gaps are rare where the lattice is fine: a round that finds some samples twice as densely next time,
+     * to find the rest of the feature they lie in */
+    for (round = 0; st == AMP_OK; round++) {
+        size_t before = *added, n = (size_t)GAP_SAMPLES << (round < 4 ? round : 4);
+        st = gap_round(&c, round < GAP_ROUNDS, n < GAP_SAMPLES_MAX ? n : GAP_SAMPLES_MAX,
+                       GAP_SEED + (unsigned long long)round, left);
+        if (*left == 0 || round >= GAP_ROUNDS || *added == before)
             break;
     }
-    amp_free(out->alloc, curve);
-    amp_free(out->alloc, box);
+    near_free(&nx, out->alloc);
+    amp_free(out->alloc, c.curve);
     return st;
 }

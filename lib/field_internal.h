@@ -25,16 +25,17 @@ typedef struct amp_field_seeds {
 } amp_field_seeds;
 
 /**
- * Curves through the covering's gaps: a few rounds of measuring the coverage of @p out's paths by sampling
- * the mesh (amp_check_coverage_gaps, seeds of its own), each adding the field's curve through every sample
- * farther than @p target from all paths (nearer than @p target to no curve added in the same round). The
- * curve's lattice position comes from inverting the field at the sample (Newton from the nearest seed);
- * samples the field does not reach are left. Pieces are kept at least @p min_len long, or shorter where they
- * pass within @p target of their sample. *added counts the curves, *gap_after the largest gap the last
- * round measured (before its curves). AMP_ERR_NOMEM, the evaluator's errors.
+ * Curves through the covering's gaps: rounds of sampling the covered part of the solid uniformly (100,000
+ * samples, twice as many after each round that found gaps, up to 800,000; seeds of its own) and adding the
+ * field's curve through every sample farther than @p target from all of @p out's paths, up to 6 rounds and
+ * a last one that only counts. The curve's lattice position comes
+ * from inverting the field at the sample (Newton from the nearest seed); samples the field does not reach
+ * are left. Pieces are kept at least @p min_len long, or shorter where they pass within @p target of their
+ * sample. *added counts the curves, *left the samples the last round still found far (0: none).
+ * AMP_ERR_NOMEM, the evaluator's errors.
  */
 amp_status amp_field_fill_gaps(const amp_field *f, const amp_bvh *b, const amp_field_opts *o,
                                const amp_field_seeds *sd, size_t nc, double target, double r, double min_len,
-                               amp_pathset *out, size_t *added, double *gap_after, amp_error *err);
+                               amp_pathset *out, size_t *added, size_t *left, amp_error *err);
 
 #endif

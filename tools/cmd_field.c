@@ -86,7 +86,7 @@ static void print_report(const report *r, int json)
         cli_json_int(&j, "inserted_curves", (long long)r->st->inserted);
         if (r->st->route == AMP_FIELD_ROUTE_ADAPTIVE) {
             cli_json_int(&j, "gap_curves", (long long)r->st->gap_curves);
-            cli_json_num(&j, "gap_after_mm", r->st->gap_after);
+            cli_json_int(&j, "gap_samples_left", (long long)r->st->gap_left);
         }
         cli_json_int(&j, "shells", r->shells);
         cli_json_int(&j, "shell_paths", (long long)r->st->shell_paths);
@@ -180,10 +180,10 @@ static int judge(const amp_field_stats *st, double spacing, double gap_all, size
     if (st->bound_met == 0) {
         /* the cells' sampled bound fails, but the curves through the measured gaps closed them: both the
          * library's measure and ours (other samples) find every sample within the covering radius */
-        if (st->route == AMP_FIELD_ROUTE_ADAPTIVE && st->gap_after > 0 && st->gap_after <= st->target && gap_all >= 0 &&
+        if (st->route == AMP_FIELD_ROUTE_ADAPTIVE && st->gap_left == 0 && gap_all >= 0 &&
             gap_all <= st->target * (1 + 1e-6)) {
-            fprintf(stderr, "ampath field: warning: the lattice's cell bound is %.3f mm > %.3f mm somewhere; %lu curves "
-                            "through the measured gaps bring the measured gap to %.3f mm\n",
+            fprintf(stderr, "ampath field: warning: the lattice's cell bound is %.3f mm > %.3f mm somewhere; %lu "
+                            "curves through the measured gaps bring the measured gap to %.3f mm\n",
                     st->bound, st->target, (unsigned long)st->gap_curves, gap_all);
             return CLI_OK;
         }

@@ -122,7 +122,8 @@ int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
  * @p out as paths of @p role ([P1 §4.2]: "keep the parts inside the mesh").
  * Every segment is cut exactly where it crosses a triangle (segment–triangle
  * intersection through the BVH); each sub-segment is then classified by the
- * winding number at its midpoint (by a ray on a closed mesh, as in amp_bvh_inside()), so that crossings through holes or flipped
+ * winding number at its midpoint (by a ray on a closed mesh, as in
+ * amp_bvh_inside()), so that crossings through holes or flipped
  * triangles do not toggle the state wrongly. Cut points lie on the surface;
  * radii are interpolated linearly. Pieces shorter than @p min_len (mm, >= 0)
  * are dropped. On error @p out keeps the pieces appended before the error.

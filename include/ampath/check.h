@@ -8,7 +8,6 @@
  *   amp_check_gouge        lib/check_gouge.c     no point printed earlier lies inside the head ([P1 §5.1])
  *   amp_check_stroke       lib/check_stroke.c    a continuous stroke neither crosses nor repeats itself ([P2 §4])
  *   amp_check_coverage     lib/check_coverage.c  distance from the solid to the paths ([P1 §4])
- *   amp_check_coverage_gaps                      the samples farther than a limit (where to add curves)
  *   amp_check_hold         lib/check_support.c   every object bead is held when printed ([P1 §5.3])
  *
  * Every checker returns AMP_ERR_CHECK with a reason when its property fails
@@ -157,21 +156,6 @@ typedef struct amp_coverage_domain {
  */
 amp_status amp_check_coverage(const amp_pathset *ps, const amp_coverage_domain *d, size_t samples, unsigned long seed,
                               amp_coverage *out, amp_error *err);
-
-/** A sample of the solid farther than a limit from every path (amp_check_coverage_gaps()). */
-typedef struct amp_check_gap {
-    amp_vec3 p; /**< the sample */
-    double gap; /**< its distance to the nearest path segment, mm */
-} amp_check_gap;
-
-/**
- * The gaps of a mesh coverage: the samples of amp_check_coverage() on @p mesh (margin 0, the same stream for
- * the same @p seed and @p samples) that lie farther than @p limit (mm, >= 0) from every path segment, farthest
- * first. *gaps is allocated with @p ps's allocator (free it with amp_free(ps->alloc, *gaps); NULL when *n is 0).
- * @p out (may be NULL) receives the measure itself. Errors as amp_check_coverage(); on error *gaps is NULL.
- */
-amp_status amp_check_coverage_gaps(const amp_pathset *ps, const amp_bvh *mesh, size_t samples, unsigned long seed,
-                                   double limit, amp_check_gap **gaps, size_t *n, amp_coverage *out, amp_error *err);
 
 /* ----------------------------------------------------- support: held paths
  *

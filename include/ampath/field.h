@@ -151,7 +151,7 @@ typedef struct amp_field_stats {
     size_t shell_paths;    /**< surface layer: shell paths written (after the covering curves) */
     double shell_length;   /**< their length, mm */
     size_t gap_curves;     /**< adaptive route: curves added through the gaps the sampled measure found */
-    double gap_after;      /**< adaptive route: the largest gap of that measure's last round, mm */
+    size_t gap_left;       /**< adaptive route: samples still farther than the target in the last round */
 } amp_field_stats;
 
 /**
@@ -173,13 +173,13 @@ typedef struct amp_field_stats {
  *   drift apart and next to the surface, down to 1/32 of a base cell.
  *   stats.bound is the largest such cell figure, a sampled upper bound;
  *   bound_met = 0 when a finest cell still exceeds the target (the field
- *   cannot meet the spacing there). The covering is then measured as
- *   amp_check_coverage_gaps() measures it (20,000 uniform samples of the
- *   solid, seeds of its own) and the field's curve through every sample
- *   farther than target from all paths is added (its lattice position by
- *   Newton's method on the field), in up to 4 rounds: features finer than
- *   the cell samples (threads, thin ribs) get their curves; stats.gap_curves
- *   counts them, stats.gap_after is the last round's measured gap;
+ *   cannot meet the spacing there). The solid is then sampled (100,000
+ *   uniform samples, twice as many in each next round while gaps are
+ *   found) and the field's curve through every sample farther than target
+ *   from all paths is added (its lattice position by Newton's method on the
+ *   field), in up to 6 rounds: features finer than the cell samples
+ *   (threads, thin ribs) get their curves; stats.gap_curves
+ *   counts them, stats.gap_left the samples a last round still finds far;
  * - the honeycomb is the plain lattice at the cell centres (no bound checked).
  * With o->shells = N > 0 a surface layer follows: N shells of curves on the
  * surface offset inward by S/2, 3S/2, ...: the lattice curves (corners of the

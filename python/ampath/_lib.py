@@ -256,7 +256,7 @@ class amp_field_stats(Structure):
                 ("length_before", c_double), ("length_after", c_double), ("radius", c_double), ("target", c_double),
                 ("bound", c_double), ("bound_met", c_int), ("inserted", c_size_t), ("route", c_int),
                 ("shell_paths", c_size_t), ("shell_length", c_double), ("gap_curves", c_size_t),
-                ("gap_after", c_double)]
+                ("gap_left", c_size_t)]
 
 
 AMP_SWEEP_MAX = 256
