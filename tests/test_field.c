@@ -176,24 +176,31 @@ static void finned_block(amp_mesh *m, amp_bvh **b)
     ck_assert_int_eq(amp_bvh_build(b, m, &err), AMP_OK);
 }
 
+/* The box field over @p m's bounding box at spacing @p S, covering @p b into @p ps. */
+static void box_cover(const amp_mesh *m, const amp_bvh *b, double S, amp_pathset *ps, amp_field_stats *st)
+{
+    amp_field f;
+    amp_field_opts o;
+    amp_error err;
+    amp_pathset_init(ps, NULL);
+    ck_assert_int_eq(amp_field_builtin(&f, "box", amp_mesh_bbox(m), &err), AMP_OK);
+    amp_field_opts_default(&o);
+    o.spacing = S;
+    ck_assert_int_eq(amp_field_cover(&f, b, &o, ps, st, &err), AMP_OK);
+}
+
 START_TEST(curves_through_measured_gaps_cover_a_fin_thinner_than_the_cell_samples)
 {
     /* At S = 2 the lattice's cells sample every 0.5 mm across the curves: the 0.15 mm fin falls between the
      * samples, and without the curves through the measured gaps its top is 6 mm from every path. */
     amp_mesh m;
     amp_bvh *b;
-    amp_field f;
-    amp_field_opts o;
     amp_field_stats st;
     amp_pathset ps;
     amp_error err;
     double g, target = sqrt(2.0);
     finned_block(&m, &b);
-    amp_pathset_init(&ps, NULL);
-    ck_assert_int_eq(amp_field_builtin(&f, "box", amp_mesh_bbox(&m), &err), AMP_OK);
-    amp_field_opts_default(&o);
-    o.spacing = 2.0;
-    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    box_cover(&m, b, 2.0, &ps, &st);
     ck_assert_uint_gt(st.gap_curves, 0);
     ck_assert_uint_eq(st.gap_left, 0);
     /* measured on other samples than the library's */
@@ -213,21 +220,15 @@ START_TEST(box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces)
      * and the curves on the faces were printed half outside it */
     amp_mesh m;
     amp_bvh *b;
-    amp_field f;
-    amp_field_opts o;
     amp_field_stats st;
     amp_pathset ps;
     amp_error err;
     double g;
     size_t i;
     amp_mesh_init(&m, NULL);
-    amp_pathset_init(&ps, NULL);
     ck_assert_int_eq(fx_box(&m, amp_v3(-5, -3, 0), amp_v3(5, 3, 4), 0), AMP_OK);
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
-    ck_assert_int_eq(amp_field_builtin(&f, "box", amp_mesh_bbox(&m), &err), AMP_OK);
-    amp_field_opts_default(&o);
-    o.spacing = 1.0;
-    ck_assert_int_eq(amp_field_cover(&f, b, &o, &ps, &st, &err), AMP_OK);
+    box_cover(&m, b, 1.0, &ps, &st);
     ck_assert_int_eq(st.bound_met, 1);
     /* one curve per unit cell of the 6 x 4 cross-section, each half a spacing inside the faces */
     ck_assert_uint_eq(ps.npaths, 24);
