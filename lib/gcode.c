@@ -285,6 +285,7 @@ static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
          "bed x range", "min < max within +-99999 mm");
     NEED(IN(o->bed_min_y, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->bed_max_y, o->bed_min_y + 1e-3, GC_COORD_MAX),
          "bed y range", "min < max within +-99999 mm");
+    NEED(IN(o->bed_radius, 0.0, GC_COORD_MAX), "bed radius", "0 (a rectangle) or a radius up to 99999 mm");
     NEED(IN(o->max_height, 1e-3, GC_COORD_MAX), "max height", "in (0, 99999] mm");
     NEED(IN(o->first_layer_height, 1e-3, 10.0), "first-layer height", "in (0, 10] mm");
     NEED(IN(o->first_layer_feed, 1e-9, 1e4), "first-layer feed", "in (0, 10000] mm/s");
@@ -433,8 +434,31 @@ static amp_status fit_axis(const amp_gcode_opts *o, char axis, double lo, double
                     o->profile ? o->profile : "?", axis, lo, hi, b0, b1, over);
 }
 
+/*
+ * A round bed: every printed vertex, placed, within the disc (its straight moves between them then are too:
+ * the disc is convex). The same vertices as the box of the scan: those of paths with something to print.
+ */
+static amp_status fit_disc(const amp_gcode_opts *o, const amp_pathset *ps, amp_vec3 off, amp_error *err)
+{
+    double cx = 0.5 * (o->bed_min_x + o->bed_max_x), cy = 0.5 * (o->bed_min_y + o->bed_max_y), far = 0.0;
+    size_t i, k;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        if (next_segment(ps, i, 0) + 1 >= ps->paths[i].n)
+            continue;
+        for (k = 0; k < ps->paths[i].n; k++)
+            far = fmax(far, hypot(v[k].p.x + off.x - cx, v[k].p.y + off.y - cy));
+    }
+    if (far <= o->bed_radius + GC_FIT_TOL)
+        return AMP_OK;
+    return amp_fail(err, AMP_ERR_RANGE, 0,
+                    "gcode: the job does not fit printer '%s': after placement it reaches %.3f mm from the centre "
+                    "(%.3f, %.3f) of the round bed of radius %.3f mm (%.3f mm over)",
+                    o->profile ? o->profile : "?", far, cx, cy, o->bed_radius, far - o->bed_radius);
+}
+
 /* The placement offset (docs/interfaces.md §5) and the check that the placed job fits the bed volume. */
-static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *err)
+static amp_status place_job(amp_gcode_iter *it, const amp_pathset *ps, const job_scan *js, amp_error *err)
 {
     const amp_gcode_opts *o = &it->o;
     amp_vec3 off = amp_v3(0, 0, 0);
@@ -450,6 +474,8 @@ static amp_status place_job(amp_gcode_iter *it, const job_scan *js, amp_error *e
         st = fit_axis(o, 'Y', js->bb.min.y + off.y, js->bb.max.y + off.y, o->bed_min_y, o->bed_max_y, err);
     if (st == AMP_OK)
         st = fit_axis(o, 'Z', js->bb.min.z + off.z, js->bb.max.z + off.z, 0.0, o->max_height, err);
+    if (st == AMP_OK && o->bed_radius > 0.0)
+        st = fit_disc(o, ps, off, err);
     if (st != AMP_OK)
         return st;
     it->zmax = o->max_height - off.z;
@@ -516,7 +542,7 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     if (st == AMP_OK)
         st = scan_paths(ps, &js, err);
     if (st == AMP_OK)
-        st = place_job(it, &js, err);
+        st = place_job(it, ps, &js, err);
     if (st != AMP_OK)
         return st;
     if (js.bb.max.z + it->off.z + js.rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
@@ -921,8 +947,12 @@ static int printer_line(lb *l, const amp_gcode_opts *o)
         return 1;
     r.b = rest;
     r.n = 0;
-    lb_fmt(&r, ": bed %f1..%f1 x %f1..%f1, height %f1 mm", o->bed_min_x, o->bed_max_x, o->bed_min_y, o->bed_max_y,
-           o->max_height);
+    if (o->bed_radius > 0.0)
+        lb_fmt(&r, ": round bed radius %f1 about (%f1, %f1), height %f1 mm", o->bed_radius,
+               0.5 * (o->bed_min_x + o->bed_max_x), 0.5 * (o->bed_min_y + o->bed_max_y), o->max_height);
+    else
+        lb_fmt(&r, ": bed %f1..%f1 x %f1..%f1, height %f1 mm", o->bed_min_x, o->bed_max_x, o->bed_min_y,
+               o->bed_max_y, o->max_height);
     lb_str(l, "; printer ");
     room = AMP_GCODE_LINE_MAX > l->n + r.n ? AMP_GCODE_LINE_MAX - l->n - r.n : 0;
     for (i = 0; i < n && i < room; i++)

@@ -173,6 +173,7 @@ amp_status amp_printer_check(const amp_printer *p, amp_error *err)
     RANGE(p->bed_max_y - p->bed_min_y, 1.0, 1e4, "bed depth (mm)");
     RANGE(p->bed_min_x, -1e4, 1e4, "bed origin x (mm)");
     RANGE(p->bed_min_y, -1e4, 1e4, "bed origin y (mm)");
+    RANGE(p->bed_radius, 0.0, 1e4, "round bed radius (mm)");
     RANGE(p->max_height, 1.0, 1e4, "max_print_height (mm)");
     RANGE(p->nozzle_diameter, 0.05, 3.0, "nozzle_diameter (mm)");
     RANGE(p->filament_diameter, 0.5, 5.0, "filament_diameter (mm)");
@@ -259,6 +260,7 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
     o->bed_min_y = p->bed_min_y;
     o->bed_max_x = p->bed_max_x;
     o->bed_max_y = p->bed_max_y;
+    o->bed_radius = p->bed_radius;
     o->max_height = p->max_height;
     o->filament_diameter = p->filament_diameter;
     o->flow = p->extrusion_multiplier;

@@ -109,36 +109,57 @@ static int dec_number(const char **s, const char *end, char stop, double *out)
     return k > 0 && *e == '\0' && isfinite(*out);
 }
 
-/* bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline,
- * read in place (a delta's round bed is 72 points in exponent notation). */
+/* The next "XxY" of a bed_shape value: 1, 0 at its end, -1 when malformed. */
+static int bed_point(const char **s, const char *end, double *x, double *y)
+{
+    while (*s < end && (**s == ' ' || **s == ',' || **s == '"'))
+        (*s)++;
+    if (*s == end)
+        return 0;
+    if (!dec_number(s, end, 'x', x) || *s == end || (**s != 'x' && **s != 'X'))
+        return -1;
+    (*s)++;
+    return dec_number(s, end, ',', y) ? 1 : -1;
+}
+
+/*
+ * bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline, read in place. A delta's round bed
+ * is a polygon of many corners (72 in exponent notation) about the box's centre: when every side of the
+ * outline stays within 3 % of its farthest corner's distance from the centre (a regular 16-gon or finer),
+ * the printable region is the disc inside it, its radius the nearest side's distance.
+ */
 static int bed_shape(amp_printer *p, const char *v, size_t n)
 {
-    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y, cx, cy, dmin = HUGE_VAL, dmax = 0.0;
     const char *s = v, *end = v + n;
-    int pts = 0;
-    while (s < end) {
-        double x, y;
-        while (s < end && (*s == ' ' || *s == ',' || *s == '"'))
-            s++;
-        if (s == end)
-            break;
-        if (!dec_number(&s, end, 'x', &x) || s == end || (*s != 'x' && *s != 'X'))
-            return 0;
-        s++;
-        if (!dec_number(&s, end, ',', &y))
-            return 0;
+    amp_vec3 o = amp_v3(0, 0, 0), first = o, prev = o;
+    int pts = 0, r, k;
+    while ((r = bed_point(&s, end, &x, &y)) == 1) {
         x0 = x < x0 ? x : x0;
         x1 = x > x1 ? x : x1;
         y0 = y < y0 ? y : y0;
         y1 = y > y1 ? y : y1;
         pts++;
     }
-    if (pts < 3)
+    if (r < 0 || pts < 3)
         return 0;
     p->bed_min_x = x0;
     p->bed_min_y = y0;
     p->bed_max_x = x1;
     p->bed_max_y = y1;
+    cx = 0.5 * (x0 + x1);
+    cy = 0.5 * (y0 + y1);
+    for (s = v, k = 0; bed_point(&s, end, &x, &y) == 1; k++) {
+        amp_vec3 c = amp_v3(x - cx, y - cy, 0.0);
+        dmax = fmax(dmax, amp_v3_len(c));
+        if (k == 0)
+            first = c;
+        else /* the side from the previous corner */
+            dmin = fmin(dmin, sqrt(amp_v3_seg_dist2(o, prev, c, NULL)));
+        prev = c;
+    }
+    dmin = fmin(dmin, sqrt(amp_v3_seg_dist2(o, prev, first, NULL))); /* the closing side */
+    p->bed_radius = pts >= 8 && dmin >= 0.97 * dmax ? dmin : 0.0;
     return 1;
 }
 

@@ -644,15 +644,41 @@ START_TEST(stock_profiles_of_other_firmwares_round_beds_and_long_lines_are_taken
                       AMP_OK, "%s", err.msg);
     ck_assert_double_eq_tol(p.bed_min_x, -115, 1e-3);
     ck_assert_double_eq_tol(p.bed_max_y, 115, 1e-3);
+    /* round: the disc inside the 72-gon */
+    ck_assert_double_eq_tol(p.bed_radius, 115 * cos(AMP_PI / 72), 1e-3);
     ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
     two_layers(&ps);
     amp_buf_init(&mb, NULL);
     ck_assert_msg(amp_gcode_write(&ps, &o, amp_buf_sink, &mb, NULL, &err) == AMP_OK, "%s", err.msg);
     /* the long line keeps its command, the header its bed */
     ck_assert_msg(strstr(mb.data, "\nM201 X1000 Y1000 Z1000 E5000\n") != NULL, "%s", mb.data);
-    ck_assert_msg(strstr(mb.data, "...: bed -115..115 x -115..115, height 300 mm\n") != NULL, "%.300s", mb.data);
+    ck_assert_msg(strstr(mb.data, "...: round bed radius 114.9 about (0, 0), height 300 mm\n") != NULL, "%.300s",
+                  mb.data);
+    amp_buf_free(&mb);
+    /* the 10 mm square centred at (80, 80) lies in the bed's bounding square, but its corner (85, 85) is
+     * 120 mm from the centre: refused, naming the round bed; at (75, 75) it fits */
+    o.place = AMP_PLACE_AT;
+    o.place_x = o.place_y = 80.0;
+    amp_buf_init(&mb, NULL);
+    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &mb, NULL, &err), AMP_ERR_RANGE);
+    ck_assert_msg(strstr(err.msg, "reaches 120.208 mm from the centre (0.000, 0.000) of the round bed") != NULL, "%s",
+                  err.msg);
+    amp_buf_free(&mb);
+    o.place_x = o.place_y = 75.0;
+    amp_buf_init(&mb, NULL);
+    ck_assert_msg(amp_gcode_write(&ps, &o, amp_buf_sink, &mb, NULL, &err) == AMP_OK, "%s", err.msg);
     amp_buf_free(&mb);
     amp_pathset_free(&ps);
+    /* a rectangle, and an octagon that is not regular (a bed with cut corners), stay rectangles */
+    {
+        const char *rect = "bed_shape = 0x0,250x0,250x210,0x210\n";
+        const char *oct = "bed_shape = 20x0,180x0,200x20,200x180,180x200,20x200,0x180,0x20\n";
+        ck_assert_int_eq(amp_printer_parse_ini(&p, rect, strlen(rect), "r", &err), AMP_OK);
+        ck_assert_double_eq(p.bed_radius, 0.0);
+        ck_assert_int_eq(amp_printer_parse_ini(&p, oct, strlen(oct), "o", &err), AMP_OK);
+    }
+    ck_assert_double_eq(p.bed_radius, 0.0);
+    ck_assert_double_eq(p.bed_max_x, 200.0);
 }
 END_TEST
 

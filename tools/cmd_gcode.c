@@ -126,6 +126,7 @@ static void print_json(const char *in, const char *out, const amp_printer *pr, c
     cli_json_box(&j, "bbox_mm", st->bbox);
     cli_json_box(&j, "bed_mm", (amp_box3){{it->o.bed_min_x, it->o.bed_min_y, 0.0},
                                          {it->o.bed_max_x, it->o.bed_max_y, it->o.max_height}});
+    cli_json_num(&j, "bed_radius_mm", it->o.bed_radius);
     cli_json_num(&j, "first_layer_z_mm", st->first_layer_z);
     cli_json_int(&j, "lines", (long long)st->lines);
     cli_json_int(&j, "paths", (long long)st->paths);

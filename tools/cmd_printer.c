@@ -22,6 +22,7 @@ static void json_profile(const amp_printer *p)
     cli_json_str(&j, "model", p->model);
     cli_json_str(&j, "flavor", p->flavor == AMP_FLAVOR_KLIPPER ? "klipper" : "marlin");
     cli_json_box(&j, "bed_mm", (amp_box3){{p->bed_min_x, p->bed_min_y, 0.0}, {p->bed_max_x, p->bed_max_y, p->max_height}});
+    cli_json_num(&j, "bed_radius_mm", p->bed_radius);
     cli_json_num(&j, "max_height_mm", p->max_height);
     cli_json_num(&j, "nozzle_diameter_mm", p->nozzle_diameter);
     cli_json_num(&j, "bead_width_mm", amp_printer_bead_width(p));
@@ -60,6 +61,8 @@ static void human_profile(const amp_printer *p)
     printf("printer %s (%s firmware)\n", p->name, p->flavor == AMP_FLAVOR_KLIPPER ? "Klipper" : "Marlin");
     printf("  bed X %g..%g, Y %g..%g, height %g mm\n", p->bed_min_x, p->bed_max_x, p->bed_min_y, p->bed_max_y,
            p->max_height);
+    if (p->bed_radius > 0.0)
+        printf("  round bed: printable within %g mm of its centre\n", p->bed_radius);
     printf("  nozzle %g mm (planar beads %g mm wide), filament %g mm, layers %g mm (first %g mm)\n",
            p->nozzle_diameter, amp_printer_bead_width(p), p->filament_diameter, p->layer_height, p->first_layer_height);
     printf("  hot end %g C (first layer %g C), bed %g C (first layer %g C)\n", p->temp, p->first_layer_temp,

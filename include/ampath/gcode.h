@@ -197,6 +197,8 @@ typedef struct amp_gcode_opts {
                                      when the head cone clears all printed material (3; 0 = never) */
     double head_z_offs;         /**< mm, head cone tip above the nozzle point (docs/interfaces.md §2; 0.5) */
     double head_theta;          /**< degrees, head cone half-angle from the vertical (docs/interfaces.md §2; 72) */
+    double bed_radius;          /**< mm: a round bed, the disc of this radius about the rectangle's centre is
+                                     printable (0: the whole rectangle) */
 } amp_gcode_opts;
 
 /** Figures of a job. Times in seconds, lengths in mm, volumes in mm^3. */

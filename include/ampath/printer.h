@@ -84,6 +84,9 @@ typedef struct amp_printer {
     size_t vars_len;                  /**< bytes of @p vars in use */
     size_t n_vars_dropped;            /**< keys whose value did not fit in @p vars (the name is kept, marked,
                                            while it fits, so that a macro naming it is told why) */
+    double bed_radius;                /**< a round bed (bed_shape a regular polygon of 8 or more corners about
+                                           the rectangle's centre, as a delta's): the radius of the disc inside
+                                           it, mm; 0 = the whole rectangle is printable */
 } amp_printer;
 
 /**

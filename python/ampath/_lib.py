@@ -294,7 +294,7 @@ _GCODE_OPTS = [
     ("first_layer_height", _D), ("first_layer_feed", _D), ("first_layer_hotend_temp", _D),
     ("first_layer_bed_temp", _D), ("fan_off_layers", c_int), ("fan_speed", _D), ("retract_min_travel", _D),
     ("chord_tol", _D), ("radius_tol", _D), ("min_segment", _D), ("arcs", c_int),
-    ("direct_hop", _D), ("head_z_offs", _D), ("head_theta", _D)]
+    ("direct_hop", _D), ("head_z_offs", _D), ("head_theta", _D), ("bed_radius", _D)]
 
 
 class amp_gcode_opts(Structure):
@@ -325,7 +325,8 @@ class amp_printer(Structure):
                 + [("start_gcode", c_char * AMP_PRINTER_GCODE_MAX), ("end_gcode", c_char * AMP_PRINTER_GCODE_MAX),
                    ("unknown", c_char * AMP_PRINTER_UNKNOWN_MAX), ("n_unknown", c_size_t), ("n_keys", c_size_t),
                    ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX),
-                   ("vars", c_char * AMP_PRINTER_VARS_MAX), ("vars_len", c_size_t), ("n_vars_dropped", c_size_t)])
+                   ("vars", c_char * AMP_PRINTER_VARS_MAX), ("vars_len", c_size_t), ("n_vars_dropped", c_size_t),
+                   ("bed_radius", _D)])
 
 
 # C name -> mirror, for python/tests/test_layout.py
