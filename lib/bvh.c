@@ -40,7 +40,7 @@ struct amp_bvh {
     const amp_allocator *alloc;
     bvh_tri *tris;
     size_t ntris, flipped;
-    int closed; /* every edge shared by two oppositely oriented triangles (after orienting): see ray_winding */
+    int closed; /* every edge shared by two oppositely oriented triangles (after orienting): see winding_of */
     bvh_node *nodes;
     size_t nnodes;
     amp_box3 bbox; /* of the triangles (node boxes are slightly inflated) */

@@ -263,6 +263,22 @@ static amp_status max_iso_length(const amp_field *f, int which, int nseg, double
     return AMP_OK;
 }
 
+amp_status amp_field_curve(const amp_field *f, double a, double b, size_t nc, double r, amp_pvert *curve,
+                           double *len, amp_error *err)
+{
+    size_t k;
+    amp_status st = AMP_OK;
+    for (k = 0; k <= nc && st == AMP_OK; k++) {
+        double uvw[3];
+        amp_field_to_uvw(f, a, b, (double)k / (double)nc, uvw);
+        st = f->eval(f, uvw, &curve[k].p, err);
+        curve[k].r = r;
+        if (k > 0 && len)
+            *len += amp_v3_dist(curve[k - 1].p, curve[k].p);
+    }
+    return st;
+}
+
 /* ------------------------------------------------ regions (several fields) */
 
 /* Is p in the part of the solid this field covers: inside the mesh, inside `within` (if any), in no `without`? */
@@ -615,7 +631,8 @@ static amp_status q_samples(qctx *q, uint64_t ia, uint64_t ib, uint64_t sa, uint
         double uvw[3];
         /* the same lattice point gives the same uvw whichever cell asks (sa i / QS is exact) */
         amp_field_to_uvw(q->f, ((double)ia + (double)sa * i / QS) / (double)(q->na << QDEPTH),
-               ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs, uvw);
+                         ((double)ib + (double)sb * j / QS) / (double)(q->nb << QDEPTH), (double)k / (double)q->ncs,
+                         uvw);
         if ((st = q->f->eval(q->f, uvw, &p[k], q->err)) != AMP_OK)
             return st;
         m[k] = (unsigned char)amp_field_member(q->b, q->o, p[k]);
@@ -763,7 +780,7 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
                                  amp_field_stats *s, amp_error *err)
 {
     qctx q;
-    size_t i, j, k, p0 = out->npaths;
+    size_t i, j, p0 = out->npaths;
     uint64_t *keys = NULL;
     amp_pvert *curve = NULL;
     amp_status st = AMP_OK;
@@ -793,14 +810,9 @@ static amp_status cover_adaptive(const amp_field *f, const amp_bvh *b, const amp
         qsort(keys, q.ncur, sizeof *keys, key_cmp);
     }
     for (i = 0; st == AMP_OK && i < q.ncur; i++) {
-        for (k = 0; k <= nc && st == AMP_OK; k++) {
-            double uvw[3];
-            q_uvw(&q, keys[i] >> 32, keys[i] & 0xffffffffU, (double)k / (double)nc, uvw);
-            st = f->eval(f, uvw, &curve[k].p, err);
-            curve[k].r = r;
-            if (k > 0)
-                s->length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
-        }
+        st = amp_field_curve(f, (double)(keys[i] >> 32) / (double)(na << QDEPTH),
+                             (double)(keys[i] & 0xffffffffU) / (double)(nb << QDEPTH), nc, r, curve, &s->length_before,
+                             err);
         if (st == AMP_OK)
             st = amp_field_clip(b, o, curve, nc + 1, min_len, out, err);
         s->curves++;
@@ -871,7 +883,8 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_f
                     double uvw[3], dist, sd, len = 0;
                     int ok = 0;
                     if (k <= nc) {
-                        amp_field_to_uvw(f, (double)i / (double)na, (double)j / (double)nb, (double)k / (double)nc, uvw);
+                        amp_field_to_uvw(f, (double)i / (double)na, (double)j / (double)nb, (double)k / (double)nc,
+                                         uvw);
                         if ((st = f->eval(f, uvw, &p, err)) != AMP_OK)
                             break;
                         dist = amp_bvh_closest(b, p, &q, NULL);
@@ -915,7 +928,7 @@ static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_
                                 amp_error *err)
 {
     amp_field_stats s = *stats;
-    size_t j, i, k, p0;
+    size_t j, i, p0;
     amp_pvert *curve = NULL;
     amp_status st = AMP_OK;
     curve = amp_calloc(out->alloc, nc + 1, sizeof *curve);
@@ -928,14 +941,7 @@ static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_
         for (i = 0; i < count && st == AMP_OK; i++) {
             /* cell centres; odd honeycomb rows are shifted by half a spacing (and gain one curve) */
             double a = ((double)i + (odd ? 0.0 : 0.5)) / (double)na, bb = ((double)j + 0.5) / (double)nb;
-            for (k = 0; k <= nc && st == AMP_OK; k++) {
-                double uvw[3];
-                amp_field_to_uvw(f, a, bb, (double)k / (double)nc, uvw);
-                st = f->eval(f, uvw, &curve[k].p, err);
-                curve[k].r = r;
-                if (k > 0)
-                    s.length_before += amp_v3_dist(curve[k - 1].p, curve[k].p);
-            }
+            st = amp_field_curve(f, a, bb, nc, r, curve, &s.length_before, err);
             if (st == AMP_OK)
                 st = amp_field_clip(b, o, curve, nc + 1, min_len, out, err);
             s.curves++;

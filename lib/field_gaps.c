@@ -212,16 +212,8 @@ static amp_status add_curve(const amp_field *f, const amp_bvh *b, const amp_fiel
                             amp_pathset *out, amp_error *err)
 {
     amp_pathset tmp;
-    size_t i, k;
-    amp_status st = AMP_OK;
-    for (k = 0; k <= nc && st == AMP_OK; k++) {
-        double y[3];
-        y[0] = x[0];
-        y[1] = x[1];
-        y[2] = (double)k / (double)nc;
-        st = field_at(f, y, &curve[k].p, err);
-        curve[k].r = r;
-    }
+    size_t i;
+    amp_status st = amp_field_curve(f, x[0], x[1], nc, r, curve, NULL, err);
     if (st != AMP_OK)
         return st;
     amp_pathset_init(&tmp, out->alloc);
@@ -258,17 +250,16 @@ typedef struct gap_ctx {
     amp_error *err;
 } gap_ctx;
 
-/* The curve through gap @p p: 1 when added (the index knows it), 0 when the field does not reach p. */
-static int close_gap(gap_ctx *c, amp_vec3 p, amp_status *st)
+/* The curve through gap @p p, and the index told of it; nothing when the field does not reach p. */
+static amp_status close_gap(gap_ctx *c, amp_vec3 p)
 {
     double x[3];
+    amp_status st;
     if (c->tried++ >= GAP_POINTS_MAX || !invert(c->f, c->sd, p, 1e-3 * c->target, x))
-        return 0;
-    if ((*st = add_curve(c->f, c->b, c->o, x, c->nc, c->r, c->min_len, p, c->target, c->curve, c->out, c->err)) ==
-        AMP_OK)
-        *st = near_add(c->nx, c->out->alloc, c->err);
+        return AMP_OK;
     (*c->added)++;
-    return 1;
+    st = add_curve(c->f, c->b, c->o, x, c->nc, c->r, c->min_len, p, c->target, c->curve, c->out, c->err);
+    return st == AMP_OK ? near_add(c->nx, c->out->alloc, c->err) : st;
 }
 
 /* One round: sample the covered part uniformly and close each sample left far from the paths (the index
@@ -293,7 +284,7 @@ static amp_status gap_round(gap_ctx *c, int add, size_t samples, unsigned long l
             continue;
         (*left)++;
         if (add)
-            close_gap(c, p, &st);
+            st = close_gap(c, p);
     }
     return st;
 }

@@ -12,6 +12,11 @@ int amp_field_member(const amp_bvh *b, const amp_field_opts *o, amp_vec3 p);
 /** The field's parameters at lattice position (a, b) in [0, 1]^2 and c in [0, 1] along the curves. */
 void amp_field_to_uvw(const amp_field *f, double a, double b, double c, double uvw[3]);
 
+/** The field's curve at lattice position (a, b): nc + 1 samples at c = k / nc into @p curve (radius @p r);
+ *  its polyline length is added to *len, sample by sample (len may be NULL). The evaluator's errors. */
+amp_status amp_field_curve(const amp_field *f, double a, double b, size_t nc, double r, amp_pvert *curve,
+                           double *len, amp_error *err);
+
 /** Clip a sampled curve to the covered part (mesh and regions); pieces shorter than @p min_len are dropped. */
 amp_status amp_field_clip(const amp_bvh *b, const amp_field_opts *o, const amp_pvert *v, size_t n, double min_len,
                           amp_pathset *out, amp_error *err);
