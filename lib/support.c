@@ -29,6 +29,7 @@ typedef struct sctx {
     size_t *first; /* columns of grid point i: [first[i], first[i+1]) */
     size_t nx, ny;
     double x0, y0, sp;
+    double plate; /* z of the bed under the job: the lowest bead bottom of the object paths */
 } sctx;
 
 static int active(const sctx *c, size_t ix, size_t iy, double z, double h)
@@ -59,10 +60,10 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the support grid");
     for (iy = 0; iy < c->ny; iy++)
         for (ix = 0; ix < c->nx; ix++) {
-            amp_vec3 org = amp_v3(c->x0 + (double)ix * c->sp, c->y0 + (double)iy * c->sp, fmin(bb.min.z, 0.0) - 1.0);
+            amp_vec3 org = amp_v3(c->x0 + (double)ix * c->sp, c->y0 + (double)iy * c->sp, fmin(bb.min.z, c->plate) - 1.0);
             amp_bvh_hit *hits = NULL;
             size_t n = 0, h;
-            double below = 0.0; /* top of the last solid stretch, or the plate */
+            double below = c->plate; /* top of the last solid stretch, or the plate */
             int inside = 0;
             amp_status s = amp_bvh_ray_all(model, org, amp_v3(0, 0, 1), HUGE_VAL, &hits, &n, err);
             if (s != AMP_OK)
@@ -72,7 +73,7 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
                 double z = hits[h].p.z;
                 if (hits[h].entering && !inside) {
                     inside = 1;
-                    if (z - below >= o->min_gap && z > 0.0) {
+                    if (z - below >= o->min_gap && z > c->plate) {
                         void *p = c->col;
                         if (amp_grow(c->a, &p, &c->capcol, c->ncol + 1, sizeof *c->col) != AMP_OK) {
                             amp_bvh_hits_free(model, hits);
@@ -81,7 +82,7 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
                         c->col = p;
                         c->col[c->ncol].ix = ix;
                         c->col[c->ncol].iy = iy;
-                        c->col[c->ncol].z0 = fmax(below, 0.0);
+                        c->col[c->ncol].z0 = fmax(below, c->plate);
                         c->col[c->ncol].z1 = z;
                         c->ncol++;
                     }
@@ -97,15 +98,21 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
     return AMP_OK;
 }
 
+/* Height of the rows of support layer @p layer: the lowest rows rest on the plate (bead bottom z - radius). */
+static double row_z(const sctx *c, const amp_support_opts *o, size_t layer)
+{
+    return c->plate + o->radius + (double)layer * o->layer_height;
+}
+
 /* Fill the columns with rows on every layer: along x on even layers, along y on odd ones. */
 static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *sup, amp_error *err)
 {
-    double ztop = 0.0, h = o->layer_height;
+    double ztop = c->plate, h = o->layer_height;
     size_t q, layer;
     for (q = 0; q < c->ncol; q++)
         ztop = fmax(ztop, c->col[q].z1);
-    for (layer = 0; (double)(layer + 1) * h < ztop; layer++) {
-        double z = (double)(layer + 1) * h;
+    for (layer = 0; row_z(c, o, layer) < ztop; layer++) {
+        double z = row_z(c, o, layer);
         int along_x = layer % 2 == 0;
         size_t nrow = along_x ? c->ny : c->nx, nlen = along_x ? c->nx : c->ny, row, i;
         for (row = 0; row < nrow; row++) {
@@ -476,10 +483,10 @@ static amp_status cut_row(const sctx *c, const amp_fragments *fs, size_t i, uint
     return AMP_OK;
 }
 
-/* Layer index of a support row (rows are flat, on z = (layer + 1) h). */
-static size_t row_layer(const amp_fragments *fs, size_t i, double h)
+/* Layer index of a support row (rows are flat, on z = row_z(layer)). */
+static size_t row_layer(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, size_t i)
 {
-    double z = fs->ps->verts[fs->ps->paths[i].first].p.z / h - 1.0;
+    double z = (fs->ps->verts[fs->ps->paths[i].first].p.z - row_z(c, o, 0)) / o->layer_height;
     return z > 0.0 ? (size_t)floor(z + 0.5) : 0;
 }
 
@@ -505,7 +512,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     amp_status st = AMP_OK;
     long l;
     for (i = nobj; i < fs->npaths; i++)
-        nl = row_layer(fs, i, h) + 1 > nl ? row_layer(fs, i, h) + 1 : nl;
+        nl = row_layer(c, o, fs, i) + 1 > nl ? row_layer(c, o, fs, i) + 1 : nl;
     if (nl == 0)
         return AMP_OK;
     d = amp_calloc(c->a, nx * ny, sizeof *d);
@@ -519,7 +526,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     }
     /* fill() makes the rows layer by layer: rows of layer l are nobj + [rfirst[l], rfirst[l + 1]) */
     for (i = nobj; i < fs->npaths; i++)
-        rfirst[row_layer(fs, i, h) + 1]++;
+        rfirst[row_layer(c, o, fs, i) + 1]++;
     for (i = 0; i <= nl; i++)
         rfirst[i + 1] += rfirst[i];
     for (i = 0; i < nx * ny; i++)
@@ -668,6 +675,31 @@ done:
     return st;
 }
 
+/*
+ * The bed under the job: the plate z = 0 (docs/interfaces.md §2), or lower
+ * where the object's beads reach below it (a tube's z - r, a planar bead's
+ * z - h: the helix's lowest curves lie on z = 0 with their radius below it).
+ * `gcode` rests the lowest bead on the bed, so the support's first rows must
+ * start there too, or they are laid in the air.
+ */
+static double plate_of(const amp_pathset *in)
+{
+    double z = HUGE_VAL, zc = HUGE_VAL; /* bead bottoms; centre lines (when nothing extrudes) */
+    size_t i, k;
+    for (i = 0; i < in->npaths; i++) {
+        const amp_path *p = &in->paths[i];
+        if (p->role != AMP_ROLE_OBJECT)
+            continue;
+        for (k = 0; k < p->n; k++) {
+            const amp_pvert *v = &in->verts[p->first + k];
+            zc = fmin(zc, v->p.z);
+            if (v->r > 0.0)
+                z = fmin(z, v->p.z - (p->h > 0.0 ? p->h : v->r));
+        }
+    }
+    return fmin(z < HUGE_VAL ? z : zc, 0.0);
+}
+
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
                        amp_support_stats *st, amp_error *err)
 {
@@ -699,6 +731,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     if (i == in->npaths)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: no object path to support");
     c.a = out->alloc;
+    c.plate = plate_of(in);
     amp_pathset_init(&all, out->alloc);
     if ((stt = cast_rays(&c, model, o, &s, err)) != AMP_OK)
         goto done;

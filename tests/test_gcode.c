@@ -992,17 +992,22 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
     {
         /* print-ready jobs: on the default printer's bed, the lowest bead resting on it (curved: at its radius) */
         amp_gcode_opts o;
-        double lowest = HUGE_VAL;
+        double lowest = HUGE_VAL, first = NAN;
         size_t k;
         amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
         run_in_bed(&s, text, &o);
         for (k = 0; k < s.nsegs; k++) {
-            double sl = amp_v3_dist(s.segs[k].a, s.segs[k].b);
-            if (sl > 1e-3 && s.segs[k].e > 0)
-                lowest = fmin(lowest, fmin(s.segs[k].a.z, s.segs[k].b.z) -
-                                          sqrt(s.segs[k].e * 0.25 * 1.75 * 1.75 / sl));
+            double sl = amp_v3_dist(s.segs[k].a, s.segs[k].b), bottom;
+            if (!(sl > 1e-3 && s.segs[k].e > 0))
+                continue;
+            bottom = fmin(s.segs[k].a.z, s.segs[k].b.z) - sqrt(s.segs[k].e * 0.25 * 1.75 * 1.75 / sl);
+            lowest = fmin(lowest, bottom);
+            if (isnan(first))
+                first = bottom;
         }
         ck_assert_double_eq_tol(lowest, 0, 0.02);
+        /* the first bead printed (support, under the helix's first turn) lies on the bed, not in the air */
+        ck_assert_double_eq_tol(first, 0, 0.02);
     }
     ck_assert_uint_gt(s.nsegs, 1000);
     gsim_free(&s);

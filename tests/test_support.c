@@ -159,6 +159,54 @@ START_TEST(support_command_refuses_a_file_without_paths)
 }
 END_TEST
 
+/*
+ * The support starts on the bed the job is printed on: where the object's lowest beads reach below the plate
+ * z = 0 (tubes centred on it, as the helix's first curves), the lowest support rows lie at that bead bottom,
+ * and every support layer is a whole number of layer heights above them.
+ */
+START_TEST(support_rows_start_on_the_lowest_bead_bottom)
+{
+    amp_mesh m;
+    amp_bvh *b = NULL;
+    amp_pathset ps, out;
+    amp_support_opts o;
+    amp_support_stats st;
+    double lowest = HUGE_VAL;
+    size_t i, k;
+    int y;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&out, NULL);
+    box_mesh(&m, amp_v3(0, 0, 3), amp_v3(10, 10, 5));
+    ck_assert_int_eq(amp_bvh_build(&b, &m, NULL), AMP_OK);
+    for (y = 0; y < 4; y++) { /* a floor beside the slab: tubes of radius 0.3 centred on z = 0 */
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20, 0.6 * y, 0), 0.3, NULL), AMP_OK);
+        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(30, 0.6 * y, 0), 0.3, NULL), AMP_OK);
+    }
+    slab_paths(&ps);
+    amp_support_opts_default(&o);
+    o.spacing = 1.0;
+    ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, NULL), AMP_OK);
+    ck_assert_uint_gt(st.paths, 10);
+    for (i = 0; i < out.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&out, i);
+        if (out.paths[i].role != AMP_ROLE_SUPPORT)
+            continue;
+        for (k = 0; k < out.paths[i].n; k++) {
+            double layers = (v[k].p.z - v[k].r + 0.3) / o.layer_height;
+            lowest = fmin(lowest, v[k].p.z - v[k].r);
+            ck_assert_double_eq_tol(layers, floor(layers + 0.5), 1e-9);
+        }
+    }
+    ck_assert_double_eq_tol(lowest, -0.3, 1e-12);
+    amp_pathset_free(&out);
+    amp_pathset_free(&ps);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(support_command_writes_interleaved_paths_and_rejects_bad_models)
 {
     amp_mesh m;
@@ -499,6 +547,7 @@ static Suite *support_suite(void)
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, floating_slab_gets_support_printed_before_the_paths_above);
     tcase_add_test(tc, model_on_the_plate_needs_no_support_and_bad_options_fail);
+    tcase_add_test(tc, support_rows_start_on_the_lowest_bead_bottom);
     tcase_add_test(tc, support_command_writes_interleaved_paths_and_rejects_bad_models);
     tcase_add_test(tc, support_command_refuses_a_file_without_paths);
     tcase_add_test(tc, support_from_a_trivariate_matches_its_boundary_mesh);
