@@ -672,6 +672,28 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
 }
 
 /*
+ * Raise the material grid by the bead written over input vertices k..j with
+ * cross-section @p area. A tube's bead as written is fatter than the input's
+ * (the chord is shorter than the segments it replaces, and E keeps their
+ * volume) and lies within chord_tol of them: its top is taken as the input's
+ * with the radius read back from E and chord_tol added, so that travels
+ * clear what the G-code really deposits (a reader of the G-code sees that bead).
+ */
+static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v, size_t k, size_t j, double area)
+{
+    double re = p->h > 0.0 ? 0.0 : sqrt(area / AMP_PI) + it->o.chord_tol;
+    size_t m;
+    for (m = k; m < j; m++) {
+        amp_pvert a = v[m], b = v[m + 1];
+        if (p->h <= 0.0 && (a.r > 0.0 || b.r > 0.0)) {
+            a.r = fmax(a.r, re);
+            b.r = fmax(b.r, re);
+        }
+        raise_material(it, p, &a, &b);
+    }
+}
+
+/*
  * The written segment from vertex k to vertex j of the current path (docs/interfaces.md §5,
  * clean segments): a straight G1, or with @p arc a G2/G3 along it.
  */
@@ -685,13 +707,11 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     long long fu = llround(base * 600.0);
     size_t m;
     /* E = flow * sum A L / (pi (d/2)^2) over the input segments replaced: the volume stays exact */
-    for (m = k; m < j; m++) {
-        double lm = amp_v3_dist(v[m].p, v[m + 1].p);
-        vol += amp_bead_area(0.5 * (v[m].r + v[m + 1].r), p->h) * lm;
-        raise_material(it, p, &v[m], &v[m + 1]);
-    }
+    for (m = k; m < j; m++)
+        vol += amp_bead_area(0.5 * (v[m].r + v[m + 1].r), p->h) * amp_v3_dist(v[m].p, v[m + 1].p);
     de = it->o.flow * vol / it->fil_area;
     area = len > 0.0 ? vol / len : 0.0;
+    raise_written(it, p, v, k, j, area);
     if (area * base > it->o.max_volumetric_flow) {
         /* volumetric cap: lower the feed, rounded down so that the printed F respects the cap */
         fu = (long long)floor(it->o.max_volumetric_flow / area * 600.0);

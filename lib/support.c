@@ -104,54 +104,135 @@ static double row_z(const sctx *c, const amp_support_opts *o, size_t layer)
     return c->plate + o->radius + (double)layer * o->layer_height;
 }
 
-/* Fill the columns with rows on every layer: along x on even layers, along y on odd ones. */
-static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *sup, amp_error *err)
+/*
+ * A run of active rays along one row of a layer. Runs of neighbouring rows
+ * whose facing ends are at most one ray apart are printed as one zigzag path,
+ * as slicers print support: the connector between them is a support bead like
+ * the rows (it is cut into fragments and ordered with them), and one path per
+ * region instead of one per row saves a travel, a retraction and a lift per
+ * row (issue 14: travel).
+ */
+typedef struct srun {
+    size_t row, i, j; /* rays [i, j) of row `row` */
+    size_t next;      /* the run printed after this one in its path, or NORUN */
+    int back;         /* printed from j - 1 down to i */
+    int linked;       /* has a predecessor */
+} srun;
+#define NORUN ((size_t)-1)
+
+/* The runs of one layer, row by row, left to right. */
+static amp_status layer_runs(const sctx *c, const amp_support_opts *o, size_t layer, srun **runs, size_t *cap,
+                             size_t *n, amp_error *err)
 {
-    double ztop = c->plate, h = o->layer_height;
-    size_t q, layer;
-    for (q = 0; q < c->ncol; q++)
-        ztop = fmax(ztop, c->col[q].z1);
-    for (layer = 0; row_z(c, o, layer) < ztop; layer++) {
-        double z = row_z(c, o, layer);
-        int along_x = layer % 2 == 0;
-        size_t nrow = along_x ? c->ny : c->nx, nlen = along_x ? c->nx : c->ny, row, i;
-        for (row = 0; row < nrow; row++) {
-            i = 0;
-            while (i < nlen) {
-                size_t j;
-                if (!active(c, along_x ? i : row, along_x ? row : i, z, h)) {
-                    i++;
-                    continue;
-                }
-                for (j = i; j < nlen && active(c, along_x ? j : row, along_x ? row : j, z, h); j++)
-                    ;
-                {
-                    amp_status s = amp_pathset_begin(sup, AMP_ROLE_SUPPORT, err);
-                    size_t k;
-                    if (s == AMP_OK && j == i + 1) { /* a one-ray column: a short row along it, never a point */
-                        double gx = c->x0 + (double)(along_x ? i : row) * c->sp, gy = c->y0 + (double)(along_x ? row : i) * c->sp;
-                        double dx = along_x ? 0.125 * c->sp : 0.0, dy = along_x ? 0.0 : 0.125 * c->sp;
-                        s = amp_pathset_push(sup, amp_v3(gx - dx, gy - dy, z), o->radius, err);
-                        if (s == AMP_OK)
-                            s = amp_pathset_push(sup, amp_v3(gx + dx, gy + dy, z), o->radius, err);
-                        if (s != AMP_OK)
-                            return s;
-                        i = j;
-                        continue;
-                    }
-                    for (k = i; s == AMP_OK && k < j; k++) {
-                        size_t gx = along_x ? k : row, gy = along_x ? row : k;
-                        s = amp_pathset_push(sup, amp_v3(c->x0 + (double)gx * c->sp, c->y0 + (double)gy * c->sp, z),
-                                             o->radius, err);
-                    }
-                    if (s != AMP_OK)
-                        return s;
-                }
-                i = j;
+    double z = row_z(c, o, layer), h = o->layer_height;
+    int along_x = layer % 2 == 0;
+    size_t nrow = along_x ? c->ny : c->nx, nlen = along_x ? c->nx : c->ny, row, i, j;
+    *n = 0;
+    for (row = 0; row < nrow; row++)
+        for (i = 0; i < nlen; i = j) {
+            for (j = i; j < nlen && active(c, along_x ? j : row, along_x ? row : j, z, h); j++)
+                ;
+            if (j == i) {
+                j = i + 1;
+                continue;
             }
+            if (amp_grow(c->a, (void **)runs, cap, *n + 1, sizeof **runs) != AMP_OK)
+                return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support rows");
+            (*runs)[*n].row = row;
+            (*runs)[*n].i = i;
+            (*runs)[*n].j = j;
+            (*runs)[*n].next = NORUN;
+            (*runs)[*n].back = 0;
+            (*runs)[*n].linked = 0;
+            (*n)++;
+        }
+    return AMP_OK;
+}
+
+static size_t run_exit(const srun *r) { return r->back ? r->i : r->j - 1; }
+
+static int adjacent(size_t a, size_t b) { return a <= b + 1 && b <= a + 1; }
+
+/*
+ * Link each run to a run of the row before that ends a path there with an
+ * end next to one of its own: the run enters there and leaves by its other
+ * end. A run that starts a path may still turn round to reach its follower.
+ */
+static void link_runs(srun *r, size_t n)
+{
+    size_t b, a, a0 = 0;
+    for (b = 0; b < n; b++) {
+        while (a0 < b && r[a0].row + 1 < r[b].row)
+            a0++;
+        for (a = a0; a < b && r[a].row + 1 == r[b].row; a++) {
+            size_t e;
+            if (r[a].next != NORUN)
+                continue;
+            if (!r[a].linked && !adjacent(run_exit(&r[a]), r[b].i) && !adjacent(run_exit(&r[a]), r[b].j - 1))
+                r[a].back = !r[a].back; /* a path's first run: leave by the end that reaches b */
+            e = run_exit(&r[a]);
+            if (adjacent(e, r[b].i) || adjacent(e, r[b].j - 1)) {
+                r[b].back = !adjacent(e, r[b].i);
+                r[a].next = b;
+                r[b].linked = 1;
+                break;
+            }
+            if (!r[a].linked)
+                r[a].back = !r[a].back;
         }
     }
-    return AMP_OK;
+}
+
+/* One path per chain of linked runs; a lone one-ray run is a short row along it, never a point. */
+static amp_status emit_runs(const sctx *c, const amp_support_opts *o, size_t layer, const srun *r, size_t n,
+                            amp_pathset *sup, amp_error *err)
+{
+    double z = row_z(c, o, layer);
+    int along_x = layer % 2 == 0;
+    size_t h, q, k;
+    amp_status s = AMP_OK;
+    for (h = 0; s == AMP_OK && h < n; h++) {
+        if (r[h].linked)
+            continue;
+        s = amp_pathset_begin(sup, AMP_ROLE_SUPPORT, err);
+        if (s == AMP_OK && r[h].next == NORUN && r[h].j == r[h].i + 1) {
+            double gx = c->x0 + (double)(along_x ? r[h].i : r[h].row) * c->sp;
+            double gy = c->y0 + (double)(along_x ? r[h].row : r[h].i) * c->sp;
+            double dx = along_x ? 0.125 * c->sp : 0.0, dy = along_x ? 0.0 : 0.125 * c->sp;
+            s = amp_pathset_push(sup, amp_v3(gx - dx, gy - dy, z), o->radius, err);
+            if (s == AMP_OK)
+                s = amp_pathset_push(sup, amp_v3(gx + dx, gy + dy, z), o->radius, err);
+            continue;
+        }
+        for (q = h; s == AMP_OK && q != NORUN; q = r[q].next)
+            for (k = 0; s == AMP_OK && k < r[q].j - r[q].i; k++) {
+                size_t t = r[q].back ? r[q].j - 1 - k : r[q].i + k;
+                size_t gx = along_x ? t : r[q].row, gy = along_x ? r[q].row : t;
+                s = amp_pathset_push(sup, amp_v3(c->x0 + (double)gx * c->sp, c->y0 + (double)gy * c->sp, z),
+                                     o->radius, err);
+            }
+    }
+    return s;
+}
+
+/* Fill the columns on every layer: rows along x on even layers, along y on odd ones, joined in zigzags. */
+static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *sup, amp_error *err)
+{
+    double ztop = c->plate;
+    size_t q, layer, n = 0, cap = 0;
+    srun *runs = NULL;
+    amp_status s = AMP_OK;
+    for (q = 0; q < c->ncol; q++)
+        ztop = fmax(ztop, c->col[q].z1);
+    for (layer = 0; s == AMP_OK && row_z(c, o, layer) < ztop; layer++) {
+        s = layer_runs(c, o, layer, &runs, &cap, &n, err);
+        if (s == AMP_OK) {
+            link_runs(runs, n);
+            s = emit_runs(c, o, layer, runs, n, sup, err);
+        }
+    }
+    amp_free(c->a, runs);
+    return s;
 }
 
 #define NOPATH 0xffffffffU

@@ -1726,7 +1726,8 @@ END_TEST
  * hop-clearance checker outside its end zones, where the cone checker applies. Measured: direct hops off (every
  * travel lifted vertically) 53.2 % of the time in travel, 3,539 retractions, travel 0.77 x the extrusion; on, with
  * vertical lifts over the beads' own tops (before the ramps) 43.4 %, 1,487 retractions, 0.683 x; on, ramping out of
- * the bead it leaves and into the one it starts, 39.4 %, 1,372 retractions, 0.613 x.
+ * the bead it leaves and into the one it starts, 39.4 %, 1,372 retractions, 0.613 x. Since the support rows are
+ * joined in zigzags: off 42.7 %, 2,063 retractions, 0.543 x; on 34.1 %, 1,453, 0.445 x.
  */
 START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
 {
@@ -1757,7 +1758,8 @@ START_TEST(direct_hops_cut_travel_time_on_the_helix_without_gouging)
     /* the ramps (travel_hull's end zones, and direct hops at any rise): before them 43.4 % and 0.683 x */
     ck_assert_double_lt(json_num(on, "travel_time_fraction"), 0.41);
     ck_assert_double_lt(json_num(on, "travel_per_print_length"), 0.65);
-    ck_assert_double_lt(json_num(on, "retractions"), 0.5 * json_num(off, "retractions"));
+    /* since the support prints in zigzags (its rows' short hops gone) 2,063 -> 1,453; halved before */
+    ck_assert_double_lt(json_num(on, "retractions"), 0.8 * json_num(off, "retractions"));
     ck_assert_double_lt(json_num(on, "travel_per_print_length"), json_num(off, "travel_per_print_length") - 0.05);
     ck_assert_double_gt(json_num(on, "direct_hops"), 1000);
     amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);

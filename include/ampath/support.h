@@ -7,10 +7,11 @@
  * above) is support volume. The plate is z = 0, or the lowest bead bottom of
  * the object paths where they reach below it (a tube centred on z = 0), which
  * is where `gcode` rests the job on the bed. That volume is filled on the
- * same grid with straight support paths (role support), one layer every
+ * same grid with support paths (role support), one layer every
  * layer_height mm from the plate (the lowest rows' beads rest on it: z =
  * plate + radius + k layer_height), rows along x on even layers and along y
- * on odd ones (a one-ray column
+ * on odd ones, the rows of a layer whose facing ends are at most one ray
+ * apart joined into one zigzag path (a one-ray column
  * gets a row 0.25 spacing long: no support path has zero length).
  * Ordering (Def. 5.1): the rows are cut into fragments shorter than
  * z_offs sin(theta); each support fragment must come after the last object
