@@ -466,7 +466,7 @@ static amp_status place_job(amp_gcode_iter *it, const amp_pathset *ps, const job
     if (o->place != AMP_PLACE_ORIGIN) {
         double cx = o->place == AMP_PLACE_AT ? o->place_x : 0.5 * (o->bed_min_x + o->bed_max_x);
         double cy = o->place == AMP_PLACE_AT ? o->place_y : 0.5 * (o->bed_min_y + o->bed_max_y);
-        off = amp_v3(cx - 0.5 * (js->bb.min.x + js->bb.max.x), cy - 0.5 * (js->bb.min.y + js->bb.max.y), -js->zlow);
+        off = amp_v3(cx - 0.5 * (js->bb.min.x + js->bb.max.x), cy - 0.5 * (js->bb.min.y + js->bb.max.y), 0.0 - js->zlow);
     }
     it->off = off;
     st = fit_axis(o, 'X', js->bb.min.x + off.x, js->bb.max.x + off.x, o->bed_min_x, o->bed_max_x, err);
@@ -722,7 +722,9 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
     lb_str(l, arc ? (arc->cw ? "G2" : "G3") : "G1");
     put_coord(it, l, 'X', b.x);
     put_coord(it, l, 'Y', b.y);
-    put_coord(it, l, 'Z', b.z);
+    /* Z only where it changes as written (modal, as slicers write it: a planar layer's lines stay short) */
+    if (it->have_pos != 2 || units_of(b.z + it->off.z, 1e3) != units_of(it->pos.z + it->off.z, 1e3))
+        put_coord(it, l, 'Z', b.z);
     if (arc) { /* the centre relative to the start, as G2/G3 take it */
         lb_num(l, 'I', arc->cx - a.x, 3);
         lb_num(l, 'J', arc->cy - a.y, 3);

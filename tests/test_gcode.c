@@ -1065,6 +1065,49 @@ static double gsim_filament(const gsim *s)
     return e;
 }
 
+/*
+ * Printing moves write Z only where the height as written changes (modal, as slicers write it): on five planar
+ * layers every extruding segment still lies at its layer's height (read back by the simulator), and no printing
+ * line repeats the Z the head is already at.
+ */
+START_TEST(printing_moves_write_z_only_where_it_changes)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim s;
+    char *text, *line;
+    double z = NAN;
+    size_t i, without_z = 0;
+    amp_pathset_init(&ps, NULL);
+    planar_square(&ps, -10, -10, 0, 20, 5, 0.2, 0.225);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    text = gen(&ps, &o, NULL);
+    run_in_bed(&s, text, &o);
+    for (i = 0; i < s.nsegs; i++)
+        if (s.segs[i].e > 0) {
+            double lz = 0.2 * floor(s.segs[i].b.z / 0.2 + 0.5);
+            ck_assert_double_eq_tol(s.segs[i].a.z, s.segs[i].b.z, 1e-9);
+            ck_assert_double_eq_tol(s.segs[i].b.z, lz, 1e-9);
+        }
+    for (line = text; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        const char *zw = strchr(line, 'Z'), *end = strchr(line, '\n'), *semi = strchr(line, ';');
+        int has_z = zw && (!end || zw < end) && (!semi || zw < semi);
+        if (has_z) {
+            double nz = atof(zw + 1);
+            if (strncmp(line, "G1 X", 4) == 0)
+                ck_assert_msg(nz != z, "a printing line repeats Z%g", nz);
+            z = nz;
+        } else if (strncmp(line, "G1 X", 4) == 0) {
+            without_z++;
+        }
+    }
+    ck_assert_uint_gt(without_z, 100);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(planar_beads_extrude_the_rounded_rectangle)
 {
     amp_pathset ps;
@@ -1810,6 +1853,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
     tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);
+    tcase_add_test(tc, printing_moves_write_z_only_where_it_changes);
     tcase_add_test(tc, placement_centres_the_job_and_rests_it_on_the_bed);
     tcase_add_test(tc, place_origin_keeps_coordinates_and_place_at_moves_the_centre);
     tcase_add_test(tc, a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow);
