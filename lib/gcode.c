@@ -147,54 +147,63 @@ static void lb_num(lb *l, char letter, double v, int dec)
 
 static int grid_index(double v, double v0, double cell)
 {
-    double f = floor((v - v0) / cell);
+    double f = (v - v0) / cell;
     if (!(f >= 0.0))
         return 0;
-    if (f > (double)(AMP_GCODE_GRID - 1))
+    if (f >= (double)(AMP_GCODE_GRID - 1))
         return AMP_GCODE_GRID - 1;
-    return (int)f;
+    return (int)f; /* truncation is floor here (0 <= f < GRID); floor() was a third of grid_walk's time */
+}
+
+/* Raise the cells [i0, i1] x [j0, j1] of @p grid to @p top (never lowered by float rounding). */
+static void raise_box(float *grid, int i0, int i1, int j0, int j1, double top)
+{
+    int i, j;
+    for (j = j0; j <= j1; j++)
+        for (i = i0; i <= i1; i++) {
+            float *c = &grid[j * AMP_GCODE_GRID + i];
+            if ((double)*c < top) {
+                *c = (float)top;
+                if ((double)*c < top)
+                    *c = nextafterf(*c, HUGE_VALF);
+            }
+        }
 }
 
 /*
- * Visit every cell within @p w (plus half a sampling step) of the XY segment
- * a-b: samples every half cell, each covering a box of half-width w + h/2, so
- * every point within w of the segment lies in a visited cell (conservative).
- * mode 0: raise cells to @p top; mode 1: return the highest cell.
+ * Raise every cell within @p w (plus half a sampling step) of the XY segment
+ * a-b to @p top in the material grid (w > 0 only), and every cell within
+ * half a step of it to @p topc in the centre-line grid and its blocks:
+ * samples every half cell, each covering a box of half-width w + h/2, so
+ * every point within w of the segment lies in a raised cell (conservative).
+ * One walk for both grids: the sample boxes were computed twice.
  */
-static double grid_walk(amp_gcode_iter *it, float *grid, amp_vec3 a, amp_vec3 b, double w, double top, int mode)
+static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double top, double topc)
 {
-    double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), h, best = -HUGE_VAL;
+    double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), h, wc;
     double cell = it->grid_cell;
     long steps = (long)ceil(len / (0.5 * cell)), s;
     if (steps < 1)
         steps = 1;
     h = len / (double)steps;
-    w += 0.5 * h;
+    wc = 0.5 * h;
+    w += wc;
     for (s = 0; s <= steps; s++) {
         double t = (double)s / (double)steps, px = a.x + t * dx, py = a.y + t * dy;
-        int i0 = grid_index(px - w, it->grid_x0, cell), i1 = grid_index(px + w, it->grid_x0, cell);
-        int j0 = grid_index(py - w, it->grid_y0, cell), j1 = grid_index(py + w, it->grid_y0, cell);
+        int i0 = grid_index(px - wc, it->grid_x0, cell), i1 = grid_index(px + wc, it->grid_x0, cell);
+        int j0 = grid_index(py - wc, it->grid_y0, cell), j1 = grid_index(py + wc, it->grid_y0, cell);
         int i, j;
+        if (w > wc)
+            raise_box(it->grid, grid_index(px - w, it->grid_x0, cell), grid_index(px + w, it->grid_x0, cell),
+                      grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell), top);
         for (j = j0; j <= j1; j++)
             for (i = i0; i <= i1; i++) {
-                float *c = &grid[j * AMP_GCODE_GRID + i];
-                if (mode == 0) {
-                    if (grid == it->grid_c) {
-                        float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i / GC_BLK];
-                        if ((double)*cb < top)
-                            *cb = nextafterf((float)top, HUGE_VALF);
-                    }
-                    if ((double)*c < top) {
-                        *c = (float)top;
-                        if ((double)*c < top) /* float rounding must not lower the top */
-                            *c = nextafterf(*c, HUGE_VALF);
-                    }
-                } else if ((double)*c > best) {
-                    best = (double)*c;
-                }
+                float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i / GC_BLK];
+                if ((double)*cb < topc)
+                    *cb = nextafterf((float)topc, HUGE_VALF);
             }
+        raise_box(it->grid_c, i0, i1, j0, j1, topc);
     }
-    return best;
 }
 
 /* Highest material top in the cells of the box of half-width @p w around (px, py); -HUGE_VAL if none. */
@@ -663,10 +672,8 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
     double r = fmax(va->r, vb->r);
     /* a planar bead's top is its vertex z (layer top); a tube rises r above its centre line */
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
-    if (r > 0.0)
-        grid_walk(it, it->grid, va->p, vb->p, r, top, 0);
-    /* the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
-    grid_walk(it, it->grid_c, va->p, vb->p, 0.0, fmax(va->p.z, vb->p.z), 0);
+    /* and the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
+    grid_raise(it, va->p, vb->p, r > 0.0 ? r : 0.0, top, fmax(va->p.z, vb->p.z));
     it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
     it->end_r = vb->r;
 }

@@ -39,6 +39,27 @@ static amp_gcode_block *plan_at(amp_gcode_iter *it, size_t k)
 }
 
 /*
+ * The backward pass after a block joined the window's end (at rest): each
+ * block's vback = min(sqrt(next's vback^2 + 2 a len), vjunc), from the end
+ * down. Where a value comes out as it was, every block below keeps its value
+ * too, so the pass stops there (as Marlin's planner does); the figures are
+ * those of a full pass from the end at every commit, bit for bit.
+ */
+static void plan_back(amp_gcode_iter *it)
+{
+    double a = it->o.accel, vexit = 0.0;
+    size_t k;
+    for (k = it->plan_n; k-- > 1;) {
+        amp_gcode_block *b = plan_at(it, k);
+        double ventry = sqrt(vexit * vexit + 2.0 * a * b->len);
+        vexit = ventry < b->vjunc ? ventry : b->vjunc;
+        if (k + 1 < it->plan_n && vexit == b->vback)
+            break;
+        b->vback = vexit;
+    }
+}
+
+/*
  * Execute the oldest planned block: a backward pass over the window (which
  * must end at rest, as a firmware planner with a finite buffer must) gives the
  * highest speed it may leave with; a forward step from its entry speed gives
@@ -46,14 +67,8 @@ static amp_gcode_block *plan_at(amp_gcode_iter *it, size_t k)
  */
 static void plan_commit(amp_gcode_iter *it)
 {
-    double a = it->o.accel, vexit = 0.0, t;
+    double a = it->o.accel, vexit = it->plan_n > 1 ? plan_at(it, 1)->vback : 0.0, t;
     amp_gcode_block *b0 = plan_at(it, 0);
-    size_t k;
-    for (k = it->plan_n; k-- > 1;) {
-        amp_gcode_block *b = plan_at(it, k);
-        double ventry = sqrt(vexit * vexit + 2.0 * a * b->len);
-        vexit = ventry < b->vjunc ? ventry : b->vjunc;
-    }
     {
         double reach = sqrt(it->plan_v * it->plan_v + 2.0 * a * b0->len);
         if (vexit > reach)
@@ -98,6 +113,7 @@ void amp_gc_plan_move(amp_gcode_iter *it, amp_vec3 d, double len, double feed, d
     if (!(len > 0.0))
         return;
     b.len = len;
+    b.vback = 0.0;
     b.travel = travel;
     b.ux = d.x / len;
     b.uy = d.y / len;
@@ -125,6 +141,7 @@ void amp_gc_plan_move(amp_gcode_iter *it, amp_vec3 d, double len, double feed, d
         plan_commit(it);
     *plan_at(it, it->plan_n) = b;
     it->plan_n++;
+    plan_back(it);
 }
 
 /* A move outside the print planner: from rest to rest. */

@@ -244,7 +244,8 @@ typedef struct amp_gcode_move {
 /** One planner block of the estimate (internal; part of the iterator's plain data). */
 typedef struct amp_gcode_block {
     double len, vnom, vjunc, ux, uy, uz;
-    int travel; /* a G0: its time counts as travel time */
+    double vback; /* the highest speed it may enter the next block with, from the window's end at rest */
+    int travel;   /* a G0: its time counts as travel time */
 } amp_gcode_block;
 
 /**
