@@ -757,13 +757,17 @@ done:
 }
 
 /*
- * The bed under the job: the plate z = 0 (docs/interfaces.md §2), or lower
- * where the object's beads reach below it (a tube's z - r, a planar bead's
- * z - h: the helix's lowest curves lie on z = 0 with their radius below it).
- * `gcode` rests the lowest bead on the bed, so the support's first rows must
- * start there too, or they are laid in the air.
+ * The bed under the job. `gcode` rests the lowest bead on the bed, so the
+ * support's first rows must start where the object's lowest bead bottom (a
+ * tube's z - r, a planar bead's z - h) will lie, or one of them is laid in
+ * the air: an object resting on the plate z = 0 (docs/interfaces.md §2) has
+ * its lowest beads within min_gap of it — below it (the helix's lowest
+ * curves lie on z = 0 with their radius below), or above it (a field's
+ * lowest curves, half a spacing up with their radius: 0.49 mm on the twisted
+ * bridge at 2 mm) — and the plate is that bottom. An object whose beads all
+ * float min_gap or more above z = 0 is supported from z = 0.
  */
-static double plate_of(const amp_pathset *in)
+static double plate_of(const amp_pathset *in, double min_gap)
 {
     double z = HUGE_VAL, zc = HUGE_VAL; /* bead bottoms; centre lines (when nothing extrudes) */
     size_t i, k;
@@ -778,7 +782,8 @@ static double plate_of(const amp_pathset *in)
                 z = fmin(z, v->p.z - (p->h > 0.0 ? p->h : v->r));
         }
     }
-    return fmin(z < HUGE_VAL ? z : zc, 0.0);
+    z = z < HUGE_VAL ? z : zc;
+    return z < min_gap ? z : 0.0;
 }
 
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
@@ -812,7 +817,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     if (i == in->npaths)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: no object path to support");
     c.a = out->alloc;
-    c.plate = plate_of(in);
+    c.plate = plate_of(in, o->min_gap);
     amp_pathset_init(&all, out->alloc);
     if ((stt = cast_rays(&c, model, o, &s, err)) != AMP_OK)
         goto done;

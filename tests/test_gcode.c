@@ -1023,6 +1023,53 @@ START_TEST(demo_pipeline_gcode_parses_in_the_reader)
 END_TEST
 
 
+/*
+ * A direction-field covering of a mesh on the plate, with support under its arch: the field's lowest curves lie
+ * half a spacing up (their beads' bottoms 0.5 mm above the plate), the support from the plate would rest on the
+ * bed and the part's feet would be printed in the air. Both the part's lowest beads and the support's lie on
+ * the bed.
+ */
+START_TEST(a_field_covering_with_support_rests_its_feet_on_the_bed)
+{
+    static const char *const steps[] = {
+        "model twisted-bridge -o %s.stl",
+        "field %s.stl --field box --spacing 2 -o %s-f.amp",
+        "order %s-f.amp -o %s-o.amp",
+        "mdr %s-o.amp --nominal 1 --mesh %s.stl -o %s-m.amp",
+        "support %s-m.amp --mesh %s.stl -o %s-s.amp",
+        "gcode %s-s.amp -o %s.gcode",
+    };
+    char dir[256], args[2048], *text = NULL;
+    double low[2] = {HUGE_VAL, HUGE_VAL};
+    size_t i, len;
+    amp_gcode_opts o;
+    gsim s;
+    snprintf(dir, sizeof dir, "%s", fx_tmp("feet"));
+    for (i = 0; i < sizeof steps / sizeof steps[0]; i++) {
+        snprintf(args, sizeof args, steps[i], dir, dir, dir);
+        ck_assert_msg(fx_run_tool(args, NULL, 0) == 0, "ampath %s failed", args);
+    }
+    snprintf(args, sizeof args, "%s.gcode", dir);
+    ck_assert_int_eq(amp_read_file(args, NULL, 0, &text, &len, NULL), AMP_OK);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    run_in_bed(&s, text, &o);
+    for (i = 0; i < s.nsegs; i++) {
+        double sl = amp_v3_dist(s.segs[i].a, s.segs[i].b);
+        if (sl > 1e-3 && s.segs[i].e > 0)
+            low[s.segs[i].support != 0] = fmin(low[s.segs[i].support != 0], fmin(s.segs[i].a.z, s.segs[i].b.z) -
+                                                                            sqrt(s.segs[i].e * 0.25 * 1.75 * 1.75 / sl));
+    }
+    ck_assert_msg(fabs(low[0]) < 0.02 && fabs(low[1]) < 0.02, "lowest part bead bottom %g, support %g", low[0], low[1]);
+    gsim_free(&s);
+    amp_free(NULL, text);
+    for (i = 0; i < 6; i++) {
+        static const char *const ext[] = {".stl", "-f.amp", "-o.amp", "-m.amp", "-s.amp", ".gcode"};
+        snprintf(args, sizeof args, "%s%s", dir, ext[i]);
+        remove(args);
+    }
+}
+END_TEST
+
 /* ------------------------------------------------------------------ print-ready jobs (docs/interfaces.md §5) */
 
 /*
@@ -1854,6 +1901,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
     tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);
     tcase_add_test(tc, printing_moves_write_z_only_where_it_changes);
+    tcase_add_test(tc, a_field_covering_with_support_rests_its_feet_on_the_bed);
     tcase_add_test(tc, placement_centres_the_job_and_rests_it_on_the_bed);
     tcase_add_test(tc, place_origin_keeps_coordinates_and_place_at_moves_the_centre);
     tcase_add_test(tc, a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow);

@@ -164,48 +164,55 @@ START_TEST(support_command_refuses_a_file_without_paths)
 END_TEST
 
 /*
- * The support starts on the bed the job is printed on: where the object's lowest beads reach below the plate
- * z = 0 (tubes centred on it, as the helix's first curves), the lowest support rows lie at that bead bottom,
- * and every support layer is a whole number of layer heights above them.
+ * The support starts on the bed the job is printed on (`gcode` rests the lowest bead on it). A floor of object
+ * beads beside a floating slab: centred on z = 0 (bead bottoms at -0.3, as the helix's first curves), or half a
+ * field spacing up (bottoms at 0.5, within min_gap of the plate): the lowest support rows lie at that bottom,
+ * and every support layer is a whole number of layer heights above them. A floor whose beads float min_gap or
+ * more above the plate (bottoms at 1.7) does not rest on it: the support starts at z = 0.
  */
 START_TEST(support_rows_start_on_the_lowest_bead_bottom)
 {
+    static const double floor_z[] = {0.0, 0.8, 2.0}, plate[] = {-0.3, 0.5, 0.0};
     amp_mesh m;
     amp_bvh *b = NULL;
-    amp_pathset ps, out;
     amp_support_opts o;
-    amp_support_stats st;
-    double lowest = HUGE_VAL;
-    size_t i, k;
-    int y;
+    size_t c;
     amp_mesh_init(&m, NULL);
-    amp_pathset_init(&ps, NULL);
-    amp_pathset_init(&out, NULL);
     box_mesh(&m, amp_v3(0, 0, 3), amp_v3(10, 10, 5));
     ck_assert_int_eq(amp_bvh_build(&b, &m, NULL), AMP_OK);
-    for (y = 0; y < 4; y++) { /* a floor beside the slab: tubes of radius 0.3 centred on z = 0 */
-        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
-        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20, 0.6 * y, 0), 0.3, NULL), AMP_OK);
-        ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(30, 0.6 * y, 0), 0.3, NULL), AMP_OK);
-    }
-    slab_paths(&ps);
     amp_support_opts_default(&o);
     o.spacing = 1.0;
-    ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, NULL), AMP_OK);
-    ck_assert_uint_ge(st.paths, 8); /* eight layers from z -0.3 to the slab */
-    for (i = 0; i < out.npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(&out, i);
-        if (out.paths[i].role != AMP_ROLE_SUPPORT)
-            continue;
-        for (k = 0; k < out.paths[i].n; k++) {
-            double layers = (v[k].p.z - v[k].r + 0.3) / o.layer_height;
-            lowest = fmin(lowest, v[k].p.z - v[k].r);
-            ck_assert_double_eq_tol(layers, floor(layers + 0.5), 1e-9);
+    for (c = 0; c < 3; c++) {
+        amp_pathset ps, out;
+        amp_support_stats st;
+        double lowest = HUGE_VAL;
+        size_t i, k;
+        int y;
+        amp_pathset_init(&ps, NULL);
+        amp_pathset_init(&out, NULL);
+        for (y = 0; y < 4; y++) { /* the floor beside the slab: tubes of radius 0.3 */
+            ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+            ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(20, 0.6 * y, floor_z[c]), 0.3, NULL), AMP_OK);
+            ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(30, 0.6 * y, floor_z[c]), 0.3, NULL), AMP_OK);
         }
+        slab_paths(&ps);
+        ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, NULL), AMP_OK);
+        ck_assert_uint_ge(st.paths, 6);
+        for (i = 0; i < out.npaths; i++) {
+            const amp_pvert *v = amp_pathset_path_verts(&out, i);
+            if (out.paths[i].role != AMP_ROLE_SUPPORT)
+                continue;
+            for (k = 0; k < out.paths[i].n; k++) {
+                double layers = (v[k].p.z - v[k].r - plate[c]) / o.layer_height;
+                lowest = fmin(lowest, v[k].p.z - v[k].r);
+                ck_assert_double_eq_tol(layers, floor(layers + 0.5), 1e-9);
+            }
+        }
+        ck_assert_msg(fabs(lowest - plate[c]) < 1e-12, "floor at z %g: support from %g, not %g", floor_z[c], lowest,
+                      plate[c]);
+        amp_pathset_free(&out);
+        amp_pathset_free(&ps);
     }
-    ck_assert_double_eq_tol(lowest, -0.3, 1e-12);
-    amp_pathset_free(&out);
-    amp_pathset_free(&ps);
     amp_bvh_free(b);
     amp_mesh_free(&m);
 }

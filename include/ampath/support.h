@@ -4,9 +4,11 @@
  * Vertical rays on an xy grid (spacing = density) are cast through the model;
  * every stretch of a ray that lies outside the solid but below it (from the
  * plate, or from the top of a lower part of the solid, up to the underside
- * above) is support volume. The plate is z = 0, or the lowest bead bottom of
- * the object paths where they reach below it (a tube centred on z = 0), which
- * is where `gcode` rests the job on the bed. That volume is filled on the
+ * above) is support volume. The plate is where `gcode` will rest the job:
+ * the lowest bead bottom of the object paths when it lies below min_gap (the
+ * object rests on z = 0: its lowest tubes reach below it, or a field's lowest
+ * curves sit half a spacing above it), else z = 0 (an object floating above
+ * the plate is supported from it). That volume is filled on the
  * same grid with support paths (role support), one layer every
  * layer_height mm from the plate (the lowest rows' beads rest on it: z =
  * plate + radius + k layer_height), rows along x on even layers and along y
