@@ -5,47 +5,19 @@
 #include <string.h>
 
 #include "ampath/check.h"
-
-typedef struct vkey {
-    double x, y;
-    size_t i;
-} vkey;
-
-static int cmp_vkey(const void *a, const void *b)
-{
-    const vkey *s = a, *t = b;
-    if (s->x != t->x)
-        return s->x < t->x ? -1 : 1;
-    if (s->y != t->y)
-        return s->y < t->y ? -1 : 1;
-    return s->i < t->i ? -1 : (s->i > t->i ? 1 : 0);
-}
+#include "keysort.h"
 
 typedef struct ekey2 {
     size_t a, b;
     amp_vec2 at;
 } ekey2;
 
-static int cmp_ekey2(const void *p, const void *q)
-{
-    const ekey2 *s = p, *t = q;
-    if (s->a != t->a)
-        return s->a < t->a ? -1 : 1;
-    return s->b < t->b ? -1 : (s->b > t->b ? 1 : 0);
-}
-
 typedef struct seg2 {
     amp_vec2 a, b;
     size_t ia, ib;
-    double xmin;
+    double xmin, ymin, ymax;
     int pseudo; /* travel inside the stroke: no material */
 } seg2;
-
-static int cmp_seg2(const void *p, const void *q)
-{
-    const seg2 *s = p, *t = q;
-    return s->xmin < t->xmin ? -1 : (s->xmin > t->xmin ? 1 : 0);
-}
 
 static int sgn(double v) { return (v > 0) - (v < 0); }
 
@@ -86,12 +58,6 @@ typedef struct pass {
     amp_vec2 at;
     double in, out;
 } pass;
-
-static int cmp_pass(const void *p, const void *q)
-{
-    const pass *s = p, *t = q;
-    return s->v < t->v ? -1 : (s->v > t->v ? 1 : 0);
-}
 
 /* Rows in y of the region's segments, so a point test scans one row. */
 typedef struct yrows {
@@ -233,25 +199,24 @@ static void note(stroke_scan *s, amp_vec2 at)
 }
 
 /* id[i]: the same number for points with identical coordinates. */
-static void vertex_ids(stroke_scan *s, vkey *vk)
+static void vertex_ids(stroke_scan *s, amp_skey *vk, amp_skey *tmp)
 {
     size_t i, nid = 0;
     for (i = 0; i < s->n; i++) {
-        vk[i].x = s->pts[i].x;
-        vk[i].y = s->pts[i].y;
+        vk[i].k1 = s->pts[i].x;
+        vk[i].k2 = s->pts[i].y;
         vk[i].i = i;
     }
-    if (s->n > 1)
-        qsort(vk, s->n, sizeof *vk, cmp_vkey);
+    amp_skey_sort(vk, tmp, s->n);
     for (i = 0; i < s->n; i++) {
-        if (i && (vk[i].x != vk[i - 1].x || vk[i].y != vk[i - 1].y))
+        if (i && (vk[i].k1 != vk[i - 1].k1 || vk[i].k2 != vk[i - 1].k2))
             nid++;
         s->id[vk[i].i] = nid;
     }
 }
 
 /* The non-degenerate segments into @p sg (returns their number); printed edges printed twice are counted. */
-static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek)
+static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek, amp_skey *key, amp_skey *tmp)
 {
     const amp_vec2 *pts = s->pts;
     const size_t *id = s->id;
@@ -264,6 +229,8 @@ static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek)
         sg[ns].ia = id[i];
         sg[ns].ib = id[i + 1];
         sg[ns].xmin = fmin(pts[i].x, pts[i + 1].x);
+        sg[ns].ymin = fmin(pts[i].y, pts[i + 1].y);
+        sg[ns].ymax = fmax(pts[i].y, pts[i + 1].y);
         sg[ns].pseudo = s->rad && s->rad[i] == 0 && s->rad[i + 1] == 0;
         if (sg[ns].pseudo)
             s->r.pseudo++;
@@ -277,25 +244,38 @@ static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek)
         ns++;
     }
     s->r.segments = ns;
-    if (ne > 1)
-        qsort(ek, ne, sizeof *ek, cmp_ekey2);
+    for (i = 0; i < ne; i++) {
+        key[i].k1 = (double)ek[i].a; /* vertex ids < n: exact in a double */
+        key[i].k2 = (double)ek[i].b;
+        key[i].i = i;
+    }
+    amp_skey_sort(key, tmp, ne);
     for (i = 1; i < ne; i++)
-        if (ek[i].a == ek[i - 1].a && ek[i].b == ek[i - 1].b) {
+        if (key[i].k1 == key[i - 1].k1 && key[i].k2 == key[i - 1].k2) {
             s->r.repeated_edges++;
-            note(s, ek[i].at);
+            note(s, ek[key[i].i].at);
         }
     return ns;
 }
 
-/* Segment pairs without a shared vertex, swept over x. */
-static void count_crossings(stroke_scan *s, seg2 *sg, size_t ns)
+/* Segment pairs without a shared vertex, swept over x (@p sg0 sorted by xmin into @p sg); pairs apart in y
+ * cannot meet. */
+static void count_crossings(stroke_scan *s, const seg2 *sg0, size_t ns, amp_skey *key, amp_skey *tmp, seg2 *sg)
 {
     size_t i, j;
-    if (ns > 1)
-        qsort(sg, ns, sizeof *sg, cmp_seg2);
+    for (i = 0; i < ns; i++) {
+        key[i].k1 = sg0[i].xmin;
+        key[i].k2 = 0.0;
+        key[i].i = i;
+    }
+    amp_skey_sort(key, tmp, ns);
+    for (i = 0; i < ns; i++)
+        sg[i] = sg0[key[i].i];
     for (i = 0; i < ns; i++) {
         double xmax = fmax(sg[i].a.x, sg[i].b.x);
         for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
+            if (sg[j].ymin > sg[i].ymax || sg[j].ymax < sg[i].ymin)
+                continue;
             if (sg[i].ia == sg[j].ia || sg[i].ia == sg[j].ib || sg[i].ib == sg[j].ia || sg[i].ib == sg[j].ib)
                 continue;
             if (seg_conflict(&sg[i], &sg[j])) {
@@ -307,7 +287,7 @@ static void count_crossings(stroke_scan *s, seg2 *sg, size_t ns)
 }
 
 /* Passes through a vertex visited more than once must not interleave in the cyclic order of directions. */
-static void count_interleaved_passes(stroke_scan *s, pass *ps)
+static void count_interleaved_passes(stroke_scan *s, pass *ps, amp_skey *key, amp_skey *tmp)
 {
     const amp_vec2 *pts = s->pts;
     const size_t *id = s->id;
@@ -331,17 +311,23 @@ static void count_interleaved_passes(stroke_scan *s, pass *ps)
         ps[np].out = atan2(pts[b + 1].y - pts[i].y, pts[b + 1].x - pts[i].x);
         np++;
     }
-    if (np > 1)
-        qsort(ps, np, sizeof *ps, cmp_pass);
-    for (i = 0; i < np; i++)
-        for (j = i + 1; j < np && ps[j].v == ps[i].v; j++) {
-            int c1 = in_arc(ps[i].in, ps[i].out, ps[j].in), c2 = in_arc(ps[i].in, ps[i].out, ps[j].out);
-            if (ps[j].in != ps[i].in && ps[j].in != ps[i].out && ps[j].out != ps[i].in && ps[j].out != ps[i].out &&
-                c1 != c2) {
+    for (i = 0; i < np; i++) {
+        key[i].k1 = (double)ps[i].v;
+        key[i].k2 = 0.0;
+        key[i].i = i;
+    }
+    amp_skey_sort(key, tmp, np);
+    for (i = 0; i < np; i++) {
+        const pass *pi = &ps[key[i].i];
+        for (j = i + 1; j < np && ps[key[j].i].v == pi->v; j++) {
+            const pass *pj = &ps[key[j].i];
+            int c1 = in_arc(pi->in, pi->out, pj->in), c2 = in_arc(pi->in, pi->out, pj->out);
+            if (pj->in != pi->in && pj->in != pi->out && pj->out != pi->in && pj->out != pi->out && c1 != c2) {
                 s->r.crossings++;
-                note(s, ps[i].at);
+                note(s, pi->at);
             }
         }
+    }
 }
 
 /* Every vertex and segment midpoint inside the region or within tol of it. */
@@ -381,8 +367,8 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
 {
     const amp_allocator *al = region ? region->alloc : NULL;
     stroke_scan s;
-    vkey *vk = NULL;
-    seg2 *sg = NULL;
+    amp_skey *key = NULL, *tmp = NULL;
+    seg2 *sg = NULL, *by_x = NULL;
     ekey2 *ek = NULL;
     pass *ps = NULL;
     amp_status st = AMP_OK;
@@ -394,19 +380,21 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
     s.rad = rad;
     s.n = n;
     if (n > 0) {
-        vk = amp_alloc(al, n * sizeof *vk);
+        key = amp_alloc(al, n * sizeof *key);
+        tmp = amp_alloc(al, n * sizeof *tmp);
         s.id = amp_alloc(al, n * sizeof *s.id);
         sg = amp_alloc(al, n * sizeof *sg);
+        by_x = amp_alloc(al, n * sizeof *by_x);
         ek = amp_alloc(al, n * sizeof *ek);
         ps = amp_alloc(al, n * sizeof *ps);
-        if (!vk || !s.id || !sg || !ek || !ps)
+        if (!key || !tmp || !s.id || !sg || !by_x || !ek || !ps)
             st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
     }
     if (n > 0 && st == AMP_OK) {
         s.r.closed = n > 1 && pts[0].x == pts[n - 1].x && pts[0].y == pts[n - 1].y;
-        vertex_ids(&s, vk);
-        count_crossings(&s, sg, segments_and_repeats(&s, sg, ek));
-        count_interleaved_passes(&s, ps);
+        vertex_ids(&s, key, tmp);
+        count_crossings(&s, sg, segments_and_repeats(&s, sg, ek, key, tmp), key, tmp, by_x);
+        count_interleaved_passes(&s, ps, key, tmp);
         if (region && region->npts)
             band_of(pts, n, &lo, &hi);
         if (region && region->npts && !yrows_build(&yr, region, lo - tol, hi + tol, al))
@@ -419,9 +407,11 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
                       "stroke: %lu crossings, %lu edges printed twice, %lu points outside (first near %.6g, %.6g)",
                       (unsigned long)s.r.crossings, (unsigned long)s.r.repeated_edges, (unsigned long)s.r.outside,
                       s.where.x, s.where.y);
-    amp_free(al, vk);
+    amp_free(al, key);
+    amp_free(al, tmp);
     amp_free(al, s.id);
     amp_free(al, sg);
+    amp_free(al, by_x);
     amp_free(al, ek);
     amp_free(al, ps);
     yrows_free(al, &yr);
