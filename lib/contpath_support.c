@@ -79,7 +79,9 @@ static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
     if ((q.x == a.x && q.y == a.y) || (q.x == b.x && q.y == b.y))
         return 0; /* a shared vertex (the leg's own base) */
     t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-    return hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) < tol;
+    dx = a.x + t * dx - q.x;
+    dy = a.y + t * dy - q.y;
+    return dx * dx + dy * dy < tol * tol; /* squared: hypot() was a tenth of the support corners' time */
 }
 
 /* Uniform grid of the segments of a pathset (segment = global index of its
@@ -147,8 +149,7 @@ static amp_status sg_build(sgrid *g, const amp_pathset *ps, double cell, const a
 /* Does segment a-b (a corner's leg from its base a on the perimeter to its
  * tip b) cross a segment of @p ps or an accepted leg, or touch one within
  * @p hair (a touch would become a crossing once coordinates are rounded)? */
-static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b, const amp_vec2 *legs, size_t nlegs,
-                   double hair)
+static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b, double hair)
 {
     size_t k;
     double x0 = fmin(a.x, b.x) - hair, x1 = fmax(a.x, b.x) + hair, y0 = fmin(a.y, b.y) - hair,
@@ -165,9 +166,6 @@ static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b
                     near_seg(d, a, b, hair))
                     return 1;
             }
-    for (k = 0; k < nlegs; k++)
-        if (cross2(a, b, legs[2 * k], legs[2 * k + 1]))
-            return 1;
     return 0;
 }
 
@@ -334,7 +332,81 @@ typedef struct corner_ctx {
     size_t nt, cap_t;
     amp_vec2 *legs;           /* the two legs of corner k: legs[4k .. 4k + 3] (two segments) */
     size_t cap_l;
+    /* the legs by the cell of their midpoint (lists through leg_next; a big island has thousands of corners,
+     * and every new leg was tested against all of them) */
+    double lx0, ly0, lcell, lreach; /* lreach: the longest half leg so far */
+    long lnx, lny;
+    size_t *leg_head, *leg_next, cap_n;
 } corner_ctx;
+
+#define NO_LEG ((size_t)-1)
+
+static long leg_cell(double v, double o, double c, long n)
+{
+    long k = (long)floor((v - o) / c);
+    return k < 0 ? 0 : (k >= n ? n - 1 : k);
+}
+
+/* Does segment a-b cross an accepted leg? Legs are listed by the cell of their midpoint: a leg that meets
+ * a-b's box has its midpoint within lreach of it. */
+static int crosses_leg(const corner_ctx *c, amp_vec2 a, amp_vec2 b)
+{
+    double x0 = fmin(a.x, b.x), x1 = fmax(a.x, b.x), y0 = fmin(a.y, b.y), y1 = fmax(a.y, b.y);
+    long cx0 = leg_cell(x0 - c->lreach, c->lx0, c->lcell, c->lnx), cx1 = leg_cell(x1 + c->lreach, c->lx0, c->lcell, c->lnx);
+    long cy0 = leg_cell(y0 - c->lreach, c->ly0, c->lcell, c->lny), cy1 = leg_cell(y1 + c->lreach, c->ly0, c->lcell, c->lny);
+    long x, y;
+    size_t k;
+    if (c->nt == 0)
+        return 0;
+    for (y = cy0; y <= cy1; y++)
+        for (x = cx0; x <= cx1; x++)
+            for (k = c->leg_head[y * c->lnx + x]; k != NO_LEG; k = c->leg_next[k]) {
+                amp_vec2 p = c->legs[2 * k], q = c->legs[2 * k + 1];
+                if (fmax(p.x, q.x) < x0 || fmin(p.x, q.x) > x1 || fmax(p.y, q.y) < y0 || fmin(p.y, q.y) > y1)
+                    continue; /* cross2 needs the boxes to meet */
+                if (cross2(a, b, p, q))
+                    return 1;
+            }
+    return 0;
+}
+
+/* List legs 2 nt and 2 nt + 1 (just stored in c->legs) in the cells of their midpoints. */
+static amp_status list_legs(corner_ctx *c)
+{
+    void *q = c->leg_next;
+    size_t j;
+    if (amp_grow(c->al, &q, &c->cap_n, 2 * c->nt + 2, sizeof *c->leg_next) != AMP_OK)
+        return AMP_ERR_NOMEM;
+    c->leg_next = q;
+    for (j = 2 * c->nt; j < 2 * c->nt + 2; j++) {
+        amp_vec2 p = c->legs[2 * j], e = c->legs[2 * j + 1];
+        long cell = leg_cell(0.5 * (p.y + e.y), c->ly0, c->lcell, c->lny) * c->lnx +
+                    leg_cell(0.5 * (p.x + e.x), c->lx0, c->lcell, c->lnx);
+        c->lreach = fmax(c->lreach, 0.5 * fmax(fabs(e.x - p.x), fabs(e.y - p.y)));
+        c->leg_next[j] = c->leg_head[cell];
+        c->leg_head[cell] = j;
+    }
+    return AMP_OK;
+}
+
+/* The leg grid over the segment grid's extent, cells of 4 r or more (at most 256 x 256). */
+static amp_status legs_init(corner_ctx *c)
+{
+    double w = (double)c->sg.nx * c->sg.cell, h = (double)c->sg.ny * c->sg.cell;
+    size_t i, n;
+    c->lx0 = c->sg.x0;
+    c->ly0 = c->sg.y0;
+    c->lcell = fmax(4.0 * c->r, fmax(w, h) / 256.0);
+    c->lnx = (long)(w / c->lcell) + 1;
+    c->lny = (long)(h / c->lcell) + 1;
+    n = (size_t)(c->lnx * c->lny);
+    c->leg_head = amp_alloc(c->al, n * sizeof *c->leg_head);
+    if (!c->leg_head)
+        return AMP_ERR_NOMEM;
+    for (i = 0; i < n; i++)
+        c->leg_head[i] = NO_LEG;
+    return AMP_OK;
+}
 
 /* Arclength at every vertex of each perimeter loop. */
 static amp_status perimeter_lengths(corner_ctx *c, amp_error *err)
@@ -375,8 +447,8 @@ static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error
     }
     a0 = at_len(ps, loop, c->cl[loop], s - hw, &seg);
     a1 = at_len(ps, loop, c->cl[loop], s + hw, &seg);
-    if (blocked(ps, &c->sg, xy(a0.p), ctr, c->legs, 2 * c->nt, 1e-4 * r) ||
-        blocked(ps, &c->sg, xy(a1.p), ctr, c->legs, 2 * c->nt, 1e-4 * r)) {
+    if (blocked(ps, &c->sg, xy(a0.p), ctr, 1e-4 * r) || crosses_leg(c, xy(a0.p), ctr) ||
+        blocked(ps, &c->sg, xy(a1.p), ctr, 1e-4 * r) || crosses_leg(c, xy(a1.p), ctr)) {
         c->st->corners_left_out++;
         return AMP_OK;
     }
@@ -389,6 +461,8 @@ static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error
     c->legs[4 * c->nt + 1] = ctr;
     c->legs[4 * c->nt + 2] = ctr;
     c->legs[4 * c->nt + 3] = xy(a1.p);
+    if (list_legs(c) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
     c->t[c->nt].s0 = s - hw;
     c->t[c->nt].s1 = s + hw;
     c->t[c->nt].loop = loop;
@@ -469,9 +543,11 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
     c.covered = covered;
     c.st = st;
     amp_pathset_init(&scratch, c.al);
-    if (sg_build(&c.sg, ps, 2 * r, c.al) != AMP_OK || !(c.cl = amp_calloc(c.al, nperim, sizeof *c.cl))) {
+    if (sg_build(&c.sg, ps, 2 * r, c.al) != AMP_OK || legs_init(&c) != AMP_OK ||
+        !(c.cl = amp_calloc(c.al, nperim, sizeof *c.cl))) {
         amp_free(c.al, c.sg.start);
         amp_free(c.al, c.sg.item);
+        amp_free(c.al, c.leg_head);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
     }
     if ((rc = perimeter_lengths(&c, err)) == AMP_OK && (rc = stretch_corners(&c, bare, err)) == AMP_OK)
@@ -481,6 +557,8 @@ amp_status amp_cp_support_corners(amp_pathset *ps, size_t nperim, const amp_path
     amp_free(c.al, c.cl);
     amp_free(c.al, c.t);
     amp_free(c.al, c.legs);
+    amp_free(c.al, c.leg_head);
+    amp_free(c.al, c.leg_next);
     amp_free(c.al, c.sg.start);
     amp_free(c.al, c.sg.item);
     amp_pathset_free(&scratch);
