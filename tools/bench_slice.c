@@ -84,9 +84,9 @@ static void rectilinear(const amp_polyset *R, double s, amp_vec2 *last, int *hav
  * the time per printed millimetre should stay flat as the part grows. */
 static int scaling(cli_json *j, int quick)
 {
-    static const double scales[] = {1, 2, 4, 8};
-    size_t ns = quick ? 3 : 4, i, v;
-    double per[4], lo = HUGE_VAL, hi = 0;
+    static const double scales[] = {1, 2, 4, 8, 16};
+    size_t ns = quick ? 3 : 5, i, v;
+    double per[5], lo = HUGE_VAL, hi = 0, grow = 0;
     int rc = CLI_OK;
     if (j)
         cli_json_arr(j, "scaling");
@@ -115,6 +115,8 @@ static int scaling(cli_json *j, int quick)
             rc = CLI_FAILED;
         t = cli_now() - t0;
         per[i] = rc == CLI_OK && st.printed_length > 0 ? 1e6 * t / st.printed_length : 0;
+        if (i > 0 && lo > 0) /* the cost per mm at this scale against the cheapest smaller one: > 1 is superlinear */
+            grow = fmax(grow, per[i] / lo);
         lo = fmin(lo, per[i]);
         hi = fmax(hi, per[i]);
         if (rc == CLI_OK && j) {
@@ -133,8 +135,13 @@ static int scaling(cli_json *j, int quick)
     if (j) {
         cli_json_close(j);
         cli_json_num(j, "scaling_spread", lo > 0 ? hi / lo : 0);
-    } else if (rc == CLI_OK)
-        printf("time per printed mm from x1 to x%g: spread %.2fx (flat is 1)\n", scales[ns - 1], lo > 0 ? hi / lo : 0);
+        cli_json_num(j, "scaling_growth", grow);
+    } else if (rc == CLI_OK) {
+        printf("time per printed mm from x1 to x%g: spread %.2fx (flat is 1; the small parts carry the fixed costs)\n",
+               scales[ns - 1], lo > 0 ? hi / lo : 0);
+        printf("  target growth of the time per printed mm with the part (largest ratio to a smaller part's): %.2fx "
+               "(<= 1.25) %s\n", grow, grow <= 1.25 ? "met" : "NOT MET");
+    }
     return rc;
 }
 
