@@ -428,6 +428,40 @@ START_TEST(cli_field_and_check_see_the_solid_of_an_inside_out_stl)
 }
 END_TEST
 
+/*
+ * `field` records its covering radius as `cover` records its eps, and `check --mesh` holds the paths to it
+ * after `mdr` has changed their radii (it took the largest radius before: after mdr the pipeline failed its
+ * own check, the beads' radii being smaller than the lattice's covering radius).
+ */
+START_TEST(check_holds_a_field_covering_to_its_radius_after_mdr)
+{
+    char args[2200], out[8192], base[512];
+    const char *e;
+    if (!getenv("AMP_TOOL"))
+        return;
+    snprintf(base, sizeof base, "%s", fx_tmp("field-mdr"));
+    snprintf(args, sizeof args, "model helix -o '%s.stl'", base);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "field '%s.stl' --field box --spacing 2 --samples 500 -o '%s-f.amp'", base, base);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "mdr '%s-f.amp' --nominal 1 --mesh '%s.stl' -o '%s-m.amp'", base, base, base);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "check '%s-m.amp' --mesh '%s.stl' --samples 4000 --no-gouge --json", base, base);
+    ck_assert_msg(fx_run_tool(args, out, sizeof out) == 0, "%s", out);
+    e = strstr(out, "\"eps\":");
+    ck_assert_msg(e && fabs(atof(e + 6) - sqrt(2.0)) < 1e-6 && strstr(out, "\"eps_from\":\"path file\""), "%s", out);
+    /* the radius alone would not do: the beads after mdr are at most about the nominal 1 mm */
+    snprintf(args, sizeof args, "check '%s-m.amp' --mesh '%s.stl' --samples 4000 --no-gouge --eps 1", base, base);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 1);
+    snprintf(args, sizeof args, "%s.stl", base);
+    remove(args);
+    snprintf(args, sizeof args, "%s-f.amp", base);
+    remove(args);
+    snprintf(args, sizeof args, "%s-m.amp", base);
+    remove(args);
+}
+END_TEST
+
 START_TEST(cli_field_reports_figures_and_writes_paths)
 {
     amp_mesh m;
@@ -863,6 +897,7 @@ static Suite *field_suite(void)
     tcase_add_test(tc, surface_layer_follows_the_surface_half_a_spacing_inside);
     tcase_add_test(tc, two_fields_meet_at_a_seam_without_gap_or_double_cover);
     tcase_add_test(tc, field_route_and_trivariate_route_both_cover_the_helix);
+    tcase_add_test(tc, check_holds_a_field_covering_to_its_radius_after_mdr);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -22,6 +22,7 @@ int check_mesh(const check_ctx *c, cli_json *j)
     amp_coverage cov;
     amp_coverage_domain dom = {NULL, NULL, 0.0};
     double gap = 0, mean = 0, worst_out = 0, rmax = 0, eps = c->eps;
+    const char *eps_from = "--eps";
     size_t i, outside = 0;
     int rc;
     amp_error_clear(&err);
@@ -40,8 +41,14 @@ int check_mesh(const check_ctx *c, cli_json *j)
             outside += d > fmax(OUTSIDE_TOL, c->tol);
         }
     }
-    if (!c->eps_given)
-        eps = rmax; /* the paths claim to cover their radius */
+    if (!c->eps_given) { /* the covering's recorded claim (mdr changes the radii, not it), else the radius */
+        eps = check_eps_from_comment(c->paths_file);
+        eps_from = "path file";
+        if (!(eps > 0)) {
+            eps = rmax;
+            eps_from = "largest radius";
+        }
+    }
     dom.mesh = b;
     if (amp_check_coverage(ps, &dom, (size_t)c->samples, c->seed, &cov, &err) != AMP_OK) {
         rc = cli_fail_err("check", &err);
@@ -54,6 +61,7 @@ int check_mesh(const check_ctx *c, cli_json *j)
             cli_json_bool(j, "ok", rc == CLI_OK);
             cli_json_str(j, "model", "mesh");
             cli_json_num(j, "eps", eps);
+            cli_json_str(j, "eps_from", eps_from);
             cli_json_num(j, "coverage_gap_mm", gap);
             cli_json_num(j, "coverage_gap_mean_mm", mean);
             cli_json_int(j, "samples", c->samples);

@@ -4,21 +4,24 @@
 
 #include "checkers.h"
 
-/* The eps recorded by `ampath cover` in a comment of the path file, or 0. */
-static double eps_from_comment(const char *file)
+/* The eps recorded in a comment of the path file by `ampath cover` (its eps) or `ampath field` (its covering
+ * radius), or 0: the covering's own claim, which later steps (order, mdr, support) keep in the file's header. */
+double check_eps_from_comment(const char *file)
 {
+    static const char *const tags[] = {"# ampath cover", "# ampath field"};
     char *data, *p;
-    size_t len;
+    size_t len, t;
     double eps = 0;
     if (amp_read_file(file, NULL, 0, &data, &len, NULL) != AMP_OK)
         return 0;
-    for (p = data; (p = strstr(p, "# ampath cover")) != NULL; p++) {
-        char *e = strstr(p, " eps "), *nl = strchr(p, '\n');
-        if (e && (!nl || e < nl)) {
-            eps = strtod(e + 5, NULL);
-            break;
+    for (t = 0; t < 2 && eps <= 0; t++)
+        for (p = data; (p = strstr(p, tags[t])) != NULL; p++) {
+            char *e = strstr(p, " eps "), *nl = strchr(p, '\n');
+            if (e && (!nl || e < nl)) {
+                eps = strtod(e + 5, NULL);
+                break;
+            }
         }
-    }
     amp_free(NULL, data);
     return eps > 0 ? eps : 0;
 }
@@ -37,7 +40,7 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         return rc;
     if (!c->eps_given) {
         size_t i;
-        eps = eps_from_comment(c->paths_file);
+        eps = check_eps_from_comment(c->paths_file);
         eps_from = "path file";
         if (!(eps > 0)) {
             eps_from = "largest radius";

@@ -48,10 +48,13 @@ int check_gouge(const check_ctx *c, cli_json *j);
  * Coverage within eps, measured by sampling (paper 1, §4): with --trivariate
  * the volume of the trivariate (tools/check_trivariate.c); with --mesh and no
  * --layer the solid of the mesh, plus no path vertex more than 0.01 mm outside
- * it (tools/check_mesh.c). Without --eps, eps is the one recorded by
- * `ampath cover` in the path file (trivariate), else the largest vertex radius.
+ * it (tools/check_mesh.c). Without --eps, eps is the one recorded in the
+ * path file by `ampath cover` (its eps) or `ampath field` (its covering
+ * radius), else the largest vertex radius.
  */
 int check_coverage(const check_ctx *c, cli_json *j);
+/* That recorded eps of path file @p file, or 0 (tools/check_trivariate.c). */
+double check_eps_from_comment(const char *file);
 int check_trivariate(const check_ctx *c, cli_json *j);
 int check_mesh(const check_ctx *c, cli_json *j);
 

@@ -289,8 +289,13 @@ int cmd_field(int argc, char **argv)
         rc = measure_gap(&ps, b, samples, spacing, &gap_all, &gap_in, &mean);
         t_gap = cli_now() - t0;
     }
-    if (rc == CLI_OK && out)
-        rc = cli_save_paths("field", out, &ps, "ampath field: direction-field curves clipped to the mesh");
+    if (rc == CLI_OK && out) {
+        /* the covering radius as `cover` records its eps: `check --mesh` holds the paths to it after mdr */
+        char note[160];
+        snprintf(note, sizeof note, "ampath field: direction-field curves clipped to the mesh, eps %.10g (covering radius)",
+                 st.target);
+        rc = cli_save_paths("field", out, &ps, note);
+    }
     if (rc == CLI_OK) {
         report r;
         memset(&r, 0, sizeof r);

@@ -50,7 +50,8 @@ def _object_paths(ps):
 
 
 def _eps_from_comment(ps):
-    """The eps recorded by `ampath cover` in the file @ps was read from (tools/check_trivariate.c), or 0."""
+    """The eps recorded by `ampath cover` (its eps), else by `ampath field` (its covering radius), in the file @ps
+    was read from (tools/check_trivariate.c, check_eps_from_comment), or 0."""
     src = getattr(ps, "source", None)
     if not src:
         return 0.0
@@ -59,17 +60,20 @@ def _eps_from_comment(ps):
             text = f.read().decode("utf-8", "replace")
     except OSError:
         return 0.0
-    for m in re.finditer(r"# ampath cover[^\n]*? eps ([-+0-9.eE]+)", text):
-        try:
-            eps = float(m.group(1))
-        except ValueError:
-            eps = 0.0
-        return eps if eps > 0 else 0.0
+    for tag in ("cover", "field"):
+        for m in re.finditer(r"# ampath " + tag + r"[^\n]*? eps ([-+0-9.eE]+)", text):
+            try:
+                eps = float(m.group(1))
+            except ValueError:
+                eps = 0.0
+            if eps > 0:
+                return eps
+            break
     return 0.0
 
 
 def _trivariate_eps(ps, obj, eps):
-    """The allowed gap and where it came from, as tools/check_trivariate.c picks them."""
+    """The allowed gap and where it came from, as tools/check_trivariate.c and tools/check_mesh.c pick them."""
     eps_from = "--eps"
     if eps is None:
         eps, eps_from = _eps_from_comment(ps), "path file"
@@ -98,7 +102,7 @@ def _run_trivariate(ps, obj, v, eps, samples, seed):
             "over_coverage": lib.amp_over_coverage(obj._ref, g.volume)}
 
 
-def _run_mesh(obj, m, eps, samples, seed, tol):
+def _run_mesh(ps, obj, m, eps, samples, seed, tol):
     b = m.bvh()
     worst_out, outside, rmax = 0.0, 0, 0.0
     verts = obj._ps.verts
@@ -109,11 +113,10 @@ def _run_mesh(obj, m, eps, samples, seed, tol):
             d = lib.amp_bvh_closest(b, p, None, None)
             worst_out = d if d > worst_out else worst_out
             outside += d > max(_OUTSIDE_TOL, tol)
-    if eps is None:
-        eps = rmax  # the paths claim to cover their radius
+    eps, eps_from = _trivariate_eps(ps, obj, eps)  # the covering's recorded claim, else the largest radius
     g = _measure(obj, L.amp_coverage_domain(None, ctypes.cast(b, ctypes.c_void_p), 0.0), samples, seed)
     vol = lib.amp_mesh_volume(m._ref)
-    return {"ran": True, "ok": g.gap <= eps and outside == 0, "model": "mesh", "eps": eps,
+    return {"ran": True, "ok": g.gap <= eps and outside == 0, "model": "mesh", "eps": eps, "eps_from": eps_from,
             "coverage_gap_mm": g.gap, "coverage_gap_mean_mm": g.mean, "samples": samples,
             "vertices_outside": outside, "worst_outside_mm": worst_out, "volume_mm3": vol,
             "deposited_mm3": lib.amp_pathset_volume(obj._ref, 0), "over_coverage": lib.amp_over_coverage(obj._ref, vol)}
@@ -129,7 +132,7 @@ def _coverage(ps, trivariate, mesh, layer, eps, samples, seed, tol):
     with _object_paths(ps) as obj:
         if trivariate is not None:
             return _run_trivariate(ps, obj, trivariate, eps, samples, seed)
-        return _run_mesh(obj, mesh, eps, samples, seed, tol)
+        return _run_mesh(ps, obj, mesh, eps, samples, seed, tol)
 
 
 def _gouge(ps, head):
@@ -273,7 +276,8 @@ def check(paths, trivariate=None, mesh=None, layer=None, first_layer=0.0, z_offs
     @paths: a PathSet, or a `.amp` file name. @trivariate: a Trivariate, a built-in name or a `.spl` file;
     @mesh: a Mesh or an `.stl` file (with @layer, the mesh the paths were sliced from at that height,
     @first_layer as the tool's --first-layer). @eps: the allowed gap (default: the eps `ampath cover`
-    recorded in the file @paths was read from, else the largest vertex radius). @skip: names of checks not
+    or the covering radius `ampath field` recorded in the file @paths was read from, else the largest vertex
+    radius). @skip: names of checks not
     to run (the tool's --no-NAME). @support: run the support check even without support paths.
     Bad options raise Error (AMP_ERR_ARG); a failed check is not an exception: its section has "ok": False."""
     skip = (skip,) if isinstance(skip, str) else tuple(skip)
