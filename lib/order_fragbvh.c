@@ -316,7 +316,9 @@ static inline int act_pass(const amp_fbvh_box5 *nd, double reach, double k2, con
 static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2, const amp_box3 *fb)
 {
     double room, g2 = act_reach2(nd, reach, k2, fb, &room);
-    return room > 0.0 && g2 < room * room ? room - sqrt(g2) : -1.0;
+    if (!(room > 0.0 && g2 < room * room))
+        return -1.0;
+    return g2 > 0.0 ? room - sqrt(g2) : room; /* over f's own box (no gap) no root: the sqrt was 30 % of the search */
 }
 
 /* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
