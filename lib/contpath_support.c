@@ -441,6 +441,11 @@ static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error
         return AMP_OK;
     tot = c->cl[loop][ps->paths[loop].n - 1];
     /* the perimeter is 2r out; the base r to either side */
+    if (!(d > r && d < 3 * r) && d >= 3 * r &&
+        infill_within(ps, &c->sg, ps->paths[last].first + ps->paths[last].n, ctr, 2 * r * (1 + 1e-9))) {
+        c->st->corners_touched++; /* every point of the stretch within r of that bead's material already */
+        return AMP_OK;
+    }
     if (!(d > r && d < 3 * r) || s - hw < 0 || s + hw > tot) {
         c->st->corners_left_out++;
         return AMP_OK;

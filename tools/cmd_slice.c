@@ -262,6 +262,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_num(&j, "unprinted_ring_length_mm", st->unprinted_length);
     cli_json_int(&j, "support_corners", (long long)st->support_corners);
     cli_json_int(&j, "corners_left_out", (long long)st->corners_left_out);
+    cli_json_int(&j, "corners_touched", (long long)st->corners_touched);
     cli_json_int(&j, "cycles", (long long)st->cycles);
     cli_json_int(&j, "tree_levels", (long long)st->tree_levels);
     cli_json_int(&j, "tour_fallbacks", (long long)st->tour_fallbacks);

@@ -124,7 +124,8 @@ typedef struct amp_contpath_stats {
     double support_length;   /**< mm, Remark 2.1 stretches printed */
     double unprinted_length; /**< mm, ring stretches of R̃ left unprinted by the lattice and its patches */
     size_t support_corners;  /**< step 6 corners built into the perimeter loops */
-    size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour or find no perimeter */
+    size_t corners_left_out; /**< corners that would cross a path, overlap a neighbour, or find no perimeter
+                                  within 3r and no other bead touching their stretch */
     size_t neck_islands;     /**< islands with infill whose inset by r splits at a neck narrower than a bead:
                                   perimeter (and infill) at the largest smaller offset that holds them together
                                   (last: bindings that mirror this struct, python/ampath/_lib.py, append it) */
@@ -132,6 +133,9 @@ typedef struct amp_contpath_stats {
                                   uncovered part), the rest sparse one bead further in */
     size_t band_retries;     /**< islands printed again with whole skin regions (their banded paths failed
                                   the check) */
+    size_t corners_touched;  /**< corner centres with no perimeter within 3r whose stretch another bead
+                                  touches (a centre line within 2r: the sparse core's ring beside a skin
+                                  band); no corner is needed there */
 } amp_contpath_stats;
 
 /**

@@ -226,7 +226,8 @@ class amp_contpath_stats(Structure):
                                          "joins")]
                 + [(n, c_double) for n in ("printed_length", "infill_length", "pseudo_length", "travel_length",
                                            "support_length", "unprinted_length")]
-                + [(n, c_size_t) for n in ("support_corners", "corners_left_out", "neck_islands", "skin_bands", "band_retries")])
+                + [(n, c_size_t) for n in ("support_corners", "corners_left_out", "neck_islands", "skin_bands",
+                                           "band_retries", "corners_touched")])
 
 
 class amp_stroke_report(Structure):
