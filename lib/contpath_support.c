@@ -147,8 +147,9 @@ static amp_status sg_build(sgrid *g, const amp_pathset *ps, double cell, const a
 }
 
 /* Does segment a-b (a corner's leg from its base a on the perimeter to its
- * tip b) cross a segment of @p ps or an accepted leg, or touch one within
- * @p hair (a touch would become a crossing once coordinates are rounded)? */
+ * tip b) cross a segment of @p ps, or touch one within @p hair (a touch would
+ * become a crossing once coordinates are rounded)? The accepted legs are
+ * crosses_leg's. */
 static int blocked(const amp_pathset *ps, const sgrid *g, amp_vec2 a, amp_vec2 b, double hair)
 {
     size_t k;
@@ -441,7 +442,7 @@ static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error
         return AMP_OK;
     tot = c->cl[loop][ps->paths[loop].n - 1];
     /* the perimeter is 2r out; the base r to either side */
-    if (!(d > r && d < 3 * r) && d >= 3 * r &&
+    if (d >= 3 * r &&
         infill_within(ps, &c->sg, ps->paths[last].first + ps->paths[last].n, ctr, 2 * r * (1 + 1e-9))) {
         c->st->corners_touched++; /* every point of the stretch within r of that bead's material already */
         return AMP_OK;

@@ -29,7 +29,7 @@ typedef struct sctx {
     size_t *first; /* columns of grid point i: [first[i], first[i+1]) */
     size_t nx, ny;
     double x0, y0, sp;
-    double plate; /* z of the bed under the job: the lowest bead bottom of the object paths */
+    double plate; /* z of the bed under the job (plate_of) */
 } sctx;
 
 static int active(const sctx *c, size_t ix, size_t iy, double z, double h)
@@ -158,6 +158,8 @@ static int adjacent(size_t a, size_t b) { return a <= b + 1 && b <= a + 1; }
  * end next to one of its own: the run enters there and leaves by its other
  * end. A run that starts a path may still turn round to reach its follower.
  */
+static int reaches(size_t e, const srun *b) { return adjacent(e, b->i) || adjacent(e, b->j - 1); }
+
 static void link_runs(srun *r, size_t n)
 {
     size_t b, a, a0 = 0;
@@ -165,20 +167,19 @@ static void link_runs(srun *r, size_t n)
         while (a0 < b && r[a0].row + 1 < r[b].row)
             a0++;
         for (a = a0; a < b && r[a].row + 1 == r[b].row; a++) {
-            size_t e;
+            size_t e = run_exit(&r[a]), other = r[a].back ? r[a].j - 1 : r[a].i;
             if (r[a].next != NORUN)
                 continue;
-            if (!r[a].linked && !adjacent(run_exit(&r[a]), r[b].i) && !adjacent(run_exit(&r[a]), r[b].j - 1))
+            if (!reaches(e, &r[b])) {
+                if (r[a].linked || !reaches(other, &r[b]))
+                    continue;
                 r[a].back = !r[a].back; /* a path's first run: leave by the end that reaches b */
-            e = run_exit(&r[a]);
-            if (adjacent(e, r[b].i) || adjacent(e, r[b].j - 1)) {
-                r[b].back = !adjacent(e, r[b].i);
-                r[a].next = b;
-                r[b].linked = 1;
-                break;
+                e = other;
             }
-            if (!r[a].linked)
-                r[a].back = !r[a].back;
+            r[b].back = !adjacent(e, r[b].i);
+            r[a].next = b;
+            r[b].linked = 1;
+            break;
         }
     }
 }
