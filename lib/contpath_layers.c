@@ -7,6 +7,9 @@
 #include <string.h>
 
 #include "contpath_internal.h"
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 #include "numtext.h"
 
 /* Work state of amp_contpath_layers(). */
@@ -393,16 +396,96 @@ static int island_clean(const amp_contpath_opts *o, const amp_pathset *out, size
     return 1;
 }
 
-/* One layer: its islands nearest first, each joined and started near the
- * nozzle. An island printed with skin bands whose paths the caller's
- * verifier (o->verify_stroke) rejects is printed again with its skin regions whole (a band's rings come from an
- * inset, and a slip of it can meet the core's: seen once in 60 sweep runs,
- * the bunny meshed at 0.95 mm, 0.3 mm layers, r 0.2). */
-static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath_stats *s0, amp_error *err)
+/* Bead height of layer li: the first layer from the plate, the others from the layer below. */
+static double layer_h(const amp_slices *sl, size_t li)
+{
+    const amp_layer *L = &sl->layers[li];
+    return li == 0 ? L->z_print : L->z_print - sl->layers[li - 1].z_print;
+}
+
+/* One island's paths, made apart from the others: they do not depend on
+ * where the nozzle is (only the order of the islands and the start of each
+ * stroke do, decided afterwards in layer_emit), so the islands of many
+ * layers are made at once, in parallel, and the output is the same whatever
+ * the thread count. */
+typedef struct ijob {
+    size_t li, k;          /* layer, island of its section */
+    amp_pathset ps;        /* the island's paths as island_once leaves them */
+    amp_contpath_stats s;  /* its figures, counted from zero */
+    size_t nobj;           /* object strokes among them */
+    amp_status rc;
+    amp_error err;
+} ijob;
+
+/* The island of job j with the scratch of work context w. An island printed
+ * with skin bands whose paths the caller's verifier (o->verify_stroke)
+ * rejects is made again with its skin regions whole (a band's rings come
+ * from an inset, and a slip of it can meet the core's: seen once in 60
+ * sweep runs, the bunny meshed at 0.95 mm, 0.3 mm layers, r 0.2). */
+static void island_job(lctx *w, ijob *j)
+{
+    const amp_layer *L = &w->sl->layers[j->li];
+    double h = layer_h(w->sl, j->li);
+    amp_pathset_clear(&j->ps);
+    memset(&j->s, 0, sizeof j->s);
+    j->nobj = 0;
+    j->rc = amp_polyset_island(&L->polys, j->k, &w->isl, &j->err);
+    if (j->rc == AMP_OK)
+        j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
+    if (j->rc == AMP_OK && j->s.skin_bands > 0 && !island_clean(w->o, &j->ps, 0, &w->isl)) {
+        amp_pathset_clear(&j->ps);
+        memset(&j->s, 0, sizeof j->s);
+        j->s.band_retries = 1;
+        w->no_bands = 1;
+        j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
+        w->no_bands = 0;
+    }
+}
+
+/* s += one island's figures (all counts and lengths add up; the deepest cycle tree is the deeper one). */
+static void stats_add(amp_contpath_stats *s, const amp_contpath_stats *d)
+{
+    s->layers += d->layers;
+    s->empty_layers += d->empty_layers;
+    s->islands += d->islands;
+    s->thin_islands += d->thin_islands;
+    s->dropped_islands += d->dropped_islands;
+    s->island_strokes += d->island_strokes;
+    s->specks += d->specks;
+    s->regions += d->regions;
+    s->skin_regions += d->skin_regions;
+    s->strokes += d->strokes;
+    s->multi_stroke += d->multi_stroke;
+    s->perimeter_loops += d->perimeter_loops;
+    s->support_paths += d->support_paths;
+    s->travel_moves += d->travel_moves;
+    s->free_ends += d->free_ends;
+    s->odd_vertices += d->odd_vertices;
+    s->cycles += d->cycles;
+    s->tree_levels = d->tree_levels > s->tree_levels ? d->tree_levels : s->tree_levels;
+    s->tour_fallbacks += d->tour_fallbacks;
+    s->joins += d->joins;
+    s->printed_length += d->printed_length;
+    s->infill_length += d->infill_length;
+    s->pseudo_length += d->pseudo_length;
+    s->travel_length += d->travel_length;
+    s->support_length += d->support_length;
+    s->unprinted_length += d->unprinted_length;
+    s->support_corners += d->support_corners;
+    s->corners_left_out += d->corners_left_out;
+    s->neck_islands += d->neck_islands;
+    s->skin_bands += d->skin_bands;
+    s->band_retries += d->band_retries;
+    s->corners_touched += d->corners_touched;
+}
+
+/* Layer li from its islands' jobs (jobs[k]: island k): the islands nearest
+ * first, each stroke started near the nozzle. */
+static amp_status layer_emit(lctx *c, size_t li, const ijob *jobs, amp_pathset *out, amp_contpath_stats *s0,
+                             amp_error *err)
 {
     const amp_layer *L = &c->sl->layers[li];
-    double h = li == 0 ? L->z_print : L->z_print - c->sl->layers[li - 1].z_print;
-    size_t n, k, before = out->npaths, i, nobj = 0;
+    size_t n, k, before = out->npaths, i;
     amp_status rc = AMP_OK;
     void *q = c->done;
     if (amp_grow(out->alloc, &q, &c->cap_done, L->polys.nislands + 1, 1) != AMP_OK)
@@ -411,27 +494,21 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
     memset(c->done, 0, L->polys.nislands + 1);
     for (n = 0; n < L->polys.nislands && rc == AMP_OK; n++) {
         size_t first = out->npaths;
-        amp_contpath_stats keep = *s0;
+        const ijob *j;
         k = next_island(c, L);
         if (k == NONE)
             break;
         c->done[k] = 1;
-        if ((rc = amp_polyset_island(&L->polys, k, &c->isl, err)) != AMP_OK ||
-            (rc = island_once(c, li, h, out, first, &nobj, s0, err)) != AMP_OK)
-            break;
-        if (s0->skin_bands > keep.skin_bands && !island_clean(c->o, out, first, &c->isl)) {
-            out->nverts = first < out->npaths ? out->paths[first].first : out->nverts;
-            out->npaths = first;
-            *s0 = keep;
-            s0->band_retries++;
-            c->no_bands = 1;
-            rc = island_once(c, li, h, out, first, &nobj, s0, err);
-            c->no_bands = 0;
-            if (rc != AMP_OK)
-                break;
+        j = &jobs[k];
+        if (j->rc != AMP_OK) {
+            *err = j->err;
+            return j->rc;
         }
+        if ((rc = amp_pathset_append(out, &j->ps, err)) != AMP_OK)
+            break;
+        stats_add(s0, &j->s);
         s0->islands += out->npaths > first;
-        s0->island_strokes += nobj;
+        s0->island_strokes += j->nobj;
         for (i = first; i < out->npaths && rc == AMP_OK; i++) {
             if (c->have_at)
                 rc = rotate_to(out, i, c->at, err);
@@ -446,36 +523,47 @@ static amp_status layer_paths(lctx *c, size_t li, amp_pathset *out, amp_contpath
     return rc;
 }
 
-amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
-                               amp_contpath_stats *st, amp_error *err)
+/* The per-island scratch of a work context (isl .. bare_skin). */
+static void scratch_init(lctx *w, const amp_allocator *al)
 {
-    const amp_allocator *al = out->alloc;
-    lctx c;
-    size_t li, q, p0 = out->npaths;
-    amp_contpath_stats s0;
-    amp_status rc;
-    memset(&s0, 0, sizeof s0);
-    memset(&c, 0, sizeof c);
-    c.sl = sl;
-    c.o = o;
-    amp_cx2_init(&c.khat, al);
-    amp_cx2_init(&c.kskin[0], al);
-    amp_cx2_init(&c.kskin[1], al);
-    amp_polyset_init(&c.isl, al);
-    amp_polyset_init(&c.ins, al);
-    amp_polyset_init(&c.reg, al);
-    amp_polyset_init(&c.bin, al);
-    amp_polyset_init(&c.core, al);
-    amp_polyset_init(&c.band, al);
-    amp_polyset_init(&c.reg2, al);
-    amp_pathset_init(&c.tmp, al);
-    amp_pathset_init(&c.bare, al);
-    amp_pathset_init(&c.bare_skin, al);
-    rc = amp_contpath_complex(sl, o, &c.khat, err);
-    if (rc == AMP_OK && amp_cp_khat_edges(&c.khat, al, &c.ke, &c.nke) != AMP_OK)
+    amp_polyset_init(&w->isl, al);
+    amp_polyset_init(&w->ins, al);
+    amp_polyset_init(&w->reg, al);
+    amp_polyset_init(&w->bin, al);
+    amp_polyset_init(&w->core, al);
+    amp_polyset_init(&w->band, al);
+    amp_polyset_init(&w->reg2, al);
+    amp_pathset_init(&w->tmp, al);
+    amp_pathset_init(&w->bare, al);
+    amp_pathset_init(&w->bare_skin, al);
+    w->no_bands = 0;
+}
+
+static void scratch_free(lctx *w)
+{
+    amp_polyset_free(&w->isl);
+    amp_polyset_free(&w->ins);
+    amp_polyset_free(&w->reg);
+    amp_polyset_free(&w->bin);
+    amp_polyset_free(&w->core);
+    amp_polyset_free(&w->band);
+    amp_polyset_free(&w->reg2);
+    amp_pathset_free(&w->tmp);
+    amp_pathset_free(&w->bare);
+    amp_pathset_free(&w->bare_skin);
+}
+
+/* The lattices K̂ (sparse) and the two solid ones, their edge lists and the sections' row indexes. */
+static amp_status shared_init(lctx *c, const amp_allocator *al, amp_error *err)
+{
+    const amp_contpath_opts *o = c->o;
+    const amp_slices *sl = c->sl;
+    size_t li;
+    amp_status rc = amp_contpath_complex(sl, o, &c->khat, err);
+    if (rc == AMP_OK && amp_cp_khat_edges(&c->khat, al, &c->ke, &c->nke) != AMP_OK)
         rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
-    c.skins = o->skin_bottom > 0 || o->skin_top > 0;
-    for (li = 0; li < 2 && rc == AMP_OK && c.skins; li++) {
+    c->skins = o->skin_bottom > 0 || o->skin_top > 0;
+    for (li = 0; li < 2 && rc == AMP_OK && c->skins; li++) {
         /* the solid lattices: strips 4r wide with offset r, so that the
          * beads along the long sides lie side by side and cover the region
          * once (a square lattice of 4r covers it twice: beads both ways),
@@ -485,20 +573,132 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
         so.cell = o->skin_cell > 0 ? o->skin_cell : 4 * o->radius;
         so.grid = li ? AMP_GRID_STRIPS_Y : AMP_GRID_STRIPS_X;
         so.offset = o->radius;
-        rc = amp_contpath_complex(sl, &so, &c.kskin[li], err);
-        if (rc == AMP_OK && amp_cp_khat_edges(&c.kskin[li], al, &c.kse[li], &c.nkse[li]) != AMP_OK)
+        rc = amp_contpath_complex(sl, &so, &c->kskin[li], err);
+        if (rc == AMP_OK && amp_cp_khat_edges(&c->kskin[li], al, &c->kse[li], &c->nkse[li]) != AMP_OK)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     }
-    if (rc == AMP_OK && c.skins) {
-        c.lix = amp_calloc(al, sl->nlayers + 1, sizeof *c.lix);
-        for (li = 0; li < sl->nlayers && rc == AMP_OK && c.lix; li++)
-            rc = amp_polyindex_build(&c.lix[li], &sl->layers[li].polys, err);
-        if (!c.lix)
+    if (rc == AMP_OK && c->skins) {
+        c->lix = amp_calloc(al, sl->nlayers + 1, sizeof *c->lix);
+        for (li = 0; li < sl->nlayers && rc == AMP_OK && c->lix; li++)
+            rc = amp_polyindex_build(&c->lix[li], &sl->layers[li].polys, err);
+        if (!c->lix)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing the sections");
     }
-    for (li = 0; li < sl->nlayers && rc == AMP_OK; li++) {
-        s0.layers++;
-        rc = layer_paths(&c, li, out, &s0, err);
+    return rc;
+}
+
+static void shared_free(lctx *c, const amp_allocator *al)
+{
+    size_t li;
+    for (li = 0; c->lix && li < c->sl->nlayers; li++)
+        amp_polyindex_free(&c->lix[li]);
+    amp_free(al, c->lix);
+    amp_free(al, c->ke);
+    amp_free(al, c->kse[0]);
+    amp_free(al, c->kse[1]);
+    amp_cx2_free(&c->kskin[0]);
+    amp_cx2_free(&c->kskin[1]);
+    amp_cx2_free(&c->khat);
+    amp_free(al, c->done);
+}
+
+/* islands made at once before they are written (a layer with more is made alone) */
+#define JOBS_MAX 256
+
+/* Work contexts: copies of c sharing its read-only lattices, each with its own scratch; one per thread. */
+static lctx *workers_new(const lctx *c, const amp_allocator *al, size_t *nw)
+{
+    size_t n = 1, t;
+    lctx *w;
+#ifdef _OPENMP
+    /* the islands are made on OpenMP threads only with the default allocator: a caller's allocator need not
+     * be thread-safe (include/ampath/contpath.h) */
+    if (al == NULL || al == amp_allocator_default())
+        n = (size_t)omp_get_max_threads();
+#endif
+    w = amp_calloc(al, n, sizeof *w);
+    for (t = 0; w && t < n; t++) {
+        w[t] = *c;
+        w[t].done = NULL;
+        w[t].cap_done = 0;
+        scratch_init(&w[t], al);
+    }
+    *nw = n;
+    return w;
+}
+
+/* Make the jobs [0, n) (in parallel when there is more than one work context). */
+static void run_jobs(lctx *w, size_t nw, ijob *jobs, size_t n)
+{
+    long q;
+    (void)nw;
+#pragma omp parallel for schedule(dynamic, 1) num_threads((int)nw) if (nw > 1 && n > 1)
+    for (q = 0; q < (long)n; q++) {
+        size_t t = 0;
+#ifdef _OPENMP
+        t = (size_t)omp_get_thread_num();
+#endif
+        island_job(&w[t], &jobs[q]);
+    }
+}
+
+/* Layers [l0, l1) with every island of them in (*jobs)[0 ..) in layer order: as many layers as JOBS_MAX
+ * islands hold, at least one (the array grows for a layer of more). */
+static amp_status plan_jobs(const amp_slices *sl, size_t l0, ijob **jobs, size_t *cap, size_t *njobs, size_t *l1,
+                            const amp_allocator *al, amp_error *err)
+{
+    size_t n = 0, k, li = l0;
+    while (li < sl->nlayers && (li == l0 || n + sl->layers[li].polys.nislands <= JOBS_MAX)) {
+        size_t ni = sl->layers[li].polys.nislands, old = *cap;
+        void *v = *jobs;
+        if (amp_grow(al, &v, cap, n + ni, sizeof **jobs) != AMP_OK)
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the island work");
+        *jobs = v;
+        for (k = old; k < *cap; k++)
+            amp_pathset_init(&(*jobs)[k].ps, al);
+        for (k = 0; k < ni; k++, n++) {
+            (*jobs)[n].li = li;
+            (*jobs)[n].k = k;
+        }
+        li++;
+    }
+    *njobs = n;
+    *l1 = li;
+    return AMP_OK;
+}
+
+amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
+                               amp_contpath_stats *st, amp_error *err)
+{
+    const amp_allocator *al = out->alloc;
+    lctx c, *w;
+    ijob *jobs = NULL;
+    size_t li, q, p0 = out->npaths, nw = 0, nj = 0, cap = 0;
+    amp_contpath_stats s0;
+    amp_status rc;
+    memset(&s0, 0, sizeof s0);
+    memset(&c, 0, sizeof c);
+    c.sl = sl;
+    c.o = o;
+    amp_cx2_init(&c.khat, al);
+    amp_cx2_init(&c.kskin[0], al);
+    amp_cx2_init(&c.kskin[1], al);
+    rc = shared_init(&c, al, err);
+    w = rc == AMP_OK ? workers_new(&c, al, &nw) : NULL;
+    if (rc == AMP_OK && !w)
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the island work");
+    for (li = 0; li < sl->nlayers && rc == AMP_OK;) {
+        size_t l1 = li, base = 0;
+        if ((rc = plan_jobs(sl, li, &jobs, &cap, &nj, &l1, al, err)) != AMP_OK)
+            break;
+        run_jobs(w, nw, jobs, nj);
+        for (; li < l1 && rc == AMP_OK; li++) {
+            s0.layers++;
+            rc = layer_emit(&c, li, jobs + base, out, &s0, err);
+            base += sl->layers[li].polys.nislands;
+        }
+        if (o->progress)
+            o->progress(o->progress_user, (double)li / (double)sl->nlayers);
     }
     /* figures over the paths written by this call */
     for (q = p0; q < out->npaths && rc == AMP_OK; q++) {
@@ -511,26 +711,13 @@ amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o,
             s0.travel_length += amp_v3_dist(a.p, b.p);
         }
     }
-    for (li = 0; c.lix && li < sl->nlayers; li++)
-        amp_polyindex_free(&c.lix[li]);
-    amp_free(al, c.lix);
-    amp_free(al, c.ke);
-    amp_free(al, c.kse[0]);
-    amp_free(al, c.kse[1]);
-    amp_cx2_free(&c.kskin[0]);
-    amp_cx2_free(&c.kskin[1]);
-    amp_free(al, c.done);
-    amp_cx2_free(&c.khat);
-    amp_polyset_free(&c.isl);
-    amp_polyset_free(&c.ins);
-    amp_polyset_free(&c.reg);
-    amp_polyset_free(&c.bin);
-    amp_polyset_free(&c.core);
-    amp_polyset_free(&c.band);
-    amp_polyset_free(&c.reg2);
-    amp_pathset_free(&c.tmp);
-    amp_pathset_free(&c.bare);
-    amp_pathset_free(&c.bare_skin);
+    for (q = 0; q < cap; q++)
+        amp_pathset_free(&jobs[q].ps);
+    amp_free(al, jobs);
+    for (q = 0; w && q < nw; q++)
+        scratch_free(&w[q]);
+    amp_free(al, w);
+    shared_free(&c, al);
     if (st)
         *st = s0;
     return rc;

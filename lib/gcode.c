@@ -156,17 +156,22 @@ static int grid_index(double v, double v0, double cell)
 }
 
 /* Raise the cells [i0, i1] x [j0, j1] of @p grid to @p top (never lowered by float rounding). */
-static void raise_box(float *grid, int i0, int i1, int j0, int j1, double top)
+/* The smallest float >= v: a cell raised to it is never below v, and a float c is below v exactly when it is
+ * below this. */
+static float float_up(double v)
+{
+    float f = (float)v;
+    return (double)f < v ? nextafterf(f, HUGE_VALF) : f;
+}
+
+static void raise_box(float *grid, int i0, int i1, int j0, int j1, float top)
 {
     int i, j;
     for (j = j0; j <= j1; j++)
         for (i = i0; i <= i1; i++) {
             float *c = &grid[j * AMP_GCODE_GRID + i];
-            if ((double)*c < top) {
-                *c = (float)top;
-                if ((double)*c < top)
-                    *c = nextafterf(*c, HUGE_VALF);
-            }
+            if (*c < top)
+                *c = top;
         }
 }
 
@@ -185,6 +190,7 @@ static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, dou
     long steps = (long)ceil(len / (0.5 * cell)), s;
     if (steps < 1)
         steps = 1;
+    float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
     h = len / (double)steps;
     wc = 0.5 * h;
     w += wc;
@@ -195,14 +201,14 @@ static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, dou
         int i, j;
         if (w > wc)
             raise_box(it->grid, grid_index(px - w, it->grid_x0, cell), grid_index(px + w, it->grid_x0, cell),
-                      grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell), top);
+                      grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell), ftop);
         for (j = j0; j <= j1; j++)
             for (i = i0; i <= i1; i++) {
                 float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i / GC_BLK];
                 if ((double)*cb < topc)
-                    *cb = nextafterf((float)topc, HUGE_VALF);
+                    *cb = fcb;
             }
-        raise_box(it->grid_c, i0, i1, j0, j1, topc);
+        raise_box(it->grid_c, i0, i1, j0, j1, ftopc);
     }
 }
 

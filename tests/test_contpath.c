@@ -738,6 +738,95 @@ static void layers_of(fx_part part, double step, double layer, double first, amp
     amp_mesh_free(&m);
 }
 
+/* A caller's allocator (not the default one): amp_contpath_layers then makes every island on the calling
+ * thread, the reference the OpenMP threads' output must equal. */
+static void *calling_alloc(void *u, size_t n)
+{
+    (*(long *)u)++;
+    return malloc(n);
+}
+static void *calling_realloc(void *u, void *p, size_t n)
+{
+    (*(long *)u)++;
+    return realloc(p, n);
+}
+static void calling_free(void *u, void *p)
+{
+    (void)u;
+    free(p);
+}
+
+/* Pillars on every other cell: a layer of 400 islands, more than the library makes at once. */
+static int every_other_cell(int i, int j, int k, void *u)
+{
+    (void)k;
+    (void)u;
+    return i % 2 == 0 && j % 2 == 0;
+}
+
+/* Slice @p m and compare the paths and figures made with the default allocator (the islands on the OpenMP
+ * threads when built with them) with those made with a caller's allocator (on the calling thread). */
+static void same_paths_on_any_thread(const amp_mesh *m, const amp_contpath_opts *o, size_t *islands)
+{
+    long calls = 0;
+    amp_allocator ca;
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_pathset a, b;
+    amp_contpath_stats sa, sb;
+    amp_error err;
+    size_t i;
+    ca.alloc = calling_alloc;
+    ca.realloc = calling_realloc;
+    ca.free = calling_free;
+    ca.user = &calls;
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&a, NULL);
+    amp_pathset_init(&b, &ca);
+    so.layer = 0.2;
+    so.first_layer = 0.2;
+    ck_assert_int_eq(amp_slice_mesh(m, &so, &sl, &err), AMP_OK);
+    ck_assert_msg(amp_contpath_layers(&sl, o, &a, &sa, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_msg(amp_contpath_layers(&sl, o, &b, &sb, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_int_gt(calls, 0);
+    ck_assert_uint_gt(a.npaths, 0);
+    ck_assert_uint_eq(a.npaths, b.npaths);
+    ck_assert_uint_eq(a.nverts, b.nverts);
+    for (i = 0; i < a.npaths; i++) {
+        ck_assert_int_eq(a.paths[i].role, b.paths[i].role);
+        ck_assert_uint_eq(a.paths[i].first, b.paths[i].first);
+        ck_assert_uint_eq(a.paths[i].n, b.paths[i].n);
+        ck_assert(a.paths[i].h == b.paths[i].h);
+    }
+    ck_assert(memcmp(a.verts, b.verts, a.nverts * sizeof *a.verts) == 0);
+    ck_assert(memcmp(&sa, &sb, sizeof sa) == 0);
+    *islands = sa.islands;
+    amp_pathset_free(&a);
+    amp_pathset_free(&b);
+    amp_slices_free(&sl);
+}
+
+START_TEST(islands_made_on_many_threads_equal_those_made_on_one)
+{
+    amp_mesh m;
+    amp_contpath_opts o;
+    size_t islands = 0;
+    amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke; /* as the tool, band retries included */
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, FX_PART_IDLER, 0.8), AMP_OK);
+    same_paths_on_any_thread(&m, &o, &islands);
+    ck_assert_uint_gt(islands, 10);
+    amp_mesh_free(&m);
+    /* 20 x 20 pillars of 1 mm, 1 mm tall: 5 layers of 400 islands each, every one printed */
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_voxels(&m, 39, 39, 1, 1.0, every_other_cell, NULL), AMP_OK);
+    same_paths_on_any_thread(&m, &o, &islands);
+    ck_assert_uint_eq(islands, 5 * 400);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(paths_carry_their_layer_bead_height_and_start_where_the_nozzle_is)
 {
     amp_slices sl;
@@ -1362,6 +1451,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
     tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
+    tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
     suite_add_tcase(s, tc);
     return s;
 }

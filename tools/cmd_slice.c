@@ -355,9 +355,17 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     int rc = CLI_OK;
     if (!per)
         return cli_fail("slice", CLI_USAGE, "out of memory");
+    amp_contpath_opts po = *o;
+    cli_progress bar;
+    amp_status cs;
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
-    if (amp_contpath_layers(sl, o, &ps, &st, &err) != AMP_OK) {
+    po.progress = cli_progress_fn;
+    po.progress_user = &bar;
+    cli_progress_begin(&bar, "slice");
+    cs = amp_contpath_layers(sl, &po, &ps, &st, &err);
+    cli_progress_end(&bar);
+    if (cs != AMP_OK) {
         amp_pathset_free(&ps);
         free(per);
         return cli_fail_err("slice", &err);

@@ -83,7 +83,12 @@ typedef struct amp_contpath_opts {
                                 an island printed with skin bands whose paths this verifier rejects (called
                                 with tol 1e-6, rep and err NULL) is printed again with its skin regions whole
                                 (counted in band_retries). Set it to amp_check_path_stroke (check.h) for the
-                                behaviour of the ampath tool. */
+                                behaviour of the ampath tool. With OpenMP it is called from the threads that
+                                make the islands: it must be thread-safe (amp_check_path_stroke is). */
+    /** Optional progress report of amp_contpath_layers() (fraction 0..1 of the layers, from the calling
+     *  thread, a few hundred times at most). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user;
 } amp_contpath_opts;
 
 /**
@@ -165,7 +170,10 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
  * stroke starts at its vertex nearest to where the previous one ended. An
  * island narrower than 2r (no inset by r) gets the perimeter of the inset
  * by r/2, r/4, ... r/32 instead (counted in thin_islands). @p out is
- * appended to.
+ * appended to. Built with OpenMP, the islands of up to 256 of them at a time
+ * are made on the OpenMP threads when @p out uses the default allocator (a
+ * caller's allocator is only called from the calling thread); the output is
+ * the same whatever the thread count.
  */
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);

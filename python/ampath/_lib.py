@@ -215,7 +215,8 @@ class amp_contpath_opts(Structure):
     _fields_ = [("radius", c_double), ("cell", c_double), ("grid", c_int), ("offset", c_double),
                 ("perimeters", c_int), ("support_stretches", c_int), ("support_corners", c_int),
                 ("pseudo_edges", c_int), ("tour", c_int), ("skin_bottom", c_double), ("skin_top", c_double),
-                ("skin_cell", c_double), ("join", c_int), ("verify_stroke", VERIFY_FN)]
+                ("skin_cell", c_double), ("join", c_int), ("verify_stroke", VERIFY_FN),
+                ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
 
 
 class amp_contpath_stats(Structure):
