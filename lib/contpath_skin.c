@@ -46,6 +46,8 @@ double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, s
     double depth = -1;
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
     size_t r, k;
+    amp_polyindex rx;
+    int have;
     if (!(below > 0) && !(above > 0))
         return -1;
     for (r = 0; r < R->nrings; r++) {
@@ -61,14 +63,20 @@ double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, s
         }
     }
     /* a grid inside: a hole opening above the middle of the region (at
-     * most about 16 x 16 points: the cost stays linear in the part) */
+     * most about 16 x 16 points: the cost stays linear in the part); R's
+     * row index answers them (a full scan of R per point was 8 % of a
+     * 100k-triangle torus's slice), the full scans only if it cannot be made */
     step = fmax(step, fmax(x1 - x0, y1 - y0) / 16);
+    have = amp_polyindex_build(&rx, R, NULL) == AMP_OK;
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step) {
             amp_vec2 q = amp_v2(x, y);
-            if (amp_polyset_contains(R, q, 0.0) == 1 && !covered(sl, ix, li, q, below, above))
-                depth = fmax(depth, amp_polyset_boundary_dist(R, q));
+            int in = have ? amp_polyindex_contains(&rx, q) : amp_polyset_contains(R, q, 0.0);
+            if (in == 1 && !covered(sl, ix, li, q, below, above))
+                depth = fmax(depth, have ? amp_polyindex_dist(&rx, q) : amp_polyset_boundary_dist(R, q));
         }
+    if (have)
+        amp_polyindex_free(&rx);
     /* a sample stands for the cell of `step` around it */
     return depth < 0 ? -1 : depth + step;
 }

@@ -280,33 +280,120 @@ static amp_status write_comment(const char *comment, amp_sink_fn sink, void *use
     return AMP_OK;
 }
 
-amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err)
+/* longest line of a path header and of a vertex */
+#define HEAD_MAX 64
+#define VERT_MAX (4 * AMP_G10_MAX + 1)
+/* vertices formatted per block; blocks formatted at once (on the OpenMP threads) before they are written */
+#define WBLOCK 4096
+#define WBLOCKS 4
+
+/* Where a block of the output starts: path @p i, its vertex @p k; @p nv vertices and @p nh headers in it. */
+typedef struct wblock {
+    size_t i, k, nv, nh, len;
+    char *buf;
+} wblock;
+
+static size_t format_head(const amp_pathset *ps, size_t i, char *out)
 {
-    size_t i, k;
-    amp_status st = sink(user, "ampath-paths 1\n", 15);
-    if (st == AMP_OK)
-        st = write_comment(comment, sink, user);
-    for (i = 0; st == AMP_OK && i < ps->npaths; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        const char *role = ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object";
-        if (ps->paths[i].h > 0.0)
-            st = amp_sinkf(sink, user, "path %s %lu %.10g\n", role, (unsigned long)ps->paths[i].n, ps->paths[i].h);
-        else
-            st = amp_sinkf(sink, user, "path %s %lu\n", role, (unsigned long)ps->paths[i].n);
-        for (k = 0; st == AMP_OK && k < ps->paths[i].n; k++) {
-            /* "%.10g %.10g %.10g %.10g\n", without printf's cost on the hot path */
-            char line[4 * AMP_G10_MAX + 1];
-            size_t n = amp_g10_format(v[k].p.x, line);
-            line[n++] = ' ';
-            n += amp_g10_format(v[k].p.y, line + n);
-            line[n++] = ' ';
-            n += amp_g10_format(v[k].p.z, line + n);
-            line[n++] = ' ';
-            n += amp_g10_format(v[k].r, line + n);
-            line[n++] = '\n';
-            st = sink(user, line, n);
+    const char *role = ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object";
+    int n = ps->paths[i].h > 0.0 ? snprintf(out, HEAD_MAX, "path %s %lu %.10g\n", role, (unsigned long)ps->paths[i].n,
+                                            ps->paths[i].h)
+                                 : snprintf(out, HEAD_MAX, "path %s %lu\n", role, (unsigned long)ps->paths[i].n);
+    return n > 0 ? (size_t)n : 0;
+}
+
+/* "%.10g %.10g %.10g %.10g\n", without printf's cost on the hot path */
+static size_t format_vert(const amp_pvert *v, char *line)
+{
+    size_t n = amp_g10_format(v->p.x, line);
+    line[n++] = ' ';
+    n += amp_g10_format(v->p.y, line + n);
+    line[n++] = ' ';
+    n += amp_g10_format(v->p.z, line + n);
+    line[n++] = ' ';
+    n += amp_g10_format(v->r, line + n);
+    line[n++] = '\n';
+    return n;
+}
+
+/* The text of block @p b: from vertex k of path i on, nv vertices, with the headers of the paths it starts
+ * (paths without vertices included); the last block also heads the empty paths after its last vertex. */
+static void format_block(const amp_pathset *ps, wblock *b, int last)
+{
+    size_t i = b->i, k = b->k, left = b->nv, len = 0;
+    while (i < ps->npaths && (left > 0 || (last && k == 0))) {
+        if (k == 0)
+            len += format_head(ps, i, b->buf + len);
+        if (k >= ps->paths[i].n) {
+            i++;
+            k = 0;
+            continue;
+        }
+        len += format_vert(amp_pathset_path_verts(ps, i) + k, b->buf + len);
+        left--;
+        if (++k == ps->paths[i].n) {
+            i++;
+            k = 0;
         }
     }
+    b->len = len;
+}
+
+/* Plan the next block from (*i, *k): at most WBLOCK vertices; advances (*i, *k) past it. */
+static void plan_block(const amp_pathset *ps, size_t *i, size_t *k, wblock *b)
+{
+    b->i = *i;
+    b->k = *k;
+    b->nv = b->nh = 0;
+    while (*i < ps->npaths && b->nv < WBLOCK) {
+        size_t take = ps->paths[*i].n - *k;
+        if (*k == 0)
+            b->nh++;
+        if (take > WBLOCK - b->nv)
+            take = WBLOCK - b->nv;
+        b->nv += take;
+        *k += take;
+        if (*k >= ps->paths[*i].n) {
+            (*i)++;
+            *k = 0;
+        }
+    }
+    if (*i >= ps->npaths) /* the empty paths at the end come with this block */
+        b->nh += ps->npaths - b->i;
+}
+
+amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err)
+{
+    wblock b[WBLOCKS];
+    size_t i = 0, k = 0, nb, q, cap[WBLOCKS];
+    amp_status st = sink(user, "ampath-paths 1\n", 15);
+    memset(b, 0, sizeof b);
+    memset(cap, 0, sizeof cap);
+    if (st == AMP_OK)
+        st = write_comment(comment, sink, user);
+    while (st == AMP_OK && i < ps->npaths) {
+        long t;
+        /* plan and size up to WBLOCKS blocks (buffers through the set's allocator, on this thread) */
+        for (nb = 0; nb < WBLOCKS && i < ps->npaths; nb++) {
+            void *v = b[nb].buf;
+            plan_block(ps, &i, &k, &b[nb]);
+            if (amp_grow(ps->alloc, &v, &cap[nb], b[nb].nv * VERT_MAX + b[nb].nh * HEAD_MAX + 1, 1) != AMP_OK) {
+                st = AMP_ERR_NOMEM;
+                break;
+            }
+            b[nb].buf = v;
+        }
+        if (st != AMP_OK)
+            break;
+        /* formatting only reads the set and writes its own block: the text is the same on any thread count */
+#pragma omp parallel for schedule(dynamic, 1) if (nb > 1)
+        for (t = 0; t < (long)nb; t++)
+            format_block(ps, &b[t], i >= ps->npaths && t == (long)nb - 1);
+        for (q = 0; q < nb && st == AMP_OK; q++)
+            st = sink(user, b[q].buf, b[q].len);
+    }
+    for (q = 0; q < WBLOCKS; q++)
+        amp_free(ps->alloc, b[q].buf);
     if (st != AMP_OK)
         return amp_fail(err, st, 0, "writing paths failed: %s", amp_strerror(st));
     return AMP_OK;

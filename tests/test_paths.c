@@ -48,6 +48,92 @@ START_TEST(roundtrip_preserves_paths_roles_and_radii)
 }
 END_TEST
 
+/* The text of @p ps as printf writes it, line by line (the reference of the block writer). */
+static void printf_text(const amp_pathset *ps, amp_buf *out)
+{
+    char line[256];
+    size_t i, k;
+    ck_assert_int_eq(amp_buf_append(out, "ampath-paths 1\n", 15), AMP_OK);
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        int n = ps->paths[i].h > 0 ? snprintf(line, sizeof line, "path %s %lu %.10g\n",
+                                              ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object",
+                                              (unsigned long)ps->paths[i].n, ps->paths[i].h)
+                                   : snprintf(line, sizeof line, "path %s %lu\n",
+                                              ps->paths[i].role == AMP_ROLE_SUPPORT ? "support" : "object",
+                                              (unsigned long)ps->paths[i].n);
+        ck_assert_int_eq(amp_buf_append(out, line, (size_t)n), AMP_OK);
+        for (k = 0; k < ps->paths[i].n; k++) {
+            n = snprintf(line, sizeof line, "%.10g %.10g %.10g %.10g\n", v[k].p.x, v[k].p.y, v[k].p.z, v[k].r);
+            ck_assert_int_eq(amp_buf_append(out, line, (size_t)n), AMP_OK);
+        }
+    }
+}
+
+/* Paths of @p n vertices each (n[i] may be 0), on a spiral with changing radii. */
+static void spiral_paths(amp_pathset *ps, const size_t *n, size_t np)
+{
+    amp_error err;
+    size_t i, k, t = 0;
+    for (i = 0; i < np; i++) {
+        ck_assert_int_eq(amp_pathset_begin(ps, i % 3 == 2 ? AMP_ROLE_SUPPORT : AMP_ROLE_OBJECT, &err), AMP_OK);
+        ps->paths[i].h = i % 2 ? 0.2 : 0.0;
+        for (k = 0; k < n[i]; k++, t++)
+            ck_assert_int_eq(amp_pathset_push(ps, amp_v3(30 * cos(0.01 * t), 30 * sin(0.01 * t), 1e-3 * t),
+                                              0.2 + 1e-5 * (double)(t % 977), &err),
+                             AMP_OK);
+    }
+}
+
+START_TEST(written_text_equals_printf_across_blocks_and_empty_paths)
+{
+    /* empty paths first, between and last; paths across the writer's blocks of a few thousand vertices,
+     * one of exactly 4096, one of 50,000 (several blocks), many short ones */
+    size_t n[64], np = 0, i;
+    amp_pathset ps;
+    amp_buf got, want;
+    amp_error err;
+    n[np++] = 0;
+    n[np++] = 0;
+    n[np++] = 3;
+    n[np++] = 4096;
+    n[np++] = 0;
+    n[np++] = 50000;
+    n[np++] = 4095;
+    for (i = 0; i < 40; i++)
+        n[np++] = 1 + 37 * i;
+    n[np++] = 0;
+    n[np++] = 0;
+    amp_pathset_init(&ps, NULL);
+    spiral_paths(&ps, n, np);
+    amp_buf_init(&got, NULL);
+    amp_buf_init(&want, NULL);
+    printf_text(&ps, &want);
+    ck_assert_int_eq(amp_pathset_write(&ps, NULL, amp_buf_sink, &got, &err), AMP_OK);
+    ck_assert_uint_eq(got.len, want.len);
+    ck_assert(memcmp(got.data, want.data, want.len) == 0);
+    /* only empty paths, and no path at all */
+    amp_pathset_clear(&ps);
+    spiral_paths(&ps, n, 2);
+    amp_buf_free(&got);
+    amp_buf_free(&want);
+    amp_buf_init(&got, NULL);
+    amp_buf_init(&want, NULL);
+    printf_text(&ps, &want);
+    ck_assert_int_eq(amp_pathset_write(&ps, NULL, amp_buf_sink, &got, &err), AMP_OK);
+    ck_assert_uint_eq(got.len, want.len);
+    ck_assert(memcmp(got.data, want.data, want.len) == 0);
+    amp_pathset_clear(&ps);
+    amp_buf_free(&got);
+    amp_buf_init(&got, NULL);
+    ck_assert_int_eq(amp_pathset_write(&ps, NULL, amp_buf_sink, &got, &err), AMP_OK);
+    ck_assert_uint_eq(got.len, 15);
+    amp_buf_free(&got);
+    amp_buf_free(&want);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(bead_height_roundtrips_and_sets_the_planar_cross_section)
 {
     amp_pathset ps, back, copy;
@@ -229,6 +315,7 @@ static Suite *paths_suite(void)
     tcase_add_test(tc, overlong_line_and_nul_bytes_are_rejected_without_overrun);
     tcase_add_test(tc, out_of_memory_is_reported_and_leaves_set_consistent);
     tcase_add_test(tc, file_write_is_atomic_and_reads_back);
+    tcase_add_test(tc, written_text_equals_printf_across_blocks_and_empty_paths);
     suite_add_tcase(s, tc);
     return s;
 }
