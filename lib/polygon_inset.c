@@ -328,12 +328,6 @@ typedef struct piece {
     int used;
 } piece;
 
-static int cmp_piece(const void *a, const void *b)
-{
-    const piece *s = a, *t = b;
-    return s->na < t->na ? -1 : (s->na > t->na ? 1 : 0);
-}
-
 /* Remove needles from a stitched ring in place: a vertex equal to its
  * predecessor, and the tip B of a back-and-forth A-B-A (a swallowtail piece
  * run both ways) or of a tiny loop A-B-C-A within @p small of A, cyclically.
@@ -381,15 +375,23 @@ static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
  * the vertices between become the crossing point. Returns the new count. */
 static size_t untangle(amp_vec2 *p, size_t n)
 {
-    size_t i, j, k, m;
+    size_t i, j, k, m, from = 0;
     int again = 1;
     while (again && n >= 4) {
         again = 0;
-        for (i = 0; i + 2 < n && !again; i++)
+        for (i = from; i + 2 < n && !again; i++) {
+            amp_vec2 a = p[i], b = p[i + 1];
+            double x0 = fmin(a.x, b.x), x1 = fmax(a.x, b.x), y0 = fmin(a.y, b.y), y1 = fmax(a.y, b.y);
             for (j = i + 2; j < n && j <= i + 16 && !again; j++) {
-                amp_vec2 a = p[i], b = p[i + 1], c = p[j], d = p[(j + 1) % n];
-                double d1 = amp_v2_orient(a, b, c), d2 = amp_v2_orient(a, b, d), d3 = amp_v2_orient(c, d, a),
-                       d4 = amp_v2_orient(c, d, b), t;
+                amp_vec2 c = p[j], d = p[(j + 1) % n];
+                double d1, d2, d3, d4, t;
+                /* disjoint boxes cannot cross properly (most pairs end here) */
+                if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
+                    continue;
+                d1 = amp_v2_orient(a, b, c);
+                d2 = amp_v2_orient(a, b, d);
+                d3 = amp_v2_orient(c, d, a);
+                d4 = amp_v2_orient(c, d, b);
                 if ((j + 1) % n == i || !(((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) &&
                                           ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))))
                     continue;
@@ -400,7 +402,11 @@ static size_t untangle(amp_vec2 *p, size_t n)
                     p[k] = p[m];
                 n -= j - i - 1;
                 again = 1;
+                /* the pairs of segments before i - 16 reach only segments before i, unchanged and found
+                 * uncrossed: the scan goes on from there, finding the same first crossing as from 0 */
+                from = i > 16 ? i - 16 : 0;
             }
+        }
     }
     return n;
 }
@@ -581,14 +587,30 @@ static amp_status stitch_rings(const inset_ctx *c, piece_list *pl, double r, amp
     size_t *first, i, len, cap_loop = 0, npc = pl->n;
     amp_vec2 *loop = NULL;
     amp_status st = AMP_OK;
-    if (npc > 1)
-        qsort(pl->pc, npc, sizeof *pl->pc, cmp_piece);
-    if (!(first = amp_alloc(c->al, (c->nnode + 1) * sizeof *first)))
+    piece *sorted;
+    if (!(first = amp_calloc(c->al, c->nnode + 2, sizeof *first)))
         return AMP_ERR_NOMEM;
+    if (!(sorted = amp_alloc(c->al, (npc + 1) * sizeof *sorted))) {
+        amp_free(c->al, first);
+        return AMP_ERR_NOMEM;
+    }
+    /* the pieces by start node, in the order made within a node (a stable counting sort: the order a stable
+     * comparison sort gives, on every C library) */
+    for (i = 0; i < npc; i++)
+        first[pl->pc[i].na + 1]++;
+    for (i = 0; i < c->nnode; i++)
+        first[i + 1] += first[i];
+    for (i = 0; i < npc; i++)
+        sorted[first[pl->pc[i].na]++] = pl->pc[i];
+    memcpy(pl->pc, sorted, npc * sizeof *sorted);
+    amp_free(c->al, sorted);
+    /* first[na] is now the end of na's pieces: a node's first piece, npc for a node without any */
+    for (i = c->nnode; i > 0; i--)
+        first[i] = first[i - 1];
+    first[0] = 0;
     for (i = 0; i <= c->nnode; i++)
-        first[i] = npc;
-    for (i = npc; i-- > 0;)
-        first[pl->pc[i].na] = i;
+        if (i == c->nnode || first[i] == first[i + 1])
+            first[i] = npc;
     for (i = 0; i < npc && st == AMP_OK; i++) {
         if (pl->pc[i].used)
             continue;
