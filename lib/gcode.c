@@ -155,7 +155,6 @@ static int grid_index(double v, double v0, double cell)
     return (int)f; /* truncation is floor here (0 <= f < GRID); floor() was a third of grid_walk's time */
 }
 
-/* Raise the cells [i0, i1] x [j0, j1] of @p grid to @p top (never lowered by float rounding). */
 /* The smallest float >= v: a cell raised to it is never below v, and a float c is below v exactly when it is
  * below this. */
 static float float_up(double v)
@@ -164,15 +163,20 @@ static float float_up(double v)
     return (double)f < v ? nextafterf(f, HUGE_VALF) : f;
 }
 
-static void raise_box(float *grid, int i0, int i1, int j0, int j1, float top)
+/* Rows [*r0, *r1] of cells touched so far, row j's columns lo[j] .. hi[j]: add the box [i0, i1] x [j0, j1]. */
+static void span_add(int *lo, int *hi, int *r0, int *r1, int i0, int i1, int j0, int j1)
 {
-    int i, j;
+    int j;
     for (j = j0; j <= j1; j++)
-        for (i = i0; i <= i1; i++) {
-            float *c = &grid[j * AMP_GCODE_GRID + i];
-            if (*c < top)
-                *c = top;
+        if (j < *r0 || j > *r1) {
+            lo[j] = i0;
+            hi[j] = i1;
+        } else {
+            lo[j] = i0 < lo[j] ? i0 : lo[j];
+            hi[j] = i1 > hi[j] ? i1 : hi[j];
         }
+    *r0 = j0 < *r0 ? j0 : *r0;
+    *r1 = j1 > *r1 ? j1 : *r1;
 }
 
 /*
@@ -181,34 +185,46 @@ static void raise_box(float *grid, int i0, int i1, int j0, int j1, float top)
  * half a step of it to @p topc in the centre-line grid and its blocks:
  * samples every half cell, each covering a box of half-width w + h/2, so
  * every point within w of the segment lies in a raised cell (conservative).
- * One walk for both grids: the sample boxes were computed twice.
+ * The samples move monotonically and their boxes overlap, so the cells of a
+ * row they cover are one run: the union of the boxes is gathered per row
+ * and each cell raised once (it was raised by every box over it, about six
+ * times: half the writer's time on a long planar job), the same cells.
  */
 static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double top, double topc)
 {
     double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), h, wc;
     double cell = it->grid_cell;
     long steps = (long)ceil(len / (0.5 * cell)), s;
+    int glo[AMP_GCODE_GRID], ghi[AMP_GCODE_GRID], clo[AMP_GCODE_GRID], chi[AMP_GCODE_GRID];
+    int g0 = AMP_GCODE_GRID, g1 = -1, c0 = AMP_GCODE_GRID, c1 = -1, i, j;
+    float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
     if (steps < 1)
         steps = 1;
-    float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
     h = len / (double)steps;
     wc = 0.5 * h;
     w += wc;
     for (s = 0; s <= steps; s++) {
         double t = (double)s / (double)steps, px = a.x + t * dx, py = a.y + t * dy;
-        int i0 = grid_index(px - wc, it->grid_x0, cell), i1 = grid_index(px + wc, it->grid_x0, cell);
-        int j0 = grid_index(py - wc, it->grid_y0, cell), j1 = grid_index(py + wc, it->grid_y0, cell);
-        int i, j;
+        span_add(clo, chi, &c0, &c1, grid_index(px - wc, it->grid_x0, cell), grid_index(px + wc, it->grid_x0, cell),
+                 grid_index(py - wc, it->grid_y0, cell), grid_index(py + wc, it->grid_y0, cell));
         if (w > wc)
-            raise_box(it->grid, grid_index(px - w, it->grid_x0, cell), grid_index(px + w, it->grid_x0, cell),
-                      grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell), ftop);
-        for (j = j0; j <= j1; j++)
-            for (i = i0; i <= i1; i++) {
-                float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i / GC_BLK];
-                if ((double)*cb < topc)
-                    *cb = fcb;
-            }
-        raise_box(it->grid_c, i0, i1, j0, j1, ftopc);
+            span_add(glo, ghi, &g0, &g1, grid_index(px - w, it->grid_x0, cell), grid_index(px + w, it->grid_x0, cell),
+                     grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell));
+    }
+    for (j = g0; j <= g1; j++) {
+        float *row = &it->grid[j * AMP_GCODE_GRID];
+        for (i = glo[j]; i <= ghi[j]; i++)
+            row[i] = row[i] < ftop ? ftop : row[i];
+    }
+    for (j = c0; j <= c1; j++) {
+        float *row = &it->grid_c[j * AMP_GCODE_GRID];
+        for (i = clo[j]; i <= chi[j]; i++)
+            row[i] = row[i] < ftopc ? ftopc : row[i];
+        for (i = clo[j] / GC_BLK; i <= chi[j] / GC_BLK; i++) {
+            float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i];
+            if ((double)*cb < topc)
+                *cb = fcb;
+        }
     }
 }
 
