@@ -234,10 +234,6 @@ static size_t check_pairwise(const gctx *c, amp_gouge_violation *out)
  * earlier segments. A pyramid of per-cell maximum heights prunes every region
  * whose highest earlier point is below the cone of the segment under test.
  */
-typedef struct gentry {
-    uint32_t seg, next;
-} gentry;
-
 /* The column grid over the earlier segments with its max-height pyramid. */
 typedef struct gpyramid {
     const amp_allocator *a;
@@ -246,11 +242,26 @@ typedef struct gpyramid {
     size_t off[12];     /* start of level l in maxz */
     double cw, ch;      /* column width and depth at level 0, mm */
     double *maxz;       /* highest earlier point per cell of every level (-inf: none) */
-    uint32_t *head;     /* first entry per column (0xffffffff: none) */
+    size_t *start;      /* column x's segments: ent[start[x] .. start[x] + fill[x]), in print order */
+    uint32_t *fill;
     uint32_t *stamp;    /* segment s was tested against segment i when stamp[s] == i + 1 */
-    gentry *ent;        /* column lists */
-    size_t nent, cap;
+    uint32_t *ent;      /* every column's room for all the segments whose box covers it (counted first:
+                         * a column is read as one run, not a linked list chased through memory) */
 } gpyramid;
+
+static size_t column_of(double v, double lo, double w, size_t P)
+{
+    return (size_t)fmax(0.0, fmin((double)P - 1, floor((v - lo) / w)));
+}
+
+/* The columns [x0, x1] x [y0, y1] that segment t's box covers. */
+static void columns_of(const gpyramid *g, const gseg *t, size_t *x0, size_t *x1, size_t *y0, size_t *y1)
+{
+    *x0 = column_of(t->box.min.x, g->all.min.x, g->cw, g->P);
+    *x1 = column_of(t->box.max.x, g->all.min.x, g->cw, g->P);
+    *y0 = column_of(t->box.min.y, g->all.min.y, g->ch, g->P);
+    *y1 = column_of(t->box.max.y, g->all.min.y, g->ch, g->P);
+}
 
 static amp_status pyramid_init(gpyramid *g, const gctx *c, amp_error *err)
 {
@@ -268,21 +279,33 @@ static amp_status pyramid_init(gpyramid *g, const gctx *c, amp_error *err)
     g->cw = fmax((g->all.max.x - g->all.min.x) / (double)g->P, 1e-9);
     g->ch = fmax((g->all.max.y - g->all.min.y) / (double)g->P, 1e-9);
     g->maxz = amp_calloc(g->a, total, sizeof *g->maxz);
-    g->head = amp_calloc(g->a, g->P * g->P, sizeof *g->head);
+    g->start = amp_calloc(g->a, g->P * g->P + 1, sizeof *g->start);
+    g->fill = amp_calloc(g->a, g->P * g->P, sizeof *g->fill);
     g->stamp = amp_calloc(g->a, c->n, sizeof *g->stamp);
-    if (!g->maxz || !g->head || !g->stamp)
+    if (!g->maxz || !g->start || !g->fill || !g->stamp)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
     for (i = 0; i < total; i++)
         g->maxz[i] = -HUGE_VAL;
+    for (i = 0; i < c->n; i++) {
+        size_t x0, x1, y0, y1, ix, iy;
+        columns_of(g, &c->seg[i], &x0, &x1, &y0, &y1);
+        for (iy = y0; iy <= y1; iy++)
+            for (ix = x0; ix <= x1; ix++)
+                g->start[iy * g->P + ix + 1]++;
+    }
     for (i = 0; i < g->P * g->P; i++)
-        g->head[i] = 0xffffffffU;
+        g->start[i + 1] += g->start[i];
+    g->ent = amp_calloc(g->a, g->start[g->P * g->P] + 1, sizeof *g->ent);
+    if (!g->ent)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
     return AMP_OK;
 }
 
 static void pyramid_free(gpyramid *g)
 {
     amp_free(g->a, g->maxz);
-    amp_free(g->a, g->head);
+    amp_free(g->a, g->start);
+    amp_free(g->a, g->fill);
     amp_free(g->a, g->stamp);
     amp_free(g->a, g->ent);
 }
@@ -324,8 +347,7 @@ static size_t earliest_gouged(gpyramid *g, const gctx *c, size_t i, amp_gouge_vi
     stk[top++] = 0;
     stk[top++] = 0;
     while (top) {
-        size_t y = stk[--top], x = stk[--top], l = stk[--top], dx, dy;
-        uint32_t e;
+        size_t y = stk[--top], x = stk[--top], l = stk[--top], dx, dy, e, ee;
         if (!cell_may_gouge(g, c, t, l, x, y))
             continue;
         if (l > 0) {
@@ -337,8 +359,8 @@ static size_t earliest_gouged(gpyramid *g, const gctx *c, size_t i, amp_gouge_vi
                 }
             continue;
         }
-        for (e = g->head[y * g->P + x]; e != 0xffffffffU; e = g->ent[e].next) {
-            uint32_t s = g->ent[e].seg;
+        for (e = g->start[y * g->P + x], ee = e + g->fill[y * g->P + x]; e < ee; e++) {
+            uint32_t s = g->ent[e];
             if (g->stamp[s] == i + 1 || s >= best)
                 continue;
             g->stamp[s] = (uint32_t)(i + 1);
@@ -351,30 +373,16 @@ static size_t earliest_gouged(gpyramid *g, const gctx *c, size_t i, amp_gouge_vi
     return best;
 }
 
-static size_t column_of(double v, double lo, double w, size_t P)
-{
-    return (size_t)fmax(0.0, fmin((double)P - 1, floor((v - lo) / w)));
-}
-
-/* Insert segment i into the columns its box covers, and raise the pyramid. */
-static amp_status pyramid_insert(gpyramid *g, const gctx *c, size_t i, amp_error *err)
+/* Insert segment i into the columns its box covers (their room was counted), and raise the pyramid. */
+static void pyramid_insert(gpyramid *g, const gctx *c, size_t i)
 {
     const gseg *t = &c->seg[i];
-    size_t x0 = column_of(t->box.min.x, g->all.min.x, g->cw, g->P);
-    size_t x1 = column_of(t->box.max.x, g->all.min.x, g->cw, g->P);
-    size_t y0 = column_of(t->box.min.y, g->all.min.y, g->ch, g->P);
-    size_t y1 = column_of(t->box.max.y, g->all.min.y, g->ch, g->P);
-    size_t ix, iy;
+    size_t x0, x1, y0, y1, ix, iy;
+    columns_of(g, t, &x0, &x1, &y0, &y1);
     for (iy = y0; iy <= y1; iy++)
         for (ix = x0; ix <= x1; ix++) {
-            size_t l, cx = ix, cy = iy;
-            void *pe = g->ent;
-            if (amp_grow(g->a, &pe, &g->cap, g->nent + 1, sizeof *g->ent) != AMP_OK)
-                return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
-            g->ent = pe;
-            g->ent[g->nent].seg = (uint32_t)i;
-            g->ent[g->nent].next = g->head[iy * g->P + ix];
-            g->head[iy * g->P + ix] = (uint32_t)g->nent++;
+            size_t l, cx = ix, cy = iy, col = iy * g->P + ix;
+            g->ent[g->start[col] + g->fill[col]++] = (uint32_t)i;
             for (l = 0; l < g->L; l++, cx /= 2, cy /= 2) {
                 double *m = &g->maxz[g->off[l] + cy * (g->P >> l) + cx];
                 if (*m >= t->box.max.z)
@@ -382,7 +390,6 @@ static amp_status pyramid_insert(gpyramid *g, const gctx *c, size_t i, amp_error
                 *m = t->box.max.z;
             }
         }
-    return AMP_OK;
 }
 
 /* The first segment in print order that gouges an earlier one ((size_t)-1: none), its violation in *out. */
@@ -398,8 +405,7 @@ static size_t check_grid(const gctx *c, amp_gouge_violation *out, amp_error *err
                 found = i;
                 break;
             }
-            if ((*st = pyramid_insert(&g, c, i, err)) != AMP_OK)
-                break;
+            pyramid_insert(&g, c, i);
         }
     pyramid_free(&g);
     return found;
