@@ -163,64 +163,70 @@ static float float_up(double v)
     return (double)f < v ? nextafterf(f, HUGE_VALF) : f;
 }
 
-/* Rows [*r0, *r1] of cells touched so far, row j's columns lo[j] .. hi[j]: add the box [i0, i1] x [j0, j1]. */
-static void span_add(int *lo, int *hi, int *r0, int *r1, int i0, int i1, int j0, int j1)
+/*
+ * The cells within @p w of the XY segment a-b, row by row: row j's band of y,
+ * widened by w, clips the segment, and the clipped piece's x extent widened
+ * by w gives the row's columns. Every point within w of the segment is in a
+ * listed cell (the piece of the segment within w of a point of the band lies
+ * in the widened band, and the point within w of it in x); the ends are
+ * padded by a millionth of a cell against rounding. Rows *r0 .. *r1, columns
+ * lo[j] .. hi[j]; none when *r0 > *r1.
+ */
+static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, int *lo, int *hi, int *r0,
+                          int *r1)
 {
+    double cell = it->grid_cell, pad = 1e-6 * cell, dy = b.y - a.y, dx = b.x - a.x;
     int j;
-    for (j = j0; j <= j1; j++)
-        if (j < *r0 || j > *r1) {
-            lo[j] = i0;
-            hi[j] = i1;
-        } else {
-            lo[j] = i0 < lo[j] ? i0 : lo[j];
-            hi[j] = i1 > hi[j] ? i1 : hi[j];
+    w += pad;
+    *r0 = grid_index(fmin(a.y, b.y) - w, it->grid_y0, cell);
+    *r1 = grid_index(fmax(a.y, b.y) + w, it->grid_y0, cell);
+    for (j = *r0; j <= *r1; j++) {
+        /* the band of row j (the edge rows reach on: grid_index clamps) */
+        double ylo = j == 0 ? -HUGE_VAL : it->grid_y0 + (double)j * cell - w;
+        double yhi = j == AMP_GCODE_GRID - 1 ? HUGE_VAL : it->grid_y0 + (double)(j + 1) * cell + w;
+        double t0 = 0.0, t1 = 1.0, xa, xb;
+        if (dy != 0.0) {
+            double ta = (ylo - a.y) / dy, tb = (yhi - a.y) / dy;
+            t0 = fmax(t0, fmin(ta, tb));
+            t1 = fmin(t1, fmax(ta, tb));
         }
-    *r0 = j0 < *r0 ? j0 : *r0;
-    *r1 = j1 > *r1 ? j1 : *r1;
+        if (dy == 0.0 ? (a.y < ylo || a.y > yhi) : t0 > t1) {
+            lo[j] = 1; /* an empty row (the widened band misses the segment) */
+            hi[j] = 0;
+            continue;
+        }
+        xa = a.x + t0 * dx;
+        xb = a.x + t1 * dx;
+        lo[j] = grid_index(fmin(xa, xb) - w, it->grid_x0, cell);
+        hi[j] = grid_index(fmax(xa, xb) + w, it->grid_x0, cell);
+    }
 }
 
 /*
- * Raise every cell within @p w (plus half a sampling step) of the XY segment
- * a-b to @p top in the material grid (w > 0 only), and every cell within
- * half a step of it to @p topc in the centre-line grid and its blocks:
- * samples every half cell, each covering a box of half-width w + h/2, so
- * every point within w of the segment lies in a raised cell (conservative).
- * The samples move monotonically and their boxes overlap, so the cells of a
- * row they cover are one run: the union of the boxes is gathered per row
- * and each cell raised once (it was raised by every box over it, about six
- * times: half the writer's time on a long planar job), the same cells.
+ * Raise every cell within @p w of the XY segment a-b to @p top in the
+ * material grid (w > 0 only), and every cell the segment passes through to
+ * @p topc in the centre-line grid and its blocks (segment_cells: the cells
+ * of the segment's neighbourhood row by row, each raised once; the samples
+ * every half cell this replaces boxed in up to six times as many cells).
  */
 static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double top, double topc)
 {
-    double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), h, wc;
-    double cell = it->grid_cell;
-    long steps = (long)ceil(len / (0.5 * cell)), s;
-    int glo[AMP_GCODE_GRID], ghi[AMP_GCODE_GRID], clo[AMP_GCODE_GRID], chi[AMP_GCODE_GRID];
-    int g0 = AMP_GCODE_GRID, g1 = -1, c0 = AMP_GCODE_GRID, c1 = -1, i, j;
+    int lo[AMP_GCODE_GRID], hi[AMP_GCODE_GRID], r0, r1, i, j;
     float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
-    if (steps < 1)
-        steps = 1;
-    h = len / (double)steps;
-    wc = 0.5 * h;
-    w += wc;
-    for (s = 0; s <= steps; s++) {
-        double t = (double)s / (double)steps, px = a.x + t * dx, py = a.y + t * dy;
-        span_add(clo, chi, &c0, &c1, grid_index(px - wc, it->grid_x0, cell), grid_index(px + wc, it->grid_x0, cell),
-                 grid_index(py - wc, it->grid_y0, cell), grid_index(py + wc, it->grid_y0, cell));
-        if (w > wc)
-            span_add(glo, ghi, &g0, &g1, grid_index(px - w, it->grid_x0, cell), grid_index(px + w, it->grid_x0, cell),
-                     grid_index(py - w, it->grid_y0, cell), grid_index(py + w, it->grid_y0, cell));
+    if (w > 0.0) {
+        segment_cells(it, a, b, w, lo, hi, &r0, &r1);
+        for (j = r0; j <= r1; j++) {
+            float *row = &it->grid[j * AMP_GCODE_GRID];
+            for (i = lo[j]; i <= hi[j]; i++)
+                row[i] = row[i] < ftop ? ftop : row[i];
+        }
     }
-    for (j = g0; j <= g1; j++) {
-        float *row = &it->grid[j * AMP_GCODE_GRID];
-        for (i = glo[j]; i <= ghi[j]; i++)
-            row[i] = row[i] < ftop ? ftop : row[i];
-    }
-    for (j = c0; j <= c1; j++) {
+    segment_cells(it, a, b, 0.0, lo, hi, &r0, &r1);
+    for (j = r0; j <= r1; j++) {
         float *row = &it->grid_c[j * AMP_GCODE_GRID];
-        for (i = clo[j]; i <= chi[j]; i++)
+        for (i = lo[j]; i <= hi[j]; i++)
             row[i] = row[i] < ftopc ? ftopc : row[i];
-        for (i = clo[j] / GC_BLK; i <= chi[j] / GC_BLK; i++) {
+        for (i = lo[j] / GC_BLK; lo[j] <= hi[j] && i <= hi[j] / GC_BLK; i++) {
             float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i];
             if ((double)*cb < topc)
                 *cb = fcb;
