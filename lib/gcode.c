@@ -175,20 +175,22 @@ static float float_up(double v)
 static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, int *lo, int *hi, int *r0,
                           int *r1)
 {
-    double cell = it->grid_cell, pad = 1e-6 * cell, dy = b.y - a.y, dx = b.x - a.x;
+    double cell = it->grid_cell, pad = 1e-6 * cell, dy = b.y - a.y, dx = b.x - a.x, idy = dy != 0.0 ? 1.0 / dy : 0.0;
     int j;
     w += pad;
-    *r0 = grid_index(fmin(a.y, b.y) - w, it->grid_y0, cell);
-    *r1 = grid_index(fmax(a.y, b.y) + w, it->grid_y0, cell);
+    /* plain comparisons, not fmin/fmax (finite coordinates; those were calls into libm here) */
+    *r0 = grid_index((a.y < b.y ? a.y : b.y) - w, it->grid_y0, cell);
+    *r1 = grid_index((a.y > b.y ? a.y : b.y) + w, it->grid_y0, cell);
     for (j = *r0; j <= *r1; j++) {
         /* the band of row j (the edge rows reach on: grid_index clamps) */
         double ylo = j == 0 ? -HUGE_VAL : it->grid_y0 + (double)j * cell - w;
         double yhi = j == AMP_GCODE_GRID - 1 ? HUGE_VAL : it->grid_y0 + (double)(j + 1) * cell + w;
         double t0 = 0.0, t1 = 1.0, xa, xb;
         if (dy != 0.0) {
-            double ta = (ylo - a.y) / dy, tb = (yhi - a.y) / dy;
-            t0 = fmax(t0, fmin(ta, tb));
-            t1 = fmin(t1, fmax(ta, tb));
+            double ta = (ylo - a.y) * idy, tb = (yhi - a.y) * idy;
+            double tl = ta < tb ? ta : tb, th = ta < tb ? tb : ta;
+            t0 = tl > t0 ? tl : t0;
+            t1 = th < t1 ? th : t1;
         }
         if (dy == 0.0 ? (a.y < ylo || a.y > yhi) : t0 > t1) {
             lo[j] = 1; /* an empty row (the widened band misses the segment) */
@@ -197,8 +199,8 @@ static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, doub
         }
         xa = a.x + t0 * dx;
         xb = a.x + t1 * dx;
-        lo[j] = grid_index(fmin(xa, xb) - w, it->grid_x0, cell);
-        hi[j] = grid_index(fmax(xa, xb) + w, it->grid_x0, cell);
+        lo[j] = grid_index((xa < xb ? xa : xb) - w, it->grid_x0, cell);
+        hi[j] = grid_index((xa > xb ? xa : xb) + w, it->grid_x0, cell);
     }
 }
 
