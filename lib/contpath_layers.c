@@ -553,35 +553,56 @@ static void scratch_free(lctx *w)
     amp_pathset_free(&w->bare_skin);
 }
 
-/* The lattices K̂ (sparse) and the two solid ones, their edge lists and the sections' row indexes. */
-static amp_status shared_init(lctx *c, const amp_allocator *al, amp_error *err)
+/* Lattice t: K̂ (t = 0), the solid one along x (1) or y (2), and its edge list. */
+static amp_status lattice(lctx *c, int t, const amp_allocator *al, amp_error *err)
 {
     const amp_contpath_opts *o = c->o;
-    const amp_slices *sl = c->sl;
-    size_t li;
-    amp_status rc = amp_contpath_complex(sl, o, &c->khat, err);
-    if (rc == AMP_OK && amp_cp_khat_edges(&c->khat, al, &c->ke, &c->nke) != AMP_OK)
-        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
-    c->skins = o->skin_bottom > 0 || o->skin_top > 0;
-    for (li = 0; li < 2 && rc == AMP_OK && c->skins; li++) {
+    amp_contpath_opts so = *o;
+    amp_cx2 *k = t ? &c->kskin[t - 1] : &c->khat;
+    uint64_t **e = t ? &c->kse[t - 1] : &c->ke;
+    size_t *ne = t ? &c->nkse[t - 1] : &c->nke;
+    amp_status rc;
+    if (t) {
         /* the solid lattices: strips 4r wide with offset r, so that the
          * beads along the long sides lie side by side and cover the region
          * once (a square lattice of 4r covers it twice: beads both ways),
          * along x on even layers and along y on odd ones, as slicers turn
          * their solid infill by 90 degrees */
-        amp_contpath_opts so = *o;
         so.cell = o->skin_cell > 0 ? o->skin_cell : 4 * o->radius;
-        so.grid = li ? AMP_GRID_STRIPS_Y : AMP_GRID_STRIPS_X;
+        so.grid = t == 2 ? AMP_GRID_STRIPS_Y : AMP_GRID_STRIPS_X;
         so.offset = o->radius;
-        rc = amp_contpath_complex(sl, &so, &c->kskin[li], err);
-        if (rc == AMP_OK && amp_cp_khat_edges(&c->kskin[li], al, &c->kse[li], &c->nkse[li]) != AMP_OK)
-            rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
     }
+    rc = amp_contpath_complex(c->sl, &so, k, err);
+    if (rc == AMP_OK && amp_cp_khat_edges(k, al, e, ne) != AMP_OK)
+        rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the lattice edges");
+    return rc;
+}
+
+/* The lattices and the sections' row indexes (skin tests), each independent of the others: on the OpenMP
+ * threads with the default allocator (see workers_new). */
+static amp_status shared_init(lctx *c, const amp_allocator *al, amp_error *err)
+{
+    const amp_slices *sl = c->sl;
+    amp_error e[3];
+    amp_status r[3] = {AMP_OK, AMP_OK, AMP_OK}, rc = AMP_OK;
+    int par = al == NULL || al == amp_allocator_default(), n, t, bad = 0;
+    long li;
+    c->skins = c->o->skin_bottom > 0 || c->o->skin_top > 0;
+    n = c->skins ? 3 : 1;
+    (void)par;
+#pragma omp parallel for schedule(dynamic, 1) if (par && n > 1)
+    for (t = 0; t < n; t++)
+        r[t] = lattice(c, t, al, &e[t]);
+    for (t = 0; t < n && rc == AMP_OK; t++)
+        if ((rc = r[t]) != AMP_OK && err)
+            *err = e[t];
     if (rc == AMP_OK && c->skins) {
-        c->lix = amp_calloc(al, sl->nlayers + 1, sizeof *c->lix);
-        for (li = 0; li < sl->nlayers && rc == AMP_OK && c->lix; li++)
-            rc = amp_polyindex_build(&c->lix[li], &sl->layers[li].polys, err);
-        if (!c->lix)
+        if (!(c->lix = amp_calloc(al, sl->nlayers + 1, sizeof *c->lix)))
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing the sections");
+#pragma omp parallel for schedule(dynamic, 16) reduction(| : bad) if (par)
+        for (li = 0; li < (long)sl->nlayers; li++)
+            bad |= amp_polyindex_build(&c->lix[li], &sl->layers[li].polys, NULL) != AMP_OK;
+        if (bad)
             rc = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory indexing the sections");
     }
     return rc;

@@ -215,10 +215,14 @@ static size_t count_starts(const amp_pathset *ps)
 static size_t overhangs(const amp_slices *sl, double c, double r, double *per, double *worst, size_t *at)
 {
     size_t i, over = 0;
+    long q;
     *worst = 0;
     *at = 0;
+    /* the layer pairs are independent (the slices use the default allocator): in parallel */
+#pragma omp parallel for schedule(dynamic, 8)
+    for (q = 0; q < (long)sl->nlayers - 1; q++)
+        per[q] = amp_slices_overhang(sl, (size_t)q, 4 * r);
     for (i = 0; i + 1 < sl->nlayers; i++) {
-        per[i] = amp_slices_overhang(sl, i, 4 * r);
         over += per[i] > c * r;
         if (per[i] > *worst) {
             *worst = per[i];
