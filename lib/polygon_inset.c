@@ -602,7 +602,8 @@ static amp_status stitch_rings(const inset_ctx *c, piece_list *pl, double r, amp
         first[i + 1] += first[i];
     for (i = 0; i < npc; i++)
         sorted[first[pl->pc[i].na]++] = pl->pc[i];
-    memcpy(pl->pc, sorted, npc * sizeof *sorted);
+    if (npc)
+        memcpy(pl->pc, sorted, npc * sizeof *sorted);
     amp_free(c->al, sorted);
     /* first[na] is now the end of na's pieces: a node's first piece, npc for a node without any */
     for (i = c->nnode; i > 0; i--)
