@@ -206,12 +206,13 @@ static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, doub
 
 /*
  * Raise every cell within @p w of the XY segment a-b to @p top in the
- * material grid (w > 0 only), and every cell the segment passes through to
- * @p topc in the centre-line grid and its blocks (segment_cells: the cells
- * of the segment's neighbourhood row by row, each raised once; the samples
- * every half cell this replaces boxed in up to six times as many cells).
+ * material grid (w > 0 only), and every cell within @p wc of it (0: the cells
+ * it passes through) to @p topc in the centre-line grid and its blocks
+ * (segment_cells: the cells of the segment's neighbourhood row by row, each
+ * raised once; the samples every half cell this replaces boxed in up to six
+ * times as many cells).
  */
-static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double top, double topc)
+static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double wc, double top, double topc)
 {
     int lo[AMP_GCODE_GRID], hi[AMP_GCODE_GRID], r0, r1, i, j;
     float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
@@ -223,7 +224,7 @@ static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, dou
                 row[i] = row[i] < ftop ? ftop : row[i];
         }
     }
-    segment_cells(it, a, b, 0.0, lo, hi, &r0, &r1);
+    segment_cells(it, a, b, wc, lo, hi, &r0, &r1);
     for (j = r0; j <= r1; j++) {
         float *row = &it->grid_c[j * AMP_GCODE_GRID];
         for (i = lo[j]; i <= hi[j]; i++)
@@ -703,7 +704,7 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
     /* a planar bead's top is its vertex z (layer top); a tube rises r above its centre line */
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
     /* and the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
-    grid_raise(it, va->p, vb->p, r > 0.0 ? r : 0.0, top, fmax(va->p.z, vb->p.z));
+    grid_raise(it, va->p, vb->p, r > 0.0 ? r : 0.0, 0.0, top, fmax(va->p.z, vb->p.z));
     it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
     it->end_r = vb->r;
 }
@@ -716,10 +717,31 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
  * with the radius read back from E and chord_tol added, so that travels
  * clear what the G-code really deposits (a reader of the G-code sees that bead).
  */
-static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v, size_t k, size_t j, double area)
+static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v, size_t k, size_t j, double area,
+                          int straight)
 {
     double re = p->h > 0.0 ? 0.0 : sqrt(area / AMP_PI) + it->o.chord_tol;
     size_t m;
+    if (straight && p->h > 0.0 && j > k + 1) {
+        /* a planar chord over several input segments (a straight line of the lattice: a third of the twisted
+         * bridge's segments): one raise along the chord, widened by the farthest its input strays from it
+         * (measured: chord_tol, or more where min_segment grew the chord), with the widest bead and the
+         * highest top among its vertices */
+        double d2 = 0.0, rmax = 0.0, zmax = -HUGE_VAL, dev;
+        amp_vec3 a = v[k].p, b = v[j].p;
+        for (m = k; m <= j; m++) {
+            double ex = v[m].p.x, ey = v[m].p.y, e2 = amp_v3_seg_dist2(amp_v3(ex, ey, 0.0), amp_v3(a.x, a.y, 0.0),
+                                                                     amp_v3(b.x, b.y, 0.0), NULL);
+            d2 = e2 > d2 ? e2 : d2;
+            rmax = v[m].r > rmax ? v[m].r : rmax;
+            zmax = v[m].p.z > zmax ? v[m].p.z : zmax;
+        }
+        dev = sqrt(d2);
+        grid_raise(it, a, b, rmax > 0.0 ? rmax + dev : 0.0, dev, zmax, zmax);
+        it->zc_max = fmax(it->zc_max, zmax);
+        it->end_r = v[j].r;
+        return;
+    }
     for (m = k; m < j; m++) {
         amp_pvert a = v[m], b = v[m + 1];
         if (p->h <= 0.0 && (a.r > 0.0 || b.r > 0.0)) {
@@ -748,7 +770,7 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
         vol += amp_bead_area(0.5 * (v[m].r + v[m + 1].r), p->h) * amp_v3_dist(v[m].p, v[m + 1].p);
     de = it->o.flow * vol / it->fil_area;
     area = len > 0.0 ? vol / len : 0.0;
-    raise_written(it, p, v, k, j, area);
+    raise_written(it, p, v, k, j, area, arc == NULL);
     if (area * base > it->o.max_volumetric_flow) {
         /* volumetric cap: lower the feed, rounded down so that the printed F respects the cap */
         fu = (long long)floor(it->o.max_volumetric_flow / area * 600.0);
