@@ -12,7 +12,9 @@
 #endif
 #include "numtext.h"
 
-/* Work state of amp_contpath_layers(). */
+/* Work state of amp_contpath_layers(): the lattices and indexes (shared, read-only once built), one
+ * island's scratch (isl .. bare_skin: a work context per thread, workers_new) and the print order of the
+ * islands (at, have_at, done: the calling thread's context only). */
 typedef struct lctx {
     const amp_slices *sl;
     const amp_contpath_opts *o;
@@ -578,14 +580,18 @@ static amp_status lattice(lctx *c, int t, const amp_allocator *al, amp_error *er
     return rc;
 }
 
+/* May work that allocates through @p al run on the OpenMP threads? Only with the default allocator
+ * (malloc): a caller's allocator need not be thread-safe (include/ampath/contpath.h). */
+static int threads_may_allocate(const amp_allocator *al) { return al == NULL || al == amp_allocator_default(); }
+
 /* The lattices and the sections' row indexes (skin tests), each independent of the others: on the OpenMP
- * threads with the default allocator (see workers_new). */
+ * threads when they may allocate. */
 static amp_status shared_init(lctx *c, const amp_allocator *al, amp_error *err)
 {
     const amp_slices *sl = c->sl;
     amp_error e[3];
     amp_status r[3] = {AMP_OK, AMP_OK, AMP_OK}, rc = AMP_OK;
-    int par = al == NULL || al == amp_allocator_default(), n, t, bad = 0;
+    int par = threads_may_allocate(al), n, t, bad = 0;
     long li;
     c->skins = c->o->skin_bottom > 0 || c->o->skin_top > 0;
     n = c->skins ? 3 : 1;
@@ -632,9 +638,7 @@ static lctx *workers_new(const lctx *c, const amp_allocator *al, size_t *nw)
     size_t n = 1, t;
     lctx *w;
 #ifdef _OPENMP
-    /* the islands are made on OpenMP threads only with the default allocator: a caller's allocator need not
-     * be thread-safe (include/ampath/contpath.h) */
-    if (al == NULL || al == amp_allocator_default())
+    if (threads_may_allocate(al))
         n = (size_t)omp_get_max_threads();
 #endif
     w = amp_calloc(al, n, sizeof *w);
