@@ -1287,6 +1287,59 @@ START_TEST(the_band_retry_asks_the_callers_verifier)
 }
 END_TEST
 
+START_TEST(a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the_verifier)
+{
+    /* the one case of 60 sweep runs where a skin band's rings met the core's: the bunny meshed at 0.95 mm,
+     * 0.3 mm layers, r 0.2. The tool first slices without the per-island verifier (its final check is the
+     * safety net); the check fails on that island, so the tool slices again with the verifier, which makes
+     * the island with its skin regions whole: exit 0, one retry, every path clean, and the paths are those
+     * the library makes with the verifier from the start */
+    amp_mesh m;
+    amp_error err;
+    amp_slices sl;
+    amp_slice_opts so;
+    amp_pathset lib, cli;
+    amp_contpath_stats st;
+    amp_contpath_opts o;
+    char args[768], out[4096];
+    const char *stl = fx_tmp("bandbunny.stl"), *amp = fx_tmp("bandbunny.amp");
+    size_t i;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, FX_PART_BUNNY, 0.95), AMP_OK);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.3 --radius 0.2 --continuous -o %s --json", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"band_retries\":1,") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"crossings\":0,\"repeated_edges\":0") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "\"failed_paths\":0") != NULL, "%s", out);
+    /* the library with the verifier, on the mesh as the tool read it */
+    amp_mesh_free(&m);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_file(&m, stl, &err), AMP_OK);
+    amp_slices_init(&sl, NULL);
+    so.layer = 0.3;
+    so.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
+    amp_contpath_opts_default(&o, 0.2);
+    o.verify_stroke = amp_check_path_stroke;
+    amp_pathset_init(&lib, NULL);
+    ck_assert_msg(amp_contpath_layers(&sl, &o, &lib, &st, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_uint_eq(st.band_retries, 1);
+    amp_pathset_init(&cli, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&cli, amp, &err), AMP_OK);
+    ck_assert_uint_eq(cli.npaths, lib.npaths);
+    ck_assert_uint_eq(cli.nverts, lib.nverts);
+    for (i = 0; i < lib.nverts; i++) /* the file holds 10 significant digits, the library rounds to them */
+        ck_assert(cli.verts[i].p.x == lib.verts[i].p.x && cli.verts[i].p.y == lib.verts[i].p.y);
+    amp_pathset_free(&lib);
+    amp_pathset_free(&cli);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+    remove(stl);
+    remove(amp);
+}
+END_TEST
+
 START_TEST(skin_layers_are_covered_by_beads_and_sparse_layers_are_not)
 {
     /* the idler's first and last layers are skins: >= 95 % of the section
@@ -1452,6 +1505,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
+    tcase_add_test(tc, a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the_verifier);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -306,8 +306,8 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
  * parallel (they are independent; a third of the run on the vase);
  * figures summed, and the first failure's message printed, in path order.
  * AMP_ERR_NOMEM only. */
-static amp_status check_paths(const amp_slices *sl, const amp_pathset *ps, size_t *crossings, size_t *repeats,
-                              size_t *outside, size_t *failed, amp_error *err)
+static amp_status check_paths(const amp_slices *sl, const amp_pathset *ps, int quiet, size_t *crossings,
+                              size_t *repeats, size_t *outside, size_t *failed, amp_error *err)
 {
     amp_stroke_report *reps = calloc(ps->npaths + 1, sizeof *reps);
     unsigned char *cst = calloc(ps->npaths + 1, 1);
@@ -335,7 +335,7 @@ static amp_status check_paths(const amp_slices *sl, const amp_pathset *ps, size_
             cst[i] = cs == AMP_OK ? 0 : (cs == AMP_ERR_NOMEM ? 2 : 1);
             if (cst[i] == 2)
                 rc = AMP_ERR_NOMEM;
-            else if (cst[i] == 1 && *failed == 0)
+            else if (cst[i] == 1 && *failed == 0 && !quiet)
                 fprintf(stderr, "ampath slice: path %lu fails its check: %s\n", (unsigned long)i, err->msg);
         }
         *failed += cst[i] != 0;
@@ -348,6 +348,25 @@ static amp_status check_paths(const amp_slices *sl, const amp_pathset *ps, size_
     return rc;
 }
 
+/* The paths of every layer into @p ps (emptied first; progress on a terminal), with the options' per-island
+ * stroke verifier when @p verify, without it otherwise. */
+static amp_status make_layers(const amp_slices *sl, const amp_contpath_opts *o, int verify, amp_pathset *ps,
+                              amp_contpath_stats *st, amp_error *err)
+{
+    amp_contpath_opts po = *o;
+    cli_progress bar;
+    amp_status cs;
+    amp_pathset_clear(ps);
+    if (!verify)
+        po.verify_stroke = NULL;
+    po.progress = cli_progress_fn;
+    po.progress_user = &bar;
+    cli_progress_begin(&bar, verify ? "slice again" : "slice");
+    cs = amp_contpath_layers(sl, &po, ps, st, err);
+    cli_progress_end(&bar);
+    return cs;
+}
+
 static int run_continuous(const char *file, const char *out, const amp_slices *sl, const amp_contpath_opts *o,
                           int json, double t0, double epsc, long svg_layer)
 {
@@ -357,18 +376,25 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     size_t crossings = 0, repeats = 0, outside = 0, failed = 0, over, at;
     double *per = calloc(sl->nlayers + 1, sizeof *per), worst;
     int rc = CLI_OK;
+    amp_status cs;
     if (!per)
         return cli_fail("slice", CLI_USAGE, "out of memory");
-    amp_contpath_opts po = *o;
-    cli_progress bar;
-    amp_status cs;
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
-    po.progress = cli_progress_fn;
-    po.progress_user = &bar;
-    cli_progress_begin(&bar, "slice");
-    cs = amp_contpath_layers(sl, &po, &ps, &st, &err);
-    cli_progress_end(&bar);
+    /* the final check is the skin bands' safety net first: the per-island verifier (o->verify_stroke, the
+     * same check once more on most islands: a sixth of the time) runs only when a path fails it */
+    cs = make_layers(sl, o, 0, &ps, &st, &err);
+    if (cs == AMP_OK)
+        cs = check_paths(sl, &ps, 1, &crossings, &repeats, &outside, &failed, &err);
+    if (cs == AMP_OK && failed) {
+        /* the layers again with the verifier (an island whose banded paths fail it is made again with its
+         * skin regions whole), and the check again, with its message */
+        crossings = repeats = outside = failed = 0;
+        if (o->verify_stroke)
+            cs = make_layers(sl, o, 1, &ps, &st, &err);
+        if (cs == AMP_OK)
+            cs = check_paths(sl, &ps, 0, &crossings, &repeats, &outside, &failed, &err);
+    }
     if (cs != AMP_OK) {
         amp_pathset_free(&ps);
         free(per);
@@ -385,11 +411,6 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
                 "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm); layer %lu at "
                 "z %.4g starts over an empty layer (a piece of the part begins in mid-air): it needs support\n",
                 (unsigned long)over, epsc, epsc * o->radius, (unsigned long)at, sl->layers[at].z_print);
-    if (check_paths(sl, &ps, &crossings, &repeats, &outside, &failed, &err) != AMP_OK) {
-        amp_pathset_free(&ps);
-        free(per);
-        return cli_fail_err("slice", &err);
-    }
     if (out && svg_layer >= 0)
         rc = write_stroke_svg(out, sl, &ps, svg_layer, o->radius);
     else if (out) {
