@@ -154,10 +154,6 @@ static double timed(const char *cmd)
     return rc == 0 ? t : -1;
 }
 
-/* One mesh side by side: ours = `ampath slice --continuous` + `ampath gcode`
- * as processes (this very binary), PrusaSlicer = headless --export-gcode;
- * both 0.2 mm layers, 0.45 mm beads (0.4 mm nozzle) and 20 % sparse infill
- * (PrusaSlicer's default; ours is 64 % unless told), files written. */
 /* Median of the first @p n (1 or 3) values. */
 static double median3(const double *v, size_t n)
 {
@@ -170,6 +166,10 @@ static double median3(const double *v, size_t n)
     return v[2];
 }
 
+/* One mesh side by side: ours = `ampath slice --continuous` + `ampath gcode`
+ * as processes (this very binary), PrusaSlicer = headless --export-gcode;
+ * both 0.2 mm layers, 0.45 mm beads (0.4 mm nozzle) and 20 % sparse infill
+ * (PrusaSlicer's default; ours is 64 % unless told), files written. */
 static void side_by_side(cli_json *j, const char *name, const amp_mesh *m, double *worst, int quick)
 {
     char stl[256], amp[256], gc[256], gp[256], cmd[2400], cmd2[1200], self[512];
