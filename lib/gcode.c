@@ -21,10 +21,9 @@
 #define GC_COORD_MAX 99999.0 /* keeps every number short enough for AMP_GCODE_LINE_MAX */
 #define GC_FIT_TOL 5e-4      /* half the 0.001 mm resolution of the written coordinates */
 #define GC_HEADER_LINES 9
-#if AMP_GCODE_GRID % 16 != 0
-#error "AMP_GCODE_GRID must be a multiple of 16 (blocks of the head-cone test)"
+#if AMP_GCODE_GRID < 16 || AMP_GCODE_GRID > 32768 || (AMP_GCODE_GRID & (AMP_GCODE_GRID - 1)) != 0
+#error "AMP_GCODE_GRID must be a power of two from 16 to 32768 (the head-cone test's max-pyramid halves it)"
 #endif
-#define GC_BLK (AMP_GCODE_GRID / 16) /* cells per block side of grid_cb */
 #define GC_CONE_GROUP 8 /* travel samples sharing one head-cone floor */
 
 enum { PH_HEADER, PH_START, PH_SETUP, PH_PATHS, PH_TEARDOWN, PH_END, PH_DONE };
@@ -204,6 +203,33 @@ static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, doub
     }
 }
 
+/* Start of level l (side AMP_GCODE_GRID >> l, l >= 1) in the max-pyramid grid_cp. */
+static size_t pyramid_level(int l)
+{
+    size_t off = 0;
+    int m;
+    for (m = 1; m < l; m++)
+        off += (size_t)(AMP_GCODE_GRID >> m) * (size_t)(AMP_GCODE_GRID >> m);
+    return off;
+}
+
+/* Centre-line cell (i, j) was raised to @p v: the blocks over it are raised too, up to the first one already
+ * as high (every block above that one is at least as high). */
+static void pyramid_raise(amp_gcode_iter *it, int i, int j, float v)
+{
+    size_t off = 0;
+    int side = AMP_GCODE_GRID / 2;
+    for (; side >= 1; off += (size_t)side * (size_t)side, side /= 2) {
+        float *c;
+        i /= 2;
+        j /= 2;
+        c = &it->grid_cp[off + (size_t)j * (size_t)side + (size_t)i];
+        if (*c >= v)
+            break;
+        *c = v;
+    }
+}
+
 /*
  * Raise every cell within @p w of the XY segment a-b to @p top in the
  * material grid (w > 0 only), and every cell within @p wc of it (0: the cells
@@ -215,7 +241,7 @@ static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, doub
 static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double wc, double top, double topc)
 {
     int lo[AMP_GCODE_GRID], hi[AMP_GCODE_GRID], r0, r1, i, j;
-    float ftop = float_up(top), ftopc = float_up(topc), fcb = nextafterf((float)topc, HUGE_VALF);
+    float ftop = float_up(top), ftopc = float_up(topc);
     if (w > 0.0) {
         segment_cells(it, a, b, w, lo, hi, &r0, &r1);
         for (j = r0; j <= r1; j++) {
@@ -228,12 +254,10 @@ static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, dou
     for (j = r0; j <= r1; j++) {
         float *row = &it->grid_c[j * AMP_GCODE_GRID];
         for (i = lo[j]; i <= hi[j]; i++)
-            row[i] = row[i] < ftopc ? ftopc : row[i];
-        for (i = lo[j] / GC_BLK; lo[j] <= hi[j] && i <= hi[j] / GC_BLK; i++) {
-            float *cb = &it->grid_cb[(j / GC_BLK) * 16 + i];
-            if ((double)*cb < topc)
-                *cb = fcb;
-        }
+            if (row[i] < ftopc) {
+                row[i] = ftopc;
+                pyramid_raise(it, i, j, ftopc);
+            }
     }
 }
 
@@ -547,8 +571,8 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->hull_n = it->hull_i = 0;
     for (i = 0; i < AMP_GCODE_GRID * AMP_GCODE_GRID; i++)
         it->grid[i] = it->grid_c[i] = -HUGE_VALF;
-    for (i = 0; i < 16 * 16; i++)
-        it->grid_cb[i] = -HUGE_VALF;
+    for (i = 0; i < AMP_GCODE_PYRAMID; i++)
+        it->grid_cp[i] = -HUGE_VALF;
     it->zc_max = -HUGE_VAL;
     it->end_r = 0.0;
     it->direct = 0;
@@ -826,6 +850,15 @@ static inline double rect_dist2(double px, double py, double x0, double y0, doub
 }
 
 
+/* May a block of centre-line height @p c at squared distance @p d2 raise the floor above @p lo? No when the
+ * cone's run over the distance exceeds the room by a clear margin (the exact formula would not raise lo
+ * either, and its square root is skipped). */
+static inline int may_raise(double c, double d2, double k, double zo, double hh, double lo)
+{
+    double room = c - zo + k * hh - lo;
+    return room > 0.0 && !(k * k * d2 > room * room * (1.0 + 1e-6) + 1e-12);
+}
+
 /*
  * The lowest nozzle height over the interval of half-width @p hh around
  * (@p px, @p py) whose head cone (docs/interfaces.md §2: tip z_offs above the nozzle,
@@ -833,44 +866,64 @@ static inline double rect_dist2(double px, double py, double x0, double y0, doub
  * criterion Algorithm 2 and `ampath check` apply to printing points — at
  * least @p lo; the search stops once it passes @p stop. Each centre-line
  * point lies in a cell of grid_c holding at least its z and is no nearer than
- * that cell's rectangle; blocks of cells (grid_cb) too low to matter at their
- * distance are skipped whole.
+ * that cell's rectangle. The max-pyramid grid_cp bounds every block of cells:
+ * a block too low to matter at its distance is skipped whole, from the whole
+ * grid down (the children nearer the point first), so the answer is the
+ * maximum over the cells the exact formula would raise it at, as a scan of
+ * every cell would give it (it was two thirds of the writer's time on the demo
+ * with two fixed levels).
  */
 static double cone_floor(const amp_gcode_iter *it, double px, double py, double hh, double lo, double stop)
 {
-    double k = 1.0 / tan(it->o.head_theta * AMP_PI / 180.0), cell = it->grid_cell, bs = GC_BLK * cell;
+    double k = 1.0 / tan(it->o.head_theta * AMP_PI / 180.0), cell = it->grid_cell;
     double zo = it->o.head_z_offs;
-    int bi, bj, i, j;
+    int stack[3 * 4 * 16], top = 0, levels = 0, side;
+    size_t off[16];
     if (it->zc_max - zo + k * hh <= lo)
         return lo;
-    for (bj = 0; bj < 16; bj++)
-        for (bi = 0; bi < 16; bi++) {
-            double c = (double)it->grid_cb[bj * 16 + bi], room = c - zo + k * hh - lo, d2;
-            if (!(room > 0.0))
-                continue;
-            /* as for the cells below: a clear margin skips the block without its sqrt, else the exact test */
-            d2 = rect_dist2(px, py, it->grid_x0 + bi * bs, it->grid_y0 + bj * bs, bs);
-            if (k * k * d2 > room * room * (1.0 + 1e-6) + 1e-12 || c - zo - k * (sqrt(d2) - hh) <= lo)
-                continue;
-            for (j = bj * GC_BLK; j < (bj + 1) * GC_BLK; j++)
-                for (i = bi * GC_BLK; i < (bi + 1) * GC_BLK; i++) {
-                    double v;
-                    c = (double)it->grid_c[j * AMP_GCODE_GRID + i];
-                    room = c - zo + k * hh - lo;
-                    if (!(room > 0.0))
-                        continue;
-                    /* the cone's run over the cell's distance exceeds the room by a clear margin: the exact
-                     * formula below would not raise lo either, and its sqrt is skipped */
-                    d2 = rect_dist2(px, py, it->grid_x0 + i * cell, it->grid_y0 + j * cell, cell);
-                    if (k * k * d2 > room * room * (1.0 + 1e-6) + 1e-12)
-                        continue;
-                    v = c - zo - k * (sqrt(d2) - hh);
-                    if (v > lo)
-                        lo = v;
-                }
-            if (lo > stop)
-                return lo;
+    for (side = AMP_GCODE_GRID / 2; side >= 1; side /= 2) {
+        levels++;
+        off[levels] = pyramid_level(levels);
+    }
+    /* (level, x, y) from the top level (one block: the whole grid) down; level 0 is grid_c itself */
+    stack[top++] = levels;
+    stack[top++] = 0;
+    stack[top++] = 0;
+    while (top) {
+        int y = stack[--top], x = stack[--top], l = stack[--top], n = AMP_GCODE_GRID >> l, q, cx[4], cy[4];
+        double bs = cell * (double)(1 << l), c, d2[4];
+        if (l == 0) {
+            double d;
+            c = (double)it->grid_c[y * AMP_GCODE_GRID + x];
+            d = rect_dist2(px, py, it->grid_x0 + x * cell, it->grid_y0 + y * cell, cell);
+            if (may_raise(c, d, k, zo, hh, lo)) {
+                double v = c - zo - k * (sqrt(d) - hh);
+                if (v > lo)
+                    lo = v;
+                if (lo > stop)
+                    return lo;
+            }
+            continue;
         }
+        c = (double)it->grid_cp[off[l] + (size_t)y * (size_t)n + (size_t)x];
+        if (!may_raise(c, rect_dist2(px, py, it->grid_x0 + x * bs, it->grid_y0 + y * bs, bs), k, zo, hh, lo))
+            continue;
+        /* the four children, the farthest pushed first (the nearest is searched first and raises lo soonest) */
+        for (q = 0; q < 4; q++) {
+            cx[q] = 2 * x + (q & 1);
+            cy[q] = 2 * y + (q >> 1);
+            d2[q] = rect_dist2(px, py, it->grid_x0 + cx[q] * 0.5 * bs, it->grid_y0 + cy[q] * 0.5 * bs, 0.5 * bs);
+        }
+        for (q = 0; q < 4; q++) {
+            int m, far = 0;
+            for (m = 1; m < 4; m++)
+                far = d2[m] > d2[far] ? m : far;
+            stack[top++] = l - 1;
+            stack[top++] = cx[far];
+            stack[top++] = cy[far];
+            d2[far] = -1.0;
+        }
+    }
     return lo;
 }
 
