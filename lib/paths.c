@@ -302,16 +302,35 @@ static size_t format_head(const amp_pathset *ps, size_t i, char *out)
     return n > 0 ? (size_t)n : 0;
 }
 
+/* The text of the last number written in a column (z and r repeat along a path: a layer's height, a bead's
+ * radius), so that a repeat is copied instead of formatted again. */
+typedef struct g10_memo {
+    double v;
+    size_t n; /* 0: none yet */
+    char s[AMP_G10_MAX];
+} g10_memo;
+
+static size_t format_memo(double v, g10_memo *m, char *out)
+{
+    /* the same bits, the same text (a -0 and a 0 differ in bits: each keeps its own) */
+    if (m->n == 0 || memcmp(&m->v, &v, sizeof v) != 0) {
+        m->n = amp_g10_format(v, m->s);
+        m->v = v;
+    }
+    memcpy(out, m->s, m->n);
+    return m->n;
+}
+
 /* "%.10g %.10g %.10g %.10g\n", without printf's cost on the hot path */
-static size_t format_vert(const amp_pvert *v, char *line)
+static size_t format_vert(const amp_pvert *v, char *line, g10_memo *mz, g10_memo *mr)
 {
     size_t n = amp_g10_format(v->p.x, line);
     line[n++] = ' ';
     n += amp_g10_format(v->p.y, line + n);
     line[n++] = ' ';
-    n += amp_g10_format(v->p.z, line + n);
+    n += format_memo(v->p.z, mz, line + n);
     line[n++] = ' ';
-    n += amp_g10_format(v->r, line + n);
+    n += format_memo(v->r, mr, line + n);
     line[n++] = '\n';
     return n;
 }
@@ -321,6 +340,8 @@ static size_t format_vert(const amp_pvert *v, char *line)
 static void format_block(const amp_pathset *ps, wblock *b, int last)
 {
     size_t i = b->i, k = b->k, left = b->nv, len = 0;
+    g10_memo mz, mr;
+    mz.n = mr.n = 0;
     while (i < ps->npaths && (left > 0 || (last && k == 0))) {
         if (k == 0)
             len += format_head(ps, i, b->buf + len);
@@ -329,7 +350,7 @@ static void format_block(const amp_pathset *ps, wblock *b, int last)
             k = 0;
             continue;
         }
-        len += format_vert(amp_pathset_path_verts(ps, i) + k, b->buf + len);
+        len += format_vert(amp_pathset_path_verts(ps, i) + k, b->buf + len, &mz, &mr);
         left--;
         if (++k == ps->paths[i].n) {
             i++;
