@@ -154,7 +154,9 @@ amp_box3 amp_pathset_bbox(const amp_pathset *ps)
 amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err)
 {
     amp_lex lx;
-    size_t np0 = ps->npaths, nv0 = ps->nverts;
+    size_t np0 = ps->npaths, nv0 = ps->nverts, memo_len[2] = {0, 0};
+    const char *memo_tok[2] = {NULL, NULL};
+    double memo_val[2] = {0.0, 0.0};
     long remaining = 0;
     int r;
     amp_status st = AMP_OK;
@@ -181,8 +183,20 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
                               lx.ntok);
                 break;
             }
-            for (i = 0; i < 4 && st == AMP_OK; i++)
+            for (i = 0; i < 4 && st == AMP_OK; i++) {
+                /* z and r repeat along a path: the same text as the line before is the same number */
+                if (i >= 2 && memo_len[i - 2] && lx.toklen[i] == memo_len[i - 2] &&
+                    memcmp(lx.tok[i], memo_tok[i - 2], memo_len[i - 2]) == 0) {
+                    x[i] = memo_val[i - 2];
+                    continue;
+                }
                 st = amp_lex_double(&lx, i, &x[i], err);
+                if (i >= 2 && st == AMP_OK) {
+                    memo_tok[i - 2] = lx.tok[i];
+                    memo_len[i - 2] = lx.toklen[i];
+                    memo_val[i - 2] = x[i];
+                }
+            }
             if (st != AMP_OK)
                 break;
             if (x[3] < 0.0) {
