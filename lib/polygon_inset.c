@@ -10,6 +10,18 @@
 
 /* ---- inward Minkowski offset ---- */
 
+/* min / max of finite coordinates as plain comparisons: libm's fmin and fmax are calls (NaN rules) and were
+ * 5 % of a slice in the hot loops below */
+static inline double dmin(double a, double b) { return a < b ? a : b; }
+static inline double dmax(double a, double b) { return a > b ? a : b; }
+
+/* |p - q| <= d, without hypot (its overflow care is a call per vertex pair; coordinates are millimetres) */
+static inline int within(amp_vec2 p, amp_vec2 q, double d)
+{
+    double dx = p.x - q.x, dy = p.y - q.y;
+    return dx * dx + dy * dy <= d * d;
+}
+
 typedef struct raw_seg {
     amp_vec2 a, b;
     size_t na, nb; /* node ids of the end points */
@@ -121,7 +133,7 @@ static amp_status raw_ring(inset_ctx *c, const amp_vec2 *p, size_t n, int left, 
 static int cmp_seg_x(const void *a, const void *b)
 {
     const raw_seg *s = a, *t = b;
-    double x = fmin(s->a.x, s->b.x), y = fmin(t->a.x, t->b.x);
+    double x = dmin(s->a.x, s->b.x), y = dmin(t->a.x, t->b.x);
     return x < y ? -1 : (x > y ? 1 : 0);
 }
 
@@ -198,10 +210,10 @@ static amp_status egrid_build(egrid *g, const amp_polyset *in, double r, const a
         for (k = 0; k < n; k++, e++) {
             g->ea[e] = p[k];
             g->eb[e] = p[(k + 1) % n];
-            xa = fmin(xa, p[k].x);
-            xb = fmax(xb, p[k].x);
-            ya = fmin(ya, p[k].y);
-            yb = fmax(yb, p[k].y);
+            xa = dmin(xa, p[k].x);
+            xb = dmax(xb, p[k].x);
+            ya = dmin(ya, p[k].y);
+            yb = dmax(yb, p[k].y);
         }
     }
     g->cell = fmax(r, fmax(xb - xa, yb - ya) / 256.0);
@@ -218,8 +230,8 @@ static amp_status egrid_build(egrid *g, const amp_polyset *in, double r, const a
     for (pass = 0; pass < 2; pass++) {
         for (e = 0; e < g->ne; e++) {
             long ix0, ix1, iy0, iy1, x, y;
-            egrid_range(g, fmin(g->ea[e].x, g->eb[e].x), fmax(g->ea[e].x, g->eb[e].x), fmin(g->ea[e].y, g->eb[e].y),
-                        fmax(g->ea[e].y, g->eb[e].y), &ix0, &ix1, &iy0, &iy1);
+            egrid_range(g, dmin(g->ea[e].x, g->eb[e].x), dmax(g->ea[e].x, g->eb[e].x), dmin(g->ea[e].y, g->eb[e].y),
+                        dmax(g->ea[e].y, g->eb[e].y), &ix0, &ix1, &iy0, &iy1);
             for (y = iy0; y <= iy1; y++)
                 for (x = ix0; x <= ix1; x++) {
                     size_t cidx = (size_t)(y * g->nx + x);
@@ -337,15 +349,15 @@ static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
     size_t m = 0, i, pass;
     for (i = 0; i < n; i++) {
         size_t k;
-        if (m >= 1 && hypot(p[i].x - p[m - 1].x, p[i].y - p[m - 1].y) <= tol)
+        if (m >= 1 && within(p[i], p[m - 1], tol))
             continue;
         /* p[i] repeats p[m - k] for a small k: p[m - k + 1 .. m - 1] is a
          * needle (k = 2) or a tiny loop within @p small of it; cut it out */
         for (k = 2; k <= 8 && k <= m; k++)
-            if (hypot(p[i].x - p[m - k].x, p[i].y - p[m - k].y) <= tol) {
+            if (within(p[i], p[m - k], tol)) {
                 size_t q;
                 for (q = m - k + 1; q < m; q++)
-                    if (hypot(p[q].x - p[i].x, p[q].y - p[i].y) > small)
+                    if (!within(p[q], p[i], small))
                         break;
                 if (q == m)
                     break;
@@ -358,12 +370,12 @@ static size_t despike(amp_vec2 *p, size_t n, double tol, double small)
     }
     /* the seam: the same patterns across the end of the array */
     for (pass = 0; pass < 4 && m >= 3; pass++) {
-        if (hypot(p[0].x - p[m - 1].x, p[0].y - p[m - 1].y) <= tol)
+        if (within(p[0], p[m - 1], tol))
             m--;
-        else if (hypot(p[1].x - p[m - 1].x, p[1].y - p[m - 1].y) <= tol) {
+        else if (within(p[1], p[m - 1], tol)) {
             memmove(p, p + 1, (m - 1) * sizeof *p); /* p[0] was a tip */
             m -= 2;
-        } else if (hypot(p[0].x - p[m - 2].x, p[0].y - p[m - 2].y) <= tol)
+        } else if (within(p[0], p[m - 2], tol))
             m -= 2; /* p[m - 1] was a tip, p[m - 2] repeats p[0] */
     }
     return m;
@@ -381,12 +393,12 @@ static size_t untangle(amp_vec2 *p, size_t n)
         again = 0;
         for (i = from; i + 2 < n && !again; i++) {
             amp_vec2 a = p[i], b = p[i + 1];
-            double x0 = fmin(a.x, b.x), x1 = fmax(a.x, b.x), y0 = fmin(a.y, b.y), y1 = fmax(a.y, b.y);
+            double x0 = dmin(a.x, b.x), x1 = dmax(a.x, b.x), y0 = dmin(a.y, b.y), y1 = dmax(a.y, b.y);
             for (j = i + 2; j < n && j <= i + 16 && !again; j++) {
                 amp_vec2 c = p[j], d = p[(j + 1) % n];
                 double d1, d2, d3, d4, t;
                 /* disjoint boxes cannot cross properly (most pairs end here) */
-                if (fmax(c.x, d.x) < x0 || fmin(c.x, d.x) > x1 || fmax(c.y, d.y) < y0 || fmin(c.y, d.y) > y1)
+                if (dmax(c.x, d.x) < x0 || dmin(c.x, d.x) > x1 || dmax(c.y, d.y) < y0 || dmin(c.y, d.y) > y1)
                     continue;
                 d1 = amp_v2_orient(a, b, c);
                 d2 = amp_v2_orient(a, b, d);
@@ -474,12 +486,12 @@ static amp_status raw_crossings(inset_ctx *c)
     if (c->nseg > 1)
         qsort(c->seg, c->nseg, sizeof *c->seg, cmp_seg_x);
     for (i = 0; i < c->nseg && st == AMP_OK; i++) {
-        double xmax = fmax(c->seg[i].a.x, c->seg[i].b.x);
-        double ylo = fmin(c->seg[i].a.y, c->seg[i].b.y), yhi = fmax(c->seg[i].a.y, c->seg[i].b.y);
+        double xmax = dmax(c->seg[i].a.x, c->seg[i].b.x);
+        double ylo = dmin(c->seg[i].a.y, c->seg[i].b.y), yhi = dmax(c->seg[i].a.y, c->seg[i].b.y);
         for (j = i + 1; j < c->nseg && st == AMP_OK; j++) {
-            if (fmin(c->seg[j].a.x, c->seg[j].b.x) > xmax)
+            if (dmin(c->seg[j].a.x, c->seg[j].b.x) > xmax)
                 break;
-            if (fmax(c->seg[j].a.y, c->seg[j].b.y) < ylo || fmin(c->seg[j].a.y, c->seg[j].b.y) > yhi)
+            if (dmax(c->seg[j].a.y, c->seg[j].b.y) < ylo || dmin(c->seg[j].a.y, c->seg[j].b.y) > yhi)
                 continue;
             st = intersect(c, i, j);
         }
