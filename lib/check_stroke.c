@@ -145,7 +145,7 @@ static double dist2(amp_vec2 q, amp_vec2 a, amp_vec2 b)
 {
     double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t = 0, ex, ey;
     if (l2 > 0)
-        t = fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0);
+        t = amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0);
     ex = a.x + t * dx - q.x;
     ey = a.y + t * dy - q.y;
     return ex * ex + ey * ey;
@@ -228,9 +228,9 @@ static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek, amp_skey
         sg[ns].b = pts[i + 1];
         sg[ns].ia = id[i];
         sg[ns].ib = id[i + 1];
-        sg[ns].xmin = fmin(pts[i].x, pts[i + 1].x);
-        sg[ns].ymin = fmin(pts[i].y, pts[i + 1].y);
-        sg[ns].ymax = fmax(pts[i].y, pts[i + 1].y);
+        sg[ns].xmin = amp_dmin(pts[i].x, pts[i + 1].x);
+        sg[ns].ymin = amp_dmin(pts[i].y, pts[i + 1].y);
+        sg[ns].ymax = amp_dmax(pts[i].y, pts[i + 1].y);
         sg[ns].pseudo = s->rad && s->rad[i] == 0 && s->rad[i + 1] == 0;
         if (sg[ns].pseudo)
             s->r.pseudo++;
@@ -272,7 +272,7 @@ static void count_crossings(stroke_scan *s, const seg2 *sg0, size_t ns, amp_skey
     for (i = 0; i < ns; i++)
         sg[i] = sg0[key[i].i];
     for (i = 0; i < ns; i++) {
-        double xmax = fmax(sg[i].a.x, sg[i].b.x);
+        double xmax = amp_dmax(sg[i].a.x, sg[i].b.x);
         for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
             if (sg[j].ymin > sg[i].ymax || sg[j].ymax < sg[i].ymin)
                 continue;

@@ -210,7 +210,7 @@ static int nearest(const joiner *J, size_t *uf, size_t skip, amp_vec2 q, size_t 
                 if (J->lp[l].wall || l == skip || !(A->v.r == J->r) || !(B->v.r == J->r))
                     continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
                 t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
-                t = fmin(fmax(t, 0.0), 1.0);
+                t = amp_dmin(amp_dmax(t, 0.0), 1.0);
                 ex = a.x + t * dx - q.x;
                 ey = a.y + t * dy - q.y;
                 /* clearly farther than the best (the margin covers hypot's rounding): no hypot */
@@ -250,8 +250,8 @@ static int proper_cross(amp_vec2 a, amp_vec2 b, amp_vec2 c, amp_vec2 d)
 static int connector_blocked(const joiner *J, amp_vec2 a, amp_vec2 b, uint32_t sa, uint32_t sb)
 {
     const jgrid *g = &J->g;
-    long cx0 = cell_of(g, fmin(a.x, b.x), g->x0, g->nx), cx1 = cell_of(g, fmax(a.x, b.x), g->x0, g->nx);
-    long cy0 = cell_of(g, fmin(a.y, b.y), g->y0, g->ny), cy1 = cell_of(g, fmax(a.y, b.y), g->y0, g->ny), x, y;
+    long cx0 = cell_of(g, amp_dmin(a.x, b.x), g->x0, g->nx), cx1 = cell_of(g, amp_dmax(a.x, b.x), g->x0, g->nx);
+    long cy0 = cell_of(g, amp_dmin(a.y, b.y), g->y0, g->ny), cy1 = cell_of(g, amp_dmax(a.y, b.y), g->y0, g->ny), x, y;
     double tiny = 1e-7 * J->r;
     amp_vec3 A3 = amp_v3(a.x, a.y, 0), B3 = amp_v3(b.x, b.y, 0);
     uint32_t k;

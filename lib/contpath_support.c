@@ -78,7 +78,7 @@ static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
     double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t;
     if ((q.x == a.x && q.y == a.y) || (q.x == b.x && q.y == b.y))
         return 0; /* a shared vertex (the leg's own base) */
-    t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+    t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
     dx = a.x + t * dx - q.x;
     dy = a.y + t * dy - q.y;
     return dx * dx + dy * dy < tol * tol; /* squared: hypot() was a tenth of the support corners' time */
@@ -195,7 +195,7 @@ static double nearest_perimeter(const amp_pathset *ps, const sgrid *g, size_t np
                 dx = b.x - a.x;
                 dy = b.y - a.y;
                 l2 = dx * dx + dy * dy;
-                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+                t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
                 d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
                 if (d < best || (d == best && id < bestk)) {
                     best = d;
@@ -313,7 +313,7 @@ static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_
                 dx = b.x - a.x;
                 dy = b.y - a.y;
                 l2 = dx * dx + dy * dy;
-                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+                t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
                 if (hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) <= lim)
                     return 1;
             }

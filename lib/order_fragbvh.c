@@ -195,8 +195,6 @@ void amp_fbvh_reactivate(amp_fbvh *b)
     }
 }
 
-static double dmin(double a, double b) { return a < b ? a : b; }
-static double dmax(double a, double b) { return a > b ? a : b; }
 
 /* The unprinted bounds of leaf @p id from its fragments. */
 static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
@@ -209,11 +207,11 @@ static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
         const amp_fbvh_box5 *fb = &b->fbox[q];
         if (done[b->order[q]])
             continue;
-        a->x0 = dmin(a->x0, fb->x0);
-        a->y0 = dmin(a->y0, fb->y0);
-        a->x1 = dmax(a->x1, fb->x1);
-        a->y1 = dmax(a->y1, fb->y1);
-        a->minz = dmin(a->minz, fb->minz);
+        a->x0 = amp_dmin(a->x0, fb->x0);
+        a->y0 = amp_dmin(a->y0, fb->y0);
+        a->x1 = amp_dmax(a->x1, fb->x1);
+        a->y1 = amp_dmax(a->y1, fb->y1);
+        a->minz = amp_dmin(a->minz, fb->minz);
     }
 }
 
@@ -228,8 +226,8 @@ void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned ch
         uint32_t p = b->node[id].parent;
         const amp_fbvh_box5 *l = &b->act[b->act[p].left].bx, *r = &b->act[b->act[p].right].bx;
         amp_fbvh_box5 *a = &b->act[p].bx;
-        double x0 = dmin(l->x0, r->x0), y0 = dmin(l->y0, r->y0), x1 = dmax(l->x1, r->x1), y1 = dmax(l->y1, r->y1);
-        double mz = dmin(l->minz, r->minz);
+        double x0 = amp_dmin(l->x0, r->x0), y0 = amp_dmin(l->y0, r->y0), x1 = amp_dmax(l->x1, r->x1), y1 = amp_dmax(l->y1, r->y1);
+        double mz = amp_dmin(l->minz, r->minz);
         if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz)
             break;
         a->x0 = x0;

@@ -10,11 +10,6 @@
 
 /* ---- inward Minkowski offset ---- */
 
-/* min / max of finite coordinates as plain comparisons: libm's fmin and fmax are calls (NaN rules) and were
- * 5 % of a slice in the hot loops below */
-static inline double dmin(double a, double b) { return a < b ? a : b; }
-static inline double dmax(double a, double b) { return a > b ? a : b; }
-
 /* |p - q| <= d, without hypot (its overflow care is a call per vertex pair; coordinates are millimetres) */
 static inline int within(amp_vec2 p, amp_vec2 q, double d)
 {
@@ -133,7 +128,7 @@ static amp_status raw_ring(inset_ctx *c, const amp_vec2 *p, size_t n, int left, 
 static int cmp_seg_x(const void *a, const void *b)
 {
     const raw_seg *s = a, *t = b;
-    double x = dmin(s->a.x, s->b.x), y = dmin(t->a.x, t->b.x);
+    double x = amp_dmin(s->a.x, s->b.x), y = amp_dmin(t->a.x, t->b.x);
     return x < y ? -1 : (x > y ? 1 : 0);
 }
 
@@ -210,10 +205,10 @@ static amp_status egrid_build(egrid *g, const amp_polyset *in, double r, const a
         for (k = 0; k < n; k++, e++) {
             g->ea[e] = p[k];
             g->eb[e] = p[(k + 1) % n];
-            xa = dmin(xa, p[k].x);
-            xb = dmax(xb, p[k].x);
-            ya = dmin(ya, p[k].y);
-            yb = dmax(yb, p[k].y);
+            xa = amp_dmin(xa, p[k].x);
+            xb = amp_dmax(xb, p[k].x);
+            ya = amp_dmin(ya, p[k].y);
+            yb = amp_dmax(yb, p[k].y);
         }
     }
     g->cell = fmax(r, fmax(xb - xa, yb - ya) / 256.0);
@@ -230,8 +225,8 @@ static amp_status egrid_build(egrid *g, const amp_polyset *in, double r, const a
     for (pass = 0; pass < 2; pass++) {
         for (e = 0; e < g->ne; e++) {
             long ix0, ix1, iy0, iy1, x, y;
-            egrid_range(g, dmin(g->ea[e].x, g->eb[e].x), dmax(g->ea[e].x, g->eb[e].x), dmin(g->ea[e].y, g->eb[e].y),
-                        dmax(g->ea[e].y, g->eb[e].y), &ix0, &ix1, &iy0, &iy1);
+            egrid_range(g, amp_dmin(g->ea[e].x, g->eb[e].x), amp_dmax(g->ea[e].x, g->eb[e].x), amp_dmin(g->ea[e].y, g->eb[e].y),
+                        amp_dmax(g->ea[e].y, g->eb[e].y), &ix0, &ix1, &iy0, &iy1);
             for (y = iy0; y <= iy1; y++)
                 for (x = ix0; x <= ix1; x++) {
                     size_t cidx = (size_t)(y * g->nx + x);
@@ -393,12 +388,12 @@ static size_t untangle(amp_vec2 *p, size_t n)
         again = 0;
         for (i = from; i + 2 < n && !again; i++) {
             amp_vec2 a = p[i], b = p[i + 1];
-            double x0 = dmin(a.x, b.x), x1 = dmax(a.x, b.x), y0 = dmin(a.y, b.y), y1 = dmax(a.y, b.y);
+            double x0 = amp_dmin(a.x, b.x), x1 = amp_dmax(a.x, b.x), y0 = amp_dmin(a.y, b.y), y1 = amp_dmax(a.y, b.y);
             for (j = i + 2; j < n && j <= i + 16 && !again; j++) {
                 amp_vec2 c = p[j], d = p[(j + 1) % n];
                 double d1, d2, d3, d4, t;
                 /* disjoint boxes cannot cross properly (most pairs end here) */
-                if (dmax(c.x, d.x) < x0 || dmin(c.x, d.x) > x1 || dmax(c.y, d.y) < y0 || dmin(c.y, d.y) > y1)
+                if (amp_dmax(c.x, d.x) < x0 || amp_dmin(c.x, d.x) > x1 || amp_dmax(c.y, d.y) < y0 || amp_dmin(c.y, d.y) > y1)
                     continue;
                 d1 = amp_v2_orient(a, b, c);
                 d2 = amp_v2_orient(a, b, d);
@@ -486,12 +481,12 @@ static amp_status raw_crossings(inset_ctx *c)
     if (c->nseg > 1)
         qsort(c->seg, c->nseg, sizeof *c->seg, cmp_seg_x);
     for (i = 0; i < c->nseg && st == AMP_OK; i++) {
-        double xmax = dmax(c->seg[i].a.x, c->seg[i].b.x);
-        double ylo = dmin(c->seg[i].a.y, c->seg[i].b.y), yhi = dmax(c->seg[i].a.y, c->seg[i].b.y);
+        double xmax = amp_dmax(c->seg[i].a.x, c->seg[i].b.x);
+        double ylo = amp_dmin(c->seg[i].a.y, c->seg[i].b.y), yhi = amp_dmax(c->seg[i].a.y, c->seg[i].b.y);
         for (j = i + 1; j < c->nseg && st == AMP_OK; j++) {
-            if (dmin(c->seg[j].a.x, c->seg[j].b.x) > xmax)
+            if (amp_dmin(c->seg[j].a.x, c->seg[j].b.x) > xmax)
                 break;
-            if (dmax(c->seg[j].a.y, c->seg[j].b.y) < ylo || dmin(c->seg[j].a.y, c->seg[j].b.y) > yhi)
+            if (amp_dmax(c->seg[j].a.y, c->seg[j].b.y) < ylo || amp_dmin(c->seg[j].a.y, c->seg[j].b.y) > yhi)
                 continue;
             st = intersect(c, i, j);
         }
