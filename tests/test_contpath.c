@@ -775,7 +775,6 @@ static void same_paths_on_any_thread(const amp_mesh *m, const amp_contpath_opts 
     amp_pathset a, b;
     amp_contpath_stats sa, sb;
     amp_error err;
-    size_t i;
     ca.alloc = calling_alloc;
     ca.realloc = calling_realloc;
     ca.free = calling_free;
@@ -790,15 +789,7 @@ static void same_paths_on_any_thread(const amp_mesh *m, const amp_contpath_opts 
     ck_assert_msg(amp_contpath_layers(&sl, o, &b, &sb, &err) == AMP_OK, "%s", err.msg);
     ck_assert_int_gt(calls, 0);
     ck_assert_uint_gt(a.npaths, 0);
-    ck_assert_uint_eq(a.npaths, b.npaths);
-    ck_assert_uint_eq(a.nverts, b.nverts);
-    for (i = 0; i < a.npaths; i++) {
-        ck_assert_int_eq(a.paths[i].role, b.paths[i].role);
-        ck_assert_uint_eq(a.paths[i].first, b.paths[i].first);
-        ck_assert_uint_eq(a.paths[i].n, b.paths[i].n);
-        ck_assert(a.paths[i].h == b.paths[i].h);
-    }
-    ck_assert(memcmp(a.verts, b.verts, a.nverts * sizeof *a.verts) == 0);
+    fx_assert_same_paths(&a, &b);
     ck_assert(memcmp(&sa, &sb, sizeof sa) == 0);
     *islands = sa.islands;
     amp_pathset_free(&a);

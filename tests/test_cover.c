@@ -540,17 +540,13 @@ START_TEST(helix_job_is_byte_identical_on_one_and_two_threads)
 {
     text_buf g1 = {NULL, 0, 0}, g2 = {NULL, 0, 0};
     amp_pathset p1, p2;
-    size_t i;
     int saved = omp_get_max_threads();
     amp_pathset_init(&p1, NULL);
     amp_pathset_init(&p2, NULL);
     helix_job(1, &g1, &p1);
     helix_job(2, &g2, &p2);
     omp_set_num_threads(saved);
-    ck_assert_uint_eq(p1.npaths, p2.npaths);
-    ck_assert_uint_eq(p1.nverts, p2.nverts);
-    for (i = 0; i < p1.nverts; i++)
-        ck_assert_msg(memcmp(&p1.verts[i], &p2.verts[i], sizeof p1.verts[i]) == 0, "vertex %lu differs", (unsigned long)i);
+    fx_assert_same_paths(&p1, &p2);
     ck_assert_uint_gt(g1.n, 100000);
     ck_assert_uint_eq(g1.n, g2.n);
     ck_assert(memcmp(g1.p, g2.p, g1.n) == 0);

@@ -416,7 +416,6 @@ START_TEST(ordering_is_identical_on_one_and_two_threads)
     amp_order_opts o;
     amp_order_stats s1, s2;
     amp_error err;
-    size_t i;
     amp_pathset_init(&ps, NULL);
     amp_pathset_init(&one, NULL);
     amp_pathset_init(&two, NULL);
@@ -433,15 +432,7 @@ START_TEST(ordering_is_identical_on_one_and_two_threads)
     ck_assert_uint_gt(s1.subdivisions, 0); /* the fixture needs cuts: the order is not trivial */
     ck_assert_uint_eq(s1.subdivisions, s2.subdivisions);
     ck_assert_uint_eq(s1.queries, s2.queries);
-    ck_assert_uint_eq(one.npaths, two.npaths);
-    ck_assert_uint_eq(one.nverts, two.nverts);
-    for (i = 0; i < one.npaths; i++) {
-        ck_assert_uint_eq(one.paths[i].n, two.paths[i].n);
-        ck_assert_uint_eq(one.paths[i].first, two.paths[i].first);
-    }
-    for (i = 0; i < one.nverts; i++)
-        ck_assert_msg(memcmp(&one.verts[i], &two.verts[i], sizeof one.verts[i]) == 0, "vertex %lu differs",
-                      (unsigned long)i);
+    fx_assert_same_paths(&one, &two);
     amp_pathset_free(&ps);
     amp_pathset_free(&one);
     amp_pathset_free(&two);

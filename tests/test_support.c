@@ -512,7 +512,6 @@ START_TEST(support_on_the_helix_is_identical_on_one_and_two_threads)
     amp_mesh m;
     amp_bvh *bvh = NULL;
     amp_error err;
-    size_t i;
     int saved = omp_get_max_threads();
     amp_spline_init(&v);
     amp_pathset_init(&cov, NULL);
@@ -532,14 +531,7 @@ START_TEST(support_on_the_helix_is_identical_on_one_and_two_threads)
     helix_support(&ord, bvh, 1, &s1);
     helix_support(&ord, bvh, 2, &s2);
     omp_set_num_threads(saved);
-    ck_assert_uint_eq(s1.npaths, s2.npaths);
-    ck_assert_uint_eq(s1.nverts, s2.nverts);
-    for (i = 0; i < s1.npaths; i++)
-        ck_assert_msg(s1.paths[i].role == s2.paths[i].role && s1.paths[i].n == s2.paths[i].n, "path %lu differs",
-                      (unsigned long)i);
-    for (i = 0; i < s1.nverts; i++)
-        ck_assert_msg(memcmp(&s1.verts[i], &s2.verts[i], sizeof s1.verts[i]) == 0, "vertex %lu differs",
-                      (unsigned long)i);
+    fx_assert_same_paths(&s1, &s2);
     amp_bvh_free(bvh);
     amp_mesh_free(&m);
     amp_pathset_free(&cov);

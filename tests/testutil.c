@@ -85,3 +85,17 @@ void fx_failalloc_init(fx_failalloc *f, long budget)
     f->budget = budget;
     f->count = 0;
 }
+
+void fx_assert_same_paths(const amp_pathset *a, const amp_pathset *b)
+{
+    size_t i;
+    ck_assert_uint_eq(a->npaths, b->npaths);
+    ck_assert_uint_eq(a->nverts, b->nverts);
+    for (i = 0; i < a->npaths; i++)
+        ck_assert_msg(a->paths[i].role == b->paths[i].role && a->paths[i].first == b->paths[i].first &&
+                          a->paths[i].n == b->paths[i].n && a->paths[i].h == b->paths[i].h,
+                      "path %lu differs", (unsigned long)i);
+    for (i = 0; i < a->nverts; i++)
+        ck_assert_msg(memcmp(&a->verts[i], &b->verts[i], sizeof a->verts[i]) == 0, "vertex %lu differs",
+                      (unsigned long)i);
+}

@@ -33,6 +33,9 @@
     ck_assert_msg(fabs((double)(a) - (double)(b)) <= (tol), "%s = %.17g, %s = %.17g, tolerance %g", #a, (double)(a), \
                   #b, (double)(b), (double)(tol))
 
+/** Assert two path sets are the same bit for bit: paths (role, first, n, h) and every vertex. */
+void fx_assert_same_paths(const amp_pathset *a, const amp_pathset *b);
+
 /** The scratch directory of this test run: $AMP_TEST_TMP (a fresh directory made by tests/run.sh), else /tmp. */
 const char *fx_tmpdir(void);
 
