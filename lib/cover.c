@@ -14,7 +14,7 @@
 void amp_cover_opts_default(amp_cover_opts *o)
 {
     o->eps = 1.0;
-    o->dir = 2;
+    o->dir = AMP_COVER_AUTO;
     o->min_depth = 0;
     o->measure = AMP_COVER_ARCLEN;
     o->radius = 0.5;
@@ -449,21 +449,26 @@ amp_status amp_cover_trivariate(const amp_spline *v, const amp_cover_opts *opts,
     amp_status st = AMP_OK;
     if (!v || v->dim != 3 || !opts || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "covering needs a trivariate");
-    if (!(opts->eps > 0) || !isfinite(opts->eps) || opts->dir < 0 || opts->dir > 2 || opts->min_depth < 0 ||
+    if (!(opts->eps > 0) || !isfinite(opts->eps) || opts->dir < AMP_COVER_AUTO || opts->dir > 2 || opts->min_depth < 0 ||
         opts->min_depth > 30 || !(opts->radius > 0) || opts->cells > 64)
-        return amp_fail(err, AMP_ERR_ARG, 0, "bad covering options (eps > 0, dir 0..2, 0 <= m <= 30, radius > 0, "
+        return amp_fail(err, AMP_ERR_ARG, 0, "bad covering options (eps > 0, dir 0..2 or auto, 0 <= m <= 30, radius > 0, "
                                              "cells <= 64)");
     c = amp_calloc(v->alloc, 1, sizeof *c);
     if (!c)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory");
     c->v = v;
     c->o = *opts;
+    if (c->o.dir == AMP_COVER_AUTO && (st = amp_cover_pick_dir(v, &c->o.dir, NULL, err)) != AMP_OK) {
+        amp_free(v->alloc, c);
+        return st;
+    }
+    c->st.dir = c->o.dir;
     c->G = opts->cells > 0 ? opts->cells : 16;
     if (c->o.max_depth <= 0)
         c->o.max_depth = 24;
     c->delta = opts->chord_tol > 0 ? fmin(opts->chord_tol, 0.5 * opts->eps) : opts->eps / 20;
     c->thr = opts->eps - c->delta; /* eps_s = eps_c = thr / 2 */
-    c->d = opts->dir;
+    c->d = c->o.dir;
     c->e0 = c->d == 0 ? 1 : 0;
     c->e1 = c->d == 2 ? 1 : 2;
     c->out = out;

@@ -8,11 +8,12 @@
 
 const char cmd_cover_usage[] =
     "cover a trivariate (.spl or built-in name) by print paths within eps (paper 1, 4.1)\n"
-    "usage: ampath cover TRIVARIATE --eps E [--dir u|v|w] [--min-depth M] [--measure iso|arclen]\n"
+    "usage: ampath cover TRIVARIATE --eps E [--dir auto|u|v|w] [--min-depth M] [--measure iso|arclen]\n"
     "                    -o PATHS.amp [--radius R] [--chord-tol T] [--cells N] [--samples S] [--json]\n"
     "  TRIVARIATE      a .spl file (its first trivariate) or a built-in model name (helix, torus-quarter, vase)\n"
     "  --eps E         required: largest distance from any point of the volume to a path, mm\n"
-    "  --dir D         direction of the covering iso-surfaces (paper's w), default w\n"
+    "  --dir D         direction of the covering iso-surfaces (the paper's is w); default auto: the one whose\n"
+    "                  curves are the most level, so that Algorithm 2 cuts them least (docs/splines.md)\n"
     "  --min-depth M   Algorithm 1's minimal subdivision depth m, default 0 (periodic volumes need m >= 1)\n"
     "  --measure X     arclen (default): Appendix Lemma A.1/A.2 bound, guarantees coverage;\n"
     "                  iso: the paper's iso-distance, may leave the Fig. 5 gap\n"
@@ -23,7 +24,7 @@ const char cmd_cover_usage[] =
     "  --max-curves N  refuse when the curves estimated from Lemma A.2 on the control net exceed N\n"
     "                  (default 1e6: runs of minutes and gigabytes)\n"
     "  -o FILE         write the paths (.amp)\n"
-    "  --json          {surfaces, curves, vertices, length_mm, coverage_gap_mm, over_coverage, volume_mm3,\n"
+    "  --json          {dir, dir_scores, surfaces, curves, vertices, length_mm, coverage_gap_mm, over_coverage, volume_mm3,\n"
     "                   deposited_mm3, time_s, depth_limited}\n";
 
 /*
@@ -71,7 +72,7 @@ static double estimate_curves(const amp_spline *v, int d, double eps, double cho
 
 int cmd_cover(int argc, char **argv)
 {
-    const char *pos[1], *out = NULL, *dir = "w", *measure = "arclen";
+    const char *pos[1], *out = NULL, *dir = "auto", *measure = "arclen";
     double eps = 0, radius = 0.5, chord = 0;
     long m = 0, cells = 16, samples = 20000;
     int json = 0, npos = 0, rc;
@@ -82,8 +83,8 @@ int cmd_cover(int argc, char **argv)
     amp_spline v;
     amp_pathset ps;
     amp_error err;
-    double t0, t1;
-    char comment[200];
+    double t0, t1, score[3] = {0, 0, 0};
+    char comment[200], dirname[2] = {0, 0};
     cli_progress bar;
     cli_opt opts[] = {{"eps", CLI_DOUBLE, &eps, 0},        {"dir", CLI_STR, &dir, 0},
                       {"min-depth", CLI_LONG, &m, 0},      {"measure", CLI_STR, &measure, 0},
@@ -100,9 +101,12 @@ int cmd_cover(int argc, char **argv)
     o.eps = eps;
     o.radius = radius;
     o.chord_tol = chord;
-    if (strlen(dir) != 1 || !strchr("uvw", dir[0]))
-        return cli_fail("cover", CLI_USAGE, "--dir must be u, v or w");
-    o.dir = dir[0] == 'u' ? 0 : dir[0] == 'v' ? 1 : 2;
+    if (strcmp(dir, "auto") == 0)
+        o.dir = AMP_COVER_AUTO;
+    else if (strlen(dir) == 1 && strchr("uvw", dir[0]))
+        o.dir = dir[0] == 'u' ? 0 : dir[0] == 'v' ? 1 : 2;
+    else
+        return cli_fail("cover", CLI_USAGE, "--dir must be auto, u, v or w");
     if (strcmp(measure, "arclen") == 0)
         o.measure = AMP_COVER_ARCLEN;
     else if (strcmp(measure, "iso") == 0)
@@ -116,6 +120,13 @@ int cmd_cover(int argc, char **argv)
     rc = cli_load_trivariate("cover", pos[0], &v);
     if (rc != CLI_OK)
         return rc;
+    amp_error_clear(&err);
+    /* the scores are reported whatever was asked; the choice is made only for auto */
+    if (amp_cover_pick_dir(&v, o.dir == AMP_COVER_AUTO ? &o.dir : &npos, score, &err) != AMP_OK) {
+        amp_spline_free(&v);
+        return cli_fail_err("cover", &err);
+    }
+    dirname[0] = "uvw"[o.dir];
     t0 = estimate_curves(&v, o.dir, eps, chord);
     if (!(t0 <= cli_work.max_curves)) {
         amp_spline_free(&v);
@@ -138,7 +149,7 @@ int cmd_cover(int argc, char **argv)
     if (st.depth_limited)
         fprintf(stderr, "ampath cover: warning: recursion depth limit reached; coverage is not guaranteed\n");
     snprintf(comment, sizeof comment, "ampath cover %s: eps %.17g measure %s dir %s min-depth %ld", pos[0], eps,
-             measure, dir, m);
+             measure, dirname, m);
     if (out && cli_save_paths("cover", out, &ps, comment) != CLI_OK) {
         amp_spline_free(&v);
         amp_pathset_free(&ps);
@@ -156,7 +167,12 @@ int cmd_cover(int argc, char **argv)
         cli_json_begin(&j, stdout);
         cli_json_num(&j, "eps", eps);
         cli_json_str(&j, "measure", measure);
-        cli_json_str(&j, "dir", dir);
+        cli_json_str(&j, "dir", dirname);
+        cli_json_obj(&j, "dir_scores");
+        cli_json_num(&j, "u", score[0]);
+        cli_json_num(&j, "v", score[1]);
+        cli_json_num(&j, "w", score[2]);
+        cli_json_close(&j);
         cli_json_int(&j, "min_depth", m);
         cli_json_int(&j, "surfaces", (long long)st.surfaces);
         cli_json_int(&j, "curves", (long long)st.curves);

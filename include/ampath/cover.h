@@ -48,9 +48,13 @@ typedef enum amp_cover_measure {
     AMP_COVER_ISO = 1     /**< paper's iso-distance Δ_iso (sampled; may leave the Fig. 5 gap) */
 } amp_cover_measure;
 
+/** amp_cover_opts.dir: let amp_cover_pick_dir() choose the covering direction. */
+#define AMP_COVER_AUTO (-1)
+
 typedef struct amp_cover_opts {
     double eps;                /**< largest allowed distance from a volume point to a path (mm), > 0 */
-    int dir;                   /**< direction whose iso-surfaces cover the volume (0 u, 1 v, 2 w = paper) */
+    int dir;                   /**< direction whose iso-surfaces cover the volume (0 u, 1 v, 2 w = paper), or
+                                    AMP_COVER_AUTO: the one amp_cover_pick_dir() chooses */
     int min_depth;             /**< Algorithm 1's m: levels subdivided regardless of the measure (>= 0) */
     amp_cover_measure measure; /**< see above */
     double radius;             /**< nominal deposition radius written on every vertex (mm), > 0 */
@@ -63,7 +67,7 @@ typedef struct amp_cover_opts {
     void *progress_user;       /**< passed to progress */
 } amp_cover_opts;
 
-/** Defaults: eps 1 mm, dir w, m 0, arc-length measure, radius 0.5 mm, δ = eps/20, 16 cells, no progress. */
+/** Defaults: eps 1 mm, dir AMP_COVER_AUTO, m 0, arc-length measure, radius 0.5 mm, δ = eps/20, 16 cells, no progress. */
 void amp_cover_opts_default(amp_cover_opts *o);
 
 typedef struct amp_cover_stats {
@@ -72,7 +76,23 @@ typedef struct amp_cover_stats {
     size_t vertices;      /**< polyline vertices written */
     double length;        /**< total path length (mm) */
     int depth_limited;    /**< non-zero when max_depth stopped a recursion (coverage not guaranteed) */
+    int dir;              /**< the covering direction used (0 u, 1 v, 2 w): opts->dir or the one chosen */
 } amp_cover_stats;
+
+/**
+ * The covering direction that suits a printer (docs/splines.md): Algorithm 1's
+ * iso-surfaces of direction d are covered by curves along w (d = u, v) or v
+ * (d = w), and Algorithm 2 cuts a curve wherever it climbs over itself, so the
+ * direction whose curves are the most level wins (score: the mean |t_z| / |t|
+ * of their tangents at 512 interior samples; ties keep w). Between u and v
+ * (the same curves, always the same score) the one with the shorter Lemma A.2
+ * bound (amp_spline_polygon_length_bound) is taken, u on a tie. Writes the
+ * choice to *@p dir and, when @p score is not NULL, each direction's score
+ * (lower is better). Thread-safe, no allocation.
+ * Errors: AMP_ERR_ARG (not a trivariate, NULL @p dir), AMP_ERR_RANGE (NaN in
+ * the control net).
+ */
+amp_status amp_cover_pick_dir(const amp_spline *v, int *dir, double score[3], amp_error *err);
 
 /**
  * Cover the trivariate @p v (dim 3) by paths appended to @p out (role object,

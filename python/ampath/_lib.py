@@ -139,7 +139,7 @@ class amp_cover_opts(Structure):
 
 class amp_cover_stats(Structure):
     _fields_ = [("surfaces", c_size_t), ("curves", c_size_t), ("vertices", c_size_t), ("length", c_double),
-                ("depth_limited", c_int)]
+                ("depth_limited", c_int), ("dir", c_int)]
 
 
 class amp_coverage(Structure):

@@ -38,13 +38,13 @@ def _run(fn, out, progress=None, inputs=()):
     return out
 
 
-def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
+def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, **opts):
     """Paper 1 §4.1 (`ampath cover`): paths covering @trivariate within @eps mm.
-    Options: dir (u|v|w), min_depth, measure (arclen|iso), radius, chord_tol, cells, max_depth."""
+    Options: dir (auto|u|v|w; auto: the direction whose curves are the most level), min_depth, measure (arclen|iso), radius, chord_tol, cells, max_depth."""
     o = L.amp_cover_opts()
     lib.amp_cover_opts_default(ctypes.byref(o))
     o.eps = eps
-    o.dir = _dir(dir)
+    o.dir = -1 if dir == "auto" else _dir(dir)
     if measure not in ("arclen", "iso"):
         _fail("measure must be arclen or iso")
     o.measure = 0 if measure == "arclen" else 1
@@ -57,6 +57,7 @@ def cover(trivariate, eps, dir="w", measure="arclen", progress=None, **opts):
         _check(lib.amp_cover_trivariate(trivariate._ref, ctypes.byref(o), out._ref, ctypes.byref(st),
                                         ctypes.byref(err)), err)
         out.stats = _todict(st)
+        out.stats["dir"] = "uvw"[out.stats["dir"]]
     return _run(go, out, pr, (trivariate,))
 
 

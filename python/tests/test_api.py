@@ -113,6 +113,7 @@ class Stages(TmpCase):
             with ampath.cover(v, eps=3, progress=seen.append) as ps:
                 self.assertGreater(len(ps), 0)
                 self.assertGreater(ps.stats["curves"], 0)
+                self.assertEqual(ps.stats["dir"], "v")  # chosen: curves along the helix, not round its disc
         self.assertGreater(len(seen), 2)
         self.assertEqual(seen, sorted(seen))
         self.assertTrue(0 <= seen[0] and seen[-1] <= 1.0)
