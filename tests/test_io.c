@@ -519,8 +519,14 @@ START_TEST(cover_refuses_beyond_its_curve_estimate)
     size_t i;
     FILE *f;
     /* minutes or all memory before: now refused at once with the Lemma A.2 estimate */
-    expect_tool("cover helix --eps 0.02 -o /dev/null", 2, "refused: about");
-    expect_tool("cover helix --eps 0.02 -o /dev/null", 2, "--max-curves");
+    expect_tool("cover helix --eps 0.02 --dir w -o /dev/null", 2, "refused: about");
+    expect_tool("cover helix --eps 0.02 --dir w -o /dev/null", 2, "--max-curves");
+    /* along the helix the curves are 30 times fewer but 4 times longer: their length is refused (it ran over
+     * 100 s and 3.7 GB when only the count was estimated) */
+    expect_tool("cover helix --eps 0.02 -o /dev/null", 2, "mm of paths estimated");
+    expect_tool("cover helix --eps 0.02 --max-curves 1e15 -o /dev/null", 2, "--max-length");
+    expect_tool("cover helix --eps 0.2 --max-length 1e5 -o /dev/null", 2, "--max-length");
+    expect_tool("cover helix --eps 2 --max-length 1e5 -o /dev/null", 0, NULL);
     /* the estimate for vase at eps 2 is a few hundred curves (298 made): the limit decides */
     expect_tool("cover vase --eps 2 --max-curves 100 -o /dev/null", 2, "refused: about");
     expect_tool("cover vase --eps 2 --max-curves 5000 -o /dev/null", 0, NULL);

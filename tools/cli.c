@@ -116,6 +116,7 @@ static const cli_range cli_ranges[] = {
     {"ampath-bridge", "resume-from", 1, 1e15},
     /* work limits */
     {NULL, "max-curves", 1, 1e15},
+    {NULL, "max-length", 1, 1e15},
     {NULL, "max-segments", 1, 1e15},
 };
 
@@ -200,17 +201,18 @@ static int set_value(const char *cmd, cli_opt *o, const char *val)
 }
 
 /* ---- work limits: estimated before the work, overridable per run ---- */
-cli_limits cli_work = {CLI_DEFAULT_MAX_CURVES, CLI_DEFAULT_MAX_SEGMENTS};
+cli_limits cli_work = {CLI_DEFAULT_MAX_CURVES, CLI_DEFAULT_MAX_LENGTH, CLI_DEFAULT_MAX_SEGMENTS};
 
 /* The --max-... options of the commands that estimate their work: accepted next to the
  * command's own table, so that the commands sharing a loader need no option of their own. */
 static cli_opt *work_limit_opt(const char *cmd, const char *name, size_t len)
 {
     static cli_opt curves = {"max-curves", CLI_DOUBLE, &cli_work.max_curves, 0};
+    static cli_opt length = {"max-length", CLI_DOUBLE, &cli_work.max_length, 0};
     static cli_opt segments = {"max-segments", CLI_DOUBLE, &cli_work.max_segments, 0};
     cli_opt *o = NULL;
     if (strcmp(cmd, "cover") == 0)
-        o = &curves;
+        o = strlen(length.name) == len && strncmp(length.name, name, len) == 0 ? &length : &curves;
     else if (strcmp(cmd, "slice") == 0 || strcmp(cmd, "euler") == 0 || strcmp(cmd, "check") == 0)
         o = &segments;
     return o && strlen(o->name) == len && strncmp(o->name, name, len) == 0 ? o : NULL;

@@ -55,17 +55,19 @@ int cli_given(const cli_opt *opts, const char *name);
 /*
  * Work limits: commands whose work grows without bound with a small
  * tolerance or a large input estimate it first and refuse (exit 2, the estimate
- * in the message) above these limits, which --max-curves N (cover) and
+ * in the message) above these limits, which --max-curves N, --max-length L (cover) and
  * --max-segments N (slice, euler, check) raise for one run. Documented in the
  * README section "Limits" and ampath(1).
  */
 #define CLI_DEFAULT_MAX_CURVES 1e6   /* covering curves of cover (Lemma A.2 estimate) */
+#define CLI_DEFAULT_MAX_LENGTH 5e7   /* their total length, mm (the same estimate) */
 #define CLI_DEFAULT_MAX_SEGMENTS 2e7 /* section segments over all layers: slice, euler, check --mesh */
 typedef struct cli_limits {
     double max_curves;
+    double max_length;
     double max_segments;
 } cli_limits;
-extern cli_limits cli_work; /* set by cli_parse from --max-curves / --max-segments */
+extern cli_limits cli_work; /* set by cli_parse from --max-curves / --max-length / --max-segments */
 
 /** "ampath CMD: refused: about E WHAT estimated, more than the limit of L (raise it with --OPTION N)"; CLI_USAGE. */
 int cli_work_refuse(const char *cmd, const char *what, double estimate, double limit, const char *option);

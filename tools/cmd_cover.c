@@ -23,6 +23,7 @@ const char cmd_cover_usage[] =
     "  --samples S     samples of the coverage measurement reported with --json, default 20000 (0: skip)\n"
     "  --max-curves N  refuse when the curves estimated from Lemma A.2 on the control net exceed N\n"
     "                  (default 1e6: runs of minutes and gigabytes)\n"
+    "  --max-length L  the same for their total length, mm (default 5e7: 50 km)\n"
     "  -o FILE         write the paths (.amp)\n"
     "  --json          {dir, dir_scores, surfaces, curves, vertices, length_mm, coverage_gap_mm, over_coverage, volume_mm3,\n"
     "                   deposited_mm3, time_s, depth_limited}\n";
@@ -59,14 +60,18 @@ static double net_length(const amp_spline *v, int d)
  * Work estimate before covering: Algorithm 1 halves the covering direction
  * until neighbouring surfaces are within thr = eps - delta by the Lemma A.2 measure, and
  * each surface is covered the same way by curves, so about (L_d / thr + 1) surfaces of
- * (L_e0 / thr + 1) curves each. Measured on the built-in models it is within a factor of
- * a few of the real count, which is all a refusal needs.
+ * (L_e0 / thr + 1) curves each, every one at most L_e1 long (*length: their total). Measured
+ * on the built-in models the count is within a factor of a few of the real one, which is all a
+ * refusal needs; the length counts too, because the curves of one direction may be few and
+ * long (the helix along w at eps 0.02: 4e5 curves, 100 s and 3.7 GB before it was stopped).
  */
-static double estimate_curves(const amp_spline *v, int d, double eps, double chord)
+static double estimate_curves(const amp_spline *v, int d, double eps, double chord, double *length)
 {
-    int e0 = d == 0 ? 1 : 0;
+    int e0 = d == 0 ? 1 : 0, e1 = d == 2 ? 1 : 2;
     double delta = chord > 0 ? fmin(chord, 0.5 * eps) : eps / 20, thr = eps - delta;
-    return (ceil(net_length(v, d) / thr) + 1) * (ceil(net_length(v, e0) / thr) + 1);
+    double n = (ceil(net_length(v, d) / thr) + 1) * (ceil(net_length(v, e0) / thr) + 1);
+    *length = n * net_length(v, e1);
+    return n;
 }
 
 
@@ -127,10 +132,14 @@ int cmd_cover(int argc, char **argv)
         return cli_fail_err("cover", &err);
     }
     dirname[0] = "uvw"[o.dir];
-    t0 = estimate_curves(&v, o.dir, eps, chord);
+    t0 = estimate_curves(&v, o.dir, eps, chord, &t1);
     if (!(t0 <= cli_work.max_curves)) {
         amp_spline_free(&v);
         return cli_work_refuse("cover", "covering curves", t0, cli_work.max_curves, "max-curves");
+    }
+    if (!(t1 <= cli_work.max_length)) {
+        amp_spline_free(&v);
+        return cli_work_refuse("cover", "mm of paths", t1, cli_work.max_length, "max-length");
     }
     amp_pathset_init(&ps, NULL);
     amp_error_clear(&err);
