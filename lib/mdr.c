@@ -527,10 +527,12 @@ static amp_status mdr_emit(const amp_fragments *fs, const amp_pathset *in, const
             s->r_hi = fmax(s->r_hi, r[f]);
             if (f == fs->first[i])
                 stt = amp_pathset_push(out, fr->p0, r[f], err);
+            /* a cut point within a nanometre of a vertex is that vertex (its smaller radius) */
             for (q = 0; stt == AMP_OK && q < fr->nin; q++)
-                stt = amp_pathset_push(out, in->verts[fr->vfirst + q].p, r[f], err);
+                stt = amp_pathset_push_merged(out, in->verts[fr->vfirst + q].p, r[f], AMP_PATH_SAME_POINT, 0, err);
             if (stt == AMP_OK && in->paths[i].n > 1)
-                stt = amp_pathset_push(out, fr->p1, f + 1 < fs->first[i + 1] ? fmin(r[f], r[f + 1]) : r[f], err);
+                stt = amp_pathset_push_merged(out, fr->p1, f + 1 < fs->first[i + 1] ? fmin(r[f], r[f + 1]) : r[f],
+                                              AMP_PATH_SAME_POINT, f + 1 == fs->first[i + 1], err);
         }
     }
     if (stt == AMP_OK)

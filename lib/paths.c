@@ -72,6 +72,21 @@ amp_status amp_pathset_push(amp_pathset *ps, amp_vec3 p, double r, amp_error *er
     return AMP_OK;
 }
 
+amp_status amp_pathset_push_merged(amp_pathset *ps, amp_vec3 p, double r, double tol, int last, amp_error *err)
+{
+    amp_pvert *q;
+    if (ps->npaths == 0 || ps->paths[ps->npaths - 1].n < 1 || !amp_v3_finite(p) || !isfinite(r) || r < 0.0)
+        return amp_pathset_push(ps, p, r, err); /* its errors, or a path's first vertex */
+    q = &ps->verts[ps->nverts - 1];
+    if (!(amp_v3_dist2(q->p, p) <= tol * tol))
+        return amp_pathset_push(ps, p, r, err);
+    /* the first vertex keeps its place: a path starts exactly where it was cut too */
+    if (last && ps->paths[ps->npaths - 1].n > 1)
+        q->p = p;
+    q->r = amp_dmin(q->r, r);
+    return AMP_OK;
+}
+
 amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, size_t n, amp_error *err)
 {
     size_t i, np = ps->npaths, nv = ps->nverts;

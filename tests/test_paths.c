@@ -165,6 +165,36 @@ START_TEST(bead_height_roundtrips_and_sets_the_planar_cross_section)
 }
 END_TEST
 
+/* A point within the tolerance of the last vertex joins it (the smaller radius): in place of the earlier point
+ * inside a path, at its own place when it ends the path; the first vertex stays where it is. */
+START_TEST(merged_push_joins_a_point_that_repeats_the_last_vertex)
+{
+    amp_pathset ps;
+    const amp_pvert *v;
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(0, 0, 1), 0.5, 1e-6, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(5e-7, 0, 1), 0.4, 1e-6, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(1, 0, 1), 0.5, 1e-6, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(1, 2e-6, 1), 0.3, 1e-6, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(1, 2.5e-6, 1), 0.6, 1e-6, 1, NULL), AMP_OK);
+    v = amp_pathset_path_verts(&ps, 0);
+    ck_assert_uint_eq(ps.paths[0].n, 3);
+    ck_assert(v[0].p.x == 0.0 && v[0].r == 0.4); /* the first vertex kept its place, took the smaller radius */
+    ck_assert(v[1].p.x == 1.0 && v[1].p.y == 0.0 && v[1].r == 0.5);
+    ck_assert(v[2].p.y == 2.5e-6 && v[2].r == 0.3); /* the path ends exactly at its last point */
+    /* a path's only vertex is not replaced by its last: two points stay two */
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(0, 0, 0), 0.5, 1e-6, 0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(0, 0, 1e-7), 0.5, 1e-6, 1, NULL), AMP_OK);
+    ck_assert_uint_eq(ps.paths[1].n, 1);
+    ck_assert(amp_pathset_path_verts(&ps, 1)[0].p.z == 0.0);
+    /* bad input: the errors of amp_pathset_push */
+    ck_assert_int_eq(amp_pathset_push_merged(&ps, amp_v3(NAN, 0, 0), 0.5, 1e-6, 0, NULL), AMP_ERR_ARG);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(parser_accepts_comments_crlf_and_blank_lines)
 {
     amp_pathset ps;
@@ -304,6 +334,7 @@ static Suite *paths_suite(void)
     TCase *tc = tcase_create("amp");
     tcase_add_test(tc, roundtrip_preserves_paths_roles_and_radii);
     tcase_add_test(tc, bead_height_roundtrips_and_sets_the_planar_cross_section);
+    tcase_add_test(tc, merged_push_joins_a_point_that_repeats_the_last_vertex);
     tcase_add_test(tc, parser_accepts_comments_crlf_and_blank_lines);
     tcase_add_loop_test(tc, parser_rejects_malformed_input_with_line_numbers, 0,
                         (int)(sizeof bad_cases / sizeof bad_cases[0]));

@@ -6,9 +6,10 @@
 #   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
 #   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
 # Only products are hashed (not the --json figures, which hold timings).
-# tools/identity.ref holds the listing of the current behaviour (renewed at stop 27: the gcode material grids
-# raise the cells within reach of each segment row by row, not boxes around samples, so the helix's travels
-# changed; before, at stop 26: support on the bed and in zigzags, travels over the beads as written, modal Z on
+# tools/identity.ref holds the listing of the current behaviour (renewed at stop 28: order and mdr merge a
+# cut point within a nanometre of a vertex into it, so the helix's ordered, mdr and G-code files changed; at
+# stop 27: the gcode material grids raise the cells within reach of each segment row by row, not boxes around
+# samples, so the helix's travels changed; before, at stop 26: support on the bed and in zigzags, travels over the beads as written, modal Z on
 # printing moves, the field's eps comment; the plain build, OpenMP on). Uses ./tools/ampath of the
 # current build (AMP_TOOL overrides); DIR defaults to build/identity. Compare listings made in the same DIR:
 # the products' header comments name their input files. An OPENMP=0 build covers differently (but the

@@ -79,6 +79,20 @@ amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err);
 amp_status amp_pathset_push(amp_pathset *ps, amp_vec3 p, double r, amp_error *err);
 
 /**
+ * amp_pathset_push(), except that a point within @p tol mm of the last path's
+ * last vertex does not make a new vertex (a segment of no length: a direction
+ * a checker cannot take, a "crossing" of its two neighbours by rounding): the
+ * two become one with the smaller radius, at the position of the earlier
+ * point, or of this one when @p last says it ends the path (so that a path cut
+ * from another ends exactly at the cut). A path's first vertex is never merged
+ * away. Same errors as amp_pathset_push().
+ */
+amp_status amp_pathset_push_merged(amp_pathset *ps, amp_vec3 p, double r, double tol, int last, amp_error *err);
+
+/** The tolerance the pipeline's stages merge vertices with (mm): a nanometre, far below a motor step. */
+#define AMP_PATH_SAME_POINT 1e-6
+
+/**
  * Make the last path a planar bead of height @p h mm (h > 0), or a tube again
  * (h = 0). AMP_ERR_STATE if there is no path, AMP_ERR_ARG for a negative or
  * non-finite @p h.
