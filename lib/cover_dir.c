@@ -23,19 +23,19 @@
 #define PICK_SAMPLES 8 /* per parametric direction: 512 tangents */
 
 /* |a_z| / |a|, or -1 for a vanishing vector (a pole of the parametrisation tells nothing). */
-static double slope(amp_vec3 a)
+static double slope_of(amp_vec3 a)
 {
     double n = amp_v3_len(a);
     return n > 1e-12 ? fabs(a.z) / n : -1.0;
 }
 
-amp_status amp_cover_pick_dir(const amp_spline *v, int *dir, double score[3], amp_error *err)
+amp_status amp_trivariate_slopes(const amp_spline *v, double slope[3], amp_error *err)
 {
-    double lo[3], hi[3], sum[2] = {0, 0};
-    size_t cnt[2] = {0, 0};
+    double lo[3], hi[3], sum[3] = {0, 0, 0};
+    size_t cnt[3] = {0, 0, 0};
     int i, j, k, d;
-    if (!v || v->dim != 3 || !dir)
-        return amp_fail(err, AMP_ERR_ARG, 0, "choosing a covering direction needs a trivariate");
+    if (!v || v->dim != 3 || !slope)
+        return amp_fail(err, AMP_ERR_ARG, 0, "the slopes of iso-curves need a trivariate");
     for (d = 0; d < 3; d++)
         amp_spline_domain(v, d, &lo[d], &hi[d]);
     for (i = 0; i < PICK_SAMPLES; i++)
@@ -50,20 +50,32 @@ amp_status amp_cover_pick_dir(const amp_spline *v, int *dir, double score[3], am
                 par[2] = lo[2] + (hi[2] - lo[2]) * (k + 0.5) / PICK_SAMPLES;
                 if ((st = amp_spline_eval_derivs(v, par, 1, dv, err)) != AMP_OK)
                     return st;
-                /* curves along w (d = u, v: dv[4] = dV/dw) and along v (d = w: dv[2]), as in lib/cover.c */
-                for (d = 0; d < 2; d++)
-                    if ((s = slope(dv[d == 0 ? 4 : 2])) >= 0.0) {
+                /* dV/du, dV/dv, dV/dw: dv[1], dv[2], dv[4] */
+                for (d = 0; d < 3; d++)
+                    if ((s = slope_of(dv[1 << d])) >= 0.0) {
                         sum[d] += s;
                         cnt[d]++;
                     }
             }
-    for (d = 0; d < 2; d++)
-        sum[d] = cnt[d] ? sum[d] / (double)cnt[d] : 1.0;
+    for (d = 0; d < 3; d++)
+        slope[d] = cnt[d] ? sum[d] / (double)cnt[d] : 1.0;
+    return AMP_OK;
+}
+
+amp_status amp_cover_pick_dir(const amp_spline *v, int *dir, double score[3], amp_error *err)
+{
+    double sl[3];
+    amp_status st;
+    if (!dir)
+        return amp_fail(err, AMP_ERR_ARG, 0, "choosing a covering direction needs somewhere to put it");
+    if ((st = amp_trivariate_slopes(v, sl, err)) != AMP_OK)
+        return st;
+    /* d = u, v cover with curves along w, d = w with curves along v (lib/cover.c) */
     if (score) {
-        score[0] = score[1] = sum[0];
-        score[2] = sum[1];
+        score[0] = score[1] = sl[2];
+        score[2] = sl[1];
     }
-    if (!(sum[0] < sum[1]))
+    if (!(sl[2] < sl[1]))
         *dir = 2;
     else
         *dir = amp_spline_polygon_length_bound(v, 1, NULL) < amp_spline_polygon_length_bound(v, 0, NULL) ? 1 : 0;

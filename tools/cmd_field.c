@@ -15,7 +15,8 @@ const char cmd_field_usage[] =
     "                    (helix, torus-quarter, vase); required\n"
     "  --along FILE      sweep: the spine, the first path of a .amp file (2..256 points)\n"
     "  --side W          sweep: side of the square cross-section, mm (default 6)\n"
-    "  --dir D           for a trivariate field: the direction of the curves, u, v or w (default w)\n"
+    "  --dir D           for a trivariate field: the direction of the curves, u, v or w; default auto:\n"
+    "                    the one whose curves are the most level (the ordering cuts climbing curves)\n"
     "  --spacing S       distance between neighbouring curves, mm (default 1)\n"
     "  --pattern P       grid (square lattice, covering radius S*sqrt(2)/2) or hex (honeycomb, S/sqrt(3));\n"
     "                    default grid\n"
@@ -46,6 +47,7 @@ const char cmd_field_usage[] =
 /* The figures of one run (JSON or human lines). */
 typedef struct report {
     const char *field, *pattern;
+    int dir; /* of a trivariate field's curves (0 u, 1 v, 2 w), -1 for the others */
     double spacing, mesh_volume, deposited, gap_all, gap_in, mean, t_cover, t_gap;
     long samples, shells;
     const amp_field_stats *st;
@@ -58,6 +60,11 @@ static void print_report(const report *r, int json)
         cli_json_begin(&j, stdout);
         cli_json_str(&j, "field", r->field);
         cli_json_str(&j, "pattern", r->pattern);
+        if (r->dir >= 0) {
+            char d[2] = {0, 0};
+            d[0] = "uvw"[r->dir];
+            cli_json_str(&j, "dir", d);
+        }
         cli_json_num(&j, "spacing_mm", r->spacing);
         cli_json_int(&j, "curves", (long long)r->st->curves);
         cli_json_int(&j, "paths", (long long)r->st->pieces);
@@ -202,7 +209,7 @@ static int judge(const amp_field_stats *st, double spacing, double gap_all, size
 
 int cmd_field(int argc, char **argv)
 {
-    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "w", *along = NULL;
+    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "auto", *along = NULL;
     const char *within = NULL, *without = NULL;
     amp_mesh rm[2];
     amp_bvh *rb[2] = {NULL, NULL};
@@ -240,8 +247,8 @@ int cmd_field(int argc, char **argv)
         return cli_fail("field", CLI_USAGE, "--shells must be in 0..100");
     if (samples < 0)
         return cli_fail("field", CLI_USAGE, "--samples must be >= 0");
-    if (strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
-        return cli_fail("field", CLI_USAGE, "--dir must be u, v or w, not '%s'", dir);
+    if (strcmp(dir, "auto") != 0 && strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
+        return cli_fail("field", CLI_USAGE, "--dir must be auto, u, v or w, not '%s'", dir);
     builtin = strcmp(field, "helix-square") == 0 || strcmp(field, "box") == 0;
     sweep = strcmp(field, "sweep") == 0;
     if (sweep != (along != NULL))
@@ -261,7 +268,8 @@ int cmd_field(int argc, char **argv)
         load_mesh(pos[0], &m, &b, &err) != AMP_OK ||
         (sweep ? AMP_OK
                : builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
-                         : amp_field_from_spline(&f, &spl, dir[0] - 'u', &err)) != AMP_OK) {
+                         : amp_field_from_spline(&f, &spl, dir[0] == 'a' ? AMP_FIELD_AUTO : dir[0] - 'u', &err)) !=
+                               AMP_OK) {
         rc = cli_fail_err("field", &err);
         goto done;
     }
@@ -301,6 +309,7 @@ int cmd_field(int argc, char **argv)
         memset(&r, 0, sizeof r);
         r.field = field;
         r.pattern = pattern;
+        r.dir = builtin || sweep ? -1 : f.dir;
         r.st = &st;
         r.spacing = spacing, r.mesh_volume = amp_mesh_volume(&m), r.deposited = amp_pathset_volume(&ps, -1);
         r.samples = samples, r.shells = shells, r.gap_all = gap_all, r.gap_in = gap_in, r.mean = mean;

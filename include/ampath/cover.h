@@ -95,6 +95,16 @@ typedef struct amp_cover_stats {
 amp_status amp_cover_pick_dir(const amp_spline *v, int *dir, double score[3], amp_error *err);
 
 /**
+ * How level the iso-curves of trivariate @p v are along each parametric
+ * direction: slope[d] is the mean |t_z| / |t| of the tangent t = dV/d(u, v, w)
+ * at 8 x 8 x 8 interior parameter samples (0: level; points where t vanishes
+ * are skipped). What amp_cover_pick_dir() and amp_field_from_spline()'s
+ * automatic direction compare. Thread-safe, no allocation. Errors: AMP_ERR_ARG
+ * (not a trivariate, NULL @p slope), AMP_ERR_RANGE (NaN in the net).
+ */
+amp_status amp_trivariate_slopes(const amp_spline *v, double slope[3], amp_error *err);
+
+/**
  * Cover the trivariate @p v (dim 3) by paths appended to @p out (role object,
  * radius opts->radius on every vertex), in the order surfaces were produced
  * (low to high parameter of opts->dir). @p stats may be NULL.

@@ -92,11 +92,19 @@ amp_status amp_field_sweep(amp_field *f, amp_sweep *sw, const amp_vec3 *pts, siz
 
 struct amp_spline;
 
+/** amp_field_from_spline()'s @p dir: the direction whose iso-curves are the most level. */
+#define AMP_FIELD_AUTO (-1)
+
 /**
  * A trivariate spline ([P1 §4.2]: "a trivariate that specifies the external
  * direction field") as a field over its parameter domain, curves along
- * @p dir (0 u, 1 v, 2 w). The spline is referenced, not copied: it must
- * outlive @p f. AMP_ERR_ARG when it is not a trivariate or dir is out of range.
+ * @p dir (0 u, 1 v, 2 w), or with AMP_FIELD_AUTO along the direction whose
+ * iso-curves are the most level (amp_trivariate_slopes(); slopes within 1e-6
+ * tie, and of tied ones the longest by the Lemma A.2 bound wins, w first on a
+ * tie): curves that climb are cut to pieces by Algorithm 2 (the vase along w:
+ * 271,483 cuts at spacing 1.4, along v none). The choice is f->dir. The spline
+ * is referenced, not copied: it must outlive @p f. AMP_ERR_ARG when it is not
+ * a trivariate or dir is out of range.
  */
 amp_status amp_field_from_spline(amp_field *f, const struct amp_spline *s, int dir, amp_error *err);
 

@@ -25,6 +25,10 @@ def _dir(d):
     return _DIRS[d]
 
 
+def _dir_or_auto(d):
+    return -1 if d == "auto" else _dir(d)  # -1: AMP_COVER_AUTO / AMP_FIELD_AUTO
+
+
 def _run(fn, out, progress=None, inputs=()):
     """Call a stage that appends to @out, holding its @inputs; free @out on failure."""
     try:
@@ -44,7 +48,7 @@ def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, **opts):
     o = L.amp_cover_opts()
     lib.amp_cover_opts_default(ctypes.byref(o))
     o.eps = eps
-    o.dir = -1 if dir == "auto" else _dir(dir)
+    o.dir = _dir_or_auto(dir)
     if measure not in ("arclen", "iso"):
         _fail("measure must be arclen or iso")
     o.measure = 0 if measure == "arclen" else 1
@@ -100,7 +104,7 @@ def _spine_points(along):
 def _field_of(field, mesh, dir, along, side, f, err):
     """Fill the amp_field @f as cmd_field.c does; returns what must outlive the call (sweep, trivariate)."""
     if isinstance(field, Trivariate):
-        _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir(dir), ctypes.byref(err)), err)
+        _check(lib.amp_field_from_spline(ctypes.byref(f), field._ref, _dir_or_auto(dir), ctypes.byref(err)), err)
         return [field]
     if (field == "sweep") != (along is not None):
         _fail("along (the spine) goes with field 'sweep' (and is required by it)")
@@ -116,19 +120,19 @@ def _field_of(field, mesh, dir, along, side, f, err):
         return []
     t = Trivariate.load(field)  # a .spl file or a built-in trivariate name, as the tool
     try:
-        _check(lib.amp_field_from_spline(ctypes.byref(f), t._ref, _dir(dir), ctypes.byref(err)), err)
+        _check(lib.amp_field_from_spline(ctypes.byref(f), t._ref, _dir_or_auto(dir), ctypes.byref(err)), err)
     except BaseException:
         t.close()
         raise
     return [t]
 
 
-def field(mesh, field, spacing=1.0, pattern="grid", dir="w", along=None, side=6.0, within=None, without=(),
+def field(mesh, field, spacing=1.0, pattern="grid", dir="auto", along=None, side=6.0, within=None, without=(),
           progress=None, **opts):
     """Paper 1 §4.2 (`ampath field`): curves of a direction field clipped to @mesh. @field: "helix-square",
     "box", "sweep" (a square of side @side mm swept along the spine @along: a PathSet or `.amp` file, its
     first path, or a sequence of points; paper Fig. 6), a Trivariate, or a built-in trivariate name or `.spl`
-    file (curves along @dir). @within: cover only the part inside this closed region (a Mesh or `.stl`);
+    file (curves along @dir: u, v, w, or "auto" for the most level ones). @within: cover only the part inside this closed region (a Mesh or `.stl`);
     @without: a region or a list of regions whose parts other fields cover (the tool's --within/--without).
     Options: step, min_len, radius, shells (amp_field_opts). @progress: a callable taking the fraction done."""
     f, o, st, err = L.amp_field(), L.amp_field_opts(), L.new(L.amp_field_stats), _err()
