@@ -350,6 +350,7 @@ _PROTOS = {
     "amp_error_clear": (None, [E]),
     "amp_pathset_init": (None, [P(amp_pathset), c_void_p]),
     "amp_pathset_free": (None, [P(amp_pathset)]),
+    "amp_pathset_clear": (None, [P(amp_pathset)]),
     "amp_pathset_begin": (c_int, [P(amp_pathset), c_int, E]),
     "amp_pathset_push": (c_int, [P(amp_pathset), amp_vec3, c_double, E]),
     "amp_pathset_set_height": (c_int, [P(amp_pathset), c_double, E]),

@@ -86,6 +86,30 @@ class ContinuousSlice(TmpCase):
         self.assertEqual(job.printer.name, "ender3")
 
 
+    def test_a_failing_final_check_slices_again_with_the_per_island_verifier(self):
+        # as the tool: the layers are made without the per-island verifier and checked once; only when that
+        # check fails are they made again with it (and checked again, raising if they still fail)
+        import ampath.pipeline as pl
+        tool("model", "helix", "-o", self.p("helix.stl"))
+        tool("slice", self.p("helix.stl"), "--layer", 0.3, "--continuous", "-o", self.p("cont.amp"))
+        calls, real = [], pl.Slices._check_strokes
+
+        def failing_once(sl, ps, raise_on_failure=True):
+            tot = real(sl, ps, raise_on_failure)
+            calls.append(raise_on_failure)
+            return dict(tot, failed_paths=1) if len(calls) == 1 else tot
+        pl.Slices._check_strokes = failing_once
+        try:
+            with ampath.Mesh.load(self.p("helix.stl")) as mesh, ampath.slice(mesh, 0.3, continuous=True) as cont:
+                amp = strip_comments(cont.to_amp())
+                self.assertEqual(cont.stats["failed_paths"], 0)
+        finally:
+            pl.Slices._check_strokes = real
+        self.assertEqual(calls, [False, True])
+        # made twice, appended once: the same paths as the tool's
+        self.assertSameBytes(amp, strip_comments(read(self.p("cont.amp"))), "continuous slice after the retry")
+
+
 # a profile whose start and end G-code read the placed job (PrusaSlicer's macro language)
 MACRO_INI = ("bed_shape = 0x0,250x0,250x210,0x210\nmax_print_height = 210\nprinter_model = MK3S\n"
              "print_settings_id = 0.15mm QUALITY @MK3\n"
