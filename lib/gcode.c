@@ -57,6 +57,11 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->max_feed_xy = 200.0;
     o->max_feed_z = 10.0;
     o->max_feed_e = 60.0;
+    /* Marlin's DEFAULT_MAX_ACCELERATION and DEFAULT_RETRACT_ACCELERATION */
+    o->max_accel_xy = 3000.0;
+    o->max_accel_z = 100.0;
+    o->max_accel_e = 10000.0;
+    o->retract_accel = 3000.0;
     /* the generic printer of docs/interfaces.md §5: 220 x 220 x 250 mm */
     o->profile = "generic";
     o->place = AMP_PLACE_CENTER;
@@ -342,6 +347,9 @@ static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
     NEED(isfinite(o->max_feed_xy) && o->max_feed_xy > 0.0, "max feed xy", "positive");
     NEED(isfinite(o->max_feed_z) && o->max_feed_z > 0.0, "max feed z", "positive");
     NEED(isfinite(o->max_feed_e) && o->max_feed_e > 0.0, "max feed e", "positive");
+    NEED(IN(o->max_accel_xy, 0.0, 1e6) && IN(o->max_accel_z, 0.0, 1e6) && IN(o->max_accel_e, 0.0, 1e6),
+         "max acceleration per axis", "in [0, 1e6] mm/s^2 (0: no limit)");
+    NEED(IN(o->retract_accel, 0.0, 1e6), "retract acceleration", "in [0, 1e6] mm/s^2 (0: the acceleration)");
     NEED(o->place >= AMP_PLACE_CENTER && o->place <= AMP_PLACE_AT, "place", "center, origin or a bed point");
     NEED(IN(o->place_x, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->place_y, -GC_COORD_MAX, GC_COORD_MAX), "place point",
          "finite, within +-99999 mm");

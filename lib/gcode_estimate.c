@@ -47,11 +47,11 @@ static amp_gcode_block *plan_at(amp_gcode_iter *it, size_t k)
  */
 static void plan_back(amp_gcode_iter *it)
 {
-    double a = it->o.accel, vexit = 0.0;
+    double vexit = 0.0;
     size_t k;
     for (k = it->plan_n; k-- > 1;) {
         amp_gcode_block *b = plan_at(it, k);
-        double ventry = sqrt(vexit * vexit + 2.0 * a * b->len);
+        double ventry = sqrt(vexit * vexit + 2.0 * b->acc * b->len);
         vexit = ventry < b->vjunc ? ventry : b->vjunc;
         if (k + 1 < it->plan_n && vexit == b->vback)
             break;
@@ -67,8 +67,9 @@ static void plan_back(amp_gcode_iter *it)
  */
 static void plan_commit(amp_gcode_iter *it)
 {
-    double a = it->o.accel, vexit = it->plan_n > 1 ? plan_at(it, 1)->vback : 0.0, t;
+    double vexit = it->plan_n > 1 ? plan_at(it, 1)->vback : 0.0, t, a;
     amp_gcode_block *b0 = plan_at(it, 0);
+    a = b0->acc;
     {
         double reach = sqrt(it->plan_v * it->plan_v + 2.0 * a * b0->len);
         if (vexit > reach)
@@ -94,7 +95,8 @@ void amp_gc_plan_flush(amp_gcode_iter *it)
     it->plan_v = 0.0;
 }
 
-/* Junction speed limit between unit directions u1 (incoming) and u2 (Grbl/Marlin junction deviation). */
+/* Junction speed limit between unit directions u1 (incoming) and u2 (Grbl/Marlin junction deviation), at the
+ * outgoing move's acceleration. */
 static double junction_speed(const amp_gcode_opts *o, const amp_gcode_block *p, const amp_gcode_block *b)
 {
     double c = -(p->ux * b->ux + p->uy * b->uy + p->uz * b->uz), s;
@@ -103,7 +105,15 @@ static double junction_speed(const amp_gcode_opts *o, const amp_gcode_block *p, 
     if (c < -0.999999)
         return HUGE_VAL; /* straight on */
     s = sqrt(0.5 * (1.0 - c));
-    return sqrt(o->accel * o->junction_deviation * s / (1.0 - s));
+    return sqrt(b->acc * o->junction_deviation * s / (1.0 - s));
+}
+
+/* Marlin's per-axis acceleration limit: the move's acceleration a is lowered until no axis, moving |d_axis| of
+ * the move's len, accelerates beyond its own limit (a |d_axis| / len <= max_axis). */
+static double axis_limited(double a, double max, double d_axis, double len)
+{
+    double f = fabs(d_axis);
+    return max > 0.0 && f > 0.0 && a * f > max * len ? max * len / f : a;
 }
 
 void amp_gc_plan_move(amp_gcode_iter *it, amp_vec3 d, double len, double feed, double de, int travel)
@@ -126,6 +136,10 @@ void amp_gc_plan_move(amp_gcode_iter *it, amp_vec3 d, double len, double feed, d
     if (de > 0.0 && v * de / len > it->o.max_feed_e)
         v = it->o.max_feed_e * len / de;
     b.vnom = v;
+    b.acc = it->o.accel;
+    b.acc = axis_limited(b.acc, it->o.max_accel_xy, hxy, len);
+    b.acc = axis_limited(b.acc, it->o.max_accel_z, d.z, len);
+    b.acc = axis_limited(b.acc, it->o.max_accel_e, de, len);
     if (it->plan_n == 0) {
         b.vjunc = it->plan_v; /* from rest after a flush, or continuing speed */
     } else {
@@ -144,12 +158,15 @@ void amp_gc_plan_move(amp_gcode_iter *it, amp_vec3 d, double len, double feed, d
     plan_back(it);
 }
 
-/* A move outside the print planner: from rest to rest. */
+/* A retraction or its undoing (the filament alone), outside the print planner: from rest to rest, at the
+ * retraction acceleration within the filament's limit. */
 void amp_gc_plan_single(amp_gcode_iter *it, double len, double v)
 {
-    double t;
+    double t, a = it->o.retract_accel > 0.0 ? it->o.retract_accel : it->o.accel;
     amp_gc_plan_flush(it);
-    t = amp_gcode_trapezoid_time(len, 0.0, 0.0, v, it->o.accel);
+    if (it->o.max_accel_e > 0.0 && a > it->o.max_accel_e)
+        a = it->o.max_accel_e;
+    t = amp_gcode_trapezoid_time(len, 0.0, 0.0, v, a);
     it->stats.time += t;
     it->stats.travel_time += t;
 }

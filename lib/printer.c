@@ -19,6 +19,7 @@ typedef struct builtin {
     double retract, retract_speed, lift, before_travel;
     double print, first, travel, accel, max_xy, max_z, max_e, max_flow;
     const char *start, *end;
+    double acc_xy, acc_z, acc_e, acc_retract; /* the firmware's per-axis and retraction accelerations */
 } builtin;
 
 /* Prusa-style start: heat, home without and then with mesh-bed levelling, an intro line at the bed's front edge. */
@@ -57,14 +58,17 @@ static const char ender3_start[] = "M140 S[first_layer_bed_temperature] ; bed\n"
 
 static const builtin builtins[] = {
     {"generic", "generic 220 x 220 x 250 mm Marlin printer, 0.4 mm nozzle, 1.75 mm PLA (default)", AMP_FLAVOR_MARLIN,
-     220, 220, 250, 210, 215, 60, 60, 1.0, 35, 0.4, 2.0, 30, 20, 120, 1000, 200, 10, 60, 12, NULL, NULL},
+     220, 220, 250, 210, 215, 60, 60, 1.0, 35, 0.4, 2.0, 30, 20, 120, 1000, 200, 10, 60, 12, NULL, NULL,
+     3000, 100, 10000, 3000}, /* Marlin's defaults */
     {"prusa-mk3s", "Prusa i3 MK3S: 250 x 210 x 210 mm, Prusa Marlin, mesh-bed levelling, PLA", AMP_FLAVOR_MARLIN,
-     250, 210, 210, 210, 215, 60, 60, 0.8, 35, 0.4, 1.0, 40, 20, 180, 1250, 200, 12, 120, 15, mk3s_start, mk3s_end},
+     250, 210, 210, 210, 215, 60, 60, 0.8, 35, 0.4, 1.0, 40, 20, 180, 1250, 200, 12, 120, 15, mk3s_start, mk3s_end,
+     1000, 200, 5000, 1250}, /* PrusaSlicer's MK3S profile */
     {"ender3", "Creality Ender-3: 220 x 220 x 250 mm, Marlin, Bowden (5 mm retraction), Z 5 mm/s, PLA",
      AMP_FLAVOR_MARLIN, 220, 220, 250, 200, 205, 60, 60, 5.0, 45, 0.2, 2.0, 50, 20, 150, 500, 500, 5, 25, 8,
-     ender3_start, NULL},
+     ender3_start, NULL, 500, 100, 5000, 500}, /* Creality's Marlin configuration */
     {"voron-350", "Voron 2.4 350: 350 x 350 x 340 mm, Klipper, direct drive, 3000 mm/s^2, PLA", AMP_FLAVOR_KLIPPER,
-     350, 350, 340, 210, 215, 60, 60, 0.5, 35, 0.2, 1.5, 80, 30, 250, 3000, 300, 15, 120, 24, NULL, NULL},
+     350, 350, 340, 210, 215, 60, 60, 0.5, 35, 0.2, 1.5, 80, 30, 250, 3000, 300, 15, 120, 24, NULL, NULL,
+     3000, 350, 3000, 3000}, /* a Voron printer.cfg: max_accel, max_z_accel */
 };
 #define NBUILTIN (sizeof builtins / sizeof builtins[0])
 
@@ -121,6 +125,10 @@ amp_status amp_printer_builtin(amp_printer *p, const char *name, amp_error *err)
     p->max_feed_xy = b->max_xy;
     p->max_feed_z = b->max_z;
     p->max_feed_e = b->max_e;
+    p->max_accel_xy = b->acc_xy;
+    p->max_accel_z = b->acc_z;
+    p->max_accel_e = b->acc_e;
+    p->retract_accel = b->acc_retract;
     p->max_volumetric_flow = b->max_flow;
     p->extrusion_multiplier = 1.0;
     copy_str(p->start_gcode, sizeof p->start_gcode, b->start);
@@ -196,6 +204,10 @@ amp_status amp_printer_check(const amp_printer *p, amp_error *err)
     RANGE(p->max_feed_xy, 0.1, 1e5, "machine_max_feedrate_x/y (mm/s)");
     RANGE(p->max_feed_z, 0.01, 1e5, "machine_max_feedrate_z (mm/s)");
     RANGE(p->max_feed_e, 0.1, 1e5, "machine_max_feedrate_e (mm/s)");
+    RANGE(p->max_accel_xy, 0.0, 1e6, "machine_max_acceleration_x/y (mm/s^2)");
+    RANGE(p->max_accel_z, 0.0, 1e6, "machine_max_acceleration_z (mm/s^2)");
+    RANGE(p->max_accel_e, 0.0, 1e6, "machine_max_acceleration_e (mm/s^2)");
+    RANGE(p->retract_accel, 0.0, 1e6, "machine_max_acceleration_retracting (mm/s^2)");
     RANGE(p->max_volumetric_flow, 0.01, 1e4, "max_volumetric_speed (mm^3/s)");
     RANGE(p->extrusion_multiplier, 0.01, 10.0, "extrusion_multiplier");
     return AMP_OK;
@@ -283,6 +295,10 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
     o->max_feed_xy = p->max_feed_xy;
     o->max_feed_z = p->max_feed_z;
     o->max_feed_e = p->max_feed_e;
+    o->max_accel_xy = p->max_accel_xy;
+    o->max_accel_z = p->max_accel_z;
+    o->max_accel_e = p->max_accel_e;
+    o->retract_accel = p->retract_accel;
     o->start_gcode = p->start_out[0] ? p->start_out : NULL;
     o->end_gcode = p->end_out[0] ? p->end_out : NULL;
     return AMP_OK;

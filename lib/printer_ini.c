@@ -18,7 +18,7 @@ enum {
     K_BED_SHAPE, K_MAX_HEIGHT, K_NOZZLE, K_FILAMENT, K_LAYER, K_FIRST_LAYER, K_TEMP, K_TEMP1, K_BED, K_BED1,
     K_RETRACT, K_RETRACT_SPEED, K_LIFT, K_BEFORE_TRAVEL, K_TRAVEL, K_PERIMETER, K_FIRST_SPEED, K_FAN_MIN, K_FAN_MAX,
     K_FAN_ALWAYS, K_FAN_OFF, K_COOLING, K_FLAVOR, K_START, K_END, K_ACCEL, K_FEED_X, K_FEED_Y, K_FEED_Z, K_FEED_E,
-    K_VOLUMETRIC, K_MULTIPLIER, K_MODEL
+    K_ACC_X, K_ACC_Y, K_ACC_Z, K_ACC_E, K_ACC_RETRACT, K_VOLUMETRIC, K_MULTIPLIER, K_MODEL
 };
 
 static const struct {
@@ -51,6 +51,9 @@ static const struct {
     {"machine_max_acceleration_extruding", K_ACCEL}, {"default_acceleration", K_ACCEL},
     {"machine_max_feedrate_x", K_FEED_X}, {"machine_max_feedrate_y", K_FEED_Y},
     {"machine_max_feedrate_z", K_FEED_Z}, {"machine_max_feedrate_e", K_FEED_E},
+    {"machine_max_acceleration_x", K_ACC_X}, {"machine_max_acceleration_y", K_ACC_Y},
+    {"machine_max_acceleration_z", K_ACC_Z}, {"machine_max_acceleration_e", K_ACC_E},
+    {"machine_max_acceleration_retracting", K_ACC_RETRACT},
     {"max_volumetric_speed", K_VOLUMETRIC}, {"filament_max_volumetric_speed", K_VOLUMETRIC},
     {"extrusion_multiplier", K_MULTIPLIER}, {"filament_flow_ratio", K_MULTIPLIER},
     {"printer_model", K_MODEL},
@@ -257,6 +260,11 @@ static void set_number(amp_printer *p, ini_ctx *c, int id, double x, int pct)
     case K_FEED_Y: if (x > 0 && x < p->max_feed_xy) p->max_feed_xy = x; break;
     case K_FEED_Z: if (x > 0) p->max_feed_z = x; break;
     case K_FEED_E: if (x > 0) p->max_feed_e = x; break;
+    case K_ACC_X: if (x > 0) p->max_accel_xy = x; break;
+    case K_ACC_Y: if (x > 0 && x < p->max_accel_xy) p->max_accel_xy = x; break;
+    case K_ACC_Z: if (x > 0) p->max_accel_z = x; break;
+    case K_ACC_E: if (x > 0) p->max_accel_e = x; break;
+    case K_ACC_RETRACT: if (x > 0) p->retract_accel = x; break;
     case K_VOLUMETRIC: if (x > 0) p->max_volumetric_flow = x; break; /* 0 = unlimited: keep the hot end's default */
     case K_MULTIPLIER: p->extrusion_multiplier = x; break;
     default: break; /* K_COOLING: no layer-time cooling in ampath */

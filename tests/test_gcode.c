@@ -749,6 +749,66 @@ START_TEST(time_estimate_follows_trapezoids_and_junction_limit)
 }
 END_TEST
 
+/* Trapezoid time of a move of @p len at most @p v, from rest to rest, at acceleration @p a. */
+static double rest_to_rest(double len, double v, double a)
+{
+    return len >= v * v / a ? 2.0 * v / a + (len - v * v / a) / v : 2.0 * sqrt(len / a);
+}
+
+/* Marlin lowers a move's acceleration until no axis exceeds its own (max_acceleration): a climb of 10 mm
+ * accelerates at Z's 100 mm/s^2, not at the 1000 of the moves, and a 45-degree one at 100 sqrt(2); a
+ * retraction at the retraction acceleration. Each against the closed form, and with the limits off. */
+START_TEST(moves_accelerate_within_each_axis_limit)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    double l45 = 10.0 * sqrt(2.0);
+    raw_opts(&o, AMP_FLAVOR_MARLIN);
+    o.print_feed = o.first_layer_feed = 30.0;
+    o.max_volumetric_flow = 1000;
+    ck_assert(o.accel == 1000.0 && o.max_accel_z == 100.0 && o.max_feed_z == 10.0);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 10.2), 0.2, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+    ck_assert_near(it.est.print_time, rest_to_rest(10.0, 10.0, 100.0), 1e-9); /* 1.1 s, not 1.015 */
+    o.max_accel_z = 0.0; /* no limit: the move's own acceleration */
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+    ck_assert_near(it.est.print_time, rest_to_rest(10.0, 10.0, 1000.0), 1e-9);
+    amp_pathset_free(&ps);
+    /* 45 degrees in x-z: feed and acceleration both limited by z's share (1 / sqrt 2 of the move) */
+    o.max_accel_z = 100.0;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(10, 0, 10.2), 0.2, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+    ck_assert_near(it.est.print_time, rest_to_rest(l45, 10.0 * sqrt(2.0), 100.0 * sqrt(2.0)), 1e-9);
+    /* two paths: one retraction, its undoing and the retraction at the end, each from rest to rest at the
+     * retraction acceleration */
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(30, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(40, 0, 0.2), 0.2, NULL);
+    o.retract_accel = 500.0;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+    {
+        double with = it.est.travel_time;
+        o.retract_accel = 3000.0;
+        ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+        ck_assert_near(with - it.est.travel_time,
+                       3.0 * (rest_to_rest(o.retract_length, o.retract_speed, 500.0) -
+                              rest_to_rest(o.retract_length, o.retract_speed, 3000.0)),
+                       1e-9);
+    }
+    amp_pathset_free(&ps);
+    /* bad limits are refused */
+    o.max_accel_z = -1.0;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_ERR_ARG);
+}
+END_TEST
+
 START_TEST(caller_start_and_end_sequences_replace_the_built_in_ones)
 {
     amp_pathset ps;
@@ -1893,6 +1953,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, reader_parses_every_line_of_both_flavors);
     tcase_add_loop_test(tc, reader_rejects_broken_gcode, 0, (int)(sizeof broken_gcode / sizeof broken_gcode[0]));
     tcase_add_test(tc, time_estimate_follows_trapezoids_and_junction_limit);
+    tcase_add_test(tc, moves_accelerate_within_each_axis_limit);
     tcase_add_test(tc, caller_start_and_end_sequences_replace_the_built_in_ones);
     tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
     tcase_add_test(tc, bad_input_gives_clear_errors);

@@ -22,6 +22,10 @@ static const char prusa_ini[] =
     "gcode_flavor = marlin2\n"
     "layer_height = 0.15\n"
     "machine_max_acceleration_extruding = 1500,1250\n"
+    "machine_max_acceleration_retracting = 1250,1250\n"
+    "machine_max_acceleration_x = 1000,960\n"
+    "machine_max_acceleration_y = 900,960\n"
+    "machine_max_acceleration_z = 200,200\n"
     "machine_max_feedrate_x = 300,200\n"
     "machine_max_feedrate_y = 250,200\n"
     "machine_max_feedrate_z = 12,12\n"
@@ -122,9 +126,13 @@ START_TEST(prusaslicer_ini_is_read_with_unknown_keys_listed)
     ck_assert_double_eq(p.accel, 1500);
     ck_assert_double_eq(p.max_feed_xy, 250);
     ck_assert_double_eq(p.max_feed_z, 12);
+    ck_assert_double_eq(p.max_accel_xy, 900); /* the smaller of x and y */
+    ck_assert_double_eq(p.max_accel_z, 200);
+    ck_assert_double_eq(p.max_accel_e, 10000); /* not in the file: the generic printer's (Marlin's default) */
+    ck_assert_double_eq(p.retract_accel, 1250);
     ck_assert_double_eq(p.max_volumetric_flow, 12); /* 0 = unlimited in the slicer: the hot end's default */
     ck_assert_int_eq(p.flavor, AMP_FLAVOR_MARLIN);
-    ck_assert_uint_eq(p.n_keys, 31);
+    ck_assert_uint_eq(p.n_keys, 35);
     ck_assert_uint_eq(p.n_unknown, 2);
     ck_assert_str_eq(p.unknown, "thumbnails,wipe_tower_x");
     ck_assert_msg(amp_printer_gcode_opts(&p, &o, &err) == AMP_OK, "%s", err.msg);
@@ -213,6 +221,7 @@ START_TEST(printer_command_lists_and_shows_profiles)
     ck_assert_ptr_nonnull(strstr(out, "\"name\":\"voron-350\""));
     ck_assert_int_eq(fx_run_tool("printer show ender3 --json", out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"max_feed_z_mm_s\":5"));
+    ck_assert_ptr_nonnull(strstr(out, "\"max_accel_z_mm_s2\":100"));
     snprintf(args, sizeof args, "printer show %s --json", path);
     ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"unknown_keys\":[\"thumbnails\",\"wipe_tower_x\"]"));

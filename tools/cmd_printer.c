@@ -46,6 +46,10 @@ static void json_profile(const amp_printer *p)
     cli_json_num(&j, "max_feed_xy_mm_s", p->max_feed_xy);
     cli_json_num(&j, "max_feed_z_mm_s", p->max_feed_z);
     cli_json_num(&j, "max_feed_e_mm_s", p->max_feed_e);
+    cli_json_num(&j, "max_accel_xy_mm_s2", p->max_accel_xy);
+    cli_json_num(&j, "max_accel_z_mm_s2", p->max_accel_z);
+    cli_json_num(&j, "max_accel_e_mm_s2", p->max_accel_e);
+    cli_json_num(&j, "retract_accel_mm_s2", p->retract_accel);
     cli_json_num(&j, "max_volumetric_flow_mm3_s", p->max_volumetric_flow);
     cli_json_num(&j, "extrusion_multiplier", p->extrusion_multiplier);
     cli_json_str(&j, "start_gcode", p->start_out);
@@ -74,6 +78,8 @@ static void human_profile(const amp_printer *p)
            "mm/s; flow %g mm^3/s; multiplier %g\n",
            p->print_speed, p->first_layer_speed, p->travel_speed, p->accel, p->max_feed_xy, p->max_feed_z,
            p->max_feed_e, p->max_volumetric_flow, p->extrusion_multiplier);
+    printf("  axis accelerations: XY %g, Z %g, E %g mm/s^2; retraction %g mm/s^2 (0: no limit)\n", p->max_accel_xy,
+           p->max_accel_z, p->max_accel_e, p->retract_accel);
     printf("  start G-code: %s\n", p->start_out[0] ? "" : "(built-in: heat, home, wait)");
     if (p->start_out[0])
         printf("%s\n", p->start_out);

@@ -96,7 +96,10 @@
  * reversed incoming and the outgoing direction) and by both segments' feeds;
  * the planner must be able to stop at the end of its window and at every
  * travel, retraction and path end. Feeds are clamped to max_feed_xy,
- * max_feed_z (z component) and max_feed_e (filament speed) as firmware does.
+ * max_feed_z (z component) and max_feed_e (filament speed) as firmware does,
+ * and each move's acceleration to max_accel_xy, max_accel_z and max_accel_e
+ * along its direction (a lift of the head accelerates at Z's 100 mm/s^2, not
+ * at the 1000 of the moves); retractions accelerate at retract_accel.
  * Heating and homing time are not included.
  *
  * Numbers: X Y Z with 3 decimals, E with 5, F (mm/min) with 1, trailing
@@ -178,6 +181,10 @@ typedef struct amp_gcode_opts {
     double max_feed_xy;         /**< mm/s limit of the XY speed in the estimate (200) */
     double max_feed_z;          /**< mm/s limit of the Z speed, also the feed of travel lifts (10) */
     double max_feed_e;          /**< mm/s limit of the filament speed in the estimate (60) */
+    double max_accel_xy;        /**< mm/s^2 per-axis limits of the estimate (Marlin's max_acceleration: a move's */
+    double max_accel_z;         /**< acceleration is lowered until no axis exceeds its own): X and Y (3000), */
+    double max_accel_e;         /**< Z (100), filament (10000); 0 = no limit */
+    double retract_accel;       /**< mm/s^2 of retractions (Marlin's M204 R, 3000; 0: accel) */
     /* printer and placement (docs/interfaces.md §5); amp_printer_gcode_opts() fills these from a profile */
     const char *profile;        /**< printer name for the header ("generic"); not copied */
     int place;                  /**< AMP_PLACE_CENTER (default), AMP_PLACE_ORIGIN or AMP_PLACE_AT */
@@ -247,6 +254,7 @@ typedef struct amp_gcode_move {
 /** One planner block of the estimate (internal; part of the iterator's plain data). */
 typedef struct amp_gcode_block {
     double len, vnom, vjunc, ux, uy, uz;
+    double acc;   /* the move's acceleration: accel lowered by the per-axis limits */
     double vback; /* the highest speed it may enter the next block with, from the window's end at rest */
     int travel;   /* a G0: its time counts as travel time */
 } amp_gcode_block;

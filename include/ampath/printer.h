@@ -68,6 +68,8 @@ typedef struct amp_printer {
     double print_speed, first_layer_speed, travel_speed;
     double accel;                     /**< printing acceleration */
     double max_feed_xy, max_feed_z, max_feed_e;
+    /** machine_max_acceleration_x/y (the smaller), _z, _e and _retracting, mm/s^2: the estimate's per-axis limits */
+    double max_accel_xy, max_accel_z, max_accel_e, retract_accel;
     double max_volumetric_flow;       /**< mm^3/s */
     double extrusion_multiplier;
     char start_gcode[AMP_PRINTER_GCODE_MAX]; /**< "" = the writer's built-in sequence; placeholders unexpanded */

@@ -291,7 +291,8 @@ _GCODE_OPTS = [
     ("travel_feed", _D), ("retract_length", _D), ("retract_speed", _D), ("z_hop", _D), ("travel_corridor", _D),
     ("end_lift", _D), ("relative_e", c_int), ("hotend_temp", _D), ("bed_temp", _D), ("start_gcode", c_char_p),
     ("end_gcode", c_char_p), ("accel", _D), ("junction_deviation", _D), ("max_feed_xy", _D), ("max_feed_z", _D),
-    ("max_feed_e", _D), ("profile", c_char_p), ("place", c_int), ("place_x", _D), ("place_y", _D),
+    ("max_feed_e", _D), ("max_accel_xy", _D), ("max_accel_z", _D), ("max_accel_e", _D), ("retract_accel", _D),
+    ("profile", c_char_p), ("place", c_int), ("place_x", _D), ("place_y", _D),
     ("bed_min_x", _D), ("bed_min_y", _D), ("bed_max_x", _D), ("bed_max_y", _D), ("max_height", _D),
     ("first_layer_height", _D), ("first_layer_feed", _D), ("first_layer_hotend_temp", _D),
     ("first_layer_bed_temp", _D), ("fan_off_layers", c_int), ("fan_speed", _D), ("retract_min_travel", _D),
@@ -323,7 +324,8 @@ class amp_printer(Structure):
                 + [("fan_off_layers", c_int)]
                 + [(n, _D) for n in ("retract_length", "retract_speed", "retract_lift", "retract_before_travel",
                                      "print_speed", "first_layer_speed", "travel_speed", "accel", "max_feed_xy",
-                                     "max_feed_z", "max_feed_e", "max_volumetric_flow", "extrusion_multiplier")]
+                                     "max_feed_z", "max_feed_e", "max_accel_xy", "max_accel_z", "max_accel_e",
+                                     "retract_accel", "max_volumetric_flow", "extrusion_multiplier")]
                 + [("start_gcode", c_char * AMP_PRINTER_GCODE_MAX), ("end_gcode", c_char * AMP_PRINTER_GCODE_MAX),
                    ("unknown", c_char * AMP_PRINTER_UNKNOWN_MAX), ("n_unknown", c_size_t), ("n_keys", c_size_t),
                    ("start_out", c_char * AMP_PRINTER_GCODE_MAX), ("end_out", c_char * AMP_PRINTER_GCODE_MAX),
