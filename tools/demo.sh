@@ -54,7 +54,7 @@ echo "subdivisions:    $(num $D/order.json subdivisions_improved)"
 echo "coverage error:  $(echo "$GAP" | cut -c1-6) mm (eps $EPS mm)"
 TT=$(num $D/gcode.json travel_time_s | cut -d. -f1)
 echo "print length:    $(num $D/gcode.json print_length_mm | cut -d. -f1) mm extruding, $(num $D/gcode.json travel_length_mm | cut -d. -f1) mm travel ($(num $D/gcode.json travel_per_print_length | cut -c1-4) x)"
-echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, of which travel $((TT / 60)) min ($((100 * TT / (T > 0 ? T : 1))) %); filament $(num $D/gcode.json filament_mm | cut -d. -f1) mm"
+echo "estimated time:  $((T / 3600)) h $((T % 3600 / 60)) min, of which travel $((TT / 60)) min ($(((200 * TT / (T > 0 ? T : 1) + 1) / 2)) %); filament $(num $D/gcode.json filament_mm | cut -d. -f1) mm"
 echo "travels:         $(num $D/gcode.json travels) ($(num $D/gcode.json direct_hops) direct hops without retraction or lift, $(num $D/gcode.json retractions) retractions); targets: <= 0.5 x, <= 30 %"
 echo
 
