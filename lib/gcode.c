@@ -48,6 +48,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->travel_corridor = 1.0;
     o->end_lift = 10.0;
     o->relative_e = flavor == AMP_FLAVOR_KLIPPER; /* docs/interfaces.md §5: Klipper uses M83 by default */
+    o->max_cross_section = 4.0 * 0.4 * 0.4; /* Klipper's default for the 0.4 mm nozzle (Klipper flavour only) */
     o->hotend_temp = 210.0;
     o->bed_temp = 60.0;
     o->start_gcode = NULL;
@@ -350,6 +351,7 @@ static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
     NEED(IN(o->max_accel_xy, 0.0, 1e6) && IN(o->max_accel_z, 0.0, 1e6) && IN(o->max_accel_e, 0.0, 1e6),
          "max acceleration per axis", "in [0, 1e6] mm/s^2 (0: no limit)");
     NEED(IN(o->retract_accel, 0.0, 1e6), "retract acceleration", "in [0, 1e6] mm/s^2 (0: the acceleration)");
+    NEED(IN(o->max_cross_section, 0.0, 1e4), "max cross-section", "in [0, 10000] mm^2 (0: no limit)");
     NEED(o->place >= AMP_PLACE_CENTER && o->place <= AMP_PLACE_AT, "place", "center, origin or a bed point");
     NEED(IN(o->place_x, -GC_COORD_MAX, GC_COORD_MAX) && IN(o->place_y, -GC_COORD_MAX, GC_COORD_MAX), "place point",
          "finite, within +-99999 mm");
@@ -560,6 +562,8 @@ static void reset_run(amp_gcode_iter *it, int pass)
 {
     size_t i;
     it->pass = pass;
+    it->xs_path = (size_t)-1;
+    it->xs_area = 0.0;
     it->phase = PH_HEADER;
     it->sub = 0;
     it->path = 0;
@@ -637,6 +641,13 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
                 it->stats.lines++;
     }
     it->stats.input_segments = js.input_segments;
+    if (it->xs_path != (size_t)-1)
+        return amp_fail(err, AMP_ERR_LIMIT, 0,
+                        "gcode: path %lu extrudes %.3g mm^2 of cross-section (a bead of radius %.3g mm), more than the "
+                        "printer takes (%.3g mm^2: Klipper's max_extrude_cross_section, 4 x nozzle^2, would stop the "
+                        "job there): lower the radius (ampath mdr --nominal, field --radius) or, if printer.cfg allows "
+                        "more, say so with --max-cross-section",
+                        (unsigned long)it->xs_path, it->xs_area, sqrt(it->xs_area / AMP_PI), it->o.max_cross_section);
     it->est = it->stats;
     reset_run(it, 2);
     it->stats.input_segments = js.input_segments;
@@ -802,6 +813,13 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
         vol += amp_bead_area(0.5 * (v[m].r + v[m + 1].r), p->h) * amp_v3_dist(v[m].p, v[m + 1].p);
     de = it->o.flow * vol / it->fil_area;
     area = len > 0.0 ? vol / len : 0.0;
+    /* the cross-section the firmware reads off the line: E over the XYZ length (Klipper checks moves with XY) */
+    if (it->o.flavor == AMP_FLAVOR_KLIPPER && it->o.max_cross_section > 0.0 && it->xs_path == (size_t)-1 &&
+        len > 0.0 && (d.x != 0.0 || d.y != 0.0) &&
+        de * it->fil_area / len > it->o.max_cross_section * (1.0 - 1e-6)) {
+        it->xs_path = it->path;
+        it->xs_area = de * it->fil_area / len;
+    }
     raise_written(it, p, v, k, j, area, arc == NULL);
     if (area * base > it->o.max_volumetric_flow) {
         /* volumetric cap: lower the feed, rounded down so that the printed F respects the cap */

@@ -295,6 +295,7 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
     o->max_feed_xy = p->max_feed_xy;
     o->max_feed_z = p->max_feed_z;
     o->max_feed_e = p->max_feed_e;
+    o->max_cross_section = 4.0 * p->nozzle_diameter * p->nozzle_diameter; /* Klipper's default for the nozzle */
     o->max_accel_xy = p->max_accel_xy;
     o->max_accel_z = p->max_accel_z;
     o->max_accel_e = p->max_accel_e;

@@ -99,6 +99,7 @@ static const cli_range cli_ranges[] = {
     {NULL, "max-accel-z", 0, 1e6},
     {NULL, "max-accel-e", 0, 1e6},
     {NULL, "retract-accel", 0, 1e6},
+    {NULL, "max-cross-section", 0, 1e4},
     {NULL, "first-layer-feed", 0.1, 1000},
     {NULL, "retract-min-travel", 0, 1000},
     {NULL, "first-layer-hotend", 0, 500},

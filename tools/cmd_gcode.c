@@ -35,6 +35,8 @@ const char cmd_gcode_usage[] =
     "  --max-feed-xy V, --max-feed-z V, --max-feed-e V   axis limits of the estimate, mm/s\n"
     "  --max-accel-xy A, --max-accel-z A, --max-accel-e A   axis acceleration limits of the estimate,\n"
     "                          mm/s^2 (the profile's; 0 = none); --retract-accel A: of retractions\n"
+    "  --max-cross-section A   Klipper: its max_extrude_cross_section, mm^2 (4 x nozzle^2; 0 = none); a job\n"
+    "                          with a wider bead is refused (Klipper would stop it at that move)\n"
     "writer options:\n"
     "  --chord-tol T           simplification chord tolerance, mm (0.01; 0 = off)\n"
     "  --radius-tol T          deposition radius tolerance of the simplification, mm (0.01)\n"
@@ -188,7 +190,7 @@ static void print_human(const char *in, const char *out, const amp_printer *pr, 
 /* Override the profile's values with the options the user gave. */
 typedef struct cli_vals {
     double filament, flow, max_flow, feed, first_feed, travel_feed, retract, retract_speed, retract_min, z_hop;
-    double hotend, bed, hotend1, bed1, fan, fan_off, accel, jd, max_xy, max_z, max_e, acc_xy, acc_z, acc_e, acc_r;
+    double hotend, bed, hotend1, bed1, fan, fan_off, accel, jd, max_xy, max_z, max_e, acc_xy, acc_z, acc_e, acc_r, xs;
     double chord, rtol, minseg, corridor, end_lift, hop, zoffs, theta;
 } cli_vals;
 
@@ -235,6 +237,7 @@ static void apply_overrides(const cli_opt *opts, const cli_vals *v, amp_gcode_op
     OVR("max-accel-z", max_accel_z, v->acc_z);
     OVR("max-accel-e", max_accel_e, v->acc_e);
     OVR("retract-accel", retract_accel, v->acc_r);
+    OVR("max-cross-section", max_cross_section, v->xs);
     OVR("chord-tol", chord_tol, v->chord);
     OVR("radius-tol", radius_tol, v->rtol);
     OVR("min-segment", min_segment, v->minseg);
@@ -320,6 +323,7 @@ int cmd_gcode(int argc, char **argv)
                       {"max-feed-z", CLI_DOUBLE, &v.max_z, 0},  {"max-feed-e", CLI_DOUBLE, &v.max_e, 0},
                       {"max-accel-xy", CLI_DOUBLE, &v.acc_xy, 0}, {"max-accel-z", CLI_DOUBLE, &v.acc_z, 0},
                       {"max-accel-e", CLI_DOUBLE, &v.acc_e, 0}, {"retract-accel", CLI_DOUBLE, &v.acc_r, 0},
+                      {"max-cross-section", CLI_DOUBLE, &v.xs, 0},
                       {"chord-tol", CLI_DOUBLE, &v.chord, 0},   {"radius-tol", CLI_DOUBLE, &v.rtol, 0},
                       {"min-segment", CLI_DOUBLE, &v.minseg, 0}, {"corridor", CLI_DOUBLE, &v.corridor, 0},
                       {"end-lift", CLI_DOUBLE, &v.end_lift, 0}, {"relative-e", CLI_FLAG, &rel, 0},

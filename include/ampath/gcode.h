@@ -185,6 +185,11 @@ typedef struct amp_gcode_opts {
     double max_accel_z;         /**< acceleration is lowered until no axis exceeds its own): X and Y (3000), */
     double max_accel_e;         /**< Z (100), filament (10000); 0 = no limit */
     double retract_accel;       /**< mm/s^2 of retractions (Marlin's M204 R, 3000; 0: accel) */
+    double max_cross_section;   /**< mm^2, Klipper flavour only: Klipper's max_extrude_cross_section (4 x
+                                     nozzle^2; 0.64 for the 0.4 mm nozzle). Klipper refuses a move whose E over
+                                     its XYZ length, times the filament's area, is larger, and the job stops
+                                     there: amp_gcode_iter_init() refuses such a job instead (AMP_ERR_LIMIT,
+                                     naming the path). 0 = no limit. Marlin has no such check */
     /* printer and placement (docs/interfaces.md §5); amp_printer_gcode_opts() fills these from a profile */
     const char *profile;        /**< printer name for the header ("generic"); not copied */
     int place;                  /**< AMP_PLACE_CENTER (default), AMP_PLACE_ORIGIN or AMP_PLACE_AT */
@@ -274,6 +279,8 @@ typedef struct amp_gcode_iter {
     size_t path, seg;   /* current path and segment */
     const char *text;   /* position in a start or end sequence */
     int pass;           /* 1 = estimate (init), 2 = lines */
+    size_t xs_path;     /* pass 1: the first path with a move over max_cross_section ((size_t)-1: none) */
+    double xs_area;     /* its cross-section, mm^2 */
     int have_pos, retracted, printed_any;
     amp_vec3 pos;       /* exact head position */
     double e_exact;     /* absolute E, exact */

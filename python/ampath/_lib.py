@@ -292,7 +292,7 @@ _GCODE_OPTS = [
     ("end_lift", _D), ("relative_e", c_int), ("hotend_temp", _D), ("bed_temp", _D), ("start_gcode", c_char_p),
     ("end_gcode", c_char_p), ("accel", _D), ("junction_deviation", _D), ("max_feed_xy", _D), ("max_feed_z", _D),
     ("max_feed_e", _D), ("max_accel_xy", _D), ("max_accel_z", _D), ("max_accel_e", _D), ("retract_accel", _D),
-    ("profile", c_char_p), ("place", c_int), ("place_x", _D), ("place_y", _D),
+    ("max_cross_section", _D), ("profile", c_char_p), ("place", c_int), ("place_x", _D), ("place_y", _D),
     ("bed_min_x", _D), ("bed_min_y", _D), ("bed_max_x", _D), ("bed_max_y", _D), ("max_height", _D),
     ("first_layer_height", _D), ("first_layer_feed", _D), ("first_layer_hotend_temp", _D),
     ("first_layer_bed_temp", _D), ("fan_off_layers", c_int), ("fan_speed", _D), ("retract_min_travel", _D),

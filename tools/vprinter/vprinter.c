@@ -44,6 +44,9 @@ static const char usage[] =
     "                       with ADVANCED_OK fields) | prusa or bare (Resend without ok) | rs (rs N, no ok)\n"
     "  --bed X,Y,Z          bed volume in mm (default 220,220,250): Klipper answers '!! Move out of range'\n"
     "                       outside it; Marlin clamps (software endstops) and the log marks '# out of bed'\n"
+    "  --max-extrude-cross-section A   Klipper: a move whose E per mm of XYZ times the 1.75 mm filament's\n"
+    "                       area exceeds A mm^2 is refused ('!! Move exceeds maximum extrusion'; default 0.64,\n"
+    "                       Klipper's for a 0.4 mm nozzle; 0 = no check)\n"
     "  --bufsize N          command queue slots (default 4)\n"
     "  --rx-bytes N         serial RX buffer bytes; overflowing bytes are lost (default 128)\n"
     "  --advanced-ok        answer 'ok N<n> P<p> B<b>' (B one low, as Marlin)\n"
@@ -124,7 +127,8 @@ typedef struct vp {
     double plan_end[PLAN_MAX]; /* completion times of planned moves, FIFO */
     int plan_head, plan_count;
     double x, y, z, e, f;
-    int rel;
+    int rel, erel;      /* G91, M83 */
+    double max_cross;   /* Klipper: max_extrude_cross_section, mm^2 (0.64: its default for a 0.4 mm nozzle) */
     int booting;
     double boot_at;
     /* executing a long command */
@@ -339,6 +343,14 @@ static void planner_drain(vp *v, double now)
 }
 
 /* G0/G1: 0 while the planner is full (Marlin blocks in the handler until it has room), 1 when planned. */
+/* The E position after move @p cmd (M82 absolute or M83 relative). */
+static double new_e(const vp *v, const char *cmd)
+{
+    int has;
+    double e = num_arg(cmd, 'E', 0.0, &has);
+    return !has ? v->e : v->erel ? v->e + e : e;
+}
+
 static int exec_move(vp *v, const char *cmd, long n, double now)
 {
     double d, t[3];
@@ -351,6 +363,7 @@ static int exec_move(vp *v, const char *cmd, long n, double now)
         logf_line(v, "# out of bed: %ld %s\n", n, cmd);
     }
     v->f = num_arg(cmd, 'F', v->f, NULL);
+    v->e = new_e(v, cmd);
     d = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
     v->x = t[0];
     v->y = t[1];
@@ -419,9 +432,12 @@ static int execute(vp *v, const char *cmd, long n, double now)
             v->y = v->off[1] = 0;
         if (all || strchr(cmd + 3, 'Z'))
             v->z = v->off[2] = 0;
+    } else if (is_cmd(cmd, "M82") || is_cmd(cmd, "M83")) {
+        v->erel = is_cmd(cmd, "M83");
     } else if (is_cmd(cmd, "G92")) {
         double nx = num_arg(cmd, 'X', v->x, NULL), ny = num_arg(cmd, 'Y', v->y, NULL),
                nz = num_arg(cmd, 'Z', v->z, NULL);
+        v->e = num_arg(cmd, 'E', v->e, NULL);
         v->off[0] += nx - v->x;
         v->off[1] += ny - v->y;
         v->off[2] += nz - v->z;
@@ -626,6 +642,16 @@ static int klipper_refuse(vp *v, const char *cmd, double now)
         if (outside_bed(v, t)) {
             say(v, "!! Move out of range: %.3f %.3f %.3f [%.3f]\nok\n", t[0], t[1], t[2], v->e);
             return 1;
+        }
+        if (v->max_cross > 0.0 && (t[0] != v->x || t[1] != v->y)) {
+            /* klippy/kinematics/extruder.py check_move: E per mm of XYZ over the cross-section limit over the
+             * filament's area (1.75 mm) is refused unless the extrusion is tiny (E <= nozzle x that ratio) */
+            double fa = 3.14159265358979 * 0.875 * 0.875, ratio = v->max_cross / fa, de = new_e(v, cmd) - v->e;
+            double l3 = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+            if (de > 0.0 && de / l3 > ratio && de > sqrt(v->max_cross / 4.0) * ratio) {
+                say(v, "!! Move exceeds maximum extrusion (%.3fmm^2 vs %.3fmm^2)\nok\n", de / l3 * fa, v->max_cross);
+                return 1;
+            }
         }
     }
     return 0;
@@ -956,6 +982,7 @@ int main(int argc, char **argv)
                       {"busy-secs", CLI_DOUBLE, &V.busy_secs, 0},
                       {"busy-interval", CLI_DOUBLE, &V.busy_interval, 0},
                       {"heat-secs", CLI_DOUBLE, &V.heat_secs, 0},
+                      {"max-extrude-cross-section", CLI_DOUBLE, &V.max_cross, 0},
                       {"hangup-secs", CLI_DOUBLE, &V.hangup_secs, 0},
                       {"corrupt-in", CLI_DOUBLE, &V.corrupt_in, 0},
                       {"corrupt-out", CLI_DOUBLE, &V.corrupt_out, 0},
@@ -981,6 +1008,7 @@ int main(int argc, char **argv)
     v->mfd = v->sfd = -1;
     v->bed[0] = v->bed[1] = 220;
     v->bed[2] = 250;
+    v->max_cross = 4.0 * 0.4 * 0.4;
     v->action = "cancel";
     memset(&o, 0, sizeof o);
     o.bufsize = v->bufsize;
