@@ -33,6 +33,11 @@ double amp_gcode_trapezoid_time(double len, double v0, double v1, double vmax, d
     return (vp - v0) / accel + (vp - v1) / accel;
 }
 
+double amp_gcode_klipper_junction(double scv, double accel)
+{
+    return accel > 0.0 ? scv * scv * (sqrt(2.0) - 1.0) / accel : 0.0;
+}
+
 static amp_gcode_block *plan_at(amp_gcode_iter *it, size_t k)
 {
     return &it->plan[(it->plan_head + k) % AMP_GCODE_LOOKAHEAD];

@@ -881,6 +881,40 @@ START_TEST(klipper_jobs_stay_within_its_extrusion_cross_section)
 }
 END_TEST
 
+/* Klipper corners by its square_corner_velocity (5 mm/s by default): a right angle is taken at exactly that
+ * speed whatever the acceleration (klippy/toolhead.py turns it into a junction deviation); Marlin's rule with
+ * its 0.05 mm takes the same corner at 11 mm/s at 1000 mm/s^2. */
+START_TEST(klipper_takes_a_right_angle_at_its_square_corner_velocity)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    double a, v = 50, vj, t, s2 = sqrt(0.5);
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(50, 0, 0.2), 0.2, NULL);
+    amp_pathset_push(&ps, amp_v3(50, 50, 0.2), 0.2, NULL);
+    for (a = 1000; a <= 3000; a += 2000) {
+        raw_opts(&o, AMP_FLAVOR_KLIPPER);
+        o.print_feed = o.first_layer_feed = v;
+        o.max_volumetric_flow = 1000;
+        o.accel = a;
+        o.junction_deviation = amp_gcode_klipper_junction(5.0, a);
+        ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
+        vj = sqrt(a * o.junction_deviation * s2 / (1 - s2));
+        ck_assert_double_eq_tol(vj, 5.0, 1e-12);
+        t = 2 * ((v / a) + (v - vj) / a + (50 - v * v / (2 * a) - (v * v - vj * vj) / (2 * a)) / v);
+        ck_assert_double_eq_tol(it.est.print_time, t, 1e-9);
+    }
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER);
+    ck_assert_double_eq_tol(o.junction_deviation, 25.0 * (sqrt(2.0) - 1.0) / o.accel, 1e-15);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+    ck_assert_double_eq(o.junction_deviation, 0.05);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(caller_start_and_end_sequences_replace_the_built_in_ones)
 {
     amp_pathset ps;
@@ -2027,6 +2061,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, time_estimate_follows_trapezoids_and_junction_limit);
     tcase_add_test(tc, moves_accelerate_within_each_axis_limit);
     tcase_add_test(tc, klipper_jobs_stay_within_its_extrusion_cross_section);
+    tcase_add_test(tc, klipper_takes_a_right_angle_at_its_square_corner_velocity);
     tcase_add_test(tc, caller_start_and_end_sequences_replace_the_built_in_ones);
     tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
     tcase_add_test(tc, bad_input_gives_clear_errors);

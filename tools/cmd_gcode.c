@@ -348,6 +348,8 @@ int cmd_gcode(int argc, char **argv)
         o.relative_e = o.flavor == AMP_FLAVOR_KLIPPER; /* docs/interfaces.md §5: the flavour's E mode unless asked */
     }
     apply_overrides(opts, &v, &o);
+    if (flavor && !cli_seen(opts, "junction-deviation")) /* the flavour's cornering at the acceleration used */
+        o.junction_deviation = o.flavor == AMP_FLAVOR_KLIPPER ? amp_gcode_klipper_junction(5.0, o.accel) : 0.05;
     if (place && (rc = parse_place(place, &o)) != CLI_OK)
         return rc;
     o.arcs = arcs;

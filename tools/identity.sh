@@ -8,7 +8,8 @@
 # Only products are hashed (not the --json figures, which hold timings).
 # tools/identity.ref holds the listing of the current behaviour (renewed at stop 28: order and mdr merge a
 # cut point within a nanometre of a vertex into it, so the helix's ordered, mdr and G-code files changed; then
-# the estimate's per-axis accelerations changed the time in the three G-code files' headers, nothing else; at
+# the estimate's per-axis accelerations, and Klipper's square corner velocity, changed the time in the
+# G-code files' headers, nothing else; at
 # stop 27: the gcode material grids raise the cells within reach of each segment row by row, not boxes around
 # samples, so the helix's travels changed; before, at stop 26: support on the bed and in zigzags, travels over the beads as written, modal Z on
 # printing moves, the field's eps comment; the plain build, OpenMP on). Uses ./tools/ampath of the
