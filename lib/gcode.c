@@ -54,7 +54,7 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor)
     o->start_gcode = NULL;
     o->end_gcode = NULL;
     o->accel = 1000.0;
-    o->junction_deviation = flavor == AMP_FLAVOR_KLIPPER ? amp_gcode_klipper_junction(5.0, o->accel) : 0.05;
+    o->junction_deviation = amp_gcode_junction_default(flavor, o->accel);
     o->max_feed_xy = 200.0;
     o->max_feed_z = 10.0;
     o->max_feed_e = 60.0;

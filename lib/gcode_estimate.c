@@ -33,8 +33,11 @@ double amp_gcode_trapezoid_time(double len, double v0, double v1, double vmax, d
     return (vp - v0) / accel + (vp - v1) / accel;
 }
 
-double amp_gcode_klipper_junction(double scv, double accel)
+double amp_gcode_junction_default(int flavor, double accel)
 {
+    const double scv = 5.0; /* Klipper's default square_corner_velocity, mm/s */
+    if (flavor != AMP_FLAVOR_KLIPPER)
+        return 0.05;
     return accel > 0.0 ? scv * scv * (sqrt(2.0) - 1.0) / accel : 0.0;
 }
 

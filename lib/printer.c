@@ -292,8 +292,7 @@ amp_status amp_printer_gcode_opts(amp_printer *p, amp_gcode_opts *o, amp_error *
     o->fan_off_layers = p->fan_off_layers;
     o->fan_speed = p->fan_percent / 100.0;
     o->accel = p->accel;
-    if (p->flavor == AMP_FLAVOR_KLIPPER) /* its square_corner_velocity, 5 mm/s unless printer.cfg says more */
-        o->junction_deviation = amp_gcode_klipper_junction(5.0, p->accel);
+    o->junction_deviation = amp_gcode_junction_default(p->flavor, p->accel);
     o->max_feed_xy = p->max_feed_xy;
     o->max_feed_z = p->max_feed_z;
     o->max_feed_e = p->max_feed_e;

@@ -900,7 +900,7 @@ START_TEST(klipper_takes_a_right_angle_at_its_square_corner_velocity)
         o.print_feed = o.first_layer_feed = v;
         o.max_volumetric_flow = 1000;
         o.accel = a;
-        o.junction_deviation = amp_gcode_klipper_junction(5.0, a);
+        o.junction_deviation = amp_gcode_junction_default(AMP_FLAVOR_KLIPPER, a);
         ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, NULL), AMP_OK);
         vj = sqrt(a * o.junction_deviation * s2 / (1 - s2));
         ck_assert_double_eq_tol(vj, 5.0, 1e-12);

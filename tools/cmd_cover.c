@@ -80,7 +80,7 @@ int cmd_cover(int argc, char **argv)
     const char *pos[1], *out = NULL, *dir = "auto", *measure = "arclen";
     double eps = 0, radius = 0.5, chord = 0;
     long m = 0, cells = 16, samples = 20000;
-    int json = 0, npos = 0, rc;
+    int json = 0, npos = 0, rc, picked;
     amp_cover_opts o;
     amp_cover_stats st;
     amp_coverage gap;
@@ -126,11 +126,13 @@ int cmd_cover(int argc, char **argv)
     if (rc != CLI_OK)
         return rc;
     amp_error_clear(&err);
-    /* the scores are reported whatever was asked; the choice is made only for auto */
-    if (amp_cover_pick_dir(&v, o.dir == AMP_COVER_AUTO ? &o.dir : &npos, score, &err) != AMP_OK) {
+    /* the scores are reported whatever was asked; the choice is taken only for auto */
+    if (amp_cover_pick_dir(&v, &picked, score, &err) != AMP_OK) {
         amp_spline_free(&v);
         return cli_fail_err("cover", &err);
     }
+    if (o.dir == AMP_COVER_AUTO)
+        o.dir = picked;
     dirname[0] = "uvw"[o.dir];
     t0 = estimate_curves(&v, o.dir, eps, chord, &t1);
     if (!(t0 <= cli_work.max_curves)) {

@@ -349,7 +349,7 @@ int cmd_gcode(int argc, char **argv)
     }
     apply_overrides(opts, &v, &o);
     if (flavor && !cli_seen(opts, "junction-deviation")) /* the flavour's cornering at the acceleration used */
-        o.junction_deviation = o.flavor == AMP_FLAVOR_KLIPPER ? amp_gcode_klipper_junction(5.0, o.accel) : 0.05;
+        o.junction_deviation = amp_gcode_junction_default(o.flavor, o.accel);
     if (place && (rc = parse_place(place, &o)) != CLI_OK)
         return rc;
     o.arcs = arcs;

@@ -178,7 +178,7 @@ typedef struct amp_gcode_opts {
     const char *end_gcode;      /**< end sequence text (lines), NULL = built-in; not copied */
     double accel;               /**< mm/s^2 for the estimate and the set-up command (1000) */
     double junction_deviation;  /**< mm, junction speed rule of the estimate (Marlin 0.05; Klipper: its
-                                     square_corner_velocity 5 mm/s, amp_gcode_klipper_junction()) */
+                                     square_corner_velocity 5 mm/s, amp_gcode_junction_default()) */
     double max_feed_xy;         /**< mm/s limit of the XY speed in the estimate (200) */
     double max_feed_z;          /**< mm/s limit of the Z speed, also the feed of travel lifts (10) */
     double max_feed_e;          /**< mm/s limit of the filament speed in the estimate (60) */
@@ -361,12 +361,13 @@ amp_status amp_gcode_write(const amp_pathset *ps, const amp_gcode_opts *o, amp_s
 double amp_gcode_trapezoid_time(double len, double v0, double v1, double vmax, double accel);
 
 /**
- * Klipper's cornering as a junction deviation (klippy/toolhead.py): its square_corner_velocity @p scv
- * (mm/s, 5 by default) at max_accel @p accel is J = scv^2 (sqrt 2 - 1) / accel, so that a right angle is
- * taken at scv. The Klipper flavour's default junction_deviation (amp_gcode_opts_default(),
- * amp_printer_gcode_opts()) with scv 5.
+ * The flavour's junction deviation at acceleration @p accel (mm/s^2), the default of
+ * amp_gcode_opts.junction_deviation: Marlin 0.05 mm; Klipper its cornering (klippy/toolhead.py), the
+ * square_corner_velocity scv = 5 mm/s as J = scv^2 (sqrt 2 - 1) / accel, so that a right angle is taken at
+ * 5 mm/s. Used by amp_gcode_opts_default() and amp_printer_gcode_opts(); call it again after changing
+ * the flavour or the acceleration.
  */
-double amp_gcode_klipper_junction(double scv, double accel);
+double amp_gcode_junction_default(int flavor, double accel);
 
 #ifdef __cplusplus
 }

@@ -443,7 +443,7 @@ _PROTOS = {
     "amp_printer_gcode_job": (c_int, [P(amp_printer), P(amp_gcode_opts), P(amp_pathset), c_void_p, E]),
     "amp_printer_bead_width": (c_double, [P(amp_printer)]),
     "amp_gcode_opts_default": (None, [P(amp_gcode_opts), c_int]),
-    "amp_gcode_klipper_junction": (c_double, [c_double, c_double]),
+    "amp_gcode_junction_default": (c_double, [c_int, c_double]),
     "amp_gcode_write": (c_int, [P(amp_pathset), P(amp_gcode_opts), c_void_p, c_void_p, P(amp_gcode_stats), E]),
 }
 

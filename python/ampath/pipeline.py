@@ -550,7 +550,7 @@ def _gcode_opts(printer, flavor, place, start_gcode, end_gcode, opts):
             setattr(o, name, b)
     _apply(o, opts, "gcode", skip=("profile", "start_gcode", "end_gcode", "place", "place_x", "place_y"))
     if flavor is not None and "junction_deviation" not in opts:  # the flavour's cornering, as the tool
-        o.junction_deviation = lib.amp_gcode_klipper_junction(5.0, o.accel) if o.flavor == 1 else 0.05
+        o.junction_deviation = lib.amp_gcode_junction_default(o.flavor, o.accel)
     return o, pr, keep
 
 

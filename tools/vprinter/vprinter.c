@@ -342,7 +342,6 @@ static void planner_drain(vp *v, double now)
     }
 }
 
-/* G0/G1: 0 while the planner is full (Marlin blocks in the handler until it has room), 1 when planned. */
 /* The E position after move @p cmd (M82 absolute or M83 relative). */
 static double new_e(const vp *v, const char *cmd)
 {
@@ -351,6 +350,13 @@ static double new_e(const vp *v, const char *cmd)
     return !has ? v->e : v->erel ? v->e + e : e;
 }
 
+/* Length of the move from the head to @p t. */
+static double move_len(const vp *v, const double t[3])
+{
+    return sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+}
+
+/* G0/G1: 0 while the planner is full (Marlin blocks in the handler until it has room), 1 when planned. */
 static int exec_move(vp *v, const char *cmd, long n, double now)
 {
     double d, t[3];
@@ -364,7 +370,7 @@ static int exec_move(vp *v, const char *cmd, long n, double now)
     }
     v->f = num_arg(cmd, 'F', v->f, NULL);
     v->e = new_e(v, cmd);
-    d = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+    d = move_len(v, t);
     v->x = t[0];
     v->y = t[1];
     v->z = t[2];
@@ -647,7 +653,7 @@ static int klipper_refuse(vp *v, const char *cmd, double now)
             /* klippy/kinematics/extruder.py check_move: E per mm of XYZ over the cross-section limit over the
              * filament's area (1.75 mm) is refused unless the extrusion is tiny (E <= nozzle x that ratio) */
             double fa = 3.14159265358979 * 0.875 * 0.875, ratio = v->max_cross / fa, de = new_e(v, cmd) - v->e;
-            double l3 = sqrt((t[0] - v->x) * (t[0] - v->x) + (t[1] - v->y) * (t[1] - v->y) + (t[2] - v->z) * (t[2] - v->z));
+            double l3 = move_len(v, t);
             if (de > 0.0 && de / l3 > ratio && de > sqrt(v->max_cross / 4.0) * ratio) {
                 say(v, "!! Move exceeds maximum extrusion (%.3fmm^2 vs %.3fmm^2)\nok\n", de / l3 * fa, v->max_cross);
                 return 1;
