@@ -25,6 +25,7 @@ void amp_contpath_opts_default(amp_contpath_opts *o, double r)
     o->skin_bottom = 0.8;
     o->skin_top = 0.8;
     o->skin_cell = 0;
+    o->overlap_cap = 1;
 }
 
 /* Length of the printed segments of path i (a segment with radius 0 at both

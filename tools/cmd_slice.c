@@ -38,6 +38,8 @@ const char cmd_slice_usage[] =
     "  --pseudo           thin-cell patch stretches as pseudo edges (travel, Figs. 7, 8; each one\n"
     "                     more extrusion start); default printed (--no-pseudo kept for old scripts)\n"
     "  --no-join          perimeter loops and region strokes as separate paths\n"
+    "  --no-overlap-cap   keep beads whose plastic exceeds the island's slab (section area x layer\n"
+    "                     height) as built; by default they are narrowed to it (narrowed_islands)\n"
     "  -o FILE            OUT.amp: all layers; OUT.svg: one layer with its inset (with --continuous:\n"
     "                     with its strokes, beads drawn at their width)\n"
     "  --layer-index I    layer drawn in the SVG (default: the middle layer)\n"
@@ -267,6 +269,8 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "support_corners", (long long)st->support_corners);
     cli_json_int(&j, "corners_left_out", (long long)st->corners_left_out);
     cli_json_int(&j, "corners_touched", (long long)st->corners_touched);
+    cli_json_int(&j, "narrowed_islands", (long long)st->narrowed_islands);
+    cli_json_num(&j, "narrowed_mm3", st->narrowed_volume);
     cli_json_int(&j, "cycles", (long long)st->cycles);
     cli_json_int(&j, "tree_levels", (long long)st->tree_levels);
     cli_json_int(&j, "tour_fallbacks", (long long)st->tour_fallbacks);
@@ -447,7 +451,7 @@ int cmd_slice(int argc, char **argv)
 {
     double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
     long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, npos = 0, rc, ok;
+    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, nocap = 0, npos = 0, rc, ok;
     double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8, epsc = 1.0;
     const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree", *printer = NULL;
     amp_contpath_opts co;
@@ -464,6 +468,7 @@ int cmd_slice(int argc, char **argv)
                       {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
                       {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
                       {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
+                      {"no-overlap-cap", CLI_FLAG, &nocap, 0},
                       {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
                       {"top", CLI_DOUBLE, &skin_top, 0},     {"eps-c", CLI_DOUBLE, &epsc, 0},
                       {"printer", CLI_STR, &printer, 0},     {NULL, CLI_FLAG, NULL, 0}};
@@ -511,6 +516,7 @@ int cmd_slice(int argc, char **argv)
     co.pseudo_edges = pseudo && !nopseudo;
     co.join = !nojoin;
     co.support_corners = !nocorners;
+    co.overlap_cap = !nocap;
     if (!(skin_bottom >= 0) || !(skin_top >= 0) || !isfinite(skin_bottom) || !isfinite(skin_top))
         return cli_fail("slice", CLI_USAGE, "--bottom and --top must be thicknesses >= 0 mm");
     if (!(epsc > 0 && epsc <= 1))

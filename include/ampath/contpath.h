@@ -89,6 +89,9 @@ typedef struct amp_contpath_opts {
      *  thread, a few hundred times at most). */
     void (*progress)(void *user, double fraction);
     void *progress_user;
+    int overlap_cap;       /**< 1 (default): an island whose beads hold more plastic than its slab (section
+                                area x bead height) has its beads narrowed to it (stats.narrowed_islands);
+                                0: beads as built. (last: python/ampath/_lib.py mirrors this struct) */
 } amp_contpath_opts;
 
 /**
@@ -141,6 +144,9 @@ typedef struct amp_contpath_stats {
     size_t corners_touched;  /**< corner centres with no perimeter within 3r whose stretch another bead
                                   touches (a centre line within 2r: the sparse core's ring beside a skin
                                   band); no corner is needed there */
+    size_t narrowed_islands; /**< islands whose beads overlapped by more than their slab (section area x
+                                  h): narrowed by one factor of their cross-section (opts.overlap_cap) */
+    double narrowed_volume;  /**< mm^3 of bead taken off by that narrowing */
 } amp_contpath_stats;
 
 /**

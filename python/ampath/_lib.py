@@ -216,7 +216,7 @@ class amp_contpath_opts(Structure):
                 ("perimeters", c_int), ("support_stretches", c_int), ("support_corners", c_int),
                 ("pseudo_edges", c_int), ("tour", c_int), ("skin_bottom", c_double), ("skin_top", c_double),
                 ("skin_cell", c_double), ("join", c_int), ("verify_stroke", VERIFY_FN),
-                ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
+                ("progress", PROGRESS_FN), ("progress_user", c_void_p), ("overlap_cap", c_int)]
 
 
 class amp_contpath_stats(Structure):
@@ -228,7 +228,8 @@ class amp_contpath_stats(Structure):
                 + [(n, c_double) for n in ("printed_length", "infill_length", "pseudo_length", "travel_length",
                                            "support_length", "unprinted_length")]
                 + [(n, c_size_t) for n in ("support_corners", "corners_left_out", "neck_islands", "skin_bands",
-                                           "band_retries", "corners_touched")])
+                                           "band_retries", "corners_touched", "narrowed_islands")]
+                + [("narrowed_volume", c_double)])
 
 
 class amp_stroke_report(Structure):

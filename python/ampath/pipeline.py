@@ -308,7 +308,7 @@ class Slices(_Owner):
         the tool's --infill), @tour: "cycle-tree" or "merge", @eps_c: overhang warning threshold (section
         2.1, in r; a RuntimeWarning as the tool's stderr warning). Other options are the fields of
         amp_contpath_opts: cell, offset, perimeters, support_stretches, support_corners, pseudo_edges,
-        skin_bottom, skin_top, skin_cell, join. .stats adds the tool's --json figures (extrusion_starts,
+        skin_bottom, skin_top, skin_cell, join, overlap_cap. .stats adds the tool's --json figures (extrusion_starts,
         crossings, repeated_edges, outside, failed_paths, overhang_mm, overhang_pairs, max_overhang_mm)."""
         o = _contpath_opts(_bead_radius(radius, nozzle, printer), grid, infill, tour, eps_c, opts)
         out, st, err = PathSet(), L.new(L.amp_contpath_stats), _err()

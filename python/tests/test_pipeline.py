@@ -85,6 +85,18 @@ class ContinuousSlice(TmpCase):
         self.assertSameBytes(job.text.encode(), read(self.p("cont.gcode")), "continuous G-code")
         self.assertEqual(job.printer.name, "ender3")
 
+    def test_the_overlap_cap_is_an_option_as_in_the_tool(self):
+        tool("model", "helix", "-o", self.p("helix.stl"))
+        tool("slice", self.p("helix.stl"), "--layer", 0.3, "--continuous", "--no-overlap-cap", "-o", self.p("raw.amp"))
+        with ampath.Mesh.load(self.p("helix.stl")) as mesh:
+            with ampath.slice(mesh, 0.3, continuous=True) as capped, \
+                    ampath.slice(mesh, 0.3, continuous=True, overlap_cap=0) as raw:
+                self.assertSameBytes(strip_comments(raw.to_amp()), strip_comments(read(self.p("raw.amp"))),
+                                     "continuous slice without the cap")
+                self.assertGreater(capped.stats["narrowed_islands"], 0)
+                self.assertEqual(raw.stats["narrowed_islands"], 0)
+                self.assertLess(capped.volume(), raw.volume())
+
 
     def test_a_failing_final_check_slices_again_with_the_per_island_verifier(self):
         # as the tool: the layers are made without the per-island verifier and checked once; only when that
