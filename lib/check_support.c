@@ -3,7 +3,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "ampath/check.h"
+#include "check_hold_internal.h"
 
 void amp_hold_opts_default(amp_hold_opts *o)
 {
@@ -23,13 +23,7 @@ void amp_hold_report_free(amp_hold_report *rep)
     rep->npaths_failed = 0;
 }
 
-/* One sample of an extruding segment; seq is its print position, s its arc position on its path. */
-typedef struct hsample {
-    amp_vec3 p;
-    double half; /* vertical half-extent of the bead */
-    double s;
-    uint32_t path;
-} hsample;
+typedef amp_hold_sample hsample;
 
 typedef struct hctx {
     const amp_allocator *a;
@@ -188,7 +182,7 @@ static amp_status note_failure(amp_hold_report *rep, size_t path, double len, am
 
 /* Runs of unheld samples along each object path: bridges (held both sides, short) or failures. */
 static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hold_opts *o, const unsigned char *ok,
-                             amp_hold_report *rep, amp_error *err)
+                             amp_hold_report *rep, amp_hold_fail_fn fail, void *user, amp_error *err)
 {
     size_t i = 0;
     while (i < c->n) {
@@ -203,6 +197,7 @@ static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hol
         /* unheld run [i, e) of one path: a bridge between held samples, or a short tip off a held sample */
         before = i > 0 && c->sm[i - 1].path == path;
         after = e < c->n && c->sm[e].path == path;
+        amp_status st = AMP_OK;
         if (before && after && c->sm[e].s - c->sm[i - 1].s <= o->bridge + 1e-9) {
             rep->bridges++;
             rep->bridged_mm += c->sm[e].s - c->sm[i - 1].s;
@@ -210,16 +205,24 @@ static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hol
                                           o->cantilever + 1e-9) {
             rep->tips++;
         } else {
-            amp_status st = note_failure(rep, path, c->sm[e - 1].s - c->sm[j].s + o->step, c->sm[j].p, err);
-            if (st != AMP_OK)
-                return st;
+            st = note_failure(rep, path, c->sm[e - 1].s - c->sm[j].s + o->step, c->sm[j].p, err);
         }
+        if (st == AMP_OK && fail)
+            st = fail(user, &c->sm[i], e - i, err);
+        if (st != AMP_OK)
+            return st;
         i = e;
     }
     return AMP_OK;
 }
 
 amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_error *err)
+{
+    return amp_hold_scan(ps, o, rep, NULL, NULL, err);
+}
+
+amp_status amp_hold_scan(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_hold_fail_fn fail,
+                         void *user, amp_error *err)
 {
     hctx c;
     unsigned char *ok = NULL;
@@ -253,7 +256,7 @@ amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hol
             rep->samples++;
             rep->unheld += !ok[t];
         }
-    st = judge_runs(&c, ps, o, ok, rep, err);
+    st = judge_runs(&c, ps, o, ok, rep, fail, user, err);
 done:
     amp_free(c.a, ok);
     amp_free(c.a, c.sm);

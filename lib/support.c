@@ -2,8 +2,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "ampath/support.h"
 #include "order_fragbvh.h"
+#include "support_internal.h"
 
 void amp_support_opts_default(amp_support_opts *o)
 {
@@ -12,6 +12,7 @@ void amp_support_opts_default(amp_support_opts *o)
     o->layer_height = 0.4;
     o->radius = 0.2;
     o->min_gap = 1.0;
+    o->pads = 1;
     o->progress = NULL;
     o->progress_user = NULL;
 }
@@ -234,6 +235,60 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
     }
     amp_free(c->a, runs);
     return s;
+}
+
+/* Layer of support row @p i of @p ps (rows are flat, on z = row_z(layer)). */
+static size_t layer_of(const sctx *c, const amp_support_opts *o, const amp_pathset *ps, size_t i)
+{
+    double z = (ps->verts[ps->paths[i].first].p.z - row_z(c, o, 0)) / o->layer_height;
+    return z > 0.0 ? (size_t)floor(z + 0.5) : 0;
+}
+
+/* The support rows of @p all (from path nobj on) again layer by layer, lowest first, each layer in the order
+ * made (place_pieces takes the rows of one layer as one range: the pads come after fill's rows). */
+static amp_status rows_by_layer(const sctx *c, const amp_support_opts *o, amp_pathset *all, size_t nobj,
+                                amp_error *err)
+{
+    amp_pathset out;
+    size_t i, nl = 0, nr = all->npaths - nobj, *lay = amp_calloc(c->a, nr + 1, sizeof *lay), *at = NULL, *ord = NULL;
+    amp_status st = AMP_OK;
+    amp_pathset_init(&out, all->alloc);
+    if (lay) {
+        for (i = 0; i < nr; i++) {
+            lay[i] = layer_of(c, o, all, nobj + i);
+            nl = lay[i] + 1 > nl ? lay[i] + 1 : nl;
+        }
+        at = amp_calloc(c->a, nl + 2, sizeof *at);
+        ord = amp_calloc(c->a, nr + 1, sizeof *ord);
+    }
+    if (!lay || !at || !ord) {
+        st = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support pads");
+        goto done;
+    }
+    for (i = 0; i < nr; i++) /* counting sort, stable: a layer's rows keep the order they were made in */
+        at[lay[i] + 1]++;
+    for (i = 0; i < nl; i++)
+        at[i + 1] += at[i];
+    for (i = 0; i < nr; i++)
+        ord[at[lay[i]]++] = nobj + i;
+    for (i = 0; i < nobj && st == AMP_OK; i++) {
+        st = amp_pathset_add(&out, all->paths[i].role, amp_pathset_path_verts(all, i), all->paths[i].n, err);
+        if (st == AMP_OK && all->paths[i].h > 0.0)
+            st = amp_pathset_set_height(&out, all->paths[i].h, err);
+    }
+    for (i = 0; i < nr && st == AMP_OK; i++)
+        st = amp_pathset_add(&out, AMP_ROLE_SUPPORT, amp_pathset_path_verts(all, ord[i]), all->paths[ord[i]].n, err);
+    if (st == AMP_OK) {
+        amp_pathset t = *all;
+        *all = out;
+        out = t;
+    }
+done:
+    amp_free(c->a, lay);
+    amp_free(c->a, at);
+    amp_free(c->a, ord);
+    amp_pathset_free(&out);
+    return st;
 }
 
 #define NOPATH 0xffffffffU
@@ -568,8 +623,7 @@ static amp_status cut_row(const sctx *c, const amp_fragments *fs, size_t i, uint
 /* Layer index of a support row (rows are flat, on z = row_z(layer)). */
 static size_t row_layer(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, size_t i)
 {
-    double z = (fs->ps->verts[fs->ps->paths[i].first].p.z - row_z(c, o, 0)) / o->layer_height;
-    return z > 0.0 ? (size_t)floor(z + 0.5) : 0;
+    return layer_of(c, o, fs->ps, i);
 }
 
 /*
@@ -827,6 +881,15 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
+    if (o->pads) {
+        amp_support_pads_stats ps;
+        if ((stt = amp_support_pads(&all, nobj, model, o, c.plate, &ps, err)) != AMP_OK)
+            goto done;
+        s.pads = ps.paths;
+        s.pad_length = ps.length;
+        if (ps.paths && (stt = rows_by_layer(&c, o, &all, nobj, err)) != AMP_OK)
+            goto done;
+    }
     if (o->progress)
         o->progress(o->progress_user, 0.1);
     /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than

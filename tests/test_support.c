@@ -9,6 +9,7 @@
 #include <omp.h>
 #endif
 
+#include "fx_meshes.h"
 #include "runtool.h"
 #include "testutil.h"
 
@@ -26,6 +27,8 @@ static void box_mesh(amp_mesh *m, amp_vec3 lo, amp_vec3 hi)
     for (i = 0; i < 12; i++)
         ck_assert_int_eq(amp_mesh_add_tri(m, (uint32_t)f[i][0], (uint32_t)f[i][1], (uint32_t)f[i][2], NULL), AMP_OK);
 }
+
+static amp_hold_report hold(const amp_pathset *ps);
 
 /* Object paths filling a slab 10 x 10 mm from z = 3 to 5 that floats above the plate, in a printable order. */
 static void slab_paths(amp_pathset *ps)
@@ -100,8 +103,9 @@ START_TEST(floating_slab_gets_support_printed_before_the_paths_above)
 }
 END_TEST
 
-START_TEST(model_on_the_plate_needs_no_support_and_bad_options_fail)
+START_TEST(model_on_the_plate_needs_no_rows_its_floating_paths_get_pads_and_bad_options_fail)
 {
+    amp_hold_report hr;
     amp_mesh m;
     amp_bvh *b = NULL;
     amp_pathset ps, out;
@@ -115,9 +119,22 @@ START_TEST(model_on_the_plate_needs_no_support_and_bad_options_fail)
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
     slab_paths(&ps);
     amp_support_opts_default(&o);
+    o.pads = 0;
     ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.columns, 0);
     ck_assert_uint_eq(out.npaths, ps.npaths);
+    /* the paths themselves float 3 mm over the bed inside the model: the pads hold them */
+    hr = hold(&out);
+    ck_assert_uint_gt(hr.failures, 0);
+    amp_hold_report_free(&hr);
+    amp_pathset_clear(&out);
+    o.pads = 1;
+    ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.columns, 0);
+    ck_assert_uint_gt(st.pads, 0);
+    hr = hold(&out);
+    ck_assert_uint_eq(hr.failures, 0);
+    amp_hold_report_free(&hr);
     o.spacing = 0;
     ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_ERR_RANGE);
     amp_support_opts_default(&o);
@@ -341,7 +358,7 @@ START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
     ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 0);
     ck_assert_msg(json_num(js, "conflicts") == 0 && json_num(js, "trimmed_mm") == 0, "%s", js);
     ck_assert_msg(json_num(js, "unheld_paths") == 0, "%s", js);
-    made = json_num(js, "support_length_mm");
+    made = json_num(js, "support_length_mm") + json_num(js, "pad_length_mm");
     ck_assert_int_eq(amp_pathset_read_file(&out, res, &err), AMP_OK);
     kept = role_length(&out, AMP_ROLE_SUPPORT, &zero);
     ck_assert_uint_eq(zero, 0);
@@ -364,6 +381,72 @@ START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
     remove(cov);
     remove(ord);
     remove(res);
+}
+END_TEST
+
+/* field box -> order -> mdr -> support [--no-pads] of @p stl; returns the support's JSON in js. */
+static void field_job(const char *stl, const char *tag, const char *pads, char *js, size_t cap, const char **res)
+{
+    char args[2048], name[64];
+    const char *cov, *ord, *mdr;
+    snprintf(name, sizeof name, "%s-f.amp", tag);
+    cov = fx_tmp(name);
+    snprintf(args, sizeof args, "field %s --field box --spacing 1 -o %s", stl, cov);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(name, sizeof name, "%s-o.amp", tag);
+    ord = fx_tmp(name);
+    snprintf(args, sizeof args, "order %s -o %s", cov, ord);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(name, sizeof name, "%s-m.amp", tag);
+    mdr = fx_tmp(name);
+    snprintf(args, sizeof args, "mdr %s --nominal 0.5 --mesh %s -o %s", ord, stl, mdr);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(name, sizeof name, "%s-s%s.amp", tag, pads);
+    *res = fx_tmp(name);
+    snprintf(args, sizeof args, "support %s --mesh %s %s --json -o %s", mdr, stl, pads, *res);
+    ck_assert_int_eq(fx_run_tool(args, js, cap), 0);
+    remove(cov);
+    remove(ord);
+    remove(mdr);
+}
+
+/*
+ * A sphere and a torus lying on the bed, covered by a field: over the shallow rim of their undersides the
+ * rays find less than min_gap of air and put no support, yet the first row of curves there floats more
+ * than min_gap up. The pads hold it: `ampath check` (held paths, no gouging) passes with them and fails
+ * without them (--no-pads).
+ */
+START_TEST(pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside)
+{
+    static const char *const tags[] = {"sphere", "torus"};
+    char js[16384], args[2048], stl[1024];
+    const char *res;
+    int k;
+    for (k = 0; k < 2; k++) {
+        amp_mesh m;
+        amp_error err;
+        amp_mesh_init(&m, NULL);
+        if (k == 0)
+            ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 15), 15, 64, 32), AMP_OK);
+        else
+            ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 2.83), 11.44, 2.83, 96, 32), AMP_OK); /* PrusaSlicer's */
+        snprintf(args, sizeof args, "%s.stl", tags[k]);
+        snprintf(stl, sizeof stl, "%s", fx_tmp(args)); /* fx_tmp's buffers are reused */
+        ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+        amp_mesh_free(&m);
+        field_job(stl, tags[k], "--no-pads", js, sizeof js, &res);
+        ck_assert_msg(json_num(js, "pads") == 0 && json_num(js, "unheld_paths") > 0, "%s: %s", tags[k], js);
+        snprintf(args, sizeof args, "check %s --mesh %s --json", res, stl);
+        ck_assert_int_eq(fx_run_tool(args, NULL, 0), 1);
+        remove(res);
+        field_job(stl, tags[k], "", js, sizeof js, &res);
+        ck_assert_msg(json_num(js, "pads") > 0 && json_num(js, "unheld_paths") == 0, "%s: %s", tags[k], js);
+        ck_assert_msg(json_num(js, "conflicts") == 0, "%s: %s", tags[k], js);
+        snprintf(args, sizeof args, "check %s --mesh %s --json", res, stl);
+        ck_assert_msg(fx_run_tool(args, js, sizeof js) == 0, "%s: %s", tags[k], js);
+        remove(res);
+        remove(stl);
+    }
 }
 END_TEST
 
@@ -551,12 +634,13 @@ static Suite *support_suite(void)
     TCase *tc = tcase_create("support");
     tcase_set_timeout(tc, 120);
     tcase_add_test(tc, floating_slab_gets_support_printed_before_the_paths_above);
-    tcase_add_test(tc, model_on_the_plate_needs_no_support_and_bad_options_fail);
+    tcase_add_test(tc, model_on_the_plate_needs_no_rows_its_floating_paths_get_pads_and_bad_options_fail);
     tcase_add_test(tc, support_rows_start_on_the_lowest_bead_bottom);
     tcase_add_test(tc, support_command_writes_interleaved_paths_and_rejects_bad_models);
     tcase_add_test(tc, support_command_refuses_a_file_without_paths);
     tcase_add_test(tc, support_from_a_trivariate_matches_its_boundary_mesh);
     tcase_add_test(tc, helix_support_keeps_every_fragment_and_holds_every_path);
+    tcase_add_test(tc, pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside);
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
     tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);
     tcase_add_test(tc, hold_check_applies_the_overhang_rule);

@@ -15,6 +15,8 @@ const char cmd_support_usage[] =
     "  --layer H       height between support layers, mm (default 0.4)\n"
     "  --radius R      deposition radius of support paths, mm (default 0.2)\n"
     "  --min-gap G     air gaps under the model lower than G need no support, mm (default 1)\n"
+    "  --no-pads       no pads: support only where the rays find air of --min-gap or more under the model,\n"
+    "                  not also under object beads that would be printed in the air (the check below)\n"
     HEADOPT_HELP
     "  --json          one JSON object: rays, columns, support paths and length, placement, object splits,\n"
     "                  unheld object paths, time\n"
@@ -42,6 +44,8 @@ static void print_json(const char *input, const char *tri, const char *mesh, con
     cli_json_int(&j, "object_splits", (long long)st->splits);
     cli_json_int(&j, "conflicts", (long long)st->conflicts);
     cli_json_num(&j, "trimmed_mm", st->trimmed);
+    cli_json_int(&j, "pads", (long long)st->pads);
+    cli_json_num(&j, "pad_length_mm", st->pad_length);
     cli_json_int(&j, "paths_out", (long long)paths_out);
     cli_json_int(&j, "unheld_paths", (long long)hr->npaths_failed);
     cli_json_num(&j, "unheld_mm", hr->failed_mm);
@@ -73,7 +77,7 @@ int cmd_support(int argc, char **argv)
 {
     const char *pos[1], *output = NULL, *mesh = NULL, *tri = NULL;
     double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, t0;
-    int json = 0, npos = 0, rc;
+    int json = 0, nopads = 0, npos = 0, rc;
     amp_support_opts o;
     amp_support_stats st;
     amp_hold_opts ho;
@@ -88,7 +92,7 @@ int cmd_support(int argc, char **argv)
                       {"radius", CLI_DOUBLE, NULL, 0},    {"min-gap", CLI_DOUBLE, NULL, 0},
                       {"z-offs", CLI_DOUBLE, &z_offs, 0}, {"theta", CLI_DOUBLE, &theta, 0},
                       {"json", CLI_FLAG, &json, 0},       {"output", CLI_STR, &output, 0},
-                      {NULL, CLI_FLAG, NULL, 0}};
+                      {"no-pads", CLI_FLAG, &nopads, 0},  {NULL, CLI_FLAG, NULL, 0}};
     amp_support_opts_default(&o);
     opts[2].dst = &o.spacing;
     opts[3].dst = &o.layer_height;
@@ -99,6 +103,7 @@ int cmd_support(int argc, char **argv)
         return rc;
     if (!mesh == !tri)
         return cli_fail("support", CLI_USAGE, "give the model: --mesh MESH.stl or --trivariate F");
+    o.pads = !nopads;
     if ((rc = headopt_make("support", z_offs, theta, &o.head)) != CLI_OK)
         return rc;
     amp_error_clear(&err);

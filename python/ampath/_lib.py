@@ -174,12 +174,13 @@ class amp_mdr_stats(Structure):
 
 class amp_support_opts(Structure):
     _fields_ = [("head", amp_head), ("spacing", c_double), ("layer_height", c_double), ("radius", c_double),
-                ("min_gap", c_double), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
+                ("min_gap", c_double), ("progress", PROGRESS_FN), ("progress_user", c_void_p), ("pads", c_int)]
 
 
 class amp_support_stats(Structure):
     _fields_ = [("rays", c_size_t), ("columns", c_size_t), ("paths", c_size_t), ("length", c_double),
-                ("unplaced", c_size_t), ("splits", c_size_t), ("conflicts", c_size_t), ("trimmed", c_double)]
+                ("unplaced", c_size_t), ("splits", c_size_t), ("conflicts", c_size_t), ("trimmed", c_double),
+                ("pads", c_size_t), ("pad_length", c_double)]
 
 
 class amp_ring(Structure):

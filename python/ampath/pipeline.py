@@ -210,7 +210,7 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
 def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, **opts):
     """Paper 1 §5.3 (`ampath support`): support under @mesh (a Mesh, or a Trivariate whose boundary is
     tessellated as the tool does), interleaved in print order. Options: spacing, layer_height, radius,
-    min_gap (amp_support_opts)."""
+    min_gap, pads (amp_support_opts)."""
     if isinstance(mesh, Trivariate):
         with Mesh.from_trivariate(mesh) as m:
             return support(paths, m, z_offs, theta_deg, progress, **opts)
