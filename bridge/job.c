@@ -142,7 +142,7 @@ static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const 
     amp_error err;
     amp_error_clear(&err);
     amp_pathset_init(&j->ps, NULL);
-    if (amp_read_file(path, NULL, 0, &text, &len, &err) != AMP_OK ||
+    if (amp_read_file(path, NULL, AMP_PATHS_READ_MAX, &text, &len, &err) != AMP_OK ||
         amp_pathset_parse(&j->ps, text, len, &err) != AMP_OK) {
         snprintf(why, whylen, "%s:%ld: %s", path, err.line, err.msg);
         amp_free(NULL, text);

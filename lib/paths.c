@@ -279,7 +279,7 @@ amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *e
 {
     char *text;
     size_t len;
-    amp_status st = amp_read_file(path, ps->alloc, 0, &text, &len, err);
+    amp_status st = amp_read_file(path, ps->alloc, AMP_PATHS_READ_MAX, &text, &len, err);
     if (st != AMP_OK)
         return st;
     st = amp_pathset_parse(ps, text, len, err);

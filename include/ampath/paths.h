@@ -140,7 +140,12 @@ amp_box3 amp_pathset_bbox(const amp_pathset *ps);
  */
 amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err);
 
-/** amp_read_file() + amp_pathset_parse(); the message names the file. */
+/** Size bound of amp_pathset_read_file(): AMP_READ_MAX_DEFAULT (1 GiB) where size_t has 32 bits, 64 GiB where
+ *  it has more. On a host `slice --continuous` of a part that fills a printer's bed writes several GB of
+ *  .amp, and the next stage must read what the last one wrote; memory is the limit there, not this bound. */
+#define AMP_PATHS_READ_MAX ((size_t)1 << (sizeof(size_t) > 4 ? 36 : 30))
+
+/** amp_read_file() (at most AMP_PATHS_READ_MAX bytes) + amp_pathset_parse(); the message names the file. */
 amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err);
 
 /**
