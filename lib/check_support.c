@@ -3,7 +3,7 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "check_hold_internal.h"
+#include "ampath/check.h"
 
 void amp_hold_opts_default(amp_hold_opts *o)
 {
@@ -23,7 +23,7 @@ void amp_hold_report_free(amp_hold_report *rep)
     rep->npaths_failed = 0;
 }
 
-typedef amp_hold_sample hsample;
+typedef amp_bead_sample hsample;
 
 typedef struct hctx {
     const amp_allocator *a;
@@ -182,7 +182,7 @@ static amp_status note_failure(amp_hold_report *rep, size_t path, double len, am
 
 /* Runs of unheld samples along each object path: bridges (held both sides, short) or failures. */
 static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hold_opts *o, const unsigned char *ok,
-                             amp_hold_report *rep, amp_hold_fail_fn fail, void *user, amp_error *err)
+                             amp_hold_report *rep, amp_bead_run_fn fail, void *user, amp_error *err)
 {
     size_t i = 0;
     while (i < c->n) {
@@ -216,13 +216,9 @@ static amp_status judge_runs(const hctx *c, const amp_pathset *ps, const amp_hol
     return AMP_OK;
 }
 
-amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_error *err)
-{
-    return amp_hold_scan(ps, o, rep, NULL, NULL, err);
-}
-
-amp_status amp_hold_scan(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_hold_fail_fn fail,
-                         void *user, amp_error *err)
+/* amp_check_hold(), handing every unheld run to @p fail (NULL: none) as it is judged. */
+static amp_status hold_scan(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_bead_run_fn fail,
+                            void *user, amp_error *err)
 {
     hctx c;
     unsigned char *ok = NULL;
@@ -263,5 +259,24 @@ done:
     amp_free(c.a, c.cell_first);
     amp_free(c.a, c.cell_of);
     amp_free(c.a, c.sorted);
+    return st;
+}
+
+amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hold_report *rep, amp_error *err)
+{
+    return hold_scan(ps, o, rep, NULL, NULL, err);
+}
+
+amp_status amp_check_hold_runs(const amp_pathset *ps, double max_gap, amp_bead_run_fn run, void *user,
+                               amp_error *err)
+{
+    amp_hold_opts o;
+    amp_hold_report rep;
+    amp_status st;
+    memset(&rep, 0, sizeof rep);
+    amp_hold_opts_default(&o);
+    o.max_gap = max_gap;
+    st = hold_scan(ps, &o, &rep, run, user, err);
+    amp_hold_report_free(&rep);
     return st;
 }

@@ -12,7 +12,7 @@ void amp_support_opts_default(amp_support_opts *o)
     o->layer_height = 0.4;
     o->radius = 0.2;
     o->min_gap = 1.0;
-    o->pads = 1;
+    o->find_unheld = NULL;
     o->progress = NULL;
     o->progress_user = NULL;
 }
@@ -881,7 +881,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
-    if (o->pads) {
+    if (o->find_unheld) {
         amp_support_pads_stats ps;
         if ((stt = amp_support_pads(&all, nobj, model, o, c.plate, &ps, err)) != AMP_OK)
             goto done;

@@ -12,8 +12,8 @@ typedef struct amp_support_pads_stats {
 
 /*
  * Append to @p all (object paths [0, nobj), then the support made so far) the pads under every run of object
- * beads that the held-path check (amp_check_hold, max_gap = o->min_gap) finds in the air with that support
- * printed first: support beads of radius o->radius on the support layers above @p plate, each under a
+ * beads that the judge o->find_unheld (max_gap = o->min_gap) finds in the air with that support printed
+ * first: support beads of radius o->radius on the support layers above @p plate, each under a
  * sample of the run from what lies below it (the bed, a solid of @p model ending there, an object bead) up
  * to the sample's bottom. AMP_ERR_NOMEM, AMP_ERR_LIMIT.
  */

@@ -7,8 +7,9 @@
  * support, yet the lowest curves printed there may float higher (a field's
  * rows are a spacing apart: on a sphere or a torus lying on the bed, the
  * first row over the shallow rim of the underside sits 1.2 mm up with
- * nothing under it). The held-path check (check_hold_internal.h, the judge
- * of `ampath check`) names those runs, with support printed first; under
+ * nothing under it). The judge the caller gives (amp_support_opts.find_unheld:
+ * the tool's is the held-path check of `ampath check`, which this builder does
+ * not link) names those runs, with support printed first; under
  * each failing run a stack of support beads follows its samples, on the
  * support layers (row heights of lib/support.c), from what lies under each
  * sample (the bed, a solid of the model that ends below it, or an object
@@ -17,7 +18,6 @@
 #include <math.h>
 #include <string.h>
 
-#include "check_hold_internal.h"
 #include "support_internal.h"
 
 /* Object bead tops on a grid of 1 mm cells (samples every 0.25 mm), for what lies under a pad. */
@@ -163,7 +163,7 @@ static amp_status solid_top_below(const pads *c, amp_vec3 p, double bottom, doub
 }
 
 /* One pad bead path along samples [i, e) of a run at height z (a lone sample: a short stroke along the run). */
-static amp_status emit_stretch(pads *c, const amp_hold_sample *run, size_t n, size_t i, size_t e, double z,
+static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, size_t i, size_t e, double z,
                                amp_error *err)
 {
     double rs = c->o->radius;
@@ -187,8 +187,8 @@ static amp_status emit_stretch(pads *c, const amp_hold_sample *run, size_t n, si
     return st;
 }
 
-/* amp_hold_fail_fn: the stack of pads under one failing run. */
-static amp_status pad_run(void *user, const amp_hold_sample *run, size_t n, amp_error *err)
+/* amp_bead_run_fn: the stack of pads under one unheld run. */
+static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_error *err)
 {
     pads *c = user;
     double rs = c->o->radius, zmax = -HUGE_VAL;
@@ -233,13 +233,10 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
                             double plate, amp_support_pads_stats *out, amp_error *err)
 {
     amp_pathset probe;
-    amp_hold_opts ho;
-    amp_hold_report rep;
     pads c;
     size_t i, k;
     amp_status st = AMP_OK;
     memset(&c, 0, sizeof c);
-    memset(&rep, 0, sizeof rep);
     c.all = all;
     c.nobj = nobj;
     c.model = model;
@@ -257,11 +254,8 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
             for (m = 0; m < all->paths[i].n && st == AMP_OK; m++)
                 st = amp_pathset_push(&probe, v[m].p, v[m].r, err);
         }
-    amp_hold_opts_default(&ho);
-    ho.max_gap = o->min_gap; /* air lower than min_gap is left on purpose (check.h) */
-    if (st == AMP_OK)
-        st = amp_hold_scan(&probe, &ho, &rep, pad_run, &c, err);
-    amp_hold_report_free(&rep);
+    if (st == AMP_OK) /* air lower than min_gap is left on purpose (check.h) */
+        st = o->find_unheld(&probe, o->min_gap, pad_run, &c, err);
     amp_pathset_free(&probe);
     amp_free(all->alloc, c.tp);
     amp_free(all->alloc, c.cell);

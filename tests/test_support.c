@@ -119,7 +119,7 @@ START_TEST(model_on_the_plate_needs_no_rows_its_floating_paths_get_pads_and_bad_
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
     slab_paths(&ps);
     amp_support_opts_default(&o);
-    o.pads = 0;
+    ck_assert(o.find_unheld == NULL); /* the library links no checker: no pads unless asked */
     ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.columns, 0);
     ck_assert_uint_eq(out.npaths, ps.npaths);
@@ -128,7 +128,7 @@ START_TEST(model_on_the_plate_needs_no_rows_its_floating_paths_get_pads_and_bad_
     ck_assert_uint_gt(hr.failures, 0);
     amp_hold_report_free(&hr);
     amp_pathset_clear(&out);
-    o.pads = 1;
+    o.find_unheld = amp_check_hold_runs;
     ck_assert_int_eq(amp_support(&ps, b, &o, &out, &st, &err), AMP_OK);
     ck_assert_uint_eq(st.columns, 0);
     ck_assert_uint_gt(st.pads, 0);

@@ -103,7 +103,7 @@ int cmd_support(int argc, char **argv)
         return rc;
     if (!mesh == !tri)
         return cli_fail("support", CLI_USAGE, "give the model: --mesh MESH.stl or --trivariate F");
-    o.pads = !nopads;
+    o.find_unheld = nopads ? NULL : amp_check_hold_runs; /* the pads' judge: the check of 'ampath check' */
     if ((rc = headopt_make("support", z_offs, theta, &o.head)) != CLI_OK)
         return rc;
     amp_error_clear(&err);

@@ -228,6 +228,17 @@ amp_status amp_check_hold(const amp_pathset *ps, const amp_hold_opts *o, amp_hol
 /** Free the arrays of @p rep. NULL accepted. */
 void amp_hold_report_free(amp_hold_report *rep);
 
+/**
+ * amp_check_hold() with the default options but @p max_gap, handing every
+ * unheld run of samples (a failure, a bridge or a tip alike: samples of one
+ * object path in order) to @p run as it is judged; the report is not kept.
+ * The signature of support.h's amp_support_unheld_fn: set
+ * amp_support_opts.find_unheld to this function for the pads of `ampath
+ * support`. Errors: those of amp_check_hold(), or the first that @p run returns.
+ */
+amp_status amp_check_hold_runs(const amp_pathset *ps, double max_gap, amp_bead_run_fn run, void *user,
+                               amp_error *err);
+
 #ifdef __cplusplus
 }
 #endif

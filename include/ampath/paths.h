@@ -12,6 +12,7 @@
 #define AMPATH_PATHS_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "alloc.h"
 #include "io.h"
@@ -111,6 +112,23 @@ static inline amp_pvert *amp_pathset_path_verts(const amp_pathset *ps, size_t i)
     /* a set of empty paths has no vertex array: NULL + 0 is undefined behaviour (found by tests/fuzz/fuzz_amp.c) */
     return ps->verts ? ps->verts + ps->paths[i].first : NULL;
 }
+
+/**
+ * A sample of a path's bead: the point @p p on its centre line, the bead's
+ * vertical half-extent (h/2 for a planar bead of height h, else its radius),
+ * its arc position @p s (mm) along path @p path. The held-path check hands
+ * runs of them to the support's pads (check.h amp_check_hold_runs,
+ * support.h amp_support_opts.find_unheld).
+ */
+typedef struct amp_bead_sample {
+    amp_vec3 p;
+    double half;
+    double s;
+    uint32_t path;
+} amp_bead_sample;
+
+/** Receives a run of @p n consecutive samples of one path; a status other than AMP_OK stops the caller. */
+typedef amp_status (*amp_bead_run_fn)(void *user, const amp_bead_sample *run, size_t n, amp_error *err);
 
 /** Length of path @p i in mm. */
 double amp_path_length(const amp_pathset *ps, size_t i);

@@ -15,12 +15,12 @@
  * on odd ones, the rows of a layer whose facing ends are at most one ray
  * apart joined into one zigzag path (a one-ray column
  * gets a row 0.25 spacing long: no support path has zero length).
- * Pads (opts.pads, default on): the rays see the model, not the paths, so
- * object beads can still float (a field's first row over a shallow
- * underside); the held-path check of check.h, run with the rows printed
- * first, names every unheld run, and a stack of support beads on the same
- * layers follows each run from what lies under it (the bed, a solid of the
- * model ending there, an object bead) up to its bottom.
+ * Pads (opts.find_unheld set, as the tool does): the rays see the model, not
+ * the paths, so object beads can still float (a field's first row over a
+ * shallow underside); the judge (the held-path check of check.h), run with
+ * the rows printed first, names every unheld run, and a stack of support
+ * beads on the same layers follows each run from what lies under it (the
+ * bed, a solid of the model ending there, an object bead) up to its bottom.
  * Ordering (Def. 5.1): the rows are cut into fragments shorter than
  * z_offs sin(theta); each support fragment must come after the last object
  * fragment below it and before the first object fragment (and support piece)
@@ -49,6 +49,16 @@
 extern "C" {
 #endif
 
+/**
+ * The judge of the pads, exactly the signature of check.h's
+ * amp_check_hold_runs: hands @p run every run of object samples of @p ps
+ * (in print order) that nothing printed earlier holds within @p max_gap.
+ * The builder calls it through amp_support_opts.find_unheld and never links a
+ * checker itself: whoever fills the options decides whether pads are made.
+ */
+typedef amp_status (*amp_support_unheld_fn)(const amp_pathset *ps, double max_gap, amp_bead_run_fn run, void *user,
+                                            amp_error *err);
+
 typedef struct amp_support_opts {
     amp_head head;       /**< print head (for the ordering) */
     double spacing;      /**< grid spacing of rays and support rows, mm (default 2) */
@@ -58,9 +68,10 @@ typedef struct amp_support_opts {
     /** Optional progress report (fraction 0..1, from the calling thread, a few hundred times at most). */
     void (*progress)(void *user, double fraction);
     void *progress_user;
-    int pads;            /**< 1 (default): pads under the object beads this support leaves in the air (the
-                              held-path check of check.h; lib/support_pads.c); 0: the grid's rows only.
-                              (last: python/ampath/_lib.py mirrors this struct) */
+    amp_support_unheld_fn find_unheld; /**< NULL (default): the grid's rows only. Else pads under the object
+                              beads those rows leave in the air, as this judge finds them (max_gap = min_gap;
+                              lib/support_pads.c). Set it to amp_check_hold_runs (check.h) for the behaviour
+                              of the ampath tool. (last: python/ampath/_lib.py mirrors this struct) */
 } amp_support_opts;
 
 void amp_support_opts_default(amp_support_opts *o);
@@ -74,7 +85,7 @@ typedef struct amp_support_stats {
     size_t splits;        /**< object paths split to let support in between their fragments */
     size_t conflicts;     /**< support fragments with no gouge-free slot, left out (0 unless rounding bites) */
     double trimmed;       /**< length left out for those conflicts, mm */
-    size_t pads;          /**< pad paths traced under object beads the rows leave in the air (opts.pads) */
+    size_t pads;          /**< pad paths traced under object beads the rows leave in the air (opts.find_unheld) */
     double pad_length;    /**< their length, mm */
 } amp_support_stats;
 

@@ -172,9 +172,14 @@ class amp_mdr_stats(Structure):
                 ("isolated", c_size_t), ("r_lo", c_double), ("r_hi", c_double), ("deposited", c_double)]
 
 
+# amp_support_unheld_fn (support.h): amp_check_hold_runs's signature (the run callback passed on as a pointer)
+UNHELD_FN = ctypes.CFUNCTYPE(c_int, c_void_p, c_double, c_void_p, c_void_p, c_void_p)
+
+
 class amp_support_opts(Structure):
     _fields_ = [("head", amp_head), ("spacing", c_double), ("layer_height", c_double), ("radius", c_double),
-                ("min_gap", c_double), ("progress", PROGRESS_FN), ("progress_user", c_void_p), ("pads", c_int)]
+                ("min_gap", c_double), ("progress", PROGRESS_FN), ("progress_user", c_void_p),
+                ("find_unheld", UNHELD_FN)]
 
 
 class amp_support_stats(Structure):
@@ -431,6 +436,7 @@ _PROTOS = {
     "amp_contpath_opts_default": (None, [P(amp_contpath_opts), c_double]),
     "amp_contpath_layers": (c_int, [P(amp_slices), P(amp_contpath_opts), P(amp_pathset), P(amp_contpath_stats),
                                     E]),
+    "amp_check_hold_runs": (c_int, [P(amp_pathset), c_double, c_void_p, c_void_p, E]),
     "amp_check_path_stroke": (c_int, [P(amp_pathset), c_size_t, P(amp_polyset), c_double, P(amp_stroke_report),
                                       E]),
     "amp_check_gouge": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),

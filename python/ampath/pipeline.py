@@ -207,17 +207,20 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
     return _run(go, out, pr, (paths,))
 
 
-def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, **opts):
+def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, pads=True, **opts):
     """Paper 1 §5.3 (`ampath support`): support under @mesh (a Mesh, or a Trivariate whose boundary is
-    tessellated as the tool does), interleaved in print order. Options: spacing, layer_height, radius,
-    min_gap, pads (amp_support_opts)."""
+    tessellated as the tool does), interleaved in print order, with pads under the object beads the rows
+    leave in the air (@pads=False: the rows only, as `--no-pads`). Options: spacing, layer_height, radius,
+    min_gap (amp_support_opts)."""
     if isinstance(mesh, Trivariate):
         with Mesh.from_trivariate(mesh) as m:
-            return support(paths, m, z_offs, theta_deg, progress, **opts)
+            return support(paths, m, z_offs, theta_deg, progress, pads, **opts)
     o = L.amp_support_opts()
     lib.amp_support_opts_default(ctypes.byref(o))
     o.head = _head(z_offs, theta_deg)
-    _apply(o, opts, "support", skip=("head",))
+    _apply(o, opts, "support", skip=("head", "find_unheld"))
+    # the pads' judge as the tool sets it: the library's own held-path check, called from C
+    o.find_unheld = ctypes.cast(lib.amp_check_hold_runs, L.UNHELD_FN) if pads else L.UNHELD_FN()
     pr = _Progress(progress)
     o.progress = pr.c
     out, st, err = PathSet(), L.new(L.amp_support_stats), _err()

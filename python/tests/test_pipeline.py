@@ -63,6 +63,23 @@ class HelixPipeline(TmpCase):
         self.assertEqual(stats["lines"], job.text.count("\n"))
 
 
+class SupportPads(TmpCase):
+    def test_pads_are_on_by_default_and_off_with_pads_false_as_in_the_tool(self):
+        tool("cover", "helix", "--eps", 3, "--dir", "u", "-o", self.p("c.amp"))
+        tool("order", self.p("c.amp"), "-o", self.p("o.amp"))
+        tool("model", "helix", "-o", self.p("h.stl"))
+        tool("support", self.p("o.amp"), "--mesh", self.p("h.stl"), "-o", self.p("pads.amp"))
+        tool("support", self.p("o.amp"), "--mesh", self.p("h.stl"), "--no-pads", "-o", self.p("rows.amp"))
+        with ampath.PathSet.read(self.p("o.amp")) as ps, ampath.Mesh.load(self.p("h.stl")) as mesh:
+            with ampath.support(ps, mesh) as padded, ampath.support(ps, mesh, pads=False) as rows:
+                self.assertGreater(padded.stats["pads"], 0)
+                self.assertEqual(rows.stats["pads"], 0)
+                self.assertSameBytes(strip_comments(padded.to_amp()), strip_comments(read(self.p("pads.amp"))),
+                                     "support with pads")
+                self.assertSameBytes(strip_comments(rows.to_amp()), strip_comments(read(self.p("rows.amp"))),
+                                     "support without pads")
+
+
 class ContinuousSlice(TmpCase):
     def test_continuous_slice_and_its_gcode_match_the_tool(self):
         tool("model", "helix", "-o", self.p("helix.stl"))
