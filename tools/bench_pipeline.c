@@ -198,6 +198,7 @@ static int volumetric(double eps, double travel_z, int threads, int check, vrun 
     oo.travel_z_weight = travel_z;
     amp_mdr_opts_default(&mo, 0.5);
     amp_support_opts_default(&so);
+    so.find_unheld = amp_check_hold_runs; /* as `ampath support` */
     amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
     stage_begin(&cnt, &t0);
     ok = amp_trivariate_model("helix", &al, &v, NULL) == AMP_OK && amp_cover_trivariate(&v, &co, &a, NULL, NULL) == AMP_OK;
