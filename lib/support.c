@@ -620,12 +620,6 @@ static amp_status cut_row(const sctx *c, const amp_fragments *fs, size_t i, uint
     return AMP_OK;
 }
 
-/* Layer index of a support row (rows are flat, on z = row_z(layer)). */
-static size_t row_layer(const sctx *c, const amp_support_opts *o, const amp_fragments *fs, size_t i)
-{
-    return layer_of(c, o, fs->ps, i);
-}
-
 /*
  * Place the support rows, top layer first. A lower support piece L must be
  * printed no later than any piece H above it (Def. 5.1): a field over a fine
@@ -648,7 +642,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     amp_status st = AMP_OK;
     long l;
     for (i = nobj; i < fs->npaths; i++)
-        nl = row_layer(c, o, fs, i) + 1 > nl ? row_layer(c, o, fs, i) + 1 : nl;
+        nl = layer_of(c, o, fs->ps, i) + 1 > nl ? layer_of(c, o, fs->ps, i) + 1 : nl;
     if (nl == 0)
         return AMP_OK;
     d = amp_calloc(c->a, nx * ny, sizeof *d);
@@ -662,7 +656,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     }
     /* fill() makes the rows layer by layer: rows of layer l are nobj + [rfirst[l], rfirst[l + 1]) */
     for (i = nobj; i < fs->npaths; i++)
-        rfirst[row_layer(c, o, fs, i) + 1]++;
+        rfirst[layer_of(c, o, fs->ps, i) + 1]++;
     for (i = 0; i <= nl; i++)
         rfirst[i + 1] += rfirst[i];
     for (i = 0; i < nx * ny; i++)

@@ -187,6 +187,13 @@ static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, si
     return st;
 }
 
+/* Does a pad bead at height z fit under sample k: above what lies under it, below its bead? */
+static int fits(const pads *c, const amp_bead_sample *run, size_t k, double z)
+{
+    double rs = c->o->radius;
+    return z - rs >= c->base[k] - 1e-9 && z + rs <= run[k].p.z - run[k].half + 1e-9;
+}
+
 /* amp_bead_run_fn: the stack of pads under one unheld run. */
 static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_error *err)
 {
@@ -215,15 +222,12 @@ static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_
         if (z + rs > zmax + 1e-9)
             break;
         for (i = 0; st == AMP_OK && i < n; i = e) {
-#define FITS(k) (z - rs >= c->base[k] - 1e-9 && z + rs <= run[k].p.z - run[k].half + 1e-9)
-            if (!FITS(i)) {
-                e = i + 1;
-                continue;
-            }
-            for (e = i; e < n && FITS(e); e++)
+            for (e = i; e < n && fits(c, run, e, z); e++)
                 ;
-#undef FITS
-            st = emit_stretch(c, run, n, i, e, z, err);
+            if (e == i)
+                e = i + 1;
+            else
+                st = emit_stretch(c, run, n, i, e, z, err);
         }
     }
     return st;
@@ -247,12 +251,9 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
     amp_pathset_init(&probe, all->alloc);
     for (k = 0; k < 2 && st == AMP_OK; k++)
         for (i = k ? 0 : nobj; i < (k ? nobj : all->npaths) && st == AMP_OK; i++) {
-            const amp_pvert *v = amp_pathset_path_verts(all, i);
-            size_t m;
-            st = amp_pathset_begin(&probe, all->paths[i].role, err);
-            probe.paths[probe.npaths - 1].h = all->paths[i].h;
-            for (m = 0; m < all->paths[i].n && st == AMP_OK; m++)
-                st = amp_pathset_push(&probe, v[m].p, v[m].r, err);
+            st = amp_pathset_add(&probe, all->paths[i].role, amp_pathset_path_verts(all, i), all->paths[i].n, err);
+            if (st == AMP_OK && all->paths[i].h > 0.0)
+                st = amp_pathset_set_height(&probe, all->paths[i].h, err);
         }
     if (st == AMP_OK) /* air lower than min_gap is left on purpose (check.h) */
         st = o->find_unheld(&probe, o->min_gap, pad_run, &c, err);
