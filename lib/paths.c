@@ -100,16 +100,21 @@ amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, s
     return st;
 }
 
+amp_status amp_pathset_copy_path(amp_pathset *dst, const amp_pathset *src, size_t i, amp_error *err)
+{
+    amp_status st = amp_pathset_add(dst, src->paths[i].role, amp_pathset_path_verts(src, i), src->paths[i].n, err);
+    if (st == AMP_OK)
+        dst->paths[dst->npaths - 1].h = src->paths[i].h;
+    return st;
+}
+
 amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err)
 {
     size_t i;
-    for (i = 0; i < src->npaths; i++) {
-        amp_status st = amp_pathset_add(dst, src->paths[i].role, amp_pathset_path_verts(src, i), src->paths[i].n, err);
-        if (st != AMP_OK)
-            return st;
-        dst->paths[dst->npaths - 1].h = src->paths[i].h;
-    }
-    return AMP_OK;
+    amp_status st = AMP_OK;
+    for (i = 0; i < src->npaths && st == AMP_OK; i++)
+        st = amp_pathset_copy_path(dst, src, i, err);
+    return st;
 }
 
 double amp_path_length(const amp_pathset *ps, size_t i)

@@ -271,13 +271,10 @@ static amp_status rows_by_layer(const sctx *c, const amp_support_opts *o, amp_pa
         at[i + 1] += at[i];
     for (i = 0; i < nr; i++)
         ord[at[lay[i]]++] = nobj + i;
-    for (i = 0; i < nobj && st == AMP_OK; i++) {
-        st = amp_pathset_add(&out, all->paths[i].role, amp_pathset_path_verts(all, i), all->paths[i].n, err);
-        if (st == AMP_OK && all->paths[i].h > 0.0)
-            st = amp_pathset_set_height(&out, all->paths[i].h, err);
-    }
+    for (i = 0; i < nobj && st == AMP_OK; i++)
+        st = amp_pathset_copy_path(&out, all, i, err);
     for (i = 0; i < nr && st == AMP_OK; i++)
-        st = amp_pathset_add(&out, AMP_ROLE_SUPPORT, amp_pathset_path_verts(all, ord[i]), all->paths[ord[i]].n, err);
+        st = amp_pathset_copy_path(&out, all, ord[i], err);
     if (st == AMP_OK) {
         amp_pathset t = *all;
         *all = out;
@@ -786,9 +783,7 @@ static amp_status emit_all(const amp_pathset *in, size_t nobj, const amp_fragmen
             k = cnt[g];
         }
         if (st == AMP_OK && cut == f0) {
-            st = amp_pathset_add(out, in->paths[i].role, amp_pathset_path_verts(in, i), in->paths[i].n, err);
-            if (st == AMP_OK && in->paths[i].h > 0.0)
-                st = amp_pathset_set_height(out, in->paths[i].h, err);
+            st = amp_pathset_copy_path(out, in, i, err);
         } else if (st == AMP_OK) {
             st = emit_frags(out, fs, in->paths[i].role, in->paths[i].h, cut, f1, NULL, 1, &run, &run_cap, err);
         }

@@ -250,11 +250,8 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
     /* the judge sees the support first (the order support.c then aims at), then the objects in their order */
     amp_pathset_init(&probe, all->alloc);
     for (k = 0; k < 2 && st == AMP_OK; k++)
-        for (i = k ? 0 : nobj; i < (k ? nobj : all->npaths) && st == AMP_OK; i++) {
-            st = amp_pathset_add(&probe, all->paths[i].role, amp_pathset_path_verts(all, i), all->paths[i].n, err);
-            if (st == AMP_OK && all->paths[i].h > 0.0)
-                st = amp_pathset_set_height(&probe, all->paths[i].h, err);
-        }
+        for (i = k ? 0 : nobj; i < (k ? nobj : all->npaths) && st == AMP_OK; i++)
+            st = amp_pathset_copy_path(&probe, all, i, err);
     if (st == AMP_OK) /* air lower than min_gap is left on purpose (check.h) */
         st = o->find_unheld(&probe, o->min_gap, pad_run, &c, err);
     amp_pathset_free(&probe);

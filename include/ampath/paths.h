@@ -103,6 +103,10 @@ amp_status amp_pathset_set_height(amp_pathset *ps, double h, amp_error *err);
 /** Append a whole path (copies @p n vertices; a tube, h = 0). Same errors as begin + push. */
 amp_status amp_pathset_add(amp_pathset *ps, amp_role role, const amp_pvert *v, size_t n, amp_error *err);
 
+/** Append a copy of path @p i of @p src to @p dst (role, vertices, bead height). Same errors as
+ *  amp_pathset_add(). */
+amp_status amp_pathset_copy_path(amp_pathset *dst, const amp_pathset *src, size_t i, amp_error *err);
+
 /** Append copies of all paths of @p src to @p dst (roles and bead heights kept). */
 amp_status amp_pathset_append(amp_pathset *dst, const amp_pathset *src, amp_error *err);
 
