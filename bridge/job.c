@@ -121,7 +121,7 @@ static int job_read(br_job *j, char *buf, size_t cap)
 static int job_restart(br_job *j)
 {
     if (j->is_amp)
-        return amp_gcode_iter_init(&j->it, &j->ps, &j->go, NULL) == AMP_OK ? 0 : -1;
+        return amp_gcode_iter_rewind(&j->it, NULL) == AMP_OK ? 0 : -1; /* the same lines, not a new run */
     rewind(j->f);
     return 0;
 }

@@ -649,9 +649,19 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
                         "more, say so with --max-cross-section",
                         (unsigned long)it->xs_path, it->xs_area, sqrt(it->xs_area / AMP_PI), it->o.max_cross_section);
     it->est = it->stats;
-    reset_run(it, 2);
-    it->stats.input_segments = js.input_segments;
     it->magic = GC_MAGIC;
+    return amp_gcode_iter_rewind(it, err);
+}
+
+amp_status amp_gcode_iter_rewind(amp_gcode_iter *it, amp_error *err)
+{
+    if (!it)
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL iterator");
+    if (it->magic != GC_MAGIC)
+        return amp_fail(err, AMP_ERR_STATE, 0, "gcode: iterator not initialised (or init failed)");
+    /* pass 2 from its start: the placement, the grid's frame and the figures of pass 1 (it->est) stay */
+    reset_run(it, 2);
+    it->stats.input_segments = it->est.input_segments;
     return AMP_OK;
 }
 
@@ -1658,29 +1668,36 @@ int amp_gcode_iter_next(amp_gcode_iter *it, char *line, size_t cap, amp_error *e
     }
 }
 
-amp_status amp_gcode_write(const amp_pathset *ps, const amp_gcode_opts *o, amp_sink_fn sink, void *user,
-                           amp_gcode_stats *stats, amp_error *err)
+amp_status amp_gcode_iter_write(amp_gcode_iter *it, amp_sink_fn sink, void *user, amp_gcode_stats *stats,
+                                amp_error *err)
 {
-    amp_gcode_iter it;
     char line[AMP_GCODE_LINE_CAP + 1];
     amp_status st;
     int r;
-    if (!sink)
-        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL sink");
-    st = amp_gcode_iter_init(&it, ps, o, err);
-    if (st != AMP_OK)
-        return st;
-    while ((r = amp_gcode_iter_next(&it, line, AMP_GCODE_LINE_CAP, err)) == 1) {
+    if (!it || !sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL iterator or sink");
+    while ((r = amp_gcode_iter_next(it, line, AMP_GCODE_LINE_CAP, err)) == 1) {
         size_t n = strlen(line);
         line[n] = '\n';
         st = sink(user, line, n + 1);
         if (st != AMP_OK)
-            return amp_fail(err, st, 0, "gcode: writing line %lu failed: %s", (unsigned long)it.stats.lines,
+            return amp_fail(err, st, 0, "gcode: writing line %lu failed: %s", (unsigned long)it->stats.lines,
                             amp_strerror(st));
     }
     if (r < 0)
         return (amp_status)r;
     if (stats)
-        *stats = it.stats;
+        *stats = it->stats;
     return AMP_OK;
+}
+
+amp_status amp_gcode_write(const amp_pathset *ps, const amp_gcode_opts *o, amp_sink_fn sink, void *user,
+                           amp_gcode_stats *stats, amp_error *err)
+{
+    amp_gcode_iter it;
+    amp_status st;
+    if (!sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL sink");
+    st = amp_gcode_iter_init(&it, ps, o, err);
+    return st != AMP_OK ? st : amp_gcode_iter_write(&it, sink, user, stats, err);
 }

@@ -1069,6 +1069,45 @@ START_TEST(sink_failure_stops_the_writer)
 }
 END_TEST
 
+/* Rewinding replays the job without running it again: the bridge reads a job twice (check, then send) and the
+ * tool writes the iterator it initialised for the figures; both must get the lines amp_gcode_write gives. */
+START_TEST(a_rewound_iterator_writes_the_same_job_again)
+{
+    static amp_gcode_iter it;
+    amp_pathset ps, empty;
+    amp_gcode_stats st, st2;
+    amp_buf b;
+    amp_error err;
+    char line[AMP_GCODE_LINE_CAP], *once;
+    int k;
+    demo_like(&ps);
+    once = gen(&ps, NULL, &st);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, NULL, &err), AMP_OK);
+    for (k = 0; k < 500; k++) /* part of the job read, as a bridge's check that stops early */
+        ck_assert_int_eq(amp_gcode_iter_next(&it, line, sizeof line, &err), 1);
+    ck_assert_int_eq(amp_gcode_iter_rewind(&it, &err), AMP_OK);
+    amp_buf_init(&b, NULL);
+    ck_assert_int_eq(amp_gcode_iter_write(&it, amp_buf_sink, &b, &st2, &err), AMP_OK);
+    ck_assert_ptr_nonnull(b.data);
+    ck_assert_msg(strcmp(once, b.data) == 0, "the rewound job differs from a fresh one");
+    ck_assert_uint_eq(st2.lines, st.lines);
+    ck_assert_uint_eq(it.est.lines, st.lines); /* the header's figures are the job's */
+    ck_assert_double_eq(st2.time, st.time);
+    ck_assert_int_eq(amp_gcode_iter_write(&it, amp_buf_sink, &b, NULL, &err), AMP_OK); /* at the end: nothing */
+    ck_assert_uint_eq(strlen(b.data), strlen(once));
+    /* an iterator init refused cannot be rewound; NULL is an argument error */
+    amp_pathset_init(&empty, NULL);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &empty, NULL, &err), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_gcode_iter_rewind(&it, &err), AMP_ERR_STATE);
+    ck_assert_int_eq(amp_gcode_iter_write(&it, amp_buf_sink, &b, NULL, &err), AMP_ERR_STATE);
+    ck_assert_int_eq(amp_gcode_iter_rewind(NULL, &err), AMP_ERR_ARG);
+    amp_buf_free(&b);
+    free(once);
+    amp_pathset_free(&empty);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(gcode_command_writes_file_and_reports_json)
 {
     amp_pathset ps;
@@ -2066,6 +2105,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
     tcase_add_test(tc, bad_input_gives_clear_errors);
     tcase_add_test(tc, sink_failure_stops_the_writer);
+    tcase_add_test(tc, a_rewound_iterator_writes_the_same_job_again);
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
     tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);

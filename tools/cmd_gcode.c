@@ -71,7 +71,7 @@ static int read_text(const char *file, char **text)
 
 /* Through the one safe writer (io.h amp_out): symlinks followed, devices written directly, a
  * unique temporary renamed into place only after a complete, synced write. */
-static int write_gcode(const char *out, const amp_pathset *ps, const amp_gcode_opts *o, amp_gcode_stats *st)
+static int write_gcode(const char *out, amp_gcode_iter *it, amp_gcode_stats *st)
 {
     amp_out f;
     amp_error err;
@@ -79,7 +79,7 @@ static int write_gcode(const char *out, const amp_pathset *ps, const amp_gcode_o
     amp_error_clear(&err);
     if (amp_out_open(&f, out, &err) != AMP_OK)
         return cli_fail_err("gcode", &err);
-    s = amp_gcode_write(ps, o, amp_out_sink, &f, st, &err);
+    s = amp_gcode_iter_write(it, amp_out_sink, &f, st, &err); /* init already ran the job once: not again */
     if (s != AMP_OK) {
         if (f.werr)
             amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));
@@ -287,7 +287,7 @@ static int run_job(const char *in, const char *out, int json, amp_printer *pr, a
         rc = cli_fail_err("gcode", &err);
     st = it.est;
     if (rc == CLI_OK && out)
-        rc = write_gcode(out, &ps, o, &st);
+        rc = write_gcode(out, &it, &st);
     if (rc == CLI_OK && json)
         print_json(in, out, pr, &it, &st, &ps, part, cli_now() - t0);
     else if (rc == CLI_OK)

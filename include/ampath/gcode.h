@@ -346,6 +346,27 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
 int amp_gcode_iter_next(amp_gcode_iter *it, char *line, size_t cap, amp_error *err);
 
 /**
+ * Back to the first line of the job @p it was initialised with, without
+ * running it again: the lines that follow are the same as after init (the
+ * estimates in it->est are kept). For a caller that reads the job twice (the
+ * bridge checks it, then sends it) or that looked at it->est before writing.
+ * Errors: AMP_ERR_ARG for NULL, AMP_ERR_STATE for an iterator that init did
+ * not accept.
+ */
+amp_status amp_gcode_iter_rewind(amp_gcode_iter *it, amp_error *err);
+
+/**
+ * Write the rest of the job of an initialised iterator through @p sink, one
+ * newline-terminated line per call (amp_gcode_write without a second init:
+ * init runs the whole job once, so a caller that has already initialised
+ * @p it to look at it->est saves that run). @p stats (optional) receives the
+ * figures. Errors: AMP_ERR_ARG for NULL, those of amp_gcode_iter_next(), or
+ * the sink's status (the job is then incomplete).
+ */
+amp_status amp_gcode_iter_write(amp_gcode_iter *it, amp_sink_fn sink, void *user, amp_gcode_stats *stats,
+                                amp_error *err);
+
+/**
  * Write the whole job through @p sink, one newline-terminated line per call.
  * @p stats (optional) receives the figures. Errors: those of init, or the
  * sink's status (the job is then incomplete).
