@@ -163,6 +163,15 @@ static amp_status neck_offset(lctx *c, double *dp, amp_error *err)
         else
             hi = mid;
     }
+    /* back off by twice the bracket: at the last lo the neck may be a hair wide (the ring touches itself;
+     * an offset a few 1e-4 mm further splits it, and nearer the split the pieces came and went: a bunny's
+     * ear at 26.2 mm wrote a loop whose two sides crossed at the micrometre scale); here the neck is at
+     * least four brackets wide, still in the fewest pieces (r/32 was, and fewer is kept) */
+    if (rc == AMP_OK && lo - 2 * (hi - lo) > r / 32) {
+        rc = amp_polyset_inset(&c->isl, lo - 2 * (hi - lo), 0, &c->ins, err);
+        if (rc == AMP_OK && c->ins.nrings && c->ins.nislands <= n_lo)
+            lo -= 2 * (hi - lo);
+    }
     if (rc == AMP_OK && (rc = amp_polyset_inset(&c->isl, lo, 0, &c->ins, err)) == AMP_OK)
         *dp = lo;
     return rc;

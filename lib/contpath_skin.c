@@ -15,16 +15,22 @@
 
 #include "contpath_internal.h"
 
+/* Does the window of layers around li reach the bed or the top (every point of the layer uncovered)? */
+static int window_open(const amp_slices *sl, size_t li, double below, double above)
+{
+    double z = sl->layers[li].z_print;
+    return (below > 0 && (li == 0 || z - sl->layers[0].z_print < below - 1e-9)) ||
+           (above > 0 && (li + 1 == sl->nlayers || sl->layers[sl->nlayers - 1].z_print - z < above - 1e-9));
+}
+
 /* Is q covered by the sections of every layer within [z - below, z + above]
  * (other than the layer itself)? Layers beyond the part's ends do not cover. */
 static int covered(const amp_slices *sl, const amp_polyindex *ix, size_t li, amp_vec2 q, double below, double above)
 {
     double z = sl->layers[li].z_print;
     size_t j;
-    if (below > 0 && (li == 0 || z - sl->layers[0].z_print < below - 1e-9))
-        return 0; /* the first layers: the bed is below */
-    if (above > 0 && (li + 1 == sl->nlayers || sl->layers[sl->nlayers - 1].z_print - z < above - 1e-9))
-        return 0; /* the last layers: the top is above */
+    if (window_open(sl, li, below, above))
+        return 0; /* the first or last layers: the bed is below, the top above */
     for (j = li; j-- > 0 && z - sl->layers[j].z_print < below - 1e-9;)
         if ((ix ? amp_polyindex_contains(&ix[j], q) : amp_polyset_contains(&sl->layers[j].polys, q, 0.0)) != 1)
             return 0;
@@ -40,16 +46,119 @@ int amp_cp_region_is_skin(const amp_slices *sl, const amp_polyindex *ix, size_t 
     return amp_cp_region_skin_depth(sl, ix, li, R, below, above, step) >= 0;
 }
 
+/* Depth of a point for the band: its distance from R's boundary, negative outside R (1-Lipschitz; the
+ * sign lets a segment outside R be dropped at once by its ends' distances instead of bisected). */
+static double depth_at(const amp_polyindex *rx, amp_vec2 p)
+{
+    double d = amp_polyindex_dist(rx, p);
+    return amp_polyindex_contains(rx, p) == 1 ? d : -d;
+}
+
+/* The deepest point of segment a-b (depths da, db) into R, into *best, to within @p tol: the depth is
+ * 1-Lipschitz along the segment, so a piece whose ends and length cannot beat *best by more than tol is
+ * not split further. *inside = 1 once a point inside R is met. */
+static void seg_depth(const amp_polyindex *rx, amp_vec2 a, amp_vec2 b, double da, double db, double tol, int lvl,
+                      double *best, int *inside)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, len = sqrt(dx * dx + dy * dy), dm;
+    amp_vec2 m;
+    if (da > 0.0 || db > 0.0)
+        *inside = 1;
+    *best = fmax(*best, fmax(da, db));
+    if (0.5 * (da + db + len) <= *best + tol || lvl >= 48)
+        return;
+    m = amp_v2(0.5 * (a.x + b.x), 0.5 * (a.y + b.y));
+    dm = depth_at(rx, m);
+    seg_depth(rx, a, m, da, dm, tol, lvl + 1, best, inside);
+    seg_depth(rx, m, b, dm, db, tol, lvl + 1, best, inside);
+}
+
+/* How deep the edges of layer j's section reach into R (box x0..y1), to within tol; 0 when none enters.
+ * The edges are taken from the rows of ix[j] that meet the box (each edge once: in the row where its
+ * part within the box starts), or from every ring without an index. */
+static double layer_depth(const amp_slices *sl, const amp_polyindex *ix, size_t j, const amp_polyindex *rx,
+                          const double box[4], double tol, int *inside)
+{
+    double best = 0.0;
+    *inside = 0;
+    if (ix && ix[j].item) {
+        const amp_polyindex *L = &ix[j];
+        long k0 = (long)floor((box[1] - L->y0) / L->h), k1 = (long)floor((box[3] - L->y0) / L->h), k;
+        k0 = k0 < 0 ? 0 : k0;
+        k1 = k1 >= L->nrow ? L->nrow - 1 : k1;
+        for (k = k0; k <= k1; k++) {
+            size_t q;
+            for (q = L->start[k]; q < L->start[k + 1]; q++) {
+                amp_vec2 a = L->a[L->item[q]], b = L->b[L->item[q]];
+                long first = (long)floor((fmax(fmin(a.y, b.y), box[1]) - L->y0) / L->h);
+                if ((first < k0 ? k0 : first) != k || fmax(a.x, b.x) < box[0] || fmin(a.x, b.x) > box[2] ||
+                    fmax(a.y, b.y) < box[1] || fmin(a.y, b.y) > box[3])
+                    continue;
+                seg_depth(rx, a, b, depth_at(rx, a), depth_at(rx, b), tol, 0, &best, inside);
+            }
+        }
+        return best;
+    }
+    {
+        const amp_polyset *P = &sl->layers[j].polys;
+        size_t r, k;
+        for (r = 0; r < P->nrings; r++) {
+            const amp_vec2 *p = amp_polyset_ring(P, r);
+            size_t n = P->rings[r].n;
+            for (k = 0; k < n; k++) {
+                amp_vec2 a = p[k], b = p[(k + 1) % n];
+                if (fmax(a.x, b.x) < box[0] || fmin(a.x, b.x) > box[2] || fmax(a.y, b.y) < box[1] ||
+                    fmin(a.y, b.y) > box[3])
+                    continue;
+                seg_depth(rx, a, b, depth_at(rx, a), depth_at(rx, b), tol, 0, &best, inside);
+            }
+        }
+    }
+    return best;
+}
+
+/*
+ * How deep the uncovered points reach from the neighbours' sections: an
+ * uncovered point is outside some section L_j of the window, so the
+ * uncovered set's boundary inside R lies on the edges of those sections,
+ * and its deepest point is on them (or at a deeper point inside it, which
+ * the caller's grid looks for). -1 when a section of the window has no edge
+ * in R and leaves @p in (a point of R) outside: R is uncovered whole.
+ */
+static double edge_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyindex *rx,
+                         const double box[4], amp_vec2 in, double below, double above, double tol, int *any)
+{
+    double z = sl->layers[li].z_print, best = 0.0;
+    size_t j;
+    *any = 0;
+    for (j = 0; j < sl->nlayers; j++) {
+        double dz = sl->layers[j].z_print - z, d;
+        int inside;
+        if (j == li || (dz < 0 && -dz >= below - 1e-9) || (dz > 0 && dz >= above - 1e-9))
+            continue;
+        d = layer_depth(sl, ix, j, rx, box, tol, &inside);
+        if (!inside && (ix ? amp_polyindex_contains(&ix[j], in) : amp_polyset_contains(&sl->layers[j].polys, in, 0.0)) != 1)
+            return -1;
+        *any |= inside;
+        best = fmax(best, d);
+    }
+    return best;
+}
+
 double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, size_t li, const amp_polyset *R,
                                 double below, double above, double step)
 {
-    double depth = -1;
-    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y;
+    double depth = -1, deep = -1, band, tol, box[4];
+    double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y, step0 = step;
     size_t r, k;
     amp_polyindex rx;
-    int have;
+    amp_vec2 in;
+    int have, any;
     if (!(below > 0) && !(above > 0))
         return -1;
+    if (R->nrings == 0)
+        return -1;
+    in = amp_polyset_ring(R, 0)[0];
     for (r = 0; r < R->nrings; r++) {
         const amp_vec2 *p = amp_polyset_ring(R, r);
         size_t n = R->rings[r].n, stride = n / 64 + 1;
@@ -62,6 +171,9 @@ double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, s
                 depth = 0;
         }
     }
+    /* next to the bed or the top every point is uncovered: the whole region is solid */
+    if (window_open(sl, li, below, above))
+        return fmax(x1 - x0, y1 - y0) + step;
     /* a grid inside: a hole opening above the middle of the region (at
      * most about 16 x 16 points: the cost stays linear in the part); R's
      * row index answers them (a full scan of R per point was 8 % of a
@@ -71,12 +183,32 @@ double amp_cp_region_skin_depth(const amp_slices *sl, const amp_polyindex *ix, s
     for (y = y0 + 0.5 * step; y < y1; y += step)
         for (x = x0 + 0.5 * step; x < x1; x += step) {
             amp_vec2 q = amp_v2(x, y);
-            int in = have ? amp_polyindex_contains(&rx, q) : amp_polyset_contains(R, q, 0.0);
-            if (in == 1 && !covered(sl, ix, li, q, below, above))
-                depth = fmax(depth, have ? amp_polyindex_dist(&rx, q) : amp_polyset_boundary_dist(R, q));
+            int inr = have ? amp_polyindex_contains(&rx, q) : amp_polyset_contains(R, q, 0.0);
+            if (inr == 1) {
+                double d = have ? amp_polyindex_dist(&rx, q) : amp_polyset_boundary_dist(R, q);
+                in = q;
+                if (!covered(sl, ix, li, q, below, above))
+                    deep = fmax(deep, d);
+            }
         }
-    if (have)
-        amp_polyindex_free(&rx);
-    /* a sample stands for the cell of `step` around it */
-    return depth < 0 ? -1 : depth + step;
+    if (!have) /* no index: the coarse answer (a sample stands for the cell of `step` around it) */
+        return fmax(depth, deep) < 0 ? -1 : fmax(depth, deep) + step;
+    /* the band as deep as the uncovered points reach, measured on the neighbours' edges (a sampled depth
+     * plus the grid's spacing made a band 6 mm wide on a 100 mm part whose slopes leave a rim of 1 mm) */
+    box[0] = x0;
+    box[1] = y0;
+    box[2] = x1;
+    box[3] = y1;
+    tol = 0.25 * step0;
+    band = edge_depth(sl, ix, li, &rx, box, in, below, above, tol, &any);
+    amp_polyindex_free(&rx);
+    if (band < 0) /* a section of the window misses R whole */
+        return fmax(x1 - x0, y1 - y0) + step;
+    if (depth < 0 && deep < 0 && !any)
+        return -1;
+    /* an uncovered grid sample deeper than every edge: a hole opening above the middle; a sample stands for
+     * the cell of `step` around it */
+    if (deep > band)
+        return deep + step;
+    return fmax(band + tol, step0);
 }
