@@ -26,9 +26,11 @@ typedef struct lctx {
     amp_polyset isl, ins, reg;
     amp_polyset bin, core, band, reg2; /* a skin band split off a region (skin_band) */
     int no_bands;                      /* 1: skin regions whole (an island printed again) */
+    double reg_shift;                  /* extra inset of R̃ (mm; +-r/20 when an island is printed again) */
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
     amp_pathset bare_skin; /* those of its solid regions */
+    amp_pathset retry;     /* an island made again (shift_retry) */
     amp_vec2 at;     /* where the nozzle is (end of the last stroke) */
     int have_at;
     unsigned char *done; /* islands of the layer already printed */
@@ -286,7 +288,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
     amp_pathset_clear(&c->bare_skin);
     /* R̃: inside the perimeter bead (2r) and one bead radius more */
     if (rc == AMP_OK)
-        rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius, 0, &c->ins, err);
+        rc = amp_polyset_inset(&c->isl, dp + 2 * o->radius + c->reg_shift, 0, &c->ins, err);
     for (q = 0; q < c->ins.nislands && rc == AMP_OK; q++) {
         int skin;
         double w;
@@ -461,6 +463,51 @@ static double overlap_cap(amp_pathset *ps, const amp_polyset *isl, double h)
     return v0 - v;
 }
 
+/*
+ * An island the verifier still rejects hangs on a degenerate touch (the torus
+ * meshed at 1.3 mm, 0.2 mm layers, r 0.2: at z 3.4 the region's ring runs
+ * within 0.001 mm of a lattice line, and the patch edge from the ring's
+ * crossing back to a lattice vertex crosses the ring stretch before it). Such
+ * a touch does not survive a small move: the island is made again with its
+ * infill region R̃ moved in by r/20, then out by r/20 (the beads stay within
+ * the part: R̃ lies 3r inside it, the lattice's beads reach r beyond it), the
+ * first that passes kept; with neither, the first try stays (the caller's
+ * final check reports it). Counted in shift_retries.
+ */
+static void shift_retry(lctx *w, ijob *j, double h)
+{
+    static const double shift[2] = {0.05, -0.05};
+    int k, bands = j->s.band_retries > 0;
+    for (k = 0; k < 2; k++) {
+        amp_contpath_stats s;
+        memset(&s, 0, sizeof s);
+        amp_pathset_clear(&w->retry);
+        w->reg_shift = shift[k] * w->o->radius;
+        w->no_bands = bands;
+        j->rc = island_once(w, j->li, h, &w->retry, 0, &j->nobj, &s, &j->err);
+        w->reg_shift = 0.0;
+        w->no_bands = 0;
+        if (j->rc != AMP_OK)
+            return;
+        if (island_clean(w->o, &w->retry, 0, &w->isl)) {
+            amp_pathset *t = &j->ps;
+            amp_pathset_clear(t);
+            j->rc = amp_pathset_append(t, &w->retry, &j->err);
+            s.band_retries = (size_t)bands;
+            s.shift_retries = 1;
+            j->s = s;
+            return;
+        }
+    }
+    /* neither passes: the first try again (island_once is deterministic), for the caller's check to name */
+    amp_pathset_clear(&j->ps);
+    memset(&j->s, 0, sizeof j->s);
+    w->no_bands = bands;
+    j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
+    w->no_bands = 0;
+    j->s.band_retries = (size_t)bands;
+}
+
 /* The island of job j with the scratch of work context w. An island printed
  * with skin bands whose paths the caller's verifier (o->verify_stroke)
  * rejects is made again with its skin regions whole (a band's rings come
@@ -484,6 +531,8 @@ static void island_job(lctx *w, ijob *j)
         j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
         w->no_bands = 0;
     }
+    if (j->rc == AMP_OK && w->o->verify_stroke && !island_clean(w->o, &j->ps, 0, &w->isl))
+        shift_retry(w, j, h);
     if (j->rc == AMP_OK && w->o->overlap_cap) {
         double cut = overlap_cap(&j->ps, &w->isl, h);
         j->s.narrowed_islands += cut > 0.0;
@@ -528,6 +577,7 @@ static void stats_add(amp_contpath_stats *s, const amp_contpath_stats *d)
     s->corners_touched += d->corners_touched;
     s->narrowed_islands += d->narrowed_islands;
     s->narrowed_volume += d->narrowed_volume;
+    s->shift_retries += d->shift_retries;
 }
 
 /* Layer li from its islands' jobs (jobs[k]: island k): the islands nearest
@@ -587,7 +637,9 @@ static void scratch_init(lctx *w, const amp_allocator *al)
     amp_pathset_init(&w->tmp, al);
     amp_pathset_init(&w->bare, al);
     amp_pathset_init(&w->bare_skin, al);
+    amp_pathset_init(&w->retry, al);
     w->no_bands = 0;
+    w->reg_shift = 0.0;
 }
 
 static void scratch_free(lctx *w)
@@ -602,6 +654,7 @@ static void scratch_free(lctx *w)
     amp_pathset_free(&w->tmp);
     amp_pathset_free(&w->bare);
     amp_pathset_free(&w->bare_skin);
+    amp_pathset_free(&w->retry);
 }
 
 /* Lattice t: K̂ (t = 0), the solid one along x (1) or y (2), and its edge list. */

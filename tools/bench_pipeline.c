@@ -255,8 +255,7 @@ static int planar(double layer, double *t, size_t *strokes, size_t *bytes)
     amp_pathset_init(&ps, NULL);
     so.layer = layer;
     so.first_layer = 0;
-    amp_contpath_opts_default(&co, 0.5);
-    co.verify_stroke = amp_check_path_stroke;
+    amp_contpath_opts_default(&co, 0.5); /* no per-island verifier: the tool's first pass */
     amp_gcode_opts_default(&go, AMP_FLAVOR_MARLIN);
     ok = amp_mesh_model("helix", 0, &m, NULL) == AMP_OK && amp_slice_mesh(&m, &so, &sl, NULL) == AMP_OK &&
          amp_contpath_layers(&sl, &co, &ps, &st, NULL) == AMP_OK &&

@@ -107,8 +107,7 @@ static int scaling(cli_json *j, int quick)
             m.verts[v] = amp_v3(m.verts[v].x * scales[i] / 4, m.verts[v].y * scales[i] / 4, m.verts[v].z / 4);
         so.layer = 0.5;
         so.first_layer = 0;
-        amp_contpath_opts_default(&o, 0.225);
-        o.verify_stroke = amp_check_path_stroke;
+        amp_contpath_opts_default(&o, 0.225); /* no per-island verifier: the tool's first pass */
         t0 = cli_now();
         if (rc == CLI_OK && (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK ||
                              amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK))
@@ -285,8 +284,7 @@ int bench_slice(cli_json *j, int quick)
         return CLI_FAILED;
     so.layer = quick ? 1.0 : 0.2;
     so.first_layer = 0;
-    amp_contpath_opts_default(&o, 0.25);
-    o.verify_stroke = amp_check_path_stroke;
+    amp_contpath_opts_default(&o, 0.25); /* no per-island verifier: the tool's first pass */
     o.cell = 4.0;
     t0 = cli_now();
     if (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK)

@@ -255,6 +255,7 @@ static void json_stats(const amp_contpath_stats *st, const amp_pathset *ps, size
     cli_json_int(&j, "skin_regions", (long long)st->skin_regions);
     cli_json_int(&j, "skin_bands", (long long)st->skin_bands);
     cli_json_int(&j, "band_retries", (long long)st->band_retries);
+    cli_json_int(&j, "shift_retries", (long long)st->shift_retries);
     cli_json_int(&j, "strokes", (long long)st->strokes);
     cli_json_int(&j, "multi_stroke_regions", (long long)st->multi_stroke);
     cli_json_int(&j, "perimeter_loops", (long long)st->perimeter_loops);

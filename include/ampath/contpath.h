@@ -82,7 +82,9 @@ typedef struct amp_contpath_opts {
     amp_contpath_verify_fn verify_stroke; /**< NULL (default): no retry. Else the safety net of the skin bands:
                                 an island printed with skin bands whose paths this verifier rejects (called
                                 with tol 1e-6, rep and err NULL) is printed again with its skin regions whole
-                                (counted in band_retries). Set it to amp_check_path_stroke (check.h) for the
+                                (counted in band_retries); every island it then still rejects is printed
+                                again with its infill region moved in, then out, by r/20 (shift_retries), so it
+                                is called on every island. Set it to amp_check_path_stroke (check.h) for the
                                 behaviour of the ampath tool. With OpenMP it is called from the threads that
                                 make the islands: it must be thread-safe (amp_check_path_stroke is). */
     /** Optional progress report of amp_contpath_layers() (fraction 0..1 of the layers, from the calling
@@ -147,6 +149,8 @@ typedef struct amp_contpath_stats {
     size_t narrowed_islands; /**< islands whose beads overlapped by more than their slab (section area x
                                   h): narrowed by one factor of their cross-section (opts.overlap_cap) */
     double narrowed_volume;  /**< mm^3 of bead taken off by that narrowing */
+    size_t shift_retries;    /**< islands the verifier still rejected, printed again with their infill region
+                                  moved in or out by r/20 (a degenerate touch of its ring and the lattice) */
 } amp_contpath_stats;
 
 /**

@@ -235,7 +235,7 @@ class amp_contpath_stats(Structure):
                                            "support_length", "unprinted_length")]
                 + [(n, c_size_t) for n in ("support_corners", "corners_left_out", "neck_islands", "skin_bands",
                                            "band_retries", "corners_touched", "narrowed_islands")]
-                + [("narrowed_volume", c_double)])
+                + [("narrowed_volume", c_double), ("shift_retries", c_size_t)])
 
 
 class amp_stroke_report(Structure):
