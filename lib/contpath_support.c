@@ -9,8 +9,11 @@
  * that every point of p̃ is within r of a corner). From each centre ṽ' the
  * perpendicular reaches the outer boundary at a, 2r away (R̃ is the inset by
  * 3r, the perimeter bead's centre line by r): the corner is the two edges
- * from ṽ' to the perimeter at a ∓ w, w = r or less so that the corners of
- * a stretch do not overlap (Fig. 5c), and the perimeter loop runs
+ * from ṽ' to the perimeter at a ∓ w, w = r/2 or less so that the corners of
+ * a stretch do not overlap (Fig. 5c takes w = r: the circle of radius r
+ * around a; the perimeter skips the base, so the part's edge in front of it
+ * was left bare 0.41 r deep over 2r, a notch in the outer wall at every
+ * tooth; at r/2 it is 0.12 r deep over r), and the perimeter loop runs
  * through them (Fig. 5d: neighbouring corners joined along the boundary), so
  * the corners are part of the island's one stroke. A corner whose edges
  * would cross the island's other paths, or overlap its neighbour, is left
@@ -489,8 +492,9 @@ static amp_status stretch_corners(corner_ctx *c, const amp_pathset *bare, amp_er
         double L, hw;
         int closed;
         m = centres(b, n, c->r, &L, &closed);
-        /* half the base: the corners of one stretch must not overlap */
-        hw = m ? fmin(c->r, 0.45 * L / (double)(closed ? m : m + 1)) : c->r;
+        /* half the base: r/2 (the notch in the part's edge, see the top), less where the corners of one
+         * stretch would overlap */
+        hw = m ? fmin(0.5 * c->r, 0.45 * L / (double)(closed ? m : m + 1)) : 0.5 * c->r;
         for (k = 0; k < m && rc == AMP_OK; k++) {
             double at = closed ? L * (double)k / (double)m : L * (double)(k + 1) / (double)(m + 1);
             rc = place_corner(c, poly_at(b, n, at), hw, err);

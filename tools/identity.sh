@@ -6,9 +6,10 @@
 #   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
 #   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
 # Only products are hashed (not the --json figures, which hold timings).
-# tools/identity.ref holds the listing of the current behaviour (renewed at stop 30: skin bands are as deep
-# as the neighbouring sections' edges reach into a region, not a grid cell deeper, so the twisted bridge's
-# continuous paths, their G-code and picture changed, nothing else; at stop 29: slice --continuous
+# tools/identity.ref holds the listing of the current behaviour (renewed twice at stop 30: skin bands are as
+# deep as the neighbouring sections' edges reach into a region, not a grid cell deeper, then the support
+# corners' bases are r wide, not 2r, so the twisted bridge's continuous paths, their G-code and picture
+# changed, nothing else; at stop 29: slice --continuous
 # narrows the beads of an island that hold more plastic than its slab, so the twisted bridge's continuous
 # paths, their G-code and picture changed, nothing else; at stop 28: order and mdr merge a
 # cut point within a nanometre of a vertex into it, so the helix's ordered, mdr and G-code files changed; then
