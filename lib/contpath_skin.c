@@ -129,12 +129,17 @@ static double edge_depth(const amp_slices *sl, const amp_polyindex *ix, size_t l
                          const double box[4], amp_vec2 in, double below, double above, double tol, int *any)
 {
     double z = sl->layers[li].z_print, best = 0.0;
-    size_t j;
+    size_t lo = li, hi = li + 1, j;
     *any = 0;
-    for (j = 0; j < sl->nlayers; j++) {
-        double dz = sl->layers[j].z_print - z, d;
+    /* the window as covered() walks it: down while within below, up while within above */
+    while (lo > 0 && z - sl->layers[lo - 1].z_print < below - 1e-9)
+        lo--;
+    while (hi < sl->nlayers && sl->layers[hi].z_print - z < above - 1e-9)
+        hi++;
+    for (j = lo; j < hi; j++) {
+        double d;
         int inside;
-        if (j == li || (dz < 0 && -dz >= below - 1e-9) || (dz > 0 && dz >= above - 1e-9))
+        if (j == li)
             continue;
         d = layer_depth(sl, ix, j, rx, box, tol, &inside);
         if (!inside && (ix ? amp_polyindex_contains(&ix[j], in) : amp_polyset_contains(&sl->layers[j].polys, in, 0.0)) != 1)
