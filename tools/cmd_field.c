@@ -146,14 +146,22 @@ static int load_sweep(const char *along, double side, amp_field *f, amp_sweep **
     return CLI_OK;
 }
 
-/* A closed mesh and its BVH, or nothing when @p path is NULL. */
+/* A mesh and its BVH, or nothing when @p path is NULL. A mesh that is not closed is used all the same (the
+ * inside tests take the generalized winding number, which a hole changes only near it), with a warning, as
+ * `slice` gives one. */
 static amp_status load_mesh(const char *path, amp_mesh *m, amp_bvh **b, amp_error *err)
 {
+    amp_mesh_edge_report er;
     amp_status st;
     if (!path)
         return AMP_OK;
     if ((st = amp_mesh_read_stl_file(m, path, err)) != AMP_OK || (st = slicetool_outward(m, NULL, err)) != AMP_OK)
         return st;
+    if (amp_mesh_edges(m, &er, NULL) == AMP_OK && !er.closed)
+        fprintf(stderr,
+                "ampath field: warning: %s is not closed (%lu boundary, %lu non-manifold edges): inside is where "
+                "its surface winds around a point at least half a turn (generalized winding number)\n",
+                path, (unsigned long)er.boundary, (unsigned long)er.nonmanifold);
     return amp_bvh_build(b, m, err);
 }
 
