@@ -385,13 +385,14 @@ START_TEST(helix_support_keeps_every_fragment_and_holds_every_path)
 END_TEST
 
 /* field box -> order -> mdr -> support [--no-pads] of @p stl; returns the support's JSON in js. */
-static void field_job(const char *stl, const char *tag, const char *pads, char *js, size_t cap, const char **res)
+static void field_job(const char *stl, const char *tag, double spacing, const char *pads, char *js, size_t cap,
+                      const char **res)
 {
     char args[2048], name[64];
     const char *cov, *ord, *mdr;
     snprintf(name, sizeof name, "%s-f.amp", tag);
     cov = fx_tmp(name);
-    snprintf(args, sizeof args, "field %s --field box --spacing 1 -o %s", stl, cov);
+    snprintf(args, sizeof args, "field %s --field box --spacing %g -o %s", stl, spacing, cov);
     ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
     snprintf(name, sizeof name, "%s-o.amp", tag);
     ord = fx_tmp(name);
@@ -404,7 +405,7 @@ static void field_job(const char *stl, const char *tag, const char *pads, char *
     snprintf(name, sizeof name, "%s-s%s.amp", tag, pads);
     *res = fx_tmp(name);
     snprintf(args, sizeof args, "support %s --mesh %s %s --json -o %s", mdr, stl, pads, *res);
-    ck_assert_int_eq(fx_run_tool(args, js, cap), 0);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, js, cap), 0); /* the JSON, then stderr */
     remove(cov);
     remove(ord);
     remove(mdr);
@@ -434,12 +435,13 @@ START_TEST(pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside)
         snprintf(stl, sizeof stl, "%s", fx_tmp(args)); /* fx_tmp's buffers are reused */
         ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
         amp_mesh_free(&m);
-        field_job(stl, tags[k], "--no-pads", js, sizeof js, &res);
+        field_job(stl, tags[k], 1.0, "--no-pads", js, sizeof js, &res);
         ck_assert_msg(json_num(js, "pads") == 0 && json_num(js, "unheld_paths") > 0, "%s: %s", tags[k], js);
         snprintf(args, sizeof args, "check %s --mesh %s --json", res, stl);
         ck_assert_int_eq(fx_run_tool(args, NULL, 0), 1);
         remove(res);
-        field_job(stl, tags[k], "", js, sizeof js, &res);
+        field_job(stl, tags[k], 1.0, "", js, sizeof js, &res);
+        ck_assert_msg(!strstr(js, "do not rest on each other"), "%s: %s", tags[k], js);
         ck_assert_msg(json_num(js, "pads") > 0 && json_num(js, "unheld_paths") == 0, "%s: %s", tags[k], js);
         ck_assert_msg(json_num(js, "conflicts") == 0, "%s: %s", tags[k], js);
         snprintf(args, sizeof args, "check %s --mesh %s --json", res, stl);
@@ -447,6 +449,30 @@ START_TEST(pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside)
         remove(res);
         remove(stl);
     }
+}
+END_TEST
+
+/* A covering whose rows are spaced wider than their beads (box field at spacing 3, mdr's nominal 0.5) does
+ * not rest on itself: its pads come to most of its length, and `support` says so on stderr (at spacing 1,
+ * pads a few millimetres, nothing said). */
+START_TEST(support_warns_when_the_rows_do_not_rest_on_each_other)
+{
+    char js[16384], stl[1024];
+    const char *res;
+    amp_mesh m;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_sphere(&m, amp_v3(0, 0, 8), 8, 48, 24), AMP_OK);
+    snprintf(stl, sizeof stl, "%s", fx_tmp("wide.stl"));
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    amp_mesh_free(&m);
+    field_job(stl, "wide", 3.0, "", js, sizeof js, &res);
+    ck_assert_msg(json_num(js, "pads") > 0 && strstr(js, "do not rest on each other"), "%s", js);
+    remove(res);
+    field_job(stl, "wide", 1.0, "", js, sizeof js, &res);
+    ck_assert_msg(json_num(js, "pads") > 0 && !strstr(js, "do not rest on each other"), "%s", js);
+    remove(res);
+    remove(stl);
 }
 END_TEST
 
@@ -640,6 +666,7 @@ static Suite *support_suite(void)
     tcase_add_test(tc, support_command_refuses_a_file_without_paths);
     tcase_add_test(tc, support_from_a_trivariate_matches_its_boundary_mesh);
     tcase_add_test(tc, helix_support_keeps_every_fragment_and_holds_every_path);
+    tcase_add_test(tc, support_warns_when_the_rows_do_not_rest_on_each_other);
     tcase_add_test(tc, pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside);
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
     tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);

@@ -73,6 +73,19 @@ static void print_text(const char *input, const amp_support_stats *st, const amp
     }
 }
 
+/* Pads are meant for the first rows over a shallow underside; pads a tenth of the object's length and more
+ * mean its rows do not rest on each other (a covering spaced wider than its beads: the box field at
+ * spacing 3 with mdr's nominal 0.5 on PrusaSlicer's bunny made 52 m of pads for 113 m of object). */
+static void warn_pads(const amp_support_stats *st, double object_length)
+{
+    if (st->pad_length > 0.1 * object_length && object_length > 0.0)
+        fprintf(stderr,
+                "ampath support: warning: %lu pads, %.0f mm (%.0f %% of the object's %.0f mm): the object's paths do "
+                "not rest on each other; are they spaced wider than their beads (the covering's spacing against "
+                "mdr's --nominal radius)?\n",
+                (unsigned long)st->pads, st->pad_length, 100.0 * st->pad_length / object_length, object_length);
+}
+
 int cmd_support(int argc, char **argv)
 {
     const char *pos[1], *output = NULL, *mesh = NULL, *tri = NULL;
@@ -158,6 +171,7 @@ int cmd_support(int argc, char **argv)
         print_json(pos[0], tri, mesh, &o, &st, out.npaths, &hr, cli_now() - t0);
     else
         print_text(pos[0], &st, &hr);
+    warn_pads(&st, amp_pathset_length(&ps, AMP_ROLE_OBJECT));
     rc = CLI_OK;
 done:
     amp_hold_report_free(&hr);
