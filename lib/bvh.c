@@ -801,12 +801,87 @@ static amp_status piece_flush(piece *pc, double min_len, amp_role role, amp_path
     return st;
 }
 
+/* The clipper's state along one polyline: the piece being built and whether it is open. */
+typedef struct clipper {
+    piece pc;
+    int open;
+    double min_len;
+    amp_role role;
+    amp_pathset *out;
+} clipper;
+
+/* The stretch [s0, s1] of segment a + t d (radii ra .. rb) is inside (@p in) or not: extend or start the
+ * open piece, or end it. */
+static amp_status clip_run(clipper *cl, int in, amp_vec3 a, amp_vec3 d, double ra, double rb, double s0, double s1,
+                           amp_error *err)
+{
+    amp_status st = AMP_OK;
+    if (!in) {
+        if (cl->open) {
+            cl->open = 0;
+            return piece_flush(&cl->pc, cl->min_len, cl->role, cl->out, err);
+        }
+        return AMP_OK;
+    }
+    if (!cl->open) {
+        st = piece_push(&cl->pc, s0 == 0.0 ? a : amp_v3_madd(a, d, s0), ra + s0 * (rb - ra), err);
+        cl->open = 1;
+    }
+    if (st == AMP_OK)
+        st = piece_push(&cl->pc, s1 == 1.0 ? amp_v3_add(a, d) : amp_v3_madd(a, d, s1), ra + s1 * (rb - ra), err);
+    return st;
+}
+
+/* Where between t_in (inside) and t_out (outside) segment a + t d crosses winding 1/2 (open meshes: the
+ * winding number changes continuously near a hole), to a millionth of the segment: the last point found
+ * inside, so that the piece kept ends where the winding number says inside (a check of its vertices agrees). */
+static double half_crossing(const amp_bvh *b, amp_vec3 a, amp_vec3 d, double t_in, double t_out)
+{
+    int k;
+    for (k = 0; k < 20; k++) {
+        double m = 0.5 * (t_in + t_out);
+        if (winding_of(b, amp_v3_madd(a, d, m)) >= 0.5)
+            t_in = m;
+        else
+            t_out = m;
+    }
+    return t_in;
+}
+
+/* One stretch between surface crossings, classified by its middle; on an open mesh also by its ends that are
+ * polyline vertices (no surface there), split where the winding number crosses 1/2 on the way, so that no
+ * kept vertex lies where the winding number says outside. */
+static amp_status clip_stretch(const amp_bvh *b, clipper *cl, amp_vec3 a, amp_vec3 d, double ra, double rb, double s0,
+                               double s1, int end0, int end1, double *wlast, amp_error *err)
+{
+    double tm = 0.5 * (s0 + s1), c0 = s0, c1 = s1;
+    int in, in0, in1;
+    amp_status st = AMP_OK;
+    *wlast = winding_of(b, amp_v3_madd(a, d, tm));
+    in = *wlast >= 0.5;
+    if (b->closed || (!end0 && !end1))
+        return clip_run(cl, in, a, d, ra, rb, s0, s1, err);
+    in0 = end0 ? winding_of(b, amp_v3_madd(a, d, s0)) >= 0.5 : in;
+    in1 = end1 ? winding_of(b, amp_v3_madd(a, d, s1)) >= 0.5 : in;
+    if (in0 != in)
+        c0 = in ? half_crossing(b, a, d, tm, s0) : half_crossing(b, a, d, s0, tm);
+    if (in1 != in)
+        c1 = in ? half_crossing(b, a, d, tm, s1) : half_crossing(b, a, d, s1, tm);
+    if (c0 > s0)
+        st = clip_run(cl, in0, a, d, ra, rb, s0, c0, err);
+    if (st == AMP_OK)
+        st = clip_run(cl, in, a, d, ra, rb, c0, c1, err);
+    if (st == AMP_OK && c1 < s1)
+        st = clip_run(cl, in1, a, d, ra, rb, c1, s1, err);
+    return st;
+}
+
 amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n, double min_len, amp_role role,
                                  amp_pathset *out, amp_error *err)
 {
-    piece pc;
+    clipper cl;
     size_t i;
-    int open = 0, known = 0, skipped = 0;
+    int known = 0, skipped = 0;
     double wlast = 0.0;
     amp_status st = AMP_OK;
     if (!b || !out || (n > 0 && !v))
@@ -816,8 +891,11 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
     for (i = 0; i < n; i++)
         if (!amp_v3_finite(v[i].p) || !isfinite(v[i].r))
             return amp_fail(err, AMP_ERR_ARG, 0, "amp_bvh_clip_polyline: vertex %lu is not finite", (unsigned long)i);
-    memset(&pc, 0, sizeof pc);
-    pc.alloc = b->alloc;
+    memset(&cl, 0, sizeof cl);
+    cl.pc.alloc = b->alloc;
+    cl.min_len = min_len;
+    cl.role = role;
+    cl.out = out;
     for (i = 0; i + 1 < n && st == AMP_OK; i++) {
         amp_vec3 a = v[i].p, c = v[i + 1].p, d = amp_v3_sub(c, a);
         amp_bvh_hit *h = NULL;
@@ -829,48 +907,32 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
         if (st != AMP_OK)
             break;
         /*
-         * Without a crossing the winding number changes only continuously
-         * (near holes). While the last value was clearly 0 or 1, keep the
-         * state and re-check every 8th segment; otherwise check every one.
+         * Without a crossing the winding number of a closed mesh keeps its
+         * value: while the last value was clearly 0 or 1, keep the state and
+         * re-check every 8th segment. An open mesh's changes continuously
+         * near its holes: every segment is looked at, ends included.
          */
-        if (nh == 0 && known && fabs(wlast - 0.5) > 0.45 && ++skipped < 8) {
-            if (open)
-                st = piece_push(&pc, c, v[i + 1].r, err);
+        if (nh == 0 && b->closed && known && fabs(wlast - 0.5) > 0.45 && ++skipped < 8) {
+            if (cl.open)
+                st = piece_push(&cl.pc, c, v[i + 1].r, err);
             continue;
         }
         skipped = 0;
         /* breakpoints 0 < t_1 <= ... < 1, then one classification per sub-segment */
         for (k = 0; k <= nh && st == AMP_OK; k++) {
             double s1 = k < nh ? h[k].t : 1.0;
-            amp_vec3 mid;
-            int in;
             if (s1 > 1.0)
                 s1 = 1.0;
             if (s1 - s0 <= 1e-12)
                 continue; /* a duplicate hit on a shared edge, or a hit at a vertex */
-            mid = amp_v3_madd(a, d, 0.5 * (s0 + s1));
-            wlast = winding_of(b, mid);
+            st = clip_stretch(b, &cl, a, d, v[i].r, v[i + 1].r, s0, s1, s0 == 0.0, k == nh, &wlast, err);
             known = 1;
-            in = wlast >= 0.5;
-            if (in) {
-                if (!open) {
-                    amp_vec3 p0 = s0 == 0.0 ? a : amp_v3_madd(a, d, s0);
-                    st = piece_push(&pc, p0, v[i].r + s0 * (v[i + 1].r - v[i].r), err);
-                    open = 1;
-                }
-                if (st == AMP_OK)
-                    st = piece_push(&pc, s1 == 1.0 ? c : amp_v3_madd(a, d, s1), v[i].r + s1 * (v[i + 1].r - v[i].r),
-                                    err);
-            } else if (open) {
-                st = piece_flush(&pc, min_len, role, out, err);
-                open = 0;
-            }
             s0 = s1;
         }
         amp_bvh_hits_free(b, h);
     }
-    if (st == AMP_OK && open)
-        st = piece_flush(&pc, min_len, role, out, err);
-    amp_free(b->alloc, pc.v);
+    if (st == AMP_OK && cl.open)
+        st = piece_flush(&cl.pc, min_len, role, out, err);
+    amp_free(b->alloc, cl.pc.v);
     return st;
 }
