@@ -122,15 +122,15 @@ int amp_polyindex_winding(const amp_polyindex *ix, amp_vec2 q)
     return w;
 }
 
-double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q)
+double amp_polyindex_dist_within(const amp_polyindex *ix, amp_vec2 q, double cap)
 {
-    double best = HUGE_VAL;
+    double best = cap < HUGE_VAL ? cap * cap : HUGE_VAL;
     long rq, lo, hi, d;
     size_t k;
     if (!ix->item || ix->P->npts == 0)
-        return HUGE_VAL;
+        return cap;
     rq = row_of(ix, q.y);
-    /* rows outward from q's row until the next row is farther than the best */
+    /* rows outward from q's row until the next row is farther than the best (or the cap) */
     for (d = 0; d <= ix->nrow; d++) {
         double gap;
         lo = rq - d;
@@ -147,5 +147,7 @@ double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q)
         for (k = hi < ix->nrow && d > 0 ? ix->start[hi] : 0; hi < ix->nrow && d > 0 && k < ix->start[hi + 1]; k++)
             best = fmin(best, seg_dist2(q, ix->a[ix->item[k]], ix->b[ix->item[k]]));
     }
-    return sqrt(best);
+    return best < HUGE_VAL ? fmin(sqrt(best), cap) : cap;
 }
+
+double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q) { return amp_polyindex_dist_within(ix, q, HUGE_VAL); }

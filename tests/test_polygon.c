@@ -349,6 +349,13 @@ START_TEST(row_index_answers_as_the_plain_scans)
         ck_assert_msg(fabs(amp_polyset_boundary_dist(&P, q) - amp_polyindex_dist(&ix, q)) <= 1e-12,
                       "point (%.17g, %.17g): distance %.17g vs %.17g", q.x, q.y, amp_polyset_boundary_dist(&P, q),
                       amp_polyindex_dist(&ix, q));
+        /* the search bounded by a cap answers min(cap, distance) */
+        {
+            double cap = 0.5 * (double)(k % 7), d = amp_polyset_boundary_dist(&P, q);
+            ck_assert_msg(fabs(amp_polyindex_dist_within(&ix, q, cap) - fmin(cap, d)) <= 1e-12,
+                          "point (%.17g, %.17g), cap %g: %.17g vs %.17g", q.x, q.y, cap,
+                          amp_polyindex_dist_within(&ix, q, cap), fmin(cap, d));
+        }
         nin += c0 == 1;
         non += c0 == -1;
     }
@@ -362,6 +369,7 @@ START_TEST(row_index_answers_as_the_plain_scans)
     ck_assert_int_eq(amp_polyindex_build(&ix, &P, NULL), AMP_OK);
     ck_assert_int_eq(amp_polyindex_contains(&ix, amp_v2(0, 0)), 0);
     ck_assert(amp_polyindex_dist(&ix, amp_v2(0, 0)) == HUGE_VAL);
+    ck_assert(amp_polyindex_dist_within(&ix, amp_v2(0, 0), 2.5) == 2.5);
     amp_polyindex_free(&ix);
     amp_polyset_free(&P);
 }

@@ -226,9 +226,14 @@ static void side_by_side(cli_json *j, const char *name, const amp_mesh *m, doubl
                theirs > 0 ? "ok" : "failed");
 }
 
+/* The real parts of the side by side: PrusaSlicer's own shapes as Debian installs them (its 107 mm bunny is
+ * the one part above the target), when present. */
+static const char *const prusa_shapes[] = {"bunny", "torus", "M3x10_screw"};
+#define PRUSA_SHAPES "/usr/share/PrusaSlicer/shapes/"
+
 /* Side by side with PrusaSlicer (the speed target: slice --continuous +
- * gcode in at most half PrusaSlicer's wall time) on the built-in meshes and the
- * bench's bumpy torus, when `prusa-slicer` is installed (`make bench`
+ * gcode in at most half PrusaSlicer's wall time) on the built-in meshes, the
+ * bench's bumpy torus and PrusaSlicer's shapes, when `prusa-slicer` is installed (`make bench`
  * installs Debian's package); skipped with a message otherwise. */
 static void prusa(cli_json *j, const amp_mesh *torus, int quick)
 {
@@ -252,6 +257,15 @@ static void prusa(cli_json *j, const amp_mesh *torus, int quick)
         amp_mesh_init(&m, NULL);
         if (amp_mesh_model(amp_mesh_model_name(k), 0, &m, NULL) == AMP_OK)
             side_by_side(j, amp_mesh_model_name(k), &m, &worst, quick);
+        amp_mesh_free(&m);
+    }
+    for (k = 0; !quick && k < sizeof prusa_shapes / sizeof *prusa_shapes; k++) {
+        char path[256];
+        amp_mesh m;
+        amp_mesh_init(&m, NULL);
+        snprintf(path, sizeof path, PRUSA_SHAPES "%s.stl", prusa_shapes[k]);
+        if (amp_mesh_read_stl_file(&m, path, NULL) == AMP_OK)
+            side_by_side(j, prusa_shapes[k], &m, &worst, quick);
         amp_mesh_free(&m);
     }
     if (j) {

@@ -140,6 +140,9 @@ int amp_polyindex_contains(const amp_polyindex *ix, amp_vec2 q);
 int amp_polyindex_winding(const amp_polyindex *ix, amp_vec2 q);
 /** As amp_polyset_boundary_dist(P, q): distance to the nearest edge (HUGE_VAL when empty). */
 double amp_polyindex_dist(const amp_polyindex *ix, amp_vec2 q);
+/** min(@p cap, amp_polyindex_dist(ix, q)): the rows are scanned outward only up to @p cap (a point far from
+ *  the set costs a few rows, not all of them between it and the set). */
+double amp_polyindex_dist_within(const amp_polyindex *ix, amp_vec2 q, double cap);
 
 /**
  * Convex hull of @p n points (Andrew's monotone chain, exact orientation
