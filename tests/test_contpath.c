@@ -1452,35 +1452,45 @@ START_TEST(the_band_retry_asks_the_callers_verifier)
 }
 END_TEST
 
+/* The library's continuous slice of the STL file @p stl (the mesh as the tool reads it: the float rounding
+ * of its vertices decides the cases of the sweep) at layers @p h, beads of radius @p r, with the tool's
+ * verifier, into @p sl (initialised here) and @p ps. */
+static void slice_stl(const char *stl, double h, double r, amp_slices *sl, amp_pathset *ps, amp_contpath_stats *st)
+{
+    amp_mesh m;
+    amp_slice_opts so;
+    amp_contpath_opts o;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_file(&m, stl, &err), AMP_OK);
+    amp_slices_init(sl, NULL);
+    so.layer = h;
+    so.first_layer = 0;
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, sl, &err), AMP_OK);
+    amp_contpath_opts_default(&o, r);
+    o.verify_stroke = amp_check_path_stroke;
+    ck_assert_msg(amp_contpath_layers(sl, &o, ps, st, &err) == AMP_OK, "%s", err.msg);
+    amp_mesh_free(&m);
+}
+
 /* Paths that fail the stroke check (crossings, edges twice, points outside) in a slice of part @p p meshed
  * at @p step, layers @p h, beads of radius @p r, as the tool makes it. */
 static size_t failed_strokes(fx_part p, double step, double h, double r, size_t *shifts)
 {
     const char *stl = fx_tmp("split.stl");
     amp_mesh m;
-    amp_slice_opts so;
     amp_error err;
     amp_slices sl;
     amp_pathset ps;
     amp_contpath_stats st;
-    amp_contpath_opts o;
     size_t i, bad = 0;
-    amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
-    amp_contpath_opts_default(&o, r);
-    o.verify_stroke = amp_check_path_stroke;
-    /* through an STL file, as the tool reads it: these cases hang on the vertices' float rounding */
     amp_mesh_init(&m, NULL);
     ck_assert_int_eq(fx_part_mesh(&m, p, step), AMP_OK);
     ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
     amp_mesh_free(&m);
-    amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_mesh_read_stl_file(&m, stl, &err), AMP_OK);
-    so.layer = h;
-    so.first_layer = 0;
-    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
-    ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
-    amp_mesh_free(&m);
+    slice_stl(stl, h, r, &sl, &ps, &st);
+    remove(stl);
     for (i = 0; i < ps.npaths; i++)
         bad += amp_check_path_stroke(&ps, i, NULL, 0, NULL, NULL) != AMP_OK;
     *shifts = st.shift_retries;
@@ -1522,10 +1532,8 @@ START_TEST(a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the
     amp_mesh m;
     amp_error err;
     amp_slices sl;
-    amp_slice_opts so;
     amp_pathset lib, cli;
     amp_contpath_stats st;
-    amp_contpath_opts o;
     char args[768], out[4096];
     const char *stl = fx_tmp("bandbunny.stl"), *amp = fx_tmp("bandbunny.amp");
     size_t i;
@@ -1539,16 +1547,8 @@ START_TEST(a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the
     ck_assert_msg(strstr(out, "\"failed_paths\":0") != NULL, "%s", out);
     /* the library with the verifier, on the mesh as the tool read it */
     amp_mesh_free(&m);
-    amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_mesh_read_stl_file(&m, stl, &err), AMP_OK);
-    amp_slices_init(&sl, NULL);
-    so.layer = 0.25;
-    so.first_layer = 0;
-    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, &err), AMP_OK);
-    amp_contpath_opts_default(&o, 0.2);
-    o.verify_stroke = amp_check_path_stroke;
     amp_pathset_init(&lib, NULL);
-    ck_assert_msg(amp_contpath_layers(&sl, &o, &lib, &st, &err) == AMP_OK, "%s", err.msg);
+    slice_stl(stl, 0.25, 0.2, &sl, &lib, &st);
     ck_assert_uint_eq(st.band_retries, 1);
     amp_pathset_init(&cli, NULL);
     ck_assert_int_eq(amp_pathset_read_file(&cli, amp, &err), AMP_OK);
@@ -1559,7 +1559,6 @@ START_TEST(a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the
     amp_pathset_free(&lib);
     amp_pathset_free(&cli);
     amp_slices_free(&sl);
-    amp_mesh_free(&m);
     remove(stl);
     remove(amp);
 }
