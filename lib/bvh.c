@@ -808,6 +808,8 @@ typedef struct clipper {
     double min_len;
     amp_role role;
     amp_pathset *out;
+    int have_end, have_start; /* open meshes: in_end holds the state at the last segment's end vertex */
+    int in_end, in_start;     /* (measured once: it is the next segment's start) */
 } clipper;
 
 /* The stretch [s0, s1] of segment a + t d (radii ra .. rb) is inside (@p in) or not: extend or start the
@@ -861,8 +863,12 @@ static amp_status clip_stretch(const amp_bvh *b, clipper *cl, amp_vec3 a, amp_ve
     in = *wlast >= 0.5;
     if (b->closed || (!end0 && !end1))
         return clip_run(cl, in, a, d, ra, rb, s0, s1, err);
-    in0 = end0 ? winding_of(b, amp_v3_madd(a, d, s0)) >= 0.5 : in;
+    in0 = !end0 ? in : cl->have_start ? cl->in_start : winding_of(b, amp_v3_madd(a, d, s0)) >= 0.5;
     in1 = end1 ? winding_of(b, amp_v3_madd(a, d, s1)) >= 0.5 : in;
+    if (end1) {
+        cl->in_end = in1;
+        cl->have_end = 1;
+    }
     if (in0 != in)
         c0 = in ? half_crossing(b, a, d, tm, s0) : half_crossing(b, a, d, s0, tm);
     if (in1 != in)
@@ -903,6 +909,9 @@ amp_status amp_bvh_clip_polyline(const amp_bvh *b, const amp_pvert *v, size_t n,
         double s0 = 0.0;
         if (amp_v3_len2(d) == 0.0)
             continue;
+        cl.have_start = cl.have_end; /* this segment starts where the last one ended */
+        cl.in_start = cl.in_end;
+        cl.have_end = 0;
         st = amp_bvh_ray_all(b, a, d, 1.0, &h, &nh, err);
         if (st != AMP_OK)
             break;
