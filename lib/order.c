@@ -1124,6 +1124,11 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
         amp_fragments_free(&fs);
         return st;
     }
+    if ((st = amp_fbvh_set_cone(&o.bvh, o.k, err)) != AMP_OK) {
+        amp_fbvh_free(&o.bvh);
+        amp_fragments_free(&fs);
+        return st;
+    }
     if ((st = orderer_alloc(&o, fs.n)) != AMP_OK)
         goto done;
     if (opts->improve && opts->nearest && fs.n > 0)

@@ -8,6 +8,86 @@
 #define LEAF_SIZE 4
 #define STACK_MAX 128
 
+#define DIAG 0.70710678118654752440
+static const double dir_x[AMP_FBVH_NDIR] = {1.0, -1.0, 0.0, 0.0, DIAG, DIAG, -DIAG, -DIAG};
+static const double dir_y[AMP_FBVH_NDIR] = {0.0, 0.0, 1.0, -1.0, DIAG, -DIAG, DIAG, -DIAG};
+
+/* The highest u.q over the xy box (the corner furthest along u). */
+static inline double box_maxproj(const amp_fbvh_box5 *bx, int u)
+{
+    return (dir_x[u] > 0.0 ? dir_x[u] * bx->x1 : dir_x[u] * bx->x0) + (dir_y[u] > 0.0 ? dir_y[u] * bx->y1 : dir_y[u] * bx->y0);
+}
+
+/* The lowest u.p over the box (the corner furthest against u). */
+static inline double box_minproj(const amp_box3 *bx, int u)
+{
+    return (dir_x[u] > 0.0 ? dir_x[u] * bx->min.x : dir_x[u] * bx->max.x) +
+           (dir_y[u] > 0.0 ? dir_y[u] * bx->min.y : dir_y[u] * bx->max.y);
+}
+
+static void dmin_empty(amp_fbvh_cone *a)
+{
+    int u;
+    for (u = 0; u < AMP_FBVH_NDIR; u++)
+        a->m[u] = HUGE_VAL;
+}
+
+/* the cone bounds of leaf @p id from its fragments not done (done NULL: all) */
+static void dmin_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
+{
+    amp_fbvh_cone *a = &b->cone[id];
+    uint32_t q;
+    int u;
+    dmin_empty(a);
+    for (q = b->act[id].lo; q < b->act[id].hi; q++) {
+        const amp_fbvh_box5 *fb = &b->fbox[q];
+        if (done && done[b->order[q]])
+            continue;
+        for (u = 0; u < AMP_FBVH_NDIR; u++)
+            a->m[u] = amp_dmin(a->m[u], fb->minz - b->k * box_maxproj(fb, u));
+    }
+}
+
+/* node p's cone bounds from its children's; 1 when they changed */
+static int dmin_merge(amp_fbvh *b, uint32_t p)
+{
+    amp_fbvh_cone *a = &b->cone[p];
+    const amp_fbvh_cone *l = &b->cone[b->act[p].left], *r = &b->cone[b->act[p].right];
+    int u, changed = 0;
+    for (u = 0; u < AMP_FBVH_NDIR; u++) {
+        double m = amp_dmin(l->m[u], r->m[u]);
+        changed |= m != a->m[u];
+        a->m[u] = m;
+    }
+    return changed;
+}
+
+static void dmin_fill(amp_fbvh *b, const unsigned char *done)
+{
+    size_t i;
+    for (i = b->nnodes; i-- > 0;) {
+        if (b->act[i].left == 0)
+            dmin_leaf(b, done, (uint32_t)i);
+        else
+            dmin_merge(b, (uint32_t)i);
+    }
+}
+
+amp_status amp_fbvh_set_cone(amp_fbvh *b, double k, amp_error *err)
+{
+    if (b->nnodes == 0)
+        return AMP_OK;
+    if (!b->cone_mem) {
+        b->cone_mem = amp_calloc(b->alloc, b->nnodes + 1, sizeof *b->cone);
+        if (!b->cone_mem)
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy's cone bounds");
+        b->cone = (amp_fbvh_cone *)(((uintptr_t)b->cone_mem + 63u) & ~(uintptr_t)63u);
+    }
+    b->k = k;
+    dmin_fill(b, NULL);
+    return AMP_OK;
+}
+
 typedef struct mkey {
     uint64_t code;
     uint32_t id;
@@ -46,6 +126,7 @@ void amp_fbvh_free(amp_fbvh *b)
         return;
     amp_free(b->alloc, b->node);
     amp_free(b->alloc, b->act_mem);
+    amp_free(b->alloc, b->cone_mem);
     amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
@@ -150,6 +231,7 @@ amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_alloca
     amp_status st;
     memset(b, 0, sizeof *b);
     b->alloc = a;
+    b->k = NAN;
     if (n == 0)
         return AMP_OK;
     b->node = amp_calloc(a, 2 * n + 1, sizeof *b->node);
@@ -193,6 +275,8 @@ void amp_fbvh_reactivate(amp_fbvh *b)
         b->act[i].bx.y1 = bx->max.y;
         b->act[i].bx.minz = bx->min.z;
     }
+    if (b->cone)
+        dmin_fill(b, NULL);
 }
 
 
@@ -218,8 +302,11 @@ static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
 {
     uint32_t id = b->leaf[f];
+    int cone = b->cone != NULL, dchanged;
     (void)fs;
     act_leaf(b, done, id);
+    if (cone)
+        dmin_leaf(b, done, id);
     b->node[id].minz = b->act[id].bx.minz;
     /* the printed regions shrink out of the boxes: the queries below prune on what is still unprinted */
     while (b->node[id].parent != AMP_FBVH_NONE) {
@@ -228,7 +315,8 @@ void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned ch
         amp_fbvh_box5 *a = &b->act[p].bx;
         double x0 = amp_dmin(l->x0, r->x0), y0 = amp_dmin(l->y0, r->y0), x1 = amp_dmax(l->x1, r->x1), y1 = amp_dmax(l->y1, r->y1);
         double mz = amp_dmin(l->minz, r->minz);
-        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz)
+        dchanged = cone && dmin_merge(b, p);
+        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz && !dchanged)
             break;
         a->x0 = x0;
         a->y0 = y0;
@@ -319,6 +407,54 @@ static inline double act_slack(const amp_fbvh_box5 *nd, double reach, double k2,
     return g2 > 0.0 ? room - sqrt(g2) : room; /* over f's own box (no gap) no root: the sqrt was 30 % of the search */
 }
 
+/* One blocker query's bounds: the fragment's box, its reach, and for the nodes' cone bounds (when the hierarchy
+ * holds them for this k) c_u = k min u.p over the box minus the reach: a node with m_u + c_u >= 0 for some u
+ * holds no fragment below any point of the box. */
+typedef struct coneq {
+    const amp_box3 *fb;
+    double reach, k2;
+    int dir;
+    double c[AMP_FBVH_NDIR];
+} coneq;
+
+static inline void coneq_init(coneq *c, const amp_fbvh *b, double k, const amp_box3 *fb, double reach)
+{
+    int u;
+    c->fb = fb;
+    c->reach = reach;
+    c->k2 = k * k;
+    c->dir = b->cone && b->k == k;
+    if (c->dir)
+        for (u = 0; u < AMP_FBVH_NDIR; u++)
+            c->c[u] = k * box_minproj(fb, u) - reach;
+}
+
+/* the most any cone bound clears node @p id by (>= 0: nothing in it is below the box) */
+static inline double dir_excess(const amp_fbvh *b, uint32_t id, const coneq *c)
+{
+    const double *m = b->cone[id].m;
+    double e = m[0] + c->c[0];
+    int u;
+    for (u = 1; u < AMP_FBVH_NDIR; u++)
+        e = amp_dmax(e, m[u] + c->c[u]);
+    return e;
+}
+
+static inline int node_pass(const amp_fbvh *b, uint32_t id, const coneq *c)
+{
+    return act_pass(&b->act[id].bx, c->reach, c->k2, c->fb) && (!c->dir || dir_excess(b, id, c) < 0.0);
+}
+
+/* how deep the cone may reach into node @p id (mm), -1 when it cannot hold a fragment below the box */
+static inline double node_slack(const amp_fbvh *b, uint32_t id, const coneq *c)
+{
+    double s = act_slack(&b->act[id].bx, c->reach, c->k2, c->fb), e;
+    if (s <= 0.0 || !c->dir)
+        return s;
+    e = dir_excess(b, id, c);
+    return e >= 0.0 ? -1.0 : amp_dmin(s, -e);
+}
+
 /* Search the subtree of @p root, skipping child @p skip, for any active fragment below f; first found wins.
  * Reads only the compact unprinted bounds (amp_fbvh_act): printed fragments no longer widen the boxes. Nodes
  * are bounded when pushed, and the child reaching deeper into the cone is searched first: it holds a blocker
@@ -339,14 +475,14 @@ static inline size_t push_by_slack(uint32_t *stack, size_t top, uint32_t l, uint
 }
 
 static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                  uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t root, uint32_t skip,
-                                  uint32_t clear)
+                                  const coneq *c, uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t root,
+                                  uint32_t skip, uint32_t clear)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     const amp_fragment *fr = &fs->frag[f];
-    double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
-    if (root == skip || !act_pass(&b->act[root].bx, reach, k2, &fr->box))
+    double reach = c->reach, k2 = c->k2;
+    if (root == skip || !node_pass(b, root, c))
         return AMP_FBVH_NONE;
     stack[top++] = root;
     while (top) {
@@ -363,8 +499,8 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
             }
         } else if (top + 2 <= STACK_MAX) {
             uint32_t l = nd->left, r = nd->right;
-            double sl = l == skip || l == clear ? 0.0 : act_slack(&b->act[l].bx, reach, k2, &fr->box);
-            double sr = r == skip || r == clear ? 0.0 : act_slack(&b->act[r].bx, reach, k2, &fr->box);
+            double sl = l == skip || l == clear ? 0.0 : node_slack(b, l, c);
+            double sr = r == skip || r == clear ? 0.0 : node_slack(b, r, c);
             top = push_by_slack(stack, top, nd->left, nd->right, sl, sr);
         }
     }
@@ -381,8 +517,11 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
                                    uint32_t *clear)
 {
     uint32_t id, prev = AMP_FBVH_NONE, cl = clear ? *clear : AMP_FBVH_NONE;
+    const amp_fragment *fr = &fs->frag[f];
+    coneq c;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
+    coneq_init(&c, b, k, &fr->box, fr->box.max.z - zo - AMP_CONE_TOL);
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
     for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
@@ -390,17 +529,14 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
         if (id == cl)
             continue; /* proven clear by an earlier query of f */
         if (prev == AMP_FBVH_NONE) {
-            g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, id, prev, cl);
+            g = subtree_any_below(b, fs, zo, k, f, &c, xlo, xhi, done, id, prev, cl);
         } else {
             /* the level adds prev's sibling: searched straight away, under the bounds the level's own node would
              * have applied to it (its pass, then the sibling's slack), so the order of the search is the same */
-            const amp_fragment *fr = &fs->frag[f];
-            double reach = fr->box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
             uint32_t sib = b->act[id].left == prev ? b->act[id].right : b->act[id].left;
             g = AMP_FBVH_NONE;
-            if (sib != cl && act_pass(&b->act[id].bx, reach, k2, &fr->box) &&
-                act_slack(&b->act[sib].bx, reach, k2, &fr->box) > 0.0)
-                g = subtree_any_below(b, fs, zo, k, f, xlo, xhi, done, sib, AMP_FBVH_NONE, cl);
+            if (sib != cl && node_pass(b, id, &c) && node_slack(b, sib, &c) > 0.0)
+                g = subtree_any_below(b, fs, zo, k, f, &c, xlo, xhi, done, sib, AMP_FBVH_NONE, cl);
         }
         if (g != AMP_FBVH_NONE) {
             /* every level below this one held no blocker of f: printing only ever removes blockers, so that
@@ -434,7 +570,11 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
     uint32_t stack[STACK_MAX];
     size_t top = 0;
     double reach = box.max.z - zo - AMP_CONE_TOL, k2 = k * k;
-    if (b->nnodes == 0 || !act_pass(&b->act[0].bx, reach, k2, &box))
+    coneq c;
+    if (b->nnodes == 0)
+        return AMP_FBVH_NONE;
+    coneq_init(&c, b, k, &box, reach);
+    if (!node_pass(b, 0, &c))
         return AMP_FBVH_NONE;
     stack[top++] = 0;
     while (top) {
@@ -448,8 +588,8 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
                     return g;
             }
         } else if (top + 2 <= STACK_MAX) {
-            double sl = act_slack(&b->act[nd->left].bx, reach, k2, &box);
-            double sr = act_slack(&b->act[nd->right].bx, reach, k2, &box);
+            double sl = node_slack(b, nd->left, &c);
+            double sr = node_slack(b, nd->right, &c);
             top = push_by_slack(stack, top, nd->left, nd->right, sl, sr);
         }
     }

@@ -3,8 +3,9 @@
  * acceleration structure of the below relation ([P1 §5.1]: "we are using a
  * BVH query to find ... all sub-curves that are above other sub-curves").
  * Leaves hold up to 4 fragments in Morton order. Each node also keeps the
- * lowest z of its fragments that are still unprinted, so that Algorithm 2's
- * "is anything unprinted below f" query prunes printed regions.
+ * lowest z of its fragments that are still unprinted, and their cone bounds
+ * (amp_fbvh_set_cone), so that Algorithm 2's "is anything unprinted below f"
+ * query prunes printed regions and low fragments far from f.
  * Queries only read the tree (thread-safe); amp_fbvh_deactivate writes.
  */
 #ifndef AMP_LIB_FRAGBVH_H
@@ -31,6 +32,9 @@ typedef struct amp_fbvh_box5 {
     double x0, y0, x1, y1, minz;
 } amp_fbvh_box5;
 
+/* Directions u of the cone bounds: +-x, +-y and the four diagonals. */
+#define AMP_FBVH_NDIR 8
+
 /* What Algorithm 2's blocker query reads of a node, in one compact array: the xy box and lowest z of the
  * fragments below it that are still unprinted (empty when all are printed), its children and its range. */
 typedef struct amp_fbvh_act {
@@ -39,19 +43,36 @@ typedef struct amp_fbvh_act {
     uint32_t pad[2]; /* 64 bytes, and the array 64-byte aligned: one cache line a node */
 } amp_fbvh_act;
 
+/* A node's cone bounds (amp_fbvh_set_cone): per direction u, the lowest z - k u.q over the box corners q of
+ * its unprinted fragments (+inf when all are printed). Read only when the node's box bound passes. */
+typedef struct amp_fbvh_cone {
+    double m[AMP_FBVH_NDIR]; /* 64 bytes: one cache line */
+} amp_fbvh_cone;
+
 typedef struct amp_fbvh {
     const amp_allocator *alloc;
     amp_fbvh_node *node;
     amp_fbvh_act *act;    /* per node, refreshed by amp_fbvh_deactivate (inside act_mem, cache-line aligned) */
     void *act_mem;
+    amp_fbvh_cone *cone;  /* per node, NULL until amp_fbvh_set_cone (inside cone_mem, cache-line aligned) */
+    void *cone_mem;
     amp_fbvh_box5 *fbox;  /* per fragment in leaf order (order[q]): its xy box and lowest z */
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
+    double k;        /* the cone slope of cone[] (NaN: not set, the queries use the boxes alone) */
 } amp_fbvh;
 
 amp_status amp_fbvh_build(amp_fbvh *b, const amp_fragments *fs, const amp_allocator *a, amp_error *err);
 void amp_fbvh_free(amp_fbvh *b);
+
+/* Keep, per node, the cone bounds for slope @p k (= cot theta) of the still unprinted fragments: for every
+ * direction u, m_u = min (z - k u.q) over their box corners. Since k |p - q| >= k u.(p - q), a fragment below
+ * p needs m_u + k u.p < p.z - z_offs for every u: a node whose low fragments lie far away from p is passed
+ * over although its box reaches low and near. Queries with another k use the boxes alone. Kept up to date by
+ * amp_fbvh_deactivate and amp_fbvh_reactivate; 64 bytes a node. Errors: AMP_ERR_NOMEM (the hierarchy is left
+ * without cone bounds, still correct). */
+amp_status amp_fbvh_set_cone(amp_fbvh *b, double k, amp_error *err);
 
 /* Every fragment unprinted again: the hierarchy as amp_fbvh_build left it (the node boxes never shrink, only
  * the unprinted bounds do), without sorting again. */
