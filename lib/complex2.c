@@ -502,7 +502,10 @@ amp_status amp_cx2_grid(amp_cx2 *k, const amp_vec2 *hull, size_t n, double cell,
         L.ymax = fmax(L.ymax, hull[i].y);
     }
     if ((L.xmax - L.xmin) / cell * (L.ymax - L.ymin) / cell > 4e6)
-        return amp_fail(err, AMP_ERR_LIMIT, 0, "more than 4000000 cells (cell %g too small)", cell);
+        return amp_fail(err, AMP_ERR_LIMIT, 0,
+                        "a lattice of %.0f x %.0f mm in cells of %g mm has more than 4000000 cells: a part in metres "
+                        "or inches must be scaled to millimetres; otherwise a larger cell (a lower infill density)",
+                        L.xmax - L.xmin, L.ymax - L.ymin, cell);
     if ((st = lattice_basis(&L, err)) != AMP_OK)
         return st;
     st = lattice_cells(&L, hull, n, k->alloc, &keys, &nkeys, &ncell);
