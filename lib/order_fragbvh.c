@@ -531,11 +531,12 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
         if (prev == AMP_FBVH_NONE) {
             g = subtree_any_below(b, fs, zo, k, f, &c, xlo, xhi, done, id, prev, cl);
         } else {
-            /* the level adds prev's sibling: searched straight away, under the bounds the level's own node would
-             * have applied to it (its pass, then the sibling's slack), so the order of the search is the same */
+            /* the level adds prev's sibling: searched straight away when its slack is positive. The level's own
+             * node need not be tested first: its bounds are the union of its children's (lower m_u and minz,
+             * smaller gap), so it passes whenever the sibling has slack */
             uint32_t sib = b->act[id].left == prev ? b->act[id].right : b->act[id].left;
             g = AMP_FBVH_NONE;
-            if (sib != cl && node_pass(b, id, &c) && node_slack(b, sib, &c) > 0.0)
+            if (sib != cl && node_slack(b, sib, &c) > 0.0)
                 g = subtree_any_below(b, fs, zo, k, f, &c, xlo, xhi, done, sib, AMP_FBVH_NONE, cl);
         }
         if (g != AMP_FBVH_NONE) {
