@@ -73,6 +73,8 @@ static void dmin_fill(amp_fbvh *b, const unsigned char *done)
     }
 }
 
+static void rank_fill(amp_fbvh *b);
+
 amp_status amp_fbvh_set_cone(amp_fbvh *b, double k, amp_error *err)
 {
     if (b->nnodes == 0)
@@ -127,6 +129,7 @@ void amp_fbvh_free(amp_fbvh *b)
     amp_free(b->alloc, b->node);
     amp_free(b->alloc, b->act_mem);
     amp_free(b->alloc, b->cone_mem);
+    amp_free(b->alloc, b->frank);
     amp_free(b->alloc, b->fbox);
     amp_free(b->alloc, b->order);
     amp_free(b->alloc, b->leaf);
@@ -277,6 +280,8 @@ void amp_fbvh_reactivate(amp_fbvh *b)
     }
     if (b->cone)
         dmin_fill(b, NULL);
+    if (b->frank)
+        rank_fill(b);
 }
 
 
@@ -284,19 +289,57 @@ void amp_fbvh_reactivate(amp_fbvh *b)
 static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
 {
     amp_fbvh_box5 *a = &b->act[id].bx;
-    uint32_t q;
+    uint32_t q, mr = b->frank ? AMP_FBVH_NONE : 0;
     a->x0 = a->y0 = a->minz = HUGE_VAL;
     a->x1 = a->y1 = -HUGE_VAL;
     for (q = b->act[id].lo; q < b->act[id].hi; q++) {
         const amp_fbvh_box5 *fb = &b->fbox[q];
-        if (done[b->order[q]])
+        if (done && done[b->order[q]])
             continue;
+        if (b->frank && b->frank[q] < mr)
+            mr = b->frank[q];
         a->x0 = amp_dmin(a->x0, fb->x0);
         a->y0 = amp_dmin(a->y0, fb->y0);
         a->x1 = amp_dmax(a->x1, fb->x1);
         a->y1 = amp_dmax(a->y1, fb->y1);
         a->minz = amp_dmin(a->minz, fb->minz);
     }
+    b->act[id].minrank = mr;
+}
+
+/* the lowest rank below each node, all fragments unprinted */
+static void rank_fill(amp_fbvh *b)
+{
+    size_t i;
+    for (i = b->nnodes; i-- > 0;) {
+        amp_fbvh_act *a = &b->act[i];
+        uint32_t q, mr = b->frank ? AMP_FBVH_NONE : 0;
+        if (a->left == 0) {
+            for (q = a->lo; q < a->hi && b->frank; q++)
+                mr = b->frank[q] < mr ? b->frank[q] : mr;
+        } else if (b->frank) {
+            mr = b->act[a->left].minrank < b->act[a->right].minrank ? b->act[a->left].minrank : b->act[a->right].minrank;
+        }
+        a->minrank = mr;
+    }
+}
+
+amp_status amp_fbvh_set_rank(amp_fbvh *b, const uint32_t *rank, amp_error *err)
+{
+    size_t n = b->nnodes ? b->act[0].hi : 0, q;
+    if (!rank) {
+        amp_free(b->alloc, b->frank);
+        b->frank = NULL;
+    } else if (n) {
+        if (!b->frank && !(b->frank = amp_calloc(b->alloc, n, sizeof *b->frank))) {
+            rank_fill(b);
+            return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the fragment hierarchy's ranks");
+        }
+        for (q = 0; q < n; q++)
+            b->frank[q] = rank[b->order[q]];
+    }
+    rank_fill(b);
+    return AMP_OK;
 }
 
 void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned char *done, uint32_t f)
@@ -315,9 +358,12 @@ void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned ch
         amp_fbvh_box5 *a = &b->act[p].bx;
         double x0 = amp_dmin(l->x0, r->x0), y0 = amp_dmin(l->y0, r->y0), x1 = amp_dmax(l->x1, r->x1), y1 = amp_dmax(l->y1, r->y1);
         double mz = amp_dmin(l->minz, r->minz);
+        uint32_t lr = b->act[b->act[p].left].minrank, rr = b->act[b->act[p].right].minrank, mr = lr < rr ? lr : rr;
         dchanged = cone && dmin_merge(b, p);
-        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz && !dchanged)
+        if (x0 == a->x0 && y0 == a->y0 && x1 == a->x1 && y1 == a->y1 && mz == a->minz && !dchanged &&
+            mr == b->act[p].minrank)
             break;
+        b->act[p].minrank = mr;
         a->x0 = x0;
         a->y0 = y0;
         a->x1 = x1;
@@ -414,12 +460,14 @@ typedef struct coneq {
     const amp_box3 *fb;
     double reach, k2;
     int dir;
+    uint32_t rank; /* only fragments ranked below it count (AMP_FBVH_NONE: all) */
     double c[AMP_FBVH_NDIR];
 } coneq;
 
-static inline void coneq_init(coneq *c, const amp_fbvh *b, double k, const amp_box3 *fb, double reach)
+static inline void coneq_init(coneq *c, const amp_fbvh *b, double k, const amp_box3 *fb, double reach, uint32_t rank)
 {
     int u;
+    c->rank = b->frank ? rank : AMP_FBVH_NONE;
     c->fb = fb;
     c->reach = reach;
     c->k2 = k * k;
@@ -442,13 +490,16 @@ static inline double dir_excess(const amp_fbvh *b, uint32_t id, const coneq *c)
 
 static inline int node_pass(const amp_fbvh *b, uint32_t id, const coneq *c)
 {
-    return act_pass(&b->act[id].bx, c->reach, c->k2, c->fb) && (!c->dir || dir_excess(b, id, c) < 0.0);
+    return b->act[id].minrank < c->rank && act_pass(&b->act[id].bx, c->reach, c->k2, c->fb) && (!c->dir || dir_excess(b, id, c) < 0.0);
 }
 
 /* how deep the cone may reach into node @p id (mm), -1 when it cannot hold a fragment below the box */
 static inline double node_slack(const amp_fbvh *b, uint32_t id, const coneq *c)
 {
-    double s = act_slack(&b->act[id].bx, c->reach, c->k2, c->fb), e;
+    double s, e;
+    if (b->act[id].minrank >= c->rank)
+        return -1.0;
+    s = act_slack(&b->act[id].bx, c->reach, c->k2, c->fb);
     if (s <= 0.0 || !c->dir)
         return s;
     e = dir_excess(b, id, c);
@@ -493,7 +544,8 @@ static uint32_t subtree_any_below(const amp_fbvh *b, const amp_fragments *fs, do
                 uint32_t g = b->order[q];
                 /* the box bound from the leaf-ordered copy first: most candidates end here, without touching
                  * the fragment itself */
-                if ((g < xlo || g > xhi) && !done[g] && act_pass(&b->fbox[q], reach, k2, &fr->box) &&
+                if ((g < xlo || g > xhi) && (!b->frank || b->frank[q] < c->rank) && !done[g] &&
+                    act_pass(&b->fbox[q], reach, k2, &fr->box) &&
                     amp_fragment_below_k(fs, zo, k, g, f))
                     return g;
             }
@@ -513,7 +565,7 @@ static uint32_t range_of(const amp_fbvh *b, uint32_t id)
 }
 
 uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                   uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t near,
+                                   uint32_t xlo, uint32_t xhi, uint32_t rank, const unsigned char *done, uint32_t near,
                                    uint32_t *clear)
 {
     uint32_t id, prev = AMP_FBVH_NONE, cl = clear ? *clear : AMP_FBVH_NONE;
@@ -521,7 +573,7 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
     coneq c;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
-    coneq_init(&c, b, k, &fr->box, fr->box.max.z - zo - AMP_CONE_TOL);
+    coneq_init(&c, b, k, &fr->box, fr->box.max.z - zo - AMP_CONE_TOL, rank);
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
     for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
@@ -566,7 +618,8 @@ static int piece_over(const amp_fbvh *b, const amp_fragments *fs, double zo, dou
 }
 
 uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *fs, double zo, double k,
-                                       uint32_t lo, uint32_t hi, amp_box3 box, const unsigned char *done)
+                                       uint32_t lo, uint32_t hi, uint32_t rank, amp_box3 box,
+                                       const unsigned char *done)
 {
     uint32_t stack[STACK_MAX];
     size_t top = 0;
@@ -574,7 +627,7 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
     coneq c;
     if (b->nnodes == 0)
         return AMP_FBVH_NONE;
-    coneq_init(&c, b, k, &box, reach);
+    coneq_init(&c, b, k, &box, reach, rank);
     if (!node_pass(b, 0, &c))
         return AMP_FBVH_NONE;
     stack[top++] = 0;
@@ -584,7 +637,8 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
             uint32_t q;
             for (q = nd->lo; q < nd->hi; q++) {
                 uint32_t g = b->order[q];
-                if ((g < lo || g > hi) && !done[g] && act_pass(&b->fbox[q], reach, k2, &box) &&
+                if ((g < lo || g > hi) && (!b->frank || b->frank[q] < c.rank) && !done[g] &&
+                    act_pass(&b->fbox[q], reach, k2, &box) &&
                     piece_over(b, fs, zo, k, lo, hi, q))
                     return g;
             }
@@ -600,7 +654,7 @@ uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *f
 uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
                                  const unsigned char *done, uint32_t near, uint32_t *clear)
 {
-    return amp_fbvh_find_any_below_x(b, fs, zo, k, f, f, f, done, near, clear);
+    return amp_fbvh_find_any_below_x(b, fs, zo, k, f, f, f, AMP_FBVH_NONE, done, near, clear);
 }
 
 size_t amp_fbvh_for_above(const amp_fbvh *b, const amp_fragments *fs, const amp_head *h, uint32_t f,

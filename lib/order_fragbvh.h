@@ -40,7 +40,8 @@ typedef struct amp_fbvh_box5 {
 typedef struct amp_fbvh_act {
     amp_fbvh_box5 bx;
     uint32_t left, right, lo, hi;
-    uint32_t pad[2]; /* 64 bytes, and the array 64-byte aligned: one cache line a node */
+    uint32_t minrank; /* lowest rank of those fragments (amp_fbvh_set_rank; 0 without ranks, empty: NONE) */
+    uint32_t pad;     /* 64 bytes, and the array 64-byte aligned: one cache line a node */
 } amp_fbvh_act;
 
 /* A node's cone bounds (amp_fbvh_set_cone): per direction u, the lowest z - k u.q over the box corners q of
@@ -60,6 +61,7 @@ typedef struct amp_fbvh {
     size_t nnodes;
     uint32_t *order; /* fragment ids in leaf order */
     uint32_t *leaf;  /* leaf node of each fragment */
+    uint32_t *frank; /* per fragment in leaf order, its rank (amp_fbvh_set_rank); NULL: no ranks */
     double k;        /* the cone slope of cone[] (NaN: not set, the queries use the boxes alone) */
 } amp_fbvh;
 
@@ -73,6 +75,13 @@ void amp_fbvh_free(amp_fbvh *b);
  * amp_fbvh_deactivate and amp_fbvh_reactivate; 64 bytes a node. Errors: AMP_ERR_NOMEM (the hierarchy is left
  * without cone bounds, still correct). */
 amp_status amp_fbvh_set_cone(amp_fbvh *b, double k, amp_error *err);
+
+/* Rank every fragment (@p rank, per fragment id; NULL: drop the ranks): the queries that pass a rank then
+ * count only the unprinted fragments ranked below it, and nodes whose unprinted fragments all rank at or above
+ * it are passed over. The re-sequencing ranks fragments by their sub-curve's place in a gouge-free order: a
+ * blocker of a sub-curve must come before it in every such order, so it ranks below it. Kept up to date by
+ * amp_fbvh_deactivate and amp_fbvh_reactivate. Errors: AMP_ERR_NOMEM (no ranks kept, still correct). */
+amp_status amp_fbvh_set_rank(amp_fbvh *b, const uint32_t *rank, amp_error *err);
 
 /* Every fragment unprinted again: the hierarchy as amp_fbvh_build left it (the node boxes never shrink, only
  * the unprinted bounds do), without sorting again. */
@@ -97,15 +106,18 @@ uint32_t amp_fbvh_find_any_below(const amp_fbvh *b, const amp_fragments *fs, dou
                                  const unsigned char *done, uint32_t near, uint32_t *clear);
 
 /* amp_fbvh_find_any_below with the fragments [xlo, xhi] (f among them) counted as printed: the blockers of f
- * outside the sub-curve it belongs to (the re-sequencing of whole sub-curves, lib/order_seq.c). */
+ * outside the sub-curve it belongs to (the re-sequencing of whole sub-curves, lib/order_seq.c); with ranks set
+ * and @p rank not AMP_FBVH_NONE, only fragments ranked below @p rank count. */
 uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, double zo, double k, uint32_t f,
-                                   uint32_t xlo, uint32_t xhi, const unsigned char *done, uint32_t near,
+                                   uint32_t xlo, uint32_t xhi, uint32_t rank, const unsigned char *done, uint32_t near,
                                    uint32_t *clear);
 
 /* Some fragment g outside [lo, hi], not done, below any fragment of the sub-curve [lo, hi] (whose fragments'
- * boxes are inside @p box), AMP_FBVH_NONE if none: one traversal for the whole sub-curve. */
+ * boxes are inside @p box), AMP_FBVH_NONE if none: one traversal for the whole sub-curve. @p rank as for
+ * amp_fbvh_find_any_below_x. */
 uint32_t amp_fbvh_find_any_below_piece(const amp_fbvh *b, const amp_fragments *fs, double zo, double k,
-                                       uint32_t lo, uint32_t hi, amp_box3 box, const unsigned char *done);
+                                       uint32_t lo, uint32_t hi, uint32_t rank, amp_box3 box,
+                                       const unsigned char *done);
 
 /* Call cb(user, g) for every fragment g that f is below (g above f); stop early when cb returns non-zero.
  * Returns the number of fragments reported. */

@@ -12,8 +12,9 @@
  * Admissibility is kept as in Algorithm 2 (lib/order.c): a sub-curve waits on one blocker (an unprinted
  * fragment of another sub-curve below one of its fragments, amp_fbvh_find_any_below_x) and is looked at
  * again only once that blocker is printed; its fragments already found free stay free (printing only
- * removes blockers). The candidates are found lazily: the nearest sub-curve not known to be blocked is tested
- * when a search meets it. Sub-curve ends sit in a 3-D grid whose z cells are zw times thinner, so that the
+ * removes blockers); only fragments of sub-curves before it in the pass's (gouge-free) input order can block
+ * it, and the hierarchy's ranks let the queries skip the rest. The candidates are found lazily: the nearest
+ * sub-curve not known to be blocked is tested when a search meets it. Sub-curve ends sit in a 3-D grid whose z cells are zw times thinner, so that the
  * weighted distance is a ring search; far from everything it falls back to a scan of all sub-curves.
  */
 #include <math.h>
@@ -281,11 +282,11 @@ static int admissible(seq *q, uint32_t p)
     const amp_order_piece *c = &q->pc[p];
     uint32_t f, g = NONE;
     if (c->box.max.z - c->box.min.z <= 2.0 * q->zo) {
-        g = amp_fbvh_find_any_below_piece(q->bvh, q->fs, q->zo, q->k, c->lo, c->hi, c->box, q->done);
+        g = amp_fbvh_find_any_below_piece(q->bvh, q->fs, q->zo, q->k, c->lo, c->hi, p, c->box, q->done);
         q->queries++;
     } else
         for (f = c->lo + q->pos[p]; f <= c->hi; f++) {
-            g = amp_fbvh_find_any_below_x(q->bvh, q->fs, q->zo, q->k, f, c->lo, c->hi, q->done, q->last[p],
+            g = amp_fbvh_find_any_below_x(q->bvh, q->fs, q->zo, q->k, f, c->lo, c->hi, p, q->done, q->last[p],
                                           &q->clear[f]);
             q->queries++;
             if (g != NONE) {
@@ -397,6 +398,24 @@ static amp_status seq_run(seq *q, amp_order_piece *outp)
     return st;
 }
 
+/* Rank each fragment by its sub-curve's place in the given order, which is gouge-free (Algorithm 2's, or the
+ * merged and re-sequenced one): every blocker of sub-curve p then ranks below p, and the blocker queries of p
+ * pass over the sub-curves that came after it (most of the hierarchy once the front has moved past them). */
+static amp_status rank_pieces(seq *q)
+{
+    uint32_t *rank = amp_calloc(q->a, q->fs->n, sizeof *rank), f;
+    size_t i;
+    amp_status st;
+    if (!rank)
+        return amp_fail(q->err, AMP_ERR_NOMEM, 0, "out of memory for ranking %lu fragments", (unsigned long)q->fs->n);
+    for (i = 0; i < q->np; i++)
+        for (f = q->pc[i].lo; f <= q->pc[i].hi; f++)
+            rank[f] = (uint32_t)i;
+    st = amp_fbvh_set_rank(q->bvh, rank, q->err);
+    amp_free(q->a, rank);
+    return st;
+}
+
 amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double zo, double k, double zw,
                                 amp_order_piece *pc, size_t npc, const amp_allocator *a, amp_error *err,
                                 size_t *queries)
@@ -442,9 +461,12 @@ amp_status amp_order_resequence(const amp_fragments *fs, amp_fbvh *bvh, double z
         q.last[i] = NONE;
         q.live[i] = q.lpos[i] = (uint32_t)i;
     }
-    st = grid_init(&q);
+    st = rank_pieces(&q);
+    if (st == AMP_OK)
+        st = grid_init(&q);
     if (st == AMP_OK)
         st = seq_run(&q, outp);
+    amp_fbvh_set_rank(bvh, NULL, NULL);
     if (st == AMP_OK)
         memcpy(pc, outp, npc * sizeof *pc);
     if (queries)
