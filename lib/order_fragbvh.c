@@ -294,7 +294,7 @@ static void act_leaf(amp_fbvh *b, const unsigned char *done, uint32_t id)
     a->x1 = a->y1 = -HUGE_VAL;
     for (q = b->act[id].lo; q < b->act[id].hi; q++) {
         const amp_fbvh_box5 *fb = &b->fbox[q];
-        if (done && done[b->order[q]])
+        if (done[b->order[q]])
             continue;
         if (b->frank && b->frank[q] < mr)
             mr = b->frank[q];
@@ -313,12 +313,14 @@ static void rank_fill(amp_fbvh *b)
     size_t i;
     for (i = b->nnodes; i-- > 0;) {
         amp_fbvh_act *a = &b->act[i];
-        uint32_t q, mr = b->frank ? AMP_FBVH_NONE : 0;
-        if (a->left == 0) {
-            for (q = a->lo; q < a->hi && b->frank; q++)
+        uint32_t q, mr = b->frank ? AMP_FBVH_NONE : 0, l, r;
+        if (b->frank && a->left == 0) {
+            for (q = a->lo; q < a->hi; q++)
                 mr = b->frank[q] < mr ? b->frank[q] : mr;
         } else if (b->frank) {
-            mr = b->act[a->left].minrank < b->act[a->right].minrank ? b->act[a->left].minrank : b->act[a->right].minrank;
+            l = b->act[a->left].minrank;
+            r = b->act[a->right].minrank;
+            mr = l < r ? l : r;
         }
         a->minrank = mr;
     }
@@ -490,7 +492,8 @@ static inline double dir_excess(const amp_fbvh *b, uint32_t id, const coneq *c)
 
 static inline int node_pass(const amp_fbvh *b, uint32_t id, const coneq *c)
 {
-    return b->act[id].minrank < c->rank && act_pass(&b->act[id].bx, c->reach, c->k2, c->fb) && (!c->dir || dir_excess(b, id, c) < 0.0);
+    return b->act[id].minrank < c->rank && act_pass(&b->act[id].bx, c->reach, c->k2, c->fb) &&
+           (!c->dir || dir_excess(b, id, c) < 0.0);
 }
 
 /* how deep the cone may reach into node @p id (mm), -1 when it cannot hold a fragment below the box */
