@@ -15,7 +15,8 @@ static const double dir_y[AMP_FBVH_NDIR] = {0.0, 0.0, 1.0, -1.0, DIAG, -DIAG, DI
 /* The highest u.q over the xy box (the corner furthest along u). */
 static inline double box_maxproj(const amp_fbvh_box5 *bx, int u)
 {
-    return (dir_x[u] > 0.0 ? dir_x[u] * bx->x1 : dir_x[u] * bx->x0) + (dir_y[u] > 0.0 ? dir_y[u] * bx->y1 : dir_y[u] * bx->y0);
+    return (dir_x[u] > 0.0 ? dir_x[u] * bx->x1 : dir_x[u] * bx->x0) +
+           (dir_y[u] > 0.0 ? dir_y[u] * bx->y1 : dir_y[u] * bx->y0);
 }
 
 /* The lowest u.p over the box (the corner furthest against u). */
