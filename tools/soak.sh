@@ -16,6 +16,8 @@ mkdir -p "$T"
 trap 'kill $VP 2>/dev/null || true; rm -rf "$T"' EXIT
 awk -v n="$N" 'BEGIN { print "G90"; print "M82"; print "G92 E0";
     for (i = 1; i <= n; i++) printf "G1 X%.2f Y%.2f E%.4f F%d\n", 100 + 40 * sin(i * 0.1), 100 + 40 * cos(i * 0.13), 0.01 * i, 1200 + i % 7 }' > "$T/job.gcode"
+# a failed run's job, executed log and protocol logs stay for a look (the temporary directory goes)
+keep() { K=${TMPDIR:-/tmp}/ampath-soak-failed-$$; cp -r "$T" "$K"; echo "soak: logs kept in $K"; }
 moves() { grep -o 'G1 X.*' "$1" | sed 's/ *;.*//' | grep ' E'; }
 
 run() { # name, vprinter options, more bridge options
@@ -29,7 +31,7 @@ run() { # name, vprinter options, more bridge options
     while [ $rc = 1 ] && [ $runs -lt 10 ]; do
         rc=0
         $B "$T/link" "$T/job.gcode" --quiet --baud 1000000 --timeout 0.1 --boot-wait 0.2 \
-            --resume-from $resume $3 > "$T/out" 2>&1 || rc=$?
+            --resume-from $resume --log "$T/bridge-$runs.log" $3 > "$T/out" 2>&1 || rc=$?
         runs=$((runs + 1))
         if [ $rc = 1 ]; then
             resume=$(sed -n 's/.*resume with --resume-from \([0-9]*\).*/\1/p' "$T/out" | head -n 1)
@@ -38,13 +40,14 @@ run() { # name, vprinter options, more bridge options
     done
     kill $VP 2>/dev/null || true
     wait $VP 2>/dev/null || true
-    [ $rc = 0 ] || { echo "soak $1: bridge exit $rc"; cat "$T/out"; exit 1; }
+    [ $rc = 0 ] || { echo "soak $1: bridge exit $rc"; cat "$T/out"; keep; exit 1; }
     moves "$T/job.gcode" > "$T/want"
     moves "$T/ran.log" > "$T/got"
     if cmp -s "$T/want" "$T/got"; then
         echo "soak $1: $N moves executed exactly once, in order ($runs run(s), $(($(date +%s) - start)) s)"
     else
-        echo "soak $1: FAILED: executed moves differ from the job:"; diff "$T/want" "$T/got" | head -n 10; exit 1
+        echo "soak $1: FAILED: executed moves differ from the job:"; diff "$T/want" "$T/got" | head -n 10
+        keep; exit 1
     fi
 }
 
