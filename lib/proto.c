@@ -262,6 +262,7 @@ void amp_proto_link_restored(amp_proto *p, unsigned long now_ms)
     p->probing = 0;
     p->verify = 0;
     p->skip_ok = 0;
+    p->sync_err = 0;
     p->last_line = -1;
     if (p->o.flavor != AMP_PROTO_MARLIN || p->state == AMP_PROTO_STOPPED || p->state == AMP_PROTO_CONNECTING)
         return;
@@ -415,6 +416,7 @@ static void become_ready(amp_proto *p)
     p->state = AMP_PROTO_RUNNING;
     p->resync = 0;
     p->skip_ok = 0;
+    p->sync_err = 0;
     p->last_line = -1;
     emit(p, AMP_EV_READY, 0, p->rx);
 }
@@ -491,6 +493,16 @@ static void sync_ok(amp_proto *p, const char *s)
         return; /* an M105's answer (a learning or re-handshake M105 answered late), never the M110's */
     if ((p->sync_phase == 0 || p->sync_phase == 3) && p->skip_ok) {
         p->skip_ok = 0; /* the Resend's ok: now the M110 goes out again */
+        p->resync = 1;
+        return;
+    }
+    if ((p->sync_phase == 0 || p->sync_phase == 3) && p->sync_err) {
+        /* the M110 was refused (garbled on the way) and the Resend after the error was garbled too: this ok
+           is the refusal's. Taken for the M110's, the job would start one line off: after an unplug its first
+           line went to the number the re-handshake's M105 had used, and the printer skipped it (unplug soak) */
+        p->sync_err = 0;
+        if (p->m110_out > 0)
+            p->m110_out--;
         p->resync = 1;
         return;
     }
@@ -617,6 +629,7 @@ static void sync_resend(amp_proto *p, long m, long ll)
     }
     /* phases 0 and 3: the M110 itself was garbled. The ok that follows the Resend must not pass for the
        M110's (the job would start one line off): send M110 again only once it is in. */
+    p->sync_err = 0; /* the Resend answers for the error before it */
     if (p->m110_out > 0)
         p->m110_out--; /* that M110 is answered */
     p->resync = !p->skip_ok;
@@ -812,6 +825,8 @@ static void marlin_error(amp_proto *p, const char *s)
         const char *ll = strstr(s, "Line:");
         if (!(ll && parse_long(ll + 5, &p->last_line)))
             p->last_line = -1;
+        if (p->state == AMP_PROTO_SYNCING && (p->sync_phase == 0 || p->sync_phase == 3) && p->m110_out > 0)
+            p->sync_err = 1; /* our M110 refused: its Resend, or the ok after it, settles it (sync_ok) */
         emit(p, AMP_EV_ERROR, 0, s);
         return;
     }
@@ -1178,6 +1193,7 @@ static int marlin_sync(amp_proto *p, unsigned long now, char *buf, size_t cap, s
     }
     /* "N<k> M110 N<k>": the printer expects N<k+1> next */
     p->m110_out++;
+    p->sync_err = 0;
     p->sync_n = base;
     memcpy(cmd, "M110 N", 6);
     k = 6 + put_long(cmd + 6, base);

@@ -1071,6 +1071,33 @@ START_TEST(reconnect_learns_the_last_line_received_and_goes_on_after_it)
 }
 END_TEST
 
+START_TEST(a_refused_m110_whose_resend_is_garbled_is_sent_again)
+{
+    /* found by the unplug soak: after the link came back the re-handshake's M110 was garbled, the printer's
+       Resend after the error too, and the ok that followed was taken for the M110's; the first job line then
+       went to the number the re-handshake's M105 had used and the printer skipped it (a move lost) */
+    amp_proto p;
+    rec r;
+    const char *l;
+    unplugged(&p, &r);
+    tx(&p, 200);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 6\nResend: 7\nok\n", 210);
+    tx(&p, 220);
+    feed1(&p, "ok T:210.0 /210.0 B:60.0 /60.0 @:0 B@:0\n", 240);
+    l = tx(&p, 250);
+    ck_assert(frame_ok(l) && num(l) == 6 && strstr(l, " M110 N6*"));
+    /* the M105 took number 7: the garbled M110 is refused with the last line 7, its Resend garbled */
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 7\nRes#nd: 8\nok\n", 260);
+    ck_assert_int_eq(p.state, AMP_PROTO_SYNCING);
+    l = tx(&p, 270);
+    ck_assert(frame_ok(l) && num(l) == 6 && strstr(l, " M110 N6*"));
+    feed1(&p, "ok\n", 280);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    ck_assert_int_eq(num(tx(&p, 290)), 7); /* the first line not run, nothing skipped */
+    ck_assert_int_eq(p.acked, 6);
+}
+END_TEST
+
 START_TEST(reconnect_trusts_no_unconfirmed_number_and_recovers_a_lost_answer)
 {
     amp_proto p;
@@ -1215,6 +1242,7 @@ static Suite *proto_suite(void)
     tcase_add_test(tc, an_unrecognised_error_followed_by_resend_is_the_protocol_not_the_firmware);
     tcase_add_test(tc, the_ok_after_a_resend_of_the_m110_is_not_the_m110s);
     tcase_add_test(tc, a_repeated_m110s_late_ok_is_not_the_first_lines);
+    tcase_add_test(tc, a_refused_m110_whose_resend_is_garbled_is_sent_again);
     tcase_add_test(tc, an_ok_after_a_rewind_on_an_echo_still_counts);
     tcase_add_test(tc, resend_number_with_a_digit_garbled_into_a_blank_or_colon_is_no_reset);
     tcase_add_test(tc, a_request_for_line_one_needs_two_witnesses_to_be_a_reset);

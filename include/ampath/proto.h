@@ -172,6 +172,7 @@ typedef struct amp_proto {
     unsigned long err_lat; /**< smoothed time from sending a line to the printer's error for it (ms) */
     unsigned long settle_until; /**< end of the settling time */
     int skip_ok;     /**< an ok owed to a Resend is expected */
+    int sync_err;    /**< a protocol error came after the handshake's M110: the ok that follows is the refusal's */
     int probing;     /**< a probe is out after a timeout */
     int silent_probes; /**< probes in a row that got no answer (with 30 s or 3 timeouts of silence: AMP_EV_FATAL) */
     unsigned long probe_t0; /**< when the first of them went out */
