@@ -14,8 +14,9 @@
  * again only once that blocker is printed; its fragments already found free stay free (printing only
  * removes blockers); only fragments of sub-curves before it in the pass's (gouge-free) input order can block
  * it, and the hierarchy's ranks let the queries skip the rest. The candidates are found lazily: the nearest
- * sub-curve not known to be blocked is tested when a search meets it. Sub-curve ends sit in a 3-D grid whose z cells are zw times thinner, so that the
- * weighted distance is a ring search; far from everything it falls back to a scan of all sub-curves.
+ * sub-curve not known to be blocked is tested when a search meets it. Sub-curve ends sit in a 3-D grid whose
+ * z cells are zw times thinner, so that the weighted distance is a ring search; far from everything it falls
+ * back to a scan of all sub-curves.
  */
 #include <math.h>
 #include <stdlib.h>
