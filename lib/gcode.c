@@ -209,6 +209,10 @@ static void segment_cells(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, doub
     }
 }
 
+/* What grid_raise raises: the material band (grid) and the centre line (grid_c and its pyramid). */
+#define GR_BAND 1
+#define GR_CENTRE 2
+
 /* Start of level l (side AMP_GCODE_GRID >> l, l >= 1) in the max-pyramid grid_cp. */
 static size_t pyramid_level(int l)
 {
@@ -242,13 +246,15 @@ static void pyramid_raise(amp_gcode_iter *it, int i, int j, float v)
  * it passes through) to @p topc in the centre-line grid and its blocks
  * (segment_cells: the cells of the segment's neighbourhood row by row, each
  * raised once; the samples every half cell this replaces boxed in up to six
- * times as many cells).
+ * times as many cells). @p parts: GR_BAND (the material grid), GR_CENTRE (the
+ * centre-line grid) or both.
  */
-static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double wc, double top, double topc)
+static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, double wc, double top, double topc,
+                       int parts)
 {
     int lo[AMP_GCODE_GRID], hi[AMP_GCODE_GRID], r0, r1, i, j;
     float ftop = float_up(top), ftopc = float_up(topc);
-    if (w > 0.0) {
+    if (w > 0.0 && (parts & GR_BAND)) {
         segment_cells(it, a, b, w, lo, hi, &r0, &r1);
         for (j = r0; j <= r1; j++) {
             float *row = &it->grid[j * AMP_GCODE_GRID];
@@ -256,6 +262,8 @@ static void grid_raise(amp_gcode_iter *it, amp_vec3 a, amp_vec3 b, double w, dou
                 row[i] = row[i] < ftop ? ftop : row[i];
         }
     }
+    if (!(parts & GR_CENTRE))
+        return;
     segment_cells(it, a, b, wc, lo, hi, &r0, &r1);
     for (j = r0; j <= r1; j++) {
         float *row = &it->grid_c[j * AMP_GCODE_GRID];
@@ -444,12 +452,22 @@ static size_t next_vertex(const amp_gcode_iter *it, size_t i, size_t k)
     return j;
 }
 
+/* End vertex of the written move from vertex @p k of path @p i: the chord of next_vertex or, with arcs on,
+ * the arc that replaces it (*use_arc set, *arc filled). */
+static size_t next_move(const amp_gcode_iter *it, size_t i, size_t k, amp_gc_arc *arc, int *use_arc)
+{
+    size_t j = next_vertex(it, i, k);
+    *use_arc = it->o.arcs && amp_gc_fit_arc(amp_pathset_path_verts(it->ps, i), it->ps->paths[i].n, k, j, &it->o, arc);
+    return *use_arc ? arc->end : j;
+}
+
 /* ---------------------------------------------------------------- scan and placement */
 
 typedef struct job_scan {
     amp_box3 bb;  /* vertices */
     double rmax, zlow, z_first;
     size_t printable, input_segments;
+    int rising;   /* every printed path planar, level, and none below the one before (band_defer) */
 } job_scan;
 
 static amp_status scan_paths(const amp_pathset *ps, job_scan *js, amp_error *err)
@@ -459,6 +477,7 @@ static amp_status scan_paths(const amp_pathset *ps, job_scan *js, amp_error *err
     js->rmax = 0.0;
     js->zlow = js->z_first = HUGE_VAL;
     js->printable = js->input_segments = 0;
+    js->rising = 1;
     if (ps->npaths > 0 && (!ps->paths || !ps->verts))
         return amp_fail(err, AMP_ERR_ARG, 0, "gcode: inconsistent path set");
     for (i = 0; i < ps->npaths; i++) {
@@ -471,8 +490,10 @@ static amp_status scan_paths(const amp_pathset *ps, job_scan *js, amp_error *err
                             (unsigned long)i);
         if (next_segment(ps, i, 0) + 1 >= p->n)
             continue; /* skipped: nothing to print, and it must not move the placement */
-        js->printable++;
         v = amp_pathset_path_verts(ps, i);
+        if (p->h <= 0.0 || (js->printable > 0 && v[0].p.z < js->bb.max.z))
+            js->rising = 0;
+        js->printable++;
         for (k = 0; k < p->n; k++) {
             if (!amp_v3_finite(v[k].p) || !isfinite(v[k].r) || v[k].r < 0.0)
                 return amp_fail(err, AMP_ERR_ARG, 0, "gcode: path %lu vertex %lu is not finite or has a negative radius",
@@ -481,6 +502,8 @@ static amp_status scan_paths(const amp_pathset *ps, job_scan *js, amp_error *err
                 v[k].r > 1000.0)
                 return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: path %lu vertex %lu lies beyond +-%g mm",
                                 (unsigned long)i, (unsigned long)k, GC_COORD_MAX);
+            if (v[k].p.z != v[0].p.z)
+                js->rising = 0;
             js->bb = amp_box3_add(js->bb, v[k].p);
             js->rmax = fmax(js->rmax, v[k].r);
             js->zlow = fmin(js->zlow, v[k].p.z - bead_depth(p, v[k].r));
@@ -586,6 +609,7 @@ static void reset_run(amp_gcode_iter *it, int pass)
     for (i = 0; i < AMP_GCODE_PYRAMID; i++)
         it->grid_cp[i] = -HUGE_VALF;
     it->zc_max = -HUGE_VAL;
+    it->band_pending = 0;
     it->end_r = 0.0;
     it->direct = 0;
     it->plan_head = it->plan_n = 0;
@@ -631,6 +655,7 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     it->grid_x0 = js.bb.min.x - margin;
     it->grid_y0 = js.bb.min.y - margin;
     it->grid_cell = ext / AMP_GCODE_GRID;
+    it->band_lazy = js.rising;
     /* pass 1: the whole job without formatting, for the figures of the header */
     reset_run(it, 1);
     {
@@ -751,15 +776,17 @@ static void move_travel(amp_gcode_iter *it, lb *l, amp_vec3 to, int xy, double v
 }
 
 /* Raise the material grid by the bead of segment v[a] -> v[b] of path @p p. */
-static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pvert *va, const amp_pvert *vb)
+static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pvert *va, const amp_pvert *vb, int parts)
 {
     double r = fmax(va->r, vb->r);
     /* a planar bead's top is its vertex z (layer top); a tube rises r above its centre line */
     double top = fmax(va->p.z, vb->p.z) + (p->h > 0.0 ? 0.0 : r);
     /* and the centre line, for the head cone of direct hops (the model of [P1 §5.1] and `ampath check`) */
-    grid_raise(it, va->p, vb->p, r > 0.0 ? r : 0.0, 0.0, top, fmax(va->p.z, vb->p.z));
-    it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
-    it->end_r = vb->r;
+    grid_raise(it, va->p, vb->p, r > 0.0 ? r : 0.0, 0.0, top, fmax(va->p.z, vb->p.z), parts);
+    if (parts & GR_CENTRE) {
+        it->zc_max = fmax(it->zc_max, fmax(va->p.z, vb->p.z));
+        it->end_r = vb->r;
+    }
 }
 
 /*
@@ -771,7 +798,7 @@ static void raise_material(amp_gcode_iter *it, const amp_path *p, const amp_pver
  * clear what the G-code really deposits (a reader of the G-code sees that bead).
  */
 static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v, size_t k, size_t j, double area,
-                          int straight)
+                          int straight, int parts)
 {
     double re = p->h > 0.0 ? 0.0 : sqrt(area / AMP_PI) + it->o.chord_tol;
     size_t m;
@@ -790,9 +817,11 @@ static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert
             zmax = v[m].p.z > zmax ? v[m].p.z : zmax;
         }
         dev = sqrt(d2);
-        grid_raise(it, a, b, rmax > 0.0 ? rmax + dev : 0.0, dev, zmax, zmax);
-        it->zc_max = fmax(it->zc_max, zmax);
-        it->end_r = v[j].r;
+        grid_raise(it, a, b, rmax > 0.0 ? rmax + dev : 0.0, dev, zmax, zmax, parts);
+        if (parts & GR_CENTRE) {
+            it->zc_max = fmax(it->zc_max, zmax);
+            it->end_r = v[j].r;
+        }
         return;
     }
     for (m = k; m < j; m++) {
@@ -801,8 +830,60 @@ static void raise_written(amp_gcode_iter *it, const amp_path *p, const amp_pvert
             a.r = fmax(a.r, re);
             b.r = fmax(b.r, re);
         }
-        raise_material(it, p, &a, &b);
+        raise_material(it, p, &a, &b, parts);
     }
+}
+
+/*
+ * Deferred material bands (it->band_lazy: a planar job printed layer by
+ * layer, as `slice` writes it). There every later travel starts on a layer at
+ * least as high as the material printed so far and rises or stays level, and
+ * the material grid is only ever compared with heights on that travel's line
+ * (travel_hull) or at its nozzle away from the ends (direct_ok): a bead of a
+ * lower layer can never change an answer. So a written segment raises only
+ * the centre-line grid when printed; the segments since the last raise are
+ * the range from (band_path, band_seg) to the path being travelled to, with
+ * the highest top band_top, and a read at a height below band_top raises the
+ * range first (band_flush: the same moves again), while the first segment of
+ * a higher layer drops it. Every read answers as if all had been raised (the
+ * G-code is the same; tests/test_gcode.c compares it with the eager grid's), and
+ * a part with one island a layer raises no band at all (the bands were a
+ * fifth of `gcode`'s time on PrusaSlicer's bunny, in both passes).
+ */
+static void band_defer(amp_gcode_iter *it, double top, size_t k)
+{
+    float ft = float_up(top);
+    /* 1e-6 below: every later read height is at least this segment's z, up to rounding (amp_v3_lerp) */
+    if (it->band_pending && (double)it->band_top < top - 1e-6)
+        it->band_pending = 0;
+    if (!it->band_pending) {
+        it->band_pending = 1;
+        it->band_path = it->path;
+        it->band_seg = k;
+        it->band_top = ft;
+    } else if (ft > it->band_top) {
+        it->band_top = ft;
+    }
+}
+
+/* Raise the deferred bands (band_defer) before a read at height @p z that they may reach above. */
+static void band_need(amp_gcode_iter *it, double z)
+{
+    size_t q, k;
+    if (!it->band_pending || !((double)it->band_top > z))
+        return;
+    for (q = it->band_path, k = it->band_seg; q < it->path; q++, k = 0) {
+        const amp_path *p = &it->ps->paths[q];
+        const amp_pvert *v = amp_pathset_path_verts(it->ps, q);
+        while (k + 1 < p->n && next_segment(it->ps, q, k) + 1 < p->n) { /* print_step's moves */
+            amp_gc_arc arc;
+            int use_arc;
+            size_t j = next_move(it, q, k, &arc, &use_arc);
+            raise_written(it, p, v, k, j, 0.0 /* planar: the area only sizes tubes */, !use_arc, GR_BAND);
+            k = j;
+        }
+    }
+    it->band_pending = 0;
 }
 
 /*
@@ -830,7 +911,12 @@ static void move_print(amp_gcode_iter *it, lb *l, size_t k, size_t j, const amp_
         it->xs_path = it->path;
         it->xs_area = de * it->fil_area / len;
     }
-    raise_written(it, p, v, k, j, area, arc == NULL);
+    if (it->band_lazy) {
+        band_defer(it, fmax(a.z, b.z), k);
+        raise_written(it, p, v, k, j, area, arc == NULL, GR_CENTRE);
+    } else {
+        raise_written(it, p, v, k, j, area, arc == NULL, GR_BAND | GR_CENTRE);
+    }
     if (area * base > it->o.max_volumetric_flow) {
         /* volumetric cap: lower the feed, rounded down so that the printed F respects the cap */
         fu = (long long)floor(it->o.max_volumetric_flow / area * 600.0);
@@ -968,6 +1054,13 @@ static int cone_clear(const amp_gcode_iter *it, double px, double py, double z, 
     return cone_floor(it, px, py, hh, z, z) <= z; /* from z up: blocks below the cone at z need no look */
 }
 
+/* The higher of @p z and the material top in the box of half-width @p w around (px, py) (band_need first). */
+static double band_top_box(amp_gcode_iter *it, double px, double py, double w, double z)
+{
+    band_need(it, z);
+    return fmax(grid_top_box(it, it->grid, px, py, w), z);
+}
+
 /*
  * The travel polyline from it->pos to it->travel_to (docs/interfaces.md §5: gouge-free,
  * as low as is safe): the upper convex hull, in (fraction of the line, z),
@@ -1011,7 +1104,7 @@ static void travel_hull(amp_gcode_iter *it, double rb)
             t = (double)s / (double)steps;
             /* the material tops count wherever the sample's interval reaches out of both end zones */
             z = (t + dt) * len > ea && (1.0 - t + dt) * len > eb
-                    ? fmax(grid_top_box(it, it->grid, a.x + t * dx, a.y + t * dy, w), a.z + t * (b.z - a.z)) + hop
+                    ? band_top_box(it, a.x + t * dx, a.y + t * dy, w, a.z + t * (b.z - a.z)) + hop
                     : -HUGE_VAL;
             if (s % GC_CONE_GROUP == 0) { /* one cone floor for the interval of the next samples */
                 double tc = fmin(1.0, (s + 0.5 * (GC_CONE_GROUP - 1)) / (double)steps);
@@ -1343,7 +1436,7 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
  * it starts, where the cone test alone applies (the grid's cells there hold
  * those beads' own tops).
  */
-static int direct_ok(const amp_gcode_iter *it, double dxy, double rb)
+static int direct_ok(amp_gcode_iter *it, double dxy, double rb)
 {
     amp_vec3 a = it->pos, b = it->travel_to;
     double cell = it->grid_cell, hh, dz;
@@ -1362,7 +1455,7 @@ static int direct_ok(const amp_gcode_iter *it, double dxy, double rb)
         double zlo = p.z - dz; /* lowest nozzle height of the interval */
         if (!cone_clear(it, p.x, p.y, zlo, hh))
             return 0;
-        if (t * dxy - hh >= ea && (1.0 - t) * dxy - hh >= eb && grid_top_box(it, it->grid, p.x, p.y, hh) > zlo)
+        if (t * dxy - hh >= ea && (1.0 - t) * dxy - hh >= eb && band_top_box(it, p.x, p.y, hh, zlo) > zlo)
             return 0;
     }
     return 1;
@@ -1515,16 +1608,13 @@ static int travel_step(amp_gcode_iter *it, lb *l, const amp_pvert *v)
 }
 
 /* One printing move (a segment, or a fitted arc over several); at the path's end, on to the next path. */
-static int print_step(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_pvert *v)
+static int print_step(amp_gcode_iter *it, lb *l, const amp_path *p)
 {
     /* it->seg is the vertex the head is at */
     if (it->seg + 1 < p->n && next_segment(it->ps, it->path, it->seg) + 1 < p->n) {
         amp_gc_arc arc;
         int use_arc;
-        it->nxt = next_vertex(it, it->path, it->seg);
-        use_arc = it->o.arcs && amp_gc_fit_arc(v, p->n, it->seg, it->nxt, &it->o, &arc);
-        if (use_arc)
-            it->nxt = arc.end;
+        it->nxt = next_move(it, it->path, it->seg, &arc, &use_arc);
         move_print(it, l, it->seg, it->nxt, use_arc ? &arc : NULL);
         it->seg = it->nxt;
         return 1;
@@ -1553,7 +1643,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
     case PS_UNRETRACT:
         return travel_step(it, l, v);
     default:
-        return print_step(it, l, p, v);
+        return print_step(it, l, p);
     }
 }
 

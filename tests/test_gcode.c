@@ -2015,6 +2015,72 @@ START_TEST(cone_checker_catches_a_direct_hop_past_a_tower)
 }
 END_TEST
 
+/* Layers 0.3 mm apart of two rings and a rib between them, then a short bead past the rib: on every layer the
+ * hop from the first ring to the bead crosses the rib printed before it. */
+static void ribbed_layers(amp_pathset *ps, int nlayers)
+{
+    int l, k;
+    amp_pathset_init(ps, NULL);
+    for (l = 0; l < nlayers; l++) {
+        double z = 0.3 * (l + 1);
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, 0.3, NULL);
+        amp_pathset_push(ps, amp_v3(3.5, -2, z), 0.25, NULL);
+        amp_pathset_push(ps, amp_v3(3.5, 2, z), 0.25, NULL);
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, 0.3, NULL);
+        for (k = 0; k <= 24; k++)
+            amp_pathset_push(ps, amp_v3(2 * cos(k * AMP_PI / 12), 2 * sin(k * AMP_PI / 12), z), 0.25, NULL);
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, 0.3, NULL);
+        amp_pathset_push(ps, amp_v3(4.5, 0, z), 0.25, NULL);
+        amp_pathset_push(ps, amp_v3(6, 0, z), 0.25, NULL);
+        amp_pathset_begin(ps, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_set_height(ps, 0.3, NULL);
+        for (k = 0; k <= 24; k++)
+            amp_pathset_push(ps, amp_v3(10 + 2 * cos(k * AMP_PI / 12), 2 * sin(k * AMP_PI / 12), z), 0.25, NULL);
+    }
+}
+
+/*
+ * A planar job printed layer by layer raises its material grid only when a travel reads it at a height the
+ * deferred beads may reach (gcode.c, band_defer). The same job with one tube path appended (no longer
+ * layer by layer: every bead raised as printed) must write the same moves up to that path. Raising nothing
+ * before a read (band_need a no-op) makes the hops over the ribs direct and fails this.
+ */
+START_TEST(deferred_material_grid_writes_what_the_eager_grid_writes)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st, st2;
+    char *lazy, *eager, *a, *b, *eb;
+    ribbed_layers(&ps, 12);
+    raw_opts(&o, AMP_FLAVOR_MARLIN);
+    o.direct_hop = 3;
+    o.retract_min_travel = 2;
+    lazy = gen(&ps, &o, &st);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(5, 0, 3.6), 0.25, NULL);
+    amp_pathset_push(&ps, amp_v3(6, 0, 3.6), 0.25, NULL);
+    eager = gen(&ps, &o, &st2);
+    a = strstr(lazy, "; path 0 ");
+    b = strstr(eager, "; path 0 ");
+    ck_assert_ptr_nonnull(a);
+    ck_assert_ptr_nonnull(b);
+    eb = strstr(b, "; path 48 "); /* the appended path: the moves before it are the whole job's */
+    ck_assert_ptr_nonnull(eb);
+    ck_assert_msg(strlen(a) > (size_t)(eb - b) && strncmp(a, b, (size_t)(eb - b)) == 0,
+                  "the deferred grid wrote other moves");
+    /* the job has direct hops, and the hops across a rib are lifted: one hop a layer past the ring's end */
+    ck_assert_uint_gt(st.direct_hops, 0);
+    ck_assert_uint_lt(st.direct_hops, st.travels - 11);
+    ck_assert_uint_eq(st.direct_hops, st2.direct_hops);
+    free(lazy);
+    free(eager);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 /*
  * Travel on a real covering (the demo helix at eps 3 through the tool): direct hops cut the retractions
  * and the travel time share; every direct hop passes the independent cone checker and every lifted travel the
@@ -2119,6 +2185,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, travels_go_straight_over_nothing_and_over_material_only_where_it_is);
     tcase_add_test(tc, cone_checker_catches_a_direct_hop_past_a_tower);
     tcase_add_test(tc, direct_hops_cut_travel_time_on_the_helix_without_gouging);
+    tcase_add_test(tc, deferred_material_grid_writes_what_the_eager_grid_writes);
     tcase_add_test(tc, klipper_reader_rejects_marlin_only_commands);
     tcase_add_test(tc, continuous_slices_of_the_builtin_meshes_print_on_the_bed);
     tcase_add_test(tc, arcs_follow_the_input_within_tolerance);

@@ -305,6 +305,10 @@ typedef struct amp_gcode_iter {
     float grid_c[AMP_GCODE_GRID * AMP_GCODE_GRID]; /* highest printed centre line per cell (head cone test) */
     float grid_cp[AMP_GCODE_PYRAMID]; /* highest of grid_c per 2^l x 2^l block, levels l = 1, 2, ... (side 1) */
     double zc_max;      /* highest printed centre line so far */
+    int band_lazy;      /* a planar job printed layer by layer: material bands raised only when read (gcode.c) */
+    int band_pending;   /* the bands written from (band_path, band_seg) on are not in grid yet */
+    size_t band_path, band_seg;
+    float band_top;     /* their highest top, as grid would hold it */
     double end_r;       /* deposition radius at the end of the last printed segment */
     int direct;         /* the current travel is a direct hop */
     amp_gcode_block plan[AMP_GCODE_LOOKAHEAD];
