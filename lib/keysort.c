@@ -1,4 +1,5 @@
-/* Stable bottom-up merge sort of amp_skey (lib/keysort.h): insertion sort on runs of 16, then merges. */
+/* Stable bottom-up merge sort of amp_skey (lib/keysort.h): insertion sort on runs of 16, then merges; a stable
+ * radix sort of records by uint32_t fields. */
 #include "keysort.h"
 
 #include <string.h>
@@ -50,4 +51,45 @@ void amp_skey_sort(amp_skey *k, amp_skey *tmp, size_t n)
     }
     if (src != k)
         memcpy(k, src, n * sizeof *k);
+}
+
+#define DIGIT_BITS 11
+#define DIGITS (1u << DIGIT_BITS)
+
+static uint32_t field_at(const unsigned char *rec, size_t off)
+{
+    uint32_t v;
+    memcpy(&v, rec + off, sizeof v);
+    return v;
+}
+
+void amp_radix_u32(void *base, void *tmp, size_t n, size_t size, const size_t *off, int nkeys)
+{
+    unsigned char *src = base, *dst = tmp, *t;
+    size_t count[DIGITS], i, d;
+    int f, shift;
+    /* least significant first: every pass is stable, so earlier passes break the later ones' ties */
+    for (f = nkeys - 1; f >= 0; f--)
+        for (shift = 0; shift < 32; shift += DIGIT_BITS) {
+            size_t sum = 0;
+            memset(count, 0, sizeof count);
+            for (i = 0; i < n; i++)
+                count[(field_at(src + i * size, off[f]) >> shift) & (DIGITS - 1)]++;
+            if (n == 0 || count[(field_at(src, off[f]) >> shift) & (DIGITS - 1)] == n)
+                continue; /* one digit for all: the order stands */
+            for (d = 0; d < DIGITS; d++) {
+                size_t c = count[d];
+                count[d] = sum;
+                sum += c;
+            }
+            for (i = 0; i < n; i++) {
+                const unsigned char *r = src + i * size;
+                memcpy(dst + size * count[(field_at(r, off[f]) >> shift) & (DIGITS - 1)]++, r, size);
+            }
+            t = src;
+            src = dst;
+            dst = t;
+        }
+    if (src != (unsigned char *)base)
+        memcpy(base, src, n * size);
 }

@@ -1,6 +1,7 @@
 /*
  * lib/keysort.h — internal: a stable sort of (k1, k2) keys carrying an index,
- * for the checkers' sweeps. It gives the order glibc's qsort gave them (its
+ * for the checkers' sweeps, and a stable radix sort of records by uint32_t
+ * fields (the mesh's edges and triangles). It gives the order glibc's qsort gave them (its
  * merge sort is stable too) without a comparison call per step: the sorts
  * were a fifth of slicing a 536-layer part, where the stroke checker sorts
  * every stroke's vertices, edges and segments.
@@ -9,6 +10,7 @@
 #define AMPATH_LIB_KEYSORT_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 typedef struct amp_skey {
     double k1, k2; /* ascending by k1, then k2; equal keys keep their order */
@@ -17,5 +19,16 @@ typedef struct amp_skey {
 
 /* Sort @p k[0, n) in place; @p tmp has room for n keys (its content is lost). */
 void amp_skey_sort(amp_skey *k, amp_skey *tmp, size_t n);
+
+/*
+ * Stable LSD radix sort of the @p n records of @p size bytes at @p base by
+ * the uint32_t fields at byte offsets @p off[0] (most significant) ..
+ * off[nkeys - 1], ascending; equal records keep their order (the order a
+ * stable comparison sort gives, without a call per comparison: sorting the
+ * edges of a 1.25 M-triangle mesh with qsort was a quarter of `field` on it).
+ * 11-bit digits, a digit that all records share costs one counting pass.
+ * @p tmp has room for n records; the result is in @p base.
+ */
+void amp_radix_u32(void *base, void *tmp, size_t n, size_t size, const size_t *off, int nkeys);
 
 #endif

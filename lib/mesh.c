@@ -1,8 +1,10 @@
 /* Triangle mesh container. STL, BVH and inside tests live in their own files. */
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ampath/mesh.h"
+#include "keysort.h"
 #include "mesh_internal.h"
 
 void amp_mesh_init(amp_mesh *m, const amp_allocator *a)
@@ -83,7 +85,7 @@ double amp_mesh_volume(const amp_mesh *m)
 /* A directed edge (lo, hi) with the direction it was used in. */
 typedef struct edge_rec {
     uint32_t lo, hi;
-    int dir;      /* +1: lo -> hi in the triangle, -1: hi -> lo */
+    uint32_t up;  /* 1: lo -> hi in the triangle, 0: hi -> lo */
     uint32_t tri; /* triangle index, for adjacency */
 } edge_rec;
 
@@ -94,7 +96,7 @@ static int edge_cmp(const void *pa, const void *pb)
         return a->lo < b->lo ? -1 : 1;
     if (a->hi != b->hi)
         return a->hi < b->hi ? -1 : 1;
-    return a->dir - b->dir;
+    return a->up < b->up ? -1 : a->up > b->up;
 }
 
 /*
@@ -102,9 +104,12 @@ static int edge_cmp(const void *pa, const void *pb)
  * 3 ntris), sorted so that the uses of one undirected edge are adjacent.
  * Returns the count; *degenerate (if not NULL) counts skipped triangles.
  */
-static size_t collect_edges(const amp_tri *tris, size_t ntris, edge_rec *e, size_t *degenerate)
+static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t ntris, edge_rec *e,
+                            size_t *degenerate)
 {
+    static const size_t key[3] = {offsetof(edge_rec, lo), offsetof(edge_rec, hi), offsetof(edge_rec, up)};
     size_t i, n = 0;
+    edge_rec *tmp;
     for (i = 0; i < ntris; i++) {
         const amp_tri *t = &tris[i];
         int k;
@@ -117,12 +122,17 @@ static size_t collect_edges(const amp_tri *tris, size_t ntris, edge_rec *e, size
             uint32_t a = t->v[k], b = t->v[(k + 1) % 3];
             e[n].lo = a < b ? a : b;
             e[n].hi = a < b ? b : a;
-            e[n].dir = a < b ? 1 : -1;
+            e[n].up = a < b;
             e[n].tri = (uint32_t)i;
             n++;
         }
     }
-    qsort(e, n, sizeof *e, edge_cmp);
+    /* triangle order within equal keys, as the stable sort both give */
+    if ((tmp = amp_calloc(al, n + 1, sizeof *tmp)) != NULL)
+        amp_radix_u32(e, tmp, n, sizeof *e, key, 3);
+    else
+        qsort(e, n, sizeof *e, edge_cmp); /* no room for the radix sort's copy (glibc's qsort may manage) */
+    amp_free(al, tmp);
     return n;
 }
 
@@ -138,11 +148,11 @@ amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_erro
     e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
     if (!e)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
-    n = collect_edges(m->tris, m->ntris, e, &out->degenerate);
+    n = collect_edges(m->alloc, m->tris, m->ntris, e, &out->degenerate);
     for (i = 0; i < n;) {
         size_t j = i, pos = 0, neg = 0;
         while (j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi) {
-            if (e[j].dir > 0)
+            if (e[j].up)
                 pos++;
             else
                 neg++;
@@ -193,7 +203,7 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
         goto done; /* one exit that frees every temporary */
     }
     memset(nb, 0xff, ntris * 3 * sizeof *nb);
-    n = collect_edges(tris, ntris, e, NULL);
+    n = collect_edges(al, tris, ntris, e, NULL);
     /* adjacency across manifold edges only: rel = 1 when the neighbour must be flipped relative to us */
     for (i = 0; i + 1 < n; i++) {
         if (e[i].lo == e[i + 1].lo && e[i].hi == e[i + 1].hi &&
@@ -201,7 +211,7 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
             (i == 0 || e[i - 1].lo != e[i].lo || e[i - 1].hi != e[i].hi)) {
             uint32_t a = e[i].tri, b = e[i + 1].tri;
             int k;
-            unsigned char r = e[i].dir == e[i + 1].dir;
+            unsigned char r = e[i].up == e[i + 1].up;
             for (k = 0; k < 3 && nb[3 * (size_t)a + k] != 0xffffffffu; k++)
                 ;
             if (k < 3) {

@@ -8,11 +8,13 @@
  * uniform grid.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ampath/mesh.h"
+#include "keysort.h"
 #include "lex.h"
 #include "mesh_internal.h"
 
@@ -406,7 +408,16 @@ static amp_status drop_duplicates(amp_mesh *m, size_t nv0, size_t nt0, size_t *d
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for finding duplicate STL triangles");
     for (i = 0; i < n; i++)
         k[i] = tri_key_of(&m->tris[nt0 + i], i);
-    qsort(k, n, sizeof *k, cmp_tri_key);
+    {
+        /* stable: equal corner sets stay in file order, as cmp_tri_key's index tie-break orders them */
+        static const size_t key[3] = {offsetof(tri_key, v[0]), offsetof(tri_key, v[1]), offsetof(tri_key, v[2])};
+        tri_key *tmp = amp_alloc(m->alloc, n * sizeof *tmp);
+        if (tmp)
+            amp_radix_u32(k, tmp, n, sizeof *k, key, 3);
+        else
+            qsort(k, n, sizeof *k, cmp_tri_key);
+        amp_free(m->alloc, tmp);
+    }
     *dropped = mark_duplicates(m->tris + nt0, k, n, &cancelled);
     amp_free(m->alloc, k);
     if (*dropped == 0)
