@@ -183,6 +183,7 @@ amp_status amp_check_stroke(const amp_vec2 *pts, size_t n, const amp_polyset *re
 
 /* One stroke under check: its points, vertex ids (identical coordinates = the same vertex), the findings. */
 typedef struct stroke_scan {
+    const amp_allocator *al;
     const amp_vec2 *pts;
     const double *rad;
     size_t n;
@@ -258,31 +259,99 @@ static size_t segments_and_repeats(stroke_scan *s, seg2 *sg, ekey2 *ek, amp_skey
     return ns;
 }
 
-/* Segment pairs without a shared vertex, swept over x (@p sg0 sorted by xmin into @p sg); pairs apart in y
- * cannot meet. */
+/* Strip of height @p h from @p y0 (of @p nq) that holds @p y. */
+static long strip_of(double y, double y0, double h, long nq)
+{
+    double f = (y - y0) / h;
+    return !(f > 0.0) ? 0 : f >= (double)(nq - 1) ? nq - 1 : (long)f;
+}
+
+/* The conflicts between the segments sg[list[0 .. m)] (ascending positions in the x order; NULL: sg[0 .. m))
+ * whose y overlap begins in strip @p q of @p nq (every pair once: in the strip of the higher of their lows);
+ * *cnt counts them, *bi, *bj the first pair in the order of one sweep over all. */
+static void strip_conflicts(const seg2 *sg, const size_t *list, size_t m, long q, long nq, double y0, double h,
+                            size_t *cnt, size_t *bi, size_t *bj)
+{
+    size_t a, b;
+    for (a = 0; a < m; a++) {
+        size_t ia = list ? list[a] : a;
+        const seg2 *si = &sg[ia];
+        double xmax = amp_dmax(si->a.x, si->b.x);
+        for (b = a + 1; b < m && sg[list ? list[b] : b].xmin <= xmax; b++) {
+            size_t ib = list ? list[b] : b;
+            const seg2 *sj = &sg[ib];
+            if (sj->ymin > si->ymax || sj->ymax < si->ymin)
+                continue;
+            if (nq > 1 && strip_of(amp_dmax(si->ymin, sj->ymin), y0, h, nq) != q)
+                continue; /* counted in another strip */
+            if (si->ia == sj->ia || si->ia == sj->ib || si->ib == sj->ia || si->ib == sj->ib)
+                continue;
+            if (seg_conflict(si, sj) && (!(*cnt)++ || ia < *bi || (ia == *bi && ib < *bj))) {
+                *bi = ia;
+                *bj = ib;
+            }
+        }
+    }
+}
+
+/*
+ * Segment pairs without a shared vertex that cross or overlap (@p sg0 sorted
+ * by xmin into @p sg). A sweep over x meets every pair whose x ranges overlap:
+ * in a wide solid skin that is every segment of a column, quadratic in the
+ * width (the stroke check was a third of slicing a 400 mm plate). So the
+ * sweep runs in horizontal strips of about sqrt(n) segments' height, each
+ * segment in the strips its y range covers, and a pair counts only in the
+ * strip where its y overlap begins: the same pairs, each once, in time about
+ * linear. Without memory for the strips, one strip (the plain sweep).
+ */
 static void count_crossings(stroke_scan *s, const seg2 *sg0, size_t ns, amp_skey *key, amp_skey *tmp, seg2 *sg)
 {
-    size_t i, j;
+    size_t i, cnt = 0, bi = 0, bj = 0, *start = NULL, *list = NULL;
+    long nq = ns > 64 ? (long)sqrt((double)ns) : 1, q;
+    double y0 = HUGE_VAL, y1 = -HUGE_VAL, h;
     for (i = 0; i < ns; i++) {
         key[i].k1 = sg0[i].xmin;
         key[i].k2 = 0.0;
         key[i].i = i;
+        y0 = amp_dmin(y0, sg0[i].ymin);
+        y1 = amp_dmax(y1, sg0[i].ymax);
     }
     amp_skey_sort(key, tmp, ns);
     for (i = 0; i < ns; i++)
         sg[i] = sg0[key[i].i];
-    for (i = 0; i < ns; i++) {
-        double xmax = amp_dmax(sg[i].a.x, sg[i].b.x);
-        for (j = i + 1; j < ns && sg[j].xmin <= xmax; j++) {
-            if (sg[j].ymin > sg[i].ymax || sg[j].ymax < sg[i].ymin)
-                continue;
-            if (sg[i].ia == sg[j].ia || sg[i].ia == sg[j].ib || sg[i].ib == sg[j].ia || sg[i].ib == sg[j].ib)
-                continue;
-            if (seg_conflict(&sg[i], &sg[j])) {
-                s->r.crossings++;
-                note(s, sg[i].a);
+    nq = nq > 65536 ? 65536 : nq;
+    h = y1 > y0 ? (y1 - y0) / (double)nq : 1.0;
+    if (nq > 1 && (start = amp_calloc(s->al, (size_t)nq + 2, sizeof *start)) != NULL) {
+        int fill;
+        for (fill = 0; fill < 2 && start; fill++) {
+            for (i = 0; i < ns; i++)
+                for (q = strip_of(sg[i].ymin, y0, h, nq); q <= strip_of(sg[i].ymax, y0, h, nq); q++) {
+                    if (fill)
+                        list[start[q + 1]++] = i;
+                    else
+                        start[q + 2]++;
+                }
+            if (!fill) {
+                for (q = 0; q < nq; q++)
+                    start[q + 2] += start[q + 1];
+                if (!(list = amp_alloc(s->al, (start[nq + 1] + 1) * sizeof *list))) {
+                    amp_free(s->al, start);
+                    start = NULL;
+                }
             }
         }
+    }
+    if (start) {
+        for (q = 0; q < nq; q++)
+            strip_conflicts(sg, list + start[q], start[q + 1] - start[q], q, nq, y0, h, &cnt, &bi, &bj);
+    } else {
+        strip_conflicts(sg, NULL, ns, 0, 1, y0, h, &cnt, &bi, &bj);
+    }
+    amp_free(s->al, start);
+    amp_free(s->al, list);
+    if (cnt) {
+        s->r.crossings += cnt;
+        note(s, sg[bi].a); /* the place a sweep over all would have met first */
     }
 }
 
@@ -376,6 +445,7 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
     double lo = 0, hi = 0;
     memset(&s, 0, sizeof s);
     memset(&yr, 0, sizeof yr);
+    s.al = al;
     s.pts = pts;
     s.rad = rad;
     s.n = n;

@@ -499,6 +499,65 @@ START_TEST(stroke_checker_rejects_crossings_repeats_and_escapes)
 }
 END_TEST
 
+/* Proper crossings among the segments of a polyline, pair by pair (segments that share an end excluded):
+ * the reference for the checker's strips. */
+static size_t crossings_by_pairs(const amp_vec2 *p, size_t n)
+{
+    size_t i, j, c = 0;
+    for (i = 0; i + 1 < n; i++)
+        for (j = i + 2; j + 1 < n; j++) {
+            double o1 = amp_v2_orient(p[i], p[i + 1], p[j]), o2 = amp_v2_orient(p[i], p[i + 1], p[j + 1]);
+            double o3 = amp_v2_orient(p[j], p[j + 1], p[i]), o4 = amp_v2_orient(p[j], p[j + 1], p[i + 1]);
+            c += o1 * o2 < 0 && o3 * o4 < 0;
+        }
+    return c;
+}
+
+/*
+ * A stroke of thousands of segments is swept in horizontal strips (lib/check_stroke.c): every crossing is
+ * still counted once. Random walks in a tall box (long segments spanning many strips) and a flat one; and
+ * the same walk without crossings (a staircase) passes. Counting a pair in every strip it shares, or
+ * missing the pairs whose overlap begins in a strip below one segment's low end, fails this.
+ */
+START_TEST(stroke_checker_counts_every_crossing_of_a_long_stroke_once)
+{
+    amp_polyset box;
+    amp_stroke_report rep;
+    amp_error err;
+    amp_vec2 corners[4] = {{-1, -1}, {101, -1}, {101, 101}, {-1, 101}}, *p = malloc(3001 * sizeof *p);
+    unsigned long s = 12345;
+    size_t n, k, ref;
+    int shape;
+    ck_assert_ptr_nonnull(p);
+    amp_polyset_init(&box, NULL);
+    ck_assert_int_eq(amp_polyset_add(&box, corners, 4, NULL), AMP_OK);
+    for (shape = 0; shape < 3; shape++) {
+        n = shape == 2 ? 3001 : 1500;
+        for (k = 0; k < n; k++) {
+            s = s * 6364136223846793005UL + 1442695040888963407UL;
+            if (shape == 2) /* a staircase: never crosses itself */
+                p[k] = amp_v2(0.03 * (double)((k + 1) / 2), 0.03 * (double)(k / 2));
+            else if (shape == 0) { /* steps of up to 5 mm, reflected at the sides of a 100 mm square */
+                double x = k ? p[k - 1].x + (double)(s >> 11) / 9007199254740992.0 * 10 - 5 : 50;
+                double y = k ? p[k - 1].y + (double)((s * 2862933555777941757UL) >> 11) / 9007199254740992.0 * 10 - 5 : 50;
+                p[k] = amp_v2(x < 0 ? -x : x > 100 ? 200 - x : x, y < 0 ? -y : y > 100 ? 200 - y : y);
+            } else { /* anywhere in the square: long segments through many strips */
+                p[k] = amp_v2((double)(s >> 11) / 9007199254740992.0 * 100,
+                              (double)((s * 2862933555777941757UL) >> 11) / 9007199254740992.0 * 100);
+            }
+        }
+        ref = crossings_by_pairs(p, n);
+        ck_assert_int_eq(amp_check_stroke(p, n, &box, 0, &rep, &err), ref ? AMP_ERR_CHECK : AMP_OK);
+        ck_assert_uint_eq(rep.crossings, ref);
+        ck_assert_uint_eq(rep.segments, n - 1);
+        if (shape < 2)
+            ck_assert_uint_gt(ref, 100);
+    }
+    amp_polyset_free(&box);
+    free(p);
+}
+END_TEST
+
 START_TEST(printer_profile_sets_the_bead_width_of_a_continuous_slice)
 {
     /* docs/interfaces.md §4: beads 1.125 x the profile's nozzle; --radius still wins */
@@ -1712,6 +1771,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, all_layers_of_a_sphere_and_torus_pair);
     tcase_add_test(tc, built_in_models_get_one_crossing_free_stroke_per_island);
     tcase_add_test(tc, stroke_checker_rejects_crossings_repeats_and_escapes);
+    tcase_add_test(tc, stroke_checker_counts_every_crossing_of_a_long_stroke_once);
     tcase_add_test(tc, cli_continuous_gives_one_stroke_per_island_and_check_agrees);
     tcase_add_test(tc, printer_profile_sets_the_bead_width_of_a_continuous_slice);
     tcase_add_test(tc, torus_and_idler_get_one_extrusion_start_per_island_counted_in_the_gcode);
