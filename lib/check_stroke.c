@@ -302,7 +302,8 @@ static void strip_conflicts(const seg2 *sg, const size_t *list, size_t m, long q
  * sweep runs in horizontal strips of about sqrt(n) segments' height, each
  * segment in the strips its y range covers, and a pair counts only in the
  * strip where its y overlap begins: the same pairs, each once, in time about
- * linear. Without memory for the strips, one strip (the plain sweep).
+ * linear. Without memory for the strips, or when the segments are mostly
+ * tall, one strip (the plain sweep).
  */
 static void count_crossings(stroke_scan *s, const seg2 *sg0, size_t ns, amp_skey *key, amp_skey *tmp, seg2 *sg)
 {
@@ -334,7 +335,10 @@ static void count_crossings(stroke_scan *s, const seg2 *sg0, size_t ns, amp_skey
             if (!fill) {
                 for (q = 0; q < nq; q++)
                     start[q + 2] += start[q + 1];
-                if (!(list = amp_alloc(s->al, (start[nq + 1] + 1) * sizeof *list))) {
+                /* tall segments through many strips (up to n sqrt n entries) are what the plain sweep is
+                 * good at: then no strips */
+                if (start[nq + 1] > 16 * ns + 4096 ||
+                    !(list = amp_alloc(s->al, (start[nq + 1] + 1) * sizeof *list))) {
                     amp_free(s->al, start);
                     start = NULL;
                 }
