@@ -128,7 +128,7 @@ static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t
         }
     }
     /* triangle order within equal keys, as the stable sort both give */
-    if ((tmp = amp_calloc(al, n + 1, sizeof *tmp)) != NULL)
+    if ((tmp = amp_alloc(al, (n + 1) * sizeof *tmp)) != NULL)
         amp_radix_u32(e, tmp, n, sizeof *e, key, 3);
     else
         qsort(e, n, sizeof *e, edge_cmp); /* no room for the radix sort's copy (glibc's qsort may manage) */
