@@ -49,11 +49,13 @@ struct amp_bvh {
 /* ------------------------------------------------------------------ build */
 
 typedef struct build_ctx {
+    const amp_allocator *a;
     bvh_tri *tris;
     amp_vec3 *cent; /* triangle centroids, permuted with tris */
     amp_box3 *tbox; /* triangle boxes (tri_box), permuted with tris: computed once, read at every level */
     bvh_node *nodes;
-    size_t nnodes;
+    size_t nnodes, cap; /* nodes grow as needed: about 0.7 per triangle are used of the 2 the worst case needs */
+    int nomem;
 } build_ctx;
 
 static amp_box3 tri_box(const bvh_tri *t)
@@ -124,14 +126,35 @@ static void leaf_moments(build_ctx *c, bvh_node *nd)
     nd->radius = r;
 }
 
+/* Room for one more node (zeroed); 0 when out of memory (c->nomem then stays set). */
+static int node_room(build_ctx *c)
+{
+    void *p = c->nodes;
+    size_t cap = c->cap;
+    if (c->nnodes < c->cap)
+        return 1;
+    if (c->nomem || amp_grow(c->a, &p, &cap, c->nnodes + 1, sizeof *c->nodes) != AMP_OK) {
+        c->nomem = 1;
+        return 0;
+    }
+    memset((bvh_node *)p + c->cap, 0, (cap - c->cap) * sizeof *c->nodes);
+    c->nodes = p;
+    c->cap = cap;
+    return 1;
+}
+
 static uint32_t build_node(build_ctx *c, size_t first, size_t count, int depth)
 {
-    uint32_t id = (uint32_t)c->nnodes++;
-    bvh_node *nd = &c->nodes[id];
+    uint32_t id;
+    bvh_node *nd;
     amp_box3 cb = amp_box3_empty();
     size_t i, mid = 0;
     int axis, best_axis = -1, best_bin = -1;
     double best_cost = HUGE_VAL;
+    if (!node_room(c))
+        return 0;
+    id = (uint32_t)c->nnodes++;
+    nd = &c->nodes[id];
     nd->box = amp_box3_empty();
     for (i = first; i < first + count; i++) {
         nd->box = box_join(nd->box, &c->tbox[i]);
@@ -207,7 +230,7 @@ static uint32_t build_node(build_ctx *c, size_t first, size_t count, int depth)
         if (mid > first && mid < first + count) {
             uint32_t l = build_node(c, first, mid - first, depth + 1);
             uint32_t r = build_node(c, mid, first + count - mid, depth + 1);
-            nd = &c->nodes[id]; /* children do not move the array, but re-read for clarity */
+            nd = &c->nodes[id]; /* the children may have moved the array */
             nd->left = l;
             nd->right = r;
             nd->count = 0;
@@ -278,6 +301,7 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     if (!out || !m)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_bvh_build: NULL argument");
     *out = NULL;
+    memset(&c, 0, sizeof c);
     if (m->ntris > 0x7fffffffUL)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "amp_bvh_build: more than 2^31 triangles");
     for (i = 0; i < m->ntris; i++) {
@@ -314,14 +338,14 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
         return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mesh has no triangle with positive area");
     }
     b->tris = amp_calloc(m->alloc, n, sizeof *b->tris);
-    b->nodes = amp_calloc(m->alloc, 2 * n, sizeof *b->nodes);
+    c.cap = n;
+    c.nodes = amp_calloc(m->alloc, c.cap, sizeof *c.nodes);
     c.cent = amp_calloc(m->alloc, n, sizeof *c.cent);
     c.tbox = amp_calloc(m->alloc, n, sizeof *c.tbox);
-    absarea = amp_calloc(m->alloc, 2 * n, sizeof *absarea);
-    if (!b->tris || !b->nodes || !c.cent || !c.tbox || !absarea) {
+    if (!b->tris || !c.nodes || !c.cent || !c.tbox) {
         amp_free(m->alloc, c.cent);
         amp_free(m->alloc, c.tbox);
-        amp_free(m->alloc, absarea);
+        amp_free(m->alloc, c.nodes);
         amp_free(m->alloc, tris);
         amp_bvh_free(b);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
@@ -342,15 +366,26 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     }
     amp_free(m->alloc, tris);
     b->ntris = n;
+    c.a = m->alloc;
     c.tris = b->tris;
-    c.nodes = b->nodes;
     c.nnodes = 0;
     build_node(&c, 0, n, 0);
-    finish_moments(&c, absarea);
-    b->nnodes = c.nnodes;
     amp_free(m->alloc, c.cent);
     amp_free(m->alloc, c.tbox);
+    b->nodes = c.nodes;
+    b->nnodes = c.nnodes;
+    absarea = c.nomem ? NULL : amp_calloc(m->alloc, c.nnodes, sizeof *absarea);
+    if (!absarea) {
+        amp_bvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
+    }
+    finish_moments(&c, absarea);
     amp_free(m->alloc, absarea);
+    if (c.nnodes < c.cap) { /* the slack back (a failed shrink keeps the block) */
+        bvh_node *q = amp_realloc_array(m->alloc, c.nodes, c.nnodes, sizeof *c.nodes);
+        if (q)
+            b->nodes = q;
+    }
     *out = b;
     return AMP_OK;
 }
