@@ -368,7 +368,6 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
     b->ntris = n;
     c.a = m->alloc;
     c.tris = b->tris;
-    c.nnodes = 0;
     build_node(&c, 0, n, 0);
     amp_free(m->alloc, c.cent);
     amp_free(m->alloc, c.tbox);

@@ -2,6 +2,7 @@
  * radix sort of records by uint32_t fields. */
 #include "keysort.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 #define RUN 16
@@ -92,4 +93,15 @@ void amp_radix_u32(void *base, void *tmp, size_t n, size_t size, const size_t *o
         }
     if (src != (unsigned char *)base)
         memcpy(base, src, n * size);
+}
+
+void amp_radix_sort(const amp_allocator *al, void *base, size_t n, size_t size, const size_t *off, int nkeys,
+                    int (*cmp)(const void *, const void *))
+{
+    void *tmp = n > 1 ? amp_alloc(al, n * size) : NULL;
+    if (tmp)
+        amp_radix_u32(base, tmp, n, size, off, nkeys);
+    else if (n > 1)
+        qsort(base, n, size, cmp);
+    amp_free(al, tmp);
 }

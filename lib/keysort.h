@@ -12,6 +12,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "ampath/alloc.h"
+
 typedef struct amp_skey {
     double k1, k2; /* ascending by k1, then k2; equal keys keep their order */
     size_t i;      /* the caller's payload (usually the item's index) */
@@ -30,5 +32,14 @@ void amp_skey_sort(amp_skey *k, amp_skey *tmp, size_t n);
  * @p tmp has room for n records; the result is in @p base.
  */
 void amp_radix_u32(void *base, void *tmp, size_t n, size_t size, const size_t *off, int nkeys);
+
+/*
+ * amp_radix_u32 with its copy from @p al; without memory for it, qsort with
+ * @p cmp, which must order as the fields do and break ties by the records'
+ * own content as they stand (the result is then the same, if glibc's merge
+ * sort manages the memory).
+ */
+void amp_radix_sort(const amp_allocator *al, void *base, size_t n, size_t size, const size_t *off, int nkeys,
+                    int (*cmp)(const void *, const void *));
 
 #endif

@@ -109,7 +109,6 @@ static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t
 {
     static const size_t key[3] = {offsetof(edge_rec, lo), offsetof(edge_rec, hi), offsetof(edge_rec, up)};
     size_t i, n = 0;
-    edge_rec *tmp;
     for (i = 0; i < ntris; i++) {
         const amp_tri *t = &tris[i];
         int k;
@@ -127,12 +126,7 @@ static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t
             n++;
         }
     }
-    /* triangle order within equal keys, as the stable sort both give */
-    if ((tmp = amp_alloc(al, (n + 1) * sizeof *tmp)) != NULL)
-        amp_radix_u32(e, tmp, n, sizeof *e, key, 3);
-    else
-        qsort(e, n, sizeof *e, edge_cmp); /* no room for the radix sort's copy (glibc's qsort may manage) */
-    amp_free(al, tmp);
+    amp_radix_sort(al, e, n, sizeof *e, key, 3, edge_cmp); /* triangle order within equal keys (stable) */
     return n;
 }
 

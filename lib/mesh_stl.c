@@ -328,6 +328,9 @@ static tri_key tri_key_of(const amp_tri *t, size_t idx)
     return k;
 }
 
+/* The sort's fields, most significant first (amp_radix_sort; cmp_tri_key is its fallback). */
+static const size_t tri_key_fields[3] = {offsetof(tri_key, v[0]), offsetof(tri_key, v[1]), offsetof(tri_key, v[2])};
+
 /* Corners, then file order: qsort is not stable, and the copy kept must be the first one. */
 static int cmp_tri_key(const void *pa, const void *pb)
 {
@@ -408,16 +411,8 @@ static amp_status drop_duplicates(amp_mesh *m, size_t nv0, size_t nt0, size_t *d
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for finding duplicate STL triangles");
     for (i = 0; i < n; i++)
         k[i] = tri_key_of(&m->tris[nt0 + i], i);
-    {
-        /* stable: equal corner sets stay in file order, as cmp_tri_key's index tie-break orders them */
-        static const size_t key[3] = {offsetof(tri_key, v[0]), offsetof(tri_key, v[1]), offsetof(tri_key, v[2])};
-        tri_key *tmp = amp_alloc(m->alloc, n * sizeof *tmp);
-        if (tmp)
-            amp_radix_u32(k, tmp, n, sizeof *k, key, 3);
-        else
-            qsort(k, n, sizeof *k, cmp_tri_key);
-        amp_free(m->alloc, tmp);
-    }
+    /* stable: equal corner sets stay in file order, as cmp_tri_key's index tie-break orders them */
+    amp_radix_sort(m->alloc, k, n, sizeof *k, tri_key_fields, 3, cmp_tri_key);
     *dropped = mark_duplicates(m->tris + nt0, k, n, &cancelled);
     amp_free(m->alloc, k);
     if (*dropped == 0)
