@@ -4,7 +4,6 @@
 #include <string.h>
 
 #include "ampath/paths.h"
-#include "lex.h"
 #include "numtext.h"
 
 void amp_pathset_init(amp_pathset *ps, const amp_allocator *a)
@@ -169,115 +168,6 @@ amp_box3 amp_pathset_bbox(const amp_pathset *ps)
     for (i = 0; i < ps->nverts; i++)
         b = amp_box3_add(b, ps->verts[i].p);
     return b;
-}
-
-amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err)
-{
-    amp_lex lx;
-    size_t np0 = ps->npaths, nv0 = ps->nverts, memo_len[2] = {0, 0};
-    const char *memo_tok[2] = {NULL, NULL};
-    double memo_val[2] = {0.0, 0.0};
-    long remaining = 0;
-    int r;
-    amp_status st = AMP_OK;
-
-    if (!text && len)
-        return amp_fail(err, AMP_ERR_ARG, 0, "NULL text");
-    amp_lex_init(&lx, text, len, 1);
-    r = amp_lex_next(&lx, err);
-    if (r < 0)
-        return (amp_status)r;
-    if (r == 0)
-        return amp_fail(err, AMP_ERR_PARSE, 1, "line 1: empty input, expected 'ampath-paths 1'");
-    if (!amp_lex_is(&lx, 0, "ampath-paths") || lx.ntok != 2)
-        return amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected header 'ampath-paths 1'", lx.line);
-    if (!amp_lex_is(&lx, 1, "1"))
-        return amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: unsupported ampath-paths version", lx.line);
-
-    while ((r = amp_lex_next(&lx, err)) > 0) {
-        if (remaining > 0) {
-            double x[4];
-            int i;
-            if (lx.ntok != 4) {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'x y z r', found %d fields", lx.line,
-                              lx.ntok);
-                break;
-            }
-            for (i = 0; i < 4 && st == AMP_OK; i++) {
-                /* z and r repeat along a path: the same text as the line before is the same number */
-                if (i >= 2 && memo_len[i - 2] && lx.toklen[i] == memo_len[i - 2] &&
-                    memcmp(lx.tok[i], memo_tok[i - 2], memo_len[i - 2]) == 0) {
-                    x[i] = memo_val[i - 2];
-                    continue;
-                }
-                st = amp_lex_double(&lx, i, &x[i], err);
-                if (i >= 2 && st == AMP_OK) {
-                    memo_tok[i - 2] = lx.tok[i];
-                    memo_len[i - 2] = lx.toklen[i];
-                    memo_val[i - 2] = x[i];
-                }
-            }
-            if (st != AMP_OK)
-                break;
-            if (x[3] < 0.0) {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: negative radius %g", lx.line, x[3]);
-                break;
-            }
-            st = amp_pathset_push(ps, amp_v3(x[0], x[1], x[2]), x[3], err);
-            if (st != AMP_OK) {
-                if (err)
-                    err->line = lx.line;
-                break;
-            }
-            remaining--;
-            continue;
-        }
-        if (amp_lex_is(&lx, 0, "path")) {
-            amp_role role;
-            long n;
-            double h = 0.0;
-            if (lx.ntok != 3 && lx.ntok != 4) {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n> [<h>]'", lx.line);
-                break;
-            }
-            if (amp_lex_is(&lx, 1, "object"))
-                role = AMP_ROLE_OBJECT;
-            else if (amp_lex_is(&lx, 1, "support"))
-                role = AMP_ROLE_SUPPORT;
-            else {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: unknown role (expected object or support)",
-                              lx.line);
-                break;
-            }
-            st = amp_lex_long(&lx, 2, 0, (long)AMP_PATH_MAX_VERTS, &n, err);
-            if (st == AMP_OK && lx.ntok == 4)
-                st = amp_lex_double(&lx, 3, &h, err);
-            if (st != AMP_OK)
-                break;
-            if (lx.ntok == 4 && !(h > 0.0)) {
-                st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: bead height %g must be positive", lx.line, h);
-                break;
-            }
-            st = amp_pathset_begin(ps, role, err);
-            if (st != AMP_OK)
-                break;
-            ps->paths[ps->npaths - 1].h = h;
-            remaining = n;
-            continue;
-        }
-        st = amp_fail(err, AMP_ERR_PARSE, lx.line, "line %ld: expected 'path <role> <n>'", lx.line);
-        break;
-    }
-    if (r < 0)
-        st = (amp_status)r;
-    if (st == AMP_OK && remaining > 0)
-        st = amp_fail(err, AMP_ERR_PARSE, lx.line + 1, "line %ld: end of input, %ld vertices missing in last path",
-                      lx.line + 1, remaining);
-    if (st != AMP_OK) {
-        ps->npaths = np0;
-        ps->nverts = nv0;
-    }
-    return st;
 }
 
 amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err)

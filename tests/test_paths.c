@@ -3,6 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "../lib/paths_parse.h"
 #include "testutil.h"
 
 static amp_status parse(amp_pathset *ps, const char *text, amp_error *err)
@@ -328,6 +329,162 @@ START_TEST(file_write_is_atomic_and_reads_back)
 }
 END_TEST
 
+
+/* A text with every form the format allows, made by code: paths of 0..40 vertices of both roles, bead heights,
+ * comments on their own lines and after headers, blank lines, CRLF, indented headers, repeated z and r. */
+static char *varied_text(unsigned long seed, size_t npaths, size_t *len)
+{
+    size_t cap = 256 + npaths * 41 * 64, n = 0, i, k;
+    char *t = malloc(cap);
+    ck_assert_ptr_nonnull(t);
+    n += (size_t)sprintf(t + n, "# made by code\nampath-paths 1\n");
+    for (i = 0; i < npaths; i++) {
+        size_t nv = (seed = seed * 6364136223846793005UL + 1442695040888963407UL) >> 59 & 31;
+        int form = (int)(i % 5);
+        if (i % 7 == 3)
+            nv += 9;
+        if (form == 0)
+            n += (size_t)sprintf(t + n, "path object %lu\n", (unsigned long)nv);
+        else if (form == 1)
+            n += (size_t)sprintf(t + n, "  path support %lu # indented, commented\r\n", (unsigned long)nv);
+        else if (form == 2)
+            n += (size_t)sprintf(t + n, "path object %lu 0.2\n\n# between\n", (unsigned long)nv);
+        else if (form == 3)
+            n += (size_t)sprintf(t + n, "\tpath support %lu 0.35#tight\n", (unsigned long)nv);
+        else
+            n += (size_t)sprintf(t + n, "path object %lu\r\n", (unsigned long)nv);
+        for (k = 0; k < nv; k++) {
+            seed = seed * 6364136223846793005UL + 1442695040888963407UL;
+            n += (size_t)sprintf(t + n, "%.10g %.6g %g %s\n", (double)(seed >> 20 & 0xfffff) * 1e-4 - 50.0,
+                                 (double)(seed >> 40 & 0xffff) * 3e-3, 0.2 * (double)(i / 9 + 1),
+                                 k % 3 ? "0.225" : "0.3");
+        }
+    }
+    *len = n;
+    return t;
+}
+
+static void same_sets(const amp_pathset *a, const amp_pathset *b)
+{
+    size_t i;
+    ck_assert_uint_eq(a->npaths, b->npaths);
+    ck_assert_uint_eq(a->nverts, b->nverts);
+    for (i = 0; i < a->npaths; i++) {
+        ck_assert_int_eq(a->paths[i].role, b->paths[i].role);
+        ck_assert_uint_eq(a->paths[i].first, b->paths[i].first);
+        ck_assert_uint_eq(a->paths[i].n, b->paths[i].n);
+        ck_assert(a->paths[i].h == b->paths[i].h);
+    }
+    ck_assert(a->nverts == 0 || memcmp(a->verts, b->verts, a->nverts * sizeof *a->verts) == 0);
+}
+
+START_TEST(chunked_read_gives_the_one_piece_read_at_every_chunk_count)
+{
+    static const size_t counts[] = {2, 3, 4, 5, 7, 9, 16, 64, 1000};
+    size_t len, c, used;
+    char *text = varied_text(7, 400, &len);
+    amp_pathset one, chunked;
+    amp_error err;
+    amp_pathset_init(&one, NULL);
+    ck_assert_int_eq(parse(&one, "ampath-paths 1\npath object 1\n1 2 3 0.5\n", &err), AMP_OK);
+    ck_assert_int_eq(amp_pathset_parse_chunks(&one, text, len, 1, &used, &err), AMP_OK);
+    ck_assert_uint_eq(used, 1);
+    ck_assert_uint_eq(one.npaths, 401);
+    for (c = 0; c < sizeof counts / sizeof counts[0]; c++) {
+        amp_pathset_init(&chunked, NULL);
+        ck_assert_int_eq(parse(&chunked, "ampath-paths 1\npath object 1\n1 2 3 0.5\n", &err), AMP_OK);
+        ck_assert_int_eq(amp_pathset_parse_chunks(&chunked, text, len, counts[c], &used, &err), AMP_OK);
+        /* read in chunks indeed (not the one-piece fallback): as many as asked, up to the 64 the reader takes */
+        ck_assert_uint_eq(used, counts[c] < 64 ? counts[c] : 64);
+        same_sets(&one, &chunked);
+        amp_pathset_free(&chunked);
+    }
+    amp_pathset_free(&one);
+    free(text);
+}
+END_TEST
+
+/* Replace the line that starts at or after byte @p at (the header line excluded) with @p line. */
+static char *with_line(const char *text, size_t len, size_t at, const char *line, size_t *olen)
+{
+    const char *b = memchr(text + at, '\n', len - at), *e;
+    size_t nb, nl = strlen(line);
+    char *t;
+    ck_assert_ptr_nonnull(b);
+    b++;
+    e = memchr(b, '\n', len - (size_t)(b - text));
+    ck_assert_ptr_nonnull(e);
+    nb = (size_t)(b - text);
+    t = malloc(len + nl + 1);
+    memcpy(t, text, nb);
+    memcpy(t + nb, line, nl);
+    memcpy(t + nb + nl, e, len - (size_t)(e - text));
+    *olen = nb + nl + (len - (size_t)(e - text));
+    return t;
+}
+
+START_TEST(chunked_read_fails_exactly_as_the_one_piece_read)
+{
+    /* errors inside a chunk, on a chunk's first line, and paths that run on into the next chunk (a header's
+     * count one too high or too low: the next header is read as a vertex, or a vertex as a header) */
+    static const char *const lines[] = {"1 2 3", "0 0 0 -0.5", "path object 99", "path object 0", "path bridge 1",
+                                        "0 x 0 0.5", "path object 1 -0.2", "1 2 3 4 5"};
+    size_t len, l, pos, c;
+    char *text = varied_text(11, 300, &len);
+    for (l = 0; l < sizeof lines / sizeof lines[0]; l++)
+        for (pos = 1; pos < 10; pos += 2) {
+            size_t blen;
+            char *bad = with_line(text, len, len / 10 * pos, lines[l], &blen);
+            amp_pathset one;
+            amp_error e1;
+            amp_status s1;
+            amp_pathset_init(&one, NULL);
+            amp_error_clear(&e1);
+            s1 = amp_pathset_parse_chunks(&one, bad, blen, 1, NULL, &e1);
+            for (c = 2; c <= 5; c++) {
+                amp_pathset chunked;
+                amp_error e2;
+                amp_pathset_init(&chunked, NULL);
+                ck_assert_int_eq(parse(&chunked, "ampath-paths 1\npath support 1\n0 0 0 0\n", &e2), AMP_OK);
+                amp_error_clear(&e2);
+                ck_assert_int_eq(amp_pathset_parse_chunks(&chunked, bad, blen, c, NULL, &e2), s1);
+                if (s1 != AMP_OK) {
+                    ck_assert_int_eq(e2.line, e1.line);
+                    ck_assert_str_eq(e2.msg, e1.msg);
+                    ck_assert_uint_eq(chunked.npaths, 1); /* as before the call */
+                    ck_assert_uint_eq(chunked.nverts, 1);
+                }
+                amp_pathset_free(&chunked);
+            }
+            ck_assert_msg(s1 != AMP_OK || l == 3, "line '%s' at %lu: expected an error", lines[l], (unsigned long)pos);
+            amp_pathset_free(&one);
+            free(bad);
+        }
+    free(text);
+}
+END_TEST
+
+START_TEST(chunked_read_out_of_memory_leaves_the_set_as_it_was)
+{
+    size_t len;
+    char *text = varied_text(3, 60, &len);
+    long budget;
+    for (budget = 0; budget < 40; budget++) {
+        fx_failalloc fa;
+        amp_pathset ps;
+        amp_error err;
+        amp_status st;
+        fx_failalloc_init(&fa, budget);
+        amp_pathset_init(&ps, &fa.a);
+        st = amp_pathset_parse_chunks(&ps, text, len, 4, NULL, &err);
+        ck_assert(st == AMP_OK || st == AMP_ERR_NOMEM);
+        ck_assert_uint_eq(ps.npaths, st == AMP_OK ? 60 : 0);
+        amp_pathset_free(&ps);
+    }
+    free(text);
+}
+END_TEST
+
 static Suite *paths_suite(void)
 {
     Suite *s = suite_create("paths");
@@ -343,6 +500,9 @@ static Suite *paths_suite(void)
     tcase_add_test(tc, out_of_memory_is_reported_and_leaves_set_consistent);
     tcase_add_test(tc, file_write_is_atomic_and_reads_back);
     tcase_add_test(tc, written_text_equals_printf_across_blocks_and_empty_paths);
+    tcase_add_test(tc, chunked_read_gives_the_one_piece_read_at_every_chunk_count);
+    tcase_add_test(tc, chunked_read_fails_exactly_as_the_one_piece_read);
+    tcase_add_test(tc, chunked_read_out_of_memory_leaves_the_set_as_it_was);
     suite_add_tcase(s, tc);
     return s;
 }
