@@ -420,119 +420,158 @@ static void target(cli_json *j, const char *key, const char *text, double figure
     }
 }
 
-int bench_pipeline(cli_json *j, int quick)
-{
-    vrun d, dn, f1, f2;
-    double e1 = quick ? 2.0 : 1.0, e2 = quick ? 1.0 : 0.5, layer = quick ? 1.0 : 0.5, t_planar, xt, xm, ratio;
+/* Every run of the benchmark and the figures derived from them. */
+typedef struct pipeline_figs {
+    vrun d, dn, f1, f2; /* demo, demo without re-sequencing, fine on 1 and on 2 threads */
+    double e1, e2, layer, t_planar, xt, xm, ratio;
     size_t strokes, pbytes, g1, g2;
     long nproc;
     char cpu[256];
     struct rusage ru;
+    int quick;
+} pipeline_figs;
+
+/* The runs, with one progress bar over them all; 0 when one fails (the bar left as it was). */
+static int pipeline_runs(pipeline_figs *p)
+{
     cli_progress bar;
-    machine(cpu, sizeof cpu, &nproc);
+    machine(p->cpu, sizeof p->cpu, &p->nproc);
     cli_progress_begin(&bar, "bench pipeline");
-    if (!volumetric(e1, AMP_ORDER_TRAVEL_Z_WEIGHT, 1, 1, &d))
-        return CLI_FAILED;
+    if (!volumetric(p->e1, AMP_ORDER_TRAVEL_Z_WEIGHT, 1, 1, &p->d))
+        return 0;
     cli_progress_update(&bar, 0.15);
-    if (!volumetric(e1, 0.0, 1, 0, &dn))
-        return CLI_FAILED;
+    if (!volumetric(p->e1, 0.0, 1, 0, &p->dn))
+        return 0;
     cli_progress_update(&bar, 0.25);
-    g1 = greedy_subdivisions(e1);
+    p->g1 = greedy_subdivisions(p->e1);
     cli_progress_update(&bar, 0.3);
-    if (!volumetric(e2, AMP_ORDER_TRAVEL_Z_WEIGHT, 1, 0, &f1))
-        return CLI_FAILED;
+    if (!volumetric(p->e2, AMP_ORDER_TRAVEL_Z_WEIGHT, 1, 0, &p->f1))
+        return 0;
     cli_progress_update(&bar, 0.55);
-    if (!volumetric(e2, AMP_ORDER_TRAVEL_Z_WEIGHT, 2, 0, &f2))
-        return CLI_FAILED;
+    if (!volumetric(p->e2, AMP_ORDER_TRAVEL_Z_WEIGHT, 2, 0, &p->f2))
+        return 0;
     cli_progress_update(&bar, 0.8);
-    g2 = greedy_subdivisions(e2);
-    if (!planar(layer, &t_planar, &strokes, &pbytes))
-        return CLI_FAILED;
+    p->g2 = greedy_subdivisions(p->e2);
+    if (!planar(p->layer, &p->t_planar, &p->strokes, &p->pbytes))
+        return 0;
     cli_progress_end(&bar);
-    getrusage(RUSAGE_SELF, &ru);
+    getrusage(RUSAGE_SELF, &p->ru);
     /* growth exponents: log(time ratio) / log(fragment ratio) */
-    ratio = (double)f1.fragments / (double)(d.fragments ? d.fragments : 1);
-    xt = log(pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9)) / log(ratio);
-    xm = log((double)f1.peak_all / fmax((double)d.peak_all, 1.0)) / log(ratio);
-    if (j) {
-        cli_json_str(j, "cpu", cpu);
-        cli_json_int(j, "nproc", nproc);
-        json_run(j, "demo", e1, &d);
-        json_run(j, "demo_without_resequencing", e1, &dn);
-        json_run(j, "fine", e2, &f1);
-        json_run(j, "fine_2_threads", e2, &f2);
-        stage_speedups(j, &f1, &f2);
-        stage_cpu(j, "demo_cpu", NULL, &d);
-        stage_cpu(j, "fine_cpu", NULL, &f1);
-        cli_json_int(j, "greedy_subdivisions_demo", (long long)g1);
-        cli_json_int(j, "greedy_subdivisions_fine", (long long)g2);
-        cli_json_num(j, "time_exponent", xt);
-        cli_json_num(j, "memory_exponent", xm);
-        cli_json_bool(j, "threads_identical", f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes);
-        cli_json_num(j, "planar_s", t_planar);
-        cli_json_int(j, "planar_strokes", (long long)strokes);
-        cli_json_num(j, "max_rss_mb", (double)ru.ru_maxrss / 1e3);
-        cli_json_obj(j, "targets");
-    } else {
-        printf("machine: %s, %ld processors; times are wall clock, memory is the peak of the bytes live through the "
-               "caller's allocator (process max RSS %.0f MB)\n",
-               cpu, nproc, (double)ru.ru_maxrss / 1e3);
-        print_run("demo helix, 1 thread,", e1, &d);
-        printf("  travel %.1f m for %.1f m of extrusion = %.2fx, travel %.0f %% of the estimated %.0f s, %lu retractions; "
-               "baseline, Algorithm 2's own order (no re-sequencing, same run): %.2fx, %.0f %%, %lu subdivisions\n",
-               d.gs.travel_length / 1e3, d.gs.print_length / 1e3, d.gs.travel_length / fmax(d.gs.print_length, 1e-9),
-               100.0 * d.gs.travel_time / fmax(d.gs.time, 1e-9), d.gs.time, (unsigned long)d.gs.retractions,
-               dn.gs.travel_length / fmax(dn.gs.print_length, 1e-9), 100.0 * dn.gs.travel_time / fmax(dn.gs.time, 1e-9),
-               (unsigned long)dn.subdivisions);
-        printf("  subdivisions %lu, plain greedy %lu\n", (unsigned long)d.subdivisions, (unsigned long)g1);
-        print_run("fine helix, 1 thread,", e2, &f1);
-        printf("  travel %.2fx of extrusion, %.0f %% of the time; subdivisions %lu, plain greedy %lu\n",
-               f1.gs.travel_length / fmax(f1.gs.print_length, 1e-9), 100.0 * f1.gs.travel_time / fmax(f1.gs.time, 1e-9),
-               (unsigned long)f1.subdivisions, (unsigned long)g2);
-        print_run("fine helix, 2 threads,", e2, &f2);
-        stage_speedups(NULL, &f1, &f2);
-        stage_cpu(NULL, "", "demo, 1 thread", &d);
-        stage_cpu(NULL, "", "eps 0.5, 1 thread", &f1);
-        printf("  eps %.1f -> %.1f: fragments x%.2f, pipeline time x%.2f (exponent %.2f), peak memory x%.2f (exponent "
-               "%.2f); 2 threads %.2fx faster, G-code %s\n",
-               e1, e2, ratio, pipeline_s(&f1) / fmax(pipeline_s(&d), 1e-9), xt,
-               (double)f1.peak_all / fmax((double)d.peak_all, 1.0), xm, pipeline_s(&f1) / fmax(pipeline_s(&f2), 1e-9),
-               f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes ? "byte-identical" : "DIFFERS");
-        printf("baseline, planar continuous pipeline on the helix mesh (layer %.1f mm): %.2f s, %lu strokes, %.1f MB; "
-               "volumetric / planar = %.2fx\n",
-               layer, t_planar, (unsigned long)strokes, (double)pbytes / 1e6, pipeline_s(&d) / fmax(t_planar, 1e-9));
-        printf("speed and travel targets%s:\n", quick ? " (--quick: coarser sizes, not the targets' own)" : "");
-    }
-    target(j, "demo_pipeline_s", "demo pipeline time (s), 1 thread", pipeline_s(&d), 1.0, 1, "s");
-    target(j, "demo_check_s", "demo check time (s), 1 thread", d.t[ST_CHECK], 0.5, 1, "s");
-    target(j, "demo_pipeline_cpu_s", "demo pipeline CPU time (s), 1 thread", pipeline_cpu(&d), 1.0, 1, "s");
-    target(j, "demo_check_cpu_s", "demo check CPU time (s), 1 thread", d.cpu[ST_CHECK], 0.5, 1, "s");
-    target(j, "fine_pipeline_s", "eps 0.5 pipeline time (s), 1 thread", pipeline_s(&f1), 8.0, 1, "s");
-    target(j, "fine_pipeline_cpu_s", "eps 0.5 pipeline CPU time (s), 1 thread", pipeline_cpu(&f1), 8.0, 1, "s");
-    target(j, "fine_peak_mb", "eps 0.5 pipeline peak memory (MB)", (double)f1.peak_all / 1e6, 300.0, 1, "MB");
-    target(j, "time_exponent", "time growth exponent eps 1 -> 0.5", xt, 1.1, 1, "");
-    target(j, "memory_exponent", "memory growth exponent eps 1 -> 0.5", xm, 1.1, 1, "");
-    target(j, "thread_speedup", "eps 0.5 pipeline speed-up on 2 threads", pipeline_s(&f1) / fmax(pipeline_s(&f2), 1e-9),
+    p->ratio = (double)p->f1.fragments / (double)(p->d.fragments ? p->d.fragments : 1);
+    p->xt = log(pipeline_s(&p->f1) / fmax(pipeline_s(&p->d), 1e-9)) / log(p->ratio);
+    p->xm = log((double)p->f1.peak_all / fmax((double)p->d.peak_all, 1.0)) / log(p->ratio);
+    return 1;
+}
+
+/* The figures into the benchmark's JSON object; leaves "targets" open for pipeline_targets. */
+static void pipeline_json(cli_json *j, const pipeline_figs *p)
+{
+    cli_json_str(j, "cpu", p->cpu);
+    cli_json_int(j, "nproc", p->nproc);
+    json_run(j, "demo", p->e1, &p->d);
+    json_run(j, "demo_without_resequencing", p->e1, &p->dn);
+    json_run(j, "fine", p->e2, &p->f1);
+    json_run(j, "fine_2_threads", p->e2, &p->f2);
+    stage_speedups(j, &p->f1, &p->f2);
+    stage_cpu(j, "demo_cpu", NULL, &p->d);
+    stage_cpu(j, "fine_cpu", NULL, &p->f1);
+    cli_json_int(j, "greedy_subdivisions_demo", (long long)p->g1);
+    cli_json_int(j, "greedy_subdivisions_fine", (long long)p->g2);
+    cli_json_num(j, "time_exponent", p->xt);
+    cli_json_num(j, "memory_exponent", p->xm);
+    cli_json_bool(j, "threads_identical", p->f1.g.hash == p->f2.g.hash && p->f1.g.bytes == p->f2.g.bytes);
+    cli_json_num(j, "planar_s", p->t_planar);
+    cli_json_int(j, "planar_strokes", (long long)p->strokes);
+    cli_json_num(j, "max_rss_mb", (double)p->ru.ru_maxrss / 1e3);
+    cli_json_obj(j, "targets");
+}
+
+static void pipeline_text(const pipeline_figs *p)
+{
+    const vrun *d = &p->d, *dn = &p->dn, *f1 = &p->f1, *f2 = &p->f2;
+    printf("machine: %s, %ld processors; times are wall clock, memory is the peak of the bytes live through the "
+           "caller's allocator (process max RSS %.0f MB)\n",
+           p->cpu, p->nproc, (double)p->ru.ru_maxrss / 1e3);
+    print_run("demo helix, 1 thread,", p->e1, d);
+    printf("  travel %.1f m for %.1f m of extrusion = %.2fx, travel %.0f %% of the estimated %.0f s, %lu retractions; "
+           "baseline, Algorithm 2's own order (no re-sequencing, same run): %.2fx, %.0f %%, %lu subdivisions\n",
+           d->gs.travel_length / 1e3, d->gs.print_length / 1e3, d->gs.travel_length / fmax(d->gs.print_length, 1e-9),
+           100.0 * d->gs.travel_time / fmax(d->gs.time, 1e-9), d->gs.time, (unsigned long)d->gs.retractions,
+           dn->gs.travel_length / fmax(dn->gs.print_length, 1e-9),
+           100.0 * dn->gs.travel_time / fmax(dn->gs.time, 1e-9), (unsigned long)dn->subdivisions);
+    printf("  subdivisions %lu, plain greedy %lu\n", (unsigned long)d->subdivisions, (unsigned long)p->g1);
+    print_run("fine helix, 1 thread,", p->e2, f1);
+    printf("  travel %.2fx of extrusion, %.0f %% of the time; subdivisions %lu, plain greedy %lu\n",
+           f1->gs.travel_length / fmax(f1->gs.print_length, 1e-9),
+           100.0 * f1->gs.travel_time / fmax(f1->gs.time, 1e-9), (unsigned long)f1->subdivisions,
+           (unsigned long)p->g2);
+    print_run("fine helix, 2 threads,", p->e2, f2);
+    stage_speedups(NULL, f1, f2);
+    stage_cpu(NULL, "", "demo, 1 thread", d);
+    stage_cpu(NULL, "", "eps 0.5, 1 thread", f1);
+    printf("  eps %.1f -> %.1f: fragments x%.2f, pipeline time x%.2f (exponent %.2f), peak memory x%.2f (exponent "
+           "%.2f); 2 threads %.2fx faster, G-code %s\n",
+           p->e1, p->e2, p->ratio, pipeline_s(f1) / fmax(pipeline_s(d), 1e-9), p->xt,
+           (double)f1->peak_all / fmax((double)d->peak_all, 1.0), p->xm, pipeline_s(f1) / fmax(pipeline_s(f2), 1e-9),
+           f1->g.hash == f2->g.hash && f1->g.bytes == f2->g.bytes ? "byte-identical" : "DIFFERS");
+    printf("baseline, planar continuous pipeline on the helix mesh (layer %.1f mm): %.2f s, %lu strokes, %.1f MB; "
+           "volumetric / planar = %.2fx\n",
+           p->layer, p->t_planar, (unsigned long)p->strokes, (double)p->pbytes / 1e6,
+           pipeline_s(d) / fmax(p->t_planar, 1e-9));
+    printf("speed and travel targets%s:\n", p->quick ? " (--quick: coarser sizes, not the targets' own)" : "");
+}
+
+/* Each speed and travel target with its figure, "met" or "not met" (README "Speed and memory"). */
+static void pipeline_targets(cli_json *j, const pipeline_figs *p)
+{
+    const vrun *d = &p->d, *dn = &p->dn, *f1 = &p->f1, *f2 = &p->f2;
+    target(j, "demo_pipeline_s", "demo pipeline time (s), 1 thread", pipeline_s(d), 1.0, 1, "s");
+    target(j, "demo_check_s", "demo check time (s), 1 thread", d->t[ST_CHECK], 0.5, 1, "s");
+    target(j, "demo_pipeline_cpu_s", "demo pipeline CPU time (s), 1 thread", pipeline_cpu(d), 1.0, 1, "s");
+    target(j, "demo_check_cpu_s", "demo check CPU time (s), 1 thread", d->cpu[ST_CHECK], 0.5, 1, "s");
+    target(j, "fine_pipeline_s", "eps 0.5 pipeline time (s), 1 thread", pipeline_s(f1), 8.0, 1, "s");
+    target(j, "fine_pipeline_cpu_s", "eps 0.5 pipeline CPU time (s), 1 thread", pipeline_cpu(f1), 8.0, 1, "s");
+    target(j, "fine_peak_mb", "eps 0.5 pipeline peak memory (MB)", (double)f1->peak_all / 1e6, 300.0, 1, "MB");
+    target(j, "time_exponent", "time growth exponent eps 1 -> 0.5", p->xt, 1.1, 1, "");
+    target(j, "memory_exponent", "memory growth exponent eps 1 -> 0.5", p->xm, 1.1, 1, "");
+    target(j, "thread_speedup", "eps 0.5 pipeline speed-up on 2 threads", pipeline_s(f1) / fmax(pipeline_s(f2), 1e-9),
            1.6, 0, "x");
     target(j, "threads_identical", "G-code identical on 1 and 2 threads (1 = yes)",
-           f1.g.hash == f2.g.hash && f1.g.bytes == f2.g.bytes, 1.0, 0, "");
-    target(j, "improved_vs_greedy_demo", "subdivisions improved - greedy, demo", (double)d.subdivisions - (double)g1,
-           0.0, 1, "");
-    target(j, "improved_vs_greedy_fine", "subdivisions improved - greedy, eps 0.5", (double)f1.subdivisions - (double)g2,
-           0.0, 1, "");
-    target(j, "demo_subdivisions", "demo subdivisions (before the nearest choice: 4813)", (double)d.subdivisions,
+           f1->g.hash == f2->g.hash && f1->g.bytes == f2->g.bytes, 1.0, 0, "");
+    target(j, "improved_vs_greedy_demo", "subdivisions improved - greedy, demo",
+           (double)d->subdivisions - (double)p->g1, 0.0, 1, "");
+    target(j, "improved_vs_greedy_fine", "subdivisions improved - greedy, eps 0.5",
+           (double)f1->subdivisions - (double)p->g2, 0.0, 1, "");
+    target(j, "demo_subdivisions", "demo subdivisions (before the nearest choice: 4813)", (double)d->subdivisions,
            4813.0, 1, "");
-    target(j, "travel_over_extrusion", "demo travel / extrusion length", d.gs.travel_length / fmax(d.gs.print_length, 1e-9),
-           0.5, 1, "x");
-    target(j, "travel_time_share", "demo travel share of the estimated time", d.gs.travel_time / fmax(d.gs.time, 1e-9),
-           0.3, 1, "");
+    target(j, "travel_over_extrusion", "demo travel / extrusion length",
+           d->gs.travel_length / fmax(d->gs.print_length, 1e-9), 0.5, 1, "x");
+    target(j, "travel_time_share", "demo travel share of the estimated time",
+           d->gs.travel_time / fmax(d->gs.time, 1e-9), 0.3, 1, "");
     target(j, "travel_over_extrusion_baseline", "baseline (Alg. 2's own order): travel / extrusion",
-           dn.gs.travel_length / fmax(dn.gs.print_length, 1e-9), 0.5, 1, "x");
+           dn->gs.travel_length / fmax(dn->gs.print_length, 1e-9), 0.5, 1, "x");
     target(j, "travel_time_share_baseline", "baseline (Alg. 2's own order): travel share of time",
-           dn.gs.travel_time / fmax(dn.gs.time, 1e-9), 0.3, 1, "");
+           dn->gs.travel_time / fmax(dn->gs.time, 1e-9), 0.3, 1, "");
     target(j, "subdivisions_vs_baseline", "demo subdivisions - baseline's (never more cuts)",
-           (double)d.subdivisions - (double)dn.subdivisions, 0.0, 1, "");
+           (double)d->subdivisions - (double)dn->subdivisions, 0.0, 1, "");
+}
+
+int bench_pipeline(cli_json *j, int quick)
+{
+    pipeline_figs p;
+    memset(&p, 0, sizeof p);
+    p.quick = quick;
+    p.e1 = quick ? 2.0 : 1.0;
+    p.e2 = quick ? 1.0 : 0.5;
+    p.layer = quick ? 1.0 : 0.5;
+    if (!pipeline_runs(&p))
+        return CLI_FAILED;
+    if (j)
+        pipeline_json(j, &p);
+    else
+        pipeline_text(&p);
+    pipeline_targets(j, &p);
     if (j)
         cli_json_close(j);
-    return d.check_ok ? CLI_OK : CLI_FAILED;
+    return p.d.check_ok ? CLI_OK : CLI_FAILED;
 }

@@ -300,25 +300,99 @@ static void prusa(cli_json *j, const amp_mesh *torus, int quick)
         printf("  worst ratio %.2fx (target <= 0.5x)\n", worst);
 }
 
+/* The figures of the torus run: the continuous paths and the rectilinear baseline. */
+typedef struct torus_run {
+    double t_slice, t_cont, t_rect, spacing;
+    size_t perims;
+    rect_stats rs;
+    amp_contpath_stats st;
+} torus_run;
+
+/* Baseline: same perimeters and infill regions, rectilinear lines at the spacing that prints the same infill
+ * length as the continuous paths (@p infill_length). */
+static void rect_baseline(const amp_slices *sl, double radius, double infill_length, torus_run *t)
+{
+    amp_polyset isl, ins;
+    double area = 0;
+    size_t li, k;
+    amp_polyset_init(&isl, NULL);
+    amp_polyset_init(&ins, NULL);
+    for (li = 0; li < sl->nlayers; li++)
+        for (k = 0; k < sl->layers[li].polys.nislands; k++) {
+            amp_polyset_island(&sl->layers[li].polys, k, &isl, NULL);
+            amp_polyset_inset(&isl, 3 * radius, 0, &ins, NULL);
+            area += amp_polyset_area(&ins);
+        }
+    t->spacing = infill_length > 0 ? area / infill_length : 1.0;
+    for (li = 0; li < sl->nlayers; li++) {
+        amp_vec2 last = amp_v2(0, 0);
+        int have = 0;
+        for (k = 0; k < sl->layers[li].polys.nislands; k++) {
+            amp_polyset_island(&sl->layers[li].polys, k, &isl, NULL);
+            amp_polyset_inset(&isl, radius, 0, &ins, NULL);
+            t->perims += ins.nrings;
+            amp_polyset_inset(&isl, 3 * radius, 0, &ins, NULL);
+            rectilinear(&ins, t->spacing, &last, &have, &t->rs);
+        }
+    }
+    amp_polyset_free(&isl);
+    amp_polyset_free(&ins);
+}
+
+static void torus_report(cli_json *j, const amp_mesh *m, const amp_slices *sl, const amp_pathset *ps,
+                         const torus_run *t)
+{
+    size_t starts_c = ps->npaths, starts_r = t->rs.starts + t->perims, q;
+    double travel_c = 0; /* within layers, as for the baseline */
+    for (q = 1; q < ps->npaths; q++) {
+        amp_pvert a = amp_pathset_path_verts(ps, q - 1)[ps->paths[q - 1].n - 1], c = amp_pathset_path_verts(ps, q)[0];
+        if (a.p.z == c.p.z)
+            travel_c += amp_v3_dist(a.p, c.p);
+    }
+    if (j) {
+        cli_json_int(j, "triangles", (long long)m->ntris);
+        cli_json_int(j, "layers", (long long)sl->nlayers);
+        cli_json_num(j, "slice_s", t->t_slice);
+        cli_json_num(j, "continuous_s", t->t_cont);
+        cli_json_int(j, "islands", (long long)t->st.islands);
+        cli_json_int(j, "strokes", (long long)t->st.strokes);
+        cli_json_int(j, "continuous_extrusion_starts", (long long)starts_c);
+        cli_json_int(j, "rectilinear_extrusion_starts", (long long)starts_r);
+        cli_json_num(j, "starts_ratio", (double)starts_c / (double)(starts_r ? starts_r : 1));
+        cli_json_num(j, "continuous_infill_mm", t->st.infill_length);
+        cli_json_num(j, "rectilinear_infill_mm", t->rs.length);
+        cli_json_num(j, "rectilinear_spacing_mm", t->spacing);
+        cli_json_num(j, "continuous_travel_mm", travel_c);
+        cli_json_num(j, "travel_ratio", travel_c / cli_positive(t->rs.travel));
+        cli_json_num(j, "rectilinear_travel_mm", t->rs.travel);
+        cli_json_num(j, "rectilinear_s", t->t_rect);
+    } else {
+        printf("%lu triangles, %lu layers: slice %.3f s, continuous paths %.3f s (%lu islands, %lu strokes)\n",
+               (unsigned long)m->ntris, (unsigned long)sl->nlayers, t->t_slice, t->t_cont,
+               (unsigned long)t->st.islands, (unsigned long)t->st.strokes);
+        printf("extrusion starts: continuous %lu vs rectilinear %lu (%.3fx); infill %.0f vs %.0f mm (spacing %.2f "
+               "mm)\n",
+               (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
+               t->st.infill_length, t->rs.length, t->spacing);
+        printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, t->rs.travel,
+               travel_c / cli_positive(t->rs.travel));
+    }
+}
+
 int bench_slice(cli_json *j, int quick)
 {
     amp_mesh m;
     amp_slices sl;
     amp_slice_opts so;
     amp_contpath_opts o;
-    amp_contpath_stats st;
     amp_pathset ps;
-    amp_polyset isl, ins;
-    rect_stats rs;
-    double t0, t_slice, t_cont, t_rect, area = 0, spacing;
-    size_t li, k, perims = 0;
+    torus_run t;
+    double t0;
     int rc = CLI_OK, nu = quick ? 64 : 224, nv = quick ? 32 : 224;
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     amp_pathset_init(&ps, NULL);
-    amp_polyset_init(&isl, NULL);
-    amp_polyset_init(&ins, NULL);
-    memset(&rs, 0, sizeof rs);
+    memset(&t, 0, sizeof t);
     if (make_mesh(&m, nu, nv) != 0)
         return CLI_FAILED;
     so.layer = quick ? 1.0 : 0.2;
@@ -328,74 +402,19 @@ int bench_slice(cli_json *j, int quick)
     t0 = cli_now();
     if (amp_slice_mesh(&m, &so, &sl, NULL) != AMP_OK)
         rc = CLI_FAILED;
-    t_slice = cli_now() - t0;
+    t.t_slice = cli_now() - t0;
     t0 = cli_now();
-    if (rc == CLI_OK && amp_contpath_layers(&sl, &o, &ps, &st, NULL) != AMP_OK)
+    if (rc == CLI_OK && amp_contpath_layers(&sl, &o, &ps, &t.st, NULL) != AMP_OK)
         rc = CLI_FAILED;
-    t_cont = cli_now() - t0;
-    /* baseline: same perimeters and infill regions, rectilinear lines at the
-     * spacing that prints the same infill length */
+    t.t_cont = cli_now() - t0;
     t0 = cli_now();
-    for (li = 0; li < sl.nlayers && rc == CLI_OK; li++)
-        for (k = 0; k < sl.layers[li].polys.nislands; k++) {
-            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
-            amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);
-            area += amp_polyset_area(&ins);
-        }
-    spacing = rc == CLI_OK && st.infill_length > 0 ? area / st.infill_length : 1.0;
-    for (li = 0; li < sl.nlayers && rc == CLI_OK; li++) {
-        amp_vec2 last = amp_v2(0, 0);
-        int have = 0;
-        for (k = 0; k < sl.layers[li].polys.nislands; k++) {
-            amp_polyset_island(&sl.layers[li].polys, k, &isl, NULL);
-            amp_polyset_inset(&isl, o.radius, 0, &ins, NULL);
-            perims += ins.nrings;
-            amp_polyset_inset(&isl, 3 * o.radius, 0, &ins, NULL);
-            rectilinear(&ins, spacing, &last, &have, &rs);
-        }
-    }
-    t_rect = cli_now() - t0;
-    if (rc == CLI_OK) {
-        size_t starts_c = ps.npaths, starts_r = rs.starts + perims, q;
-        double travel_c = 0; /* within layers, as for the baseline */
-        for (q = 1; q < ps.npaths; q++) {
-            amp_pvert a = amp_pathset_path_verts(&ps, q - 1)[ps.paths[q - 1].n - 1], c = amp_pathset_path_verts(&ps, q)[0];
-            if (a.p.z == c.p.z)
-                travel_c += amp_v3_dist(a.p, c.p);
-        }
-        if (j) {
-            cli_json_int(j, "triangles", (long long)m.ntris);
-            cli_json_int(j, "layers", (long long)sl.nlayers);
-            cli_json_num(j, "slice_s", t_slice);
-            cli_json_num(j, "continuous_s", t_cont);
-            cli_json_int(j, "islands", (long long)st.islands);
-            cli_json_int(j, "strokes", (long long)st.strokes);
-            cli_json_int(j, "continuous_extrusion_starts", (long long)starts_c);
-            cli_json_int(j, "rectilinear_extrusion_starts", (long long)starts_r);
-            cli_json_num(j, "starts_ratio", (double)starts_c / (double)(starts_r ? starts_r : 1));
-            cli_json_num(j, "continuous_infill_mm", st.infill_length);
-            cli_json_num(j, "rectilinear_infill_mm", rs.length);
-            cli_json_num(j, "rectilinear_spacing_mm", spacing);
-            cli_json_num(j, "continuous_travel_mm", travel_c);
-            cli_json_num(j, "travel_ratio", travel_c / cli_positive(rs.travel));
-            cli_json_num(j, "rectilinear_travel_mm", rs.travel);
-            cli_json_num(j, "rectilinear_s", t_rect);
-        } else {
-            printf("%lu triangles, %lu layers: slice %.3f s, continuous paths %.3f s (%lu islands, %lu strokes)\n",
-                   (unsigned long)m.ntris, (unsigned long)sl.nlayers, t_slice, t_cont, (unsigned long)st.islands,
-                   (unsigned long)st.strokes);
-            printf("extrusion starts: continuous %lu vs rectilinear %lu (%.3fx); infill %.0f vs %.0f mm (spacing %.2f "
-                   "mm)\n",
-                   (unsigned long)starts_c, (unsigned long)starts_r, (double)starts_c / (double)(starts_r ? starts_r : 1),
-                   st.infill_length, rs.length, spacing);
-            printf("travel within layers: continuous %.0f mm vs rectilinear %.0f mm (%.3fx)\n", travel_c, rs.travel,
-                   travel_c / cli_positive(rs.travel));
-        }
-    }
     if (rc == CLI_OK)
+        rect_baseline(&sl, o.radius, t.st.infill_length, &t);
+    t.t_rect = cli_now() - t0;
+    if (rc == CLI_OK) {
+        torus_report(j, &m, &sl, &ps, &t);
         prusa(j, &m, quick);
-    amp_polyset_free(&isl);
-    amp_polyset_free(&ins);
+    }
     amp_pathset_free(&ps);
     amp_slices_free(&sl);
     amp_mesh_free(&m);

@@ -162,6 +162,51 @@ done:
     free(out);
 }
 
+/* The tensor grid of @p dim directions, ng[d] cell midpoints in [0, 1] each, into g[d] (malloc'ed), and its
+ * tot points as parameter tuples (the first direction fastest) into @p par. */
+static void grid_params(int dim, const size_t *ng, size_t tot, double **g, double *par)
+{
+    size_t i;
+    int d;
+    for (d = 0; d < dim; d++) {
+        g[d] = malloc(ng[d] * sizeof(double));
+        for (i = 0; i < ng[d]; i++)
+            g[d][i] = (i + 0.5) / (double)ng[d];
+    }
+    for (i = 0; i < tot; i++) {
+        size_t q = i;
+        for (d = 0; d < dim; d++) {
+            par[i * (size_t)dim + (size_t)d] = g[d][q % ng[d]];
+            q /= ng[d];
+        }
+    }
+}
+
+/* The per-point de Boor baseline over the same points, best of a few runs; its first run also measures how far
+ * it lands from the batched points @p out (r->maxdiff). */
+static void base_timing(const amp_spline *s, const double *par, const amp_vec3 *out, size_t tot, int quick,
+                        result *r)
+{
+    volatile double sink = 0;
+    size_t i, rep;
+    r->maxdiff = 0;
+    r->ns_base = HUGE_VAL;
+    for (rep = 0; rep < (quick ? 1u : 3u); rep++) {
+        double dt, t0 = cli_now();
+        for (i = 0; i < tot; i++) {
+            amp_vec3 p = base_eval(s, par + i * (size_t)s->dim);
+            sink += p.z;
+            if (rep == 0) {
+                double dd = amp_v3_dist(p, out[i]);
+                r->maxdiff = dd > r->maxdiff ? dd : r->maxdiff;
+            }
+        }
+        dt = (cli_now() - t0) / (double)tot * 1e9;
+        r->ns_base = dt < r->ns_base ? dt : r->ns_base;
+    }
+    (void)sink;
+}
+
 static int run_case(int dim, size_t count_per_dir, size_t grid_per_dir, int quick, result *r)
 {
     amp_spline s;
@@ -169,7 +214,7 @@ static int run_case(int dim, size_t count_per_dir, size_t grid_per_dir, int quic
 #ifdef _OPENMP
     int threads = 1;
 #endif
-    size_t count[3], ng[3] = {1, 1, 1}, tot = 1, i, reps, rep;
+    size_t count[3], ng[3] = {1, 1, 1}, tot = 1, reps, rep;
     double *g[3] = {NULL, NULL, NULL}, *par = NULL, t0;
     amp_vec3 *out = NULL;
     volatile double sink = 0;
@@ -184,18 +229,7 @@ static int run_case(int dim, size_t count_per_dir, size_t grid_per_dir, int quic
     fill(&s);
     out = malloc(tot * sizeof *out);
     par = malloc(tot * (size_t)dim * sizeof *par);
-    for (d = 0; d < dim; d++) {
-        g[d] = malloc(ng[d] * sizeof(double));
-        for (i = 0; i < ng[d]; i++)
-            g[d][i] = (i + 0.5) / (double)ng[d];
-    }
-    for (i = 0; i < tot; i++) {
-        size_t q = i;
-        for (d = 0; d < dim; d++) {
-            par[i * (size_t)dim + (size_t)d] = g[d][q % ng[d]];
-            q /= ng[d];
-        }
-    }
+    grid_params(dim, ng, tot, g, par);
     reps = quick ? 2 : 7;
 #ifdef _OPENMP
     threads = omp_get_max_threads();
@@ -221,22 +255,7 @@ static int run_case(int dim, size_t count_per_dir, size_t grid_per_dir, int quic
         else
             r->ns_batched_mt = dt < r->ns_batched_mt ? dt : r->ns_batched_mt;
     }
-    r->maxdiff = 0;
-    r->ns_base = HUGE_VAL;
-    for (rep = 0; rep < (quick ? 1 : 3); rep++) {
-        double dt;
-        t0 = cli_now();
-        for (i = 0; i < tot; i++) {
-            amp_vec3 p = base_eval(&s, par + i * (size_t)dim);
-            sink += p.z;
-            if (rep == 0) {
-                double dd = amp_v3_dist(p, out[i]);
-                r->maxdiff = dd > r->maxdiff ? dd : r->maxdiff;
-            }
-        }
-        dt = (cli_now() - t0) / (double)tot * 1e9;
-        r->ns_base = dt < r->ns_base ? dt : r->ns_base;
-    }
+    base_timing(&s, par, out, tot, quick, r);
     r->points = tot;
     (void)sink;
     if (dim == 1) {

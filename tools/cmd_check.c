@@ -48,42 +48,36 @@ const char cmd_check_usage[] =
     "                  \"strokes\": {...}, \"support\": {...}, \"ok\"}\n"
     "Exit status: 0 all checks passed, 1 a check failed, 2 bad usage or input.\n";
 
-int cmd_check(int argc, char **argv)
+/* The command line into @p c (paths file, model, head, tolerances), @p skip (--no-NAME, one per checker) and
+ * @p json; every reason to refuse it is printed here (CLI_USAGE). */
+static int check_parse(int argc, char **argv, check_ctx *c, int *skip, int *json)
 {
     const char *pos[1];
     double z_offs = AMP_HEAD_DEFAULT_Z_OFFS, theta = 72.0, overhang_deg = 45.0;
     long seed = 1;
-    int json = 0, npos = 0, rc, failed = 0, usage = 0;
-    int skip[NCHECKERS];
+    int npos = 0, rc;
     char names[NCHECKERS][40];
     cli_opt opts[20 + NCHECKERS];
-    check_ctx c;
-    amp_pathset ps;
-    cli_json j;
-    size_t i, n = 0, i_eps, i_layer;
-    memset(&c, 0, sizeof c);
-    memset(skip, 0, sizeof skip);
-    c.samples = 20000;
-    c.tol = 1e-6;
-    c.max_gap = 1.0;
-    c.bridge = 5.0;
-    opts[n++] = (cli_opt){"trivariate", CLI_STR, &c.trivariate, 0};
-    opts[n++] = (cli_opt){"mesh", CLI_STR, &c.mesh, 0};
+    size_t i, n = 0;
+    c->samples = 20000;
+    c->tol = 1e-6;
+    c->max_gap = 1.0;
+    c->bridge = 5.0;
+    opts[n++] = (cli_opt){"trivariate", CLI_STR, &c->trivariate, 0};
+    opts[n++] = (cli_opt){"mesh", CLI_STR, &c->mesh, 0};
     opts[n++] = (cli_opt){"z-offs", CLI_DOUBLE, &z_offs, 0};
     opts[n++] = (cli_opt){"theta", CLI_DOUBLE, &theta, 0};
-    i_eps = n;
-    opts[n++] = (cli_opt){"eps", CLI_DOUBLE, &c.eps, 0};
-    opts[n++] = (cli_opt){"samples", CLI_LONG, &c.samples, 0};
+    opts[n++] = (cli_opt){"eps", CLI_DOUBLE, &c->eps, 0};
+    opts[n++] = (cli_opt){"samples", CLI_LONG, &c->samples, 0};
     opts[n++] = (cli_opt){"seed", CLI_LONG, &seed, 0};
-    i_layer = n;
-    opts[n++] = (cli_opt){"layer", CLI_DOUBLE, &c.layer, 0};
-    opts[n++] = (cli_opt){"first-layer", CLI_DOUBLE, &c.first_layer, 0};
-    opts[n++] = (cli_opt){"tol", CLI_DOUBLE, &c.tol, 0};
-    opts[n++] = (cli_opt){"support", CLI_FLAG, &c.support, 0};
+    opts[n++] = (cli_opt){"layer", CLI_DOUBLE, &c->layer, 0};
+    opts[n++] = (cli_opt){"first-layer", CLI_DOUBLE, &c->first_layer, 0};
+    opts[n++] = (cli_opt){"tol", CLI_DOUBLE, &c->tol, 0};
+    opts[n++] = (cli_opt){"support", CLI_FLAG, &c->support, 0};
     opts[n++] = (cli_opt){"overhang", CLI_DOUBLE, &overhang_deg, 0};
-    opts[n++] = (cli_opt){"max-gap", CLI_DOUBLE, &c.max_gap, 0};
-    opts[n++] = (cli_opt){"bridge", CLI_DOUBLE, &c.bridge, 0};
-    opts[n++] = (cli_opt){"json", CLI_FLAG, &json, 0};
+    opts[n++] = (cli_opt){"max-gap", CLI_DOUBLE, &c->max_gap, 0};
+    opts[n++] = (cli_opt){"bridge", CLI_DOUBLE, &c->bridge, 0};
+    opts[n++] = (cli_opt){"json", CLI_FLAG, json, 0};
     for (i = 0; i < NCHECKERS; i++) {
         snprintf(names[i], sizeof names[i], "no-%s", checkers[i].name);
         opts[n++] = (cli_opt){names[i], CLI_FLAG, &skip[i], 0};
@@ -92,36 +86,51 @@ int cmd_check(int argc, char **argv)
     rc = cli_parse("check", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
-    if (c.trivariate && c.mesh)
+    if (c->trivariate && c->mesh)
         return cli_fail("check", CLI_USAGE, "give either --trivariate or --mesh, not both");
-    if ((rc = headopt_make("check", z_offs, theta, &c.head)) != CLI_OK)
+    if ((rc = headopt_make("check", z_offs, theta, &c->head)) != CLI_OK)
         return rc;
-    c.eps_given = opts[i_eps].seen;
-    if (c.eps_given && !(c.eps > 0.0))
-        return cli_fail("check", CLI_USAGE, "--eps must be positive (got %g)", c.eps);
-    if (c.samples < 1 || c.samples > 100000000L)
+    c->eps_given = cli_given(opts, "eps");
+    if (c->eps_given && !(c->eps > 0.0))
+        return cli_fail("check", CLI_USAGE, "--eps must be positive (got %g)", c->eps);
+    if (c->samples < 1 || c->samples > 100000000L)
         return cli_fail("check", CLI_USAGE, "--samples must be in 1..100000000");
-    c.layer_given = opts[i_layer].seen;
-    if (c.layer_given && !(c.layer > 0.0))
-        return cli_fail("check", CLI_USAGE, "--layer must be positive (got %g)", c.layer);
-    if (c.layer_given && !c.mesh)
+    c->layer_given = cli_given(opts, "layer");
+    if (c->layer_given && !(c->layer > 0.0))
+        return cli_fail("check", CLI_USAGE, "--layer must be positive (got %g)", c->layer);
+    if (c->layer_given && !c->mesh)
         return cli_fail("check", CLI_USAGE, "--layer needs the --mesh that was sliced");
-    if (!(c.tol >= 0.0) || c.tol > 1e3)
+    if (!(c->tol >= 0.0) || c->tol > 1e3)
         return cli_fail("check", CLI_USAGE, "--tol must be in [0, 1000] mm");
     if (!(overhang_deg >= 0.0 && overhang_deg < 90.0))
         return cli_fail("check", CLI_USAGE, "--overhang must be in [0, 90) degrees (got %g)", overhang_deg);
-    if (!(c.max_gap >= 0.0 && c.max_gap <= 1e3) || !(c.bridge >= 0.0 && c.bridge <= 1e4))
+    if (!(c->max_gap >= 0.0 && c->max_gap <= 1e3) || !(c->bridge >= 0.0 && c->bridge <= 1e4))
         return cli_fail("check", CLI_USAGE, "--max-gap and --bridge must be >= 0 mm");
-    c.overhang = overhang_deg / 57.295779513082320876;
-    c.seed = (unsigned long)seed;
-    c.paths_file = pos[0];
+    c->overhang = overhang_deg / 57.295779513082320876;
+    c->seed = (unsigned long)seed;
+    c->paths_file = pos[0];
+    return CLI_OK;
+}
+
+int cmd_check(int argc, char **argv)
+{
+    int json = 0, rc, failed = 0, usage = 0;
+    int skip[NCHECKERS];
+    check_ctx c;
+    amp_pathset ps;
+    cli_json j;
+    size_t i;
+    memset(&c, 0, sizeof c);
+    memset(skip, 0, sizeof skip);
+    if ((rc = check_parse(argc, argv, &c, skip, &json)) != CLI_OK)
+        return rc;
     amp_pathset_init(&ps, NULL);
-    if ((rc = cli_load_paths("check", pos[0], &ps)) != CLI_OK)
+    if ((rc = cli_load_paths("check", c.paths_file, &ps)) != CLI_OK)
         return rc;
     c.ps = &ps;
     if (json) {
         cli_json_begin(&j, stdout);
-        cli_json_str(&j, "input", pos[0]);
+        cli_json_str(&j, "input", c.paths_file);
     }
     for (i = 0; i < NCHECKERS; i++) {
         if (json)

@@ -75,132 +75,170 @@ static double estimate_curves(const amp_spline *v, int d, double eps, double cho
 }
 
 
-int cmd_cover(int argc, char **argv)
-{
-    const char *pos[1], *out = NULL, *dir = "auto", *measure = "arclen";
-    double eps = 0, radius = 0.5, chord = 0;
-    long m = 0, cells = 16, samples = 20000;
-    int json = 0, npos = 0, rc, picked;
+/* The command line, validated; o holds the covering options but the direction of auto. */
+typedef struct cover_args {
+    const char *input, *out, *measure;
+    double eps, chord;
+    long m, samples;
+    int json;
     amp_cover_opts o;
+} cover_args;
+
+/* What the report shows of one covering. */
+typedef struct cover_figures {
     amp_cover_stats st;
     amp_coverage gap;
-    amp_coverage_domain dom = {NULL, NULL, 0.0};
-    amp_spline v;
-    amp_pathset ps;
-    amp_error err;
-    double t0, t1, score[3] = {0, 0, 0};
-    char comment[200], dirname[2] = {0, 0};
-    cli_progress bar;
-    cli_opt opts[] = {{"eps", CLI_DOUBLE, &eps, 0},        {"dir", CLI_STR, &dir, 0},
-                      {"min-depth", CLI_LONG, &m, 0},      {"measure", CLI_STR, &measure, 0},
-                      {"radius", CLI_DOUBLE, &radius, 0},  {"chord-tol", CLI_DOUBLE, &chord, 0},
-                      {"cells", CLI_LONG, &cells, 0},      {"samples", CLI_LONG, &samples, 0},
-                      {"output", CLI_STR, &out, 0},        {"json", CLI_FLAG, &json, 0},
+    double score[3], seconds;
+    char dirname[2];
+} cover_figures;
+
+/* The command line into @p a; every reason to refuse it is printed here (CLI_USAGE). */
+static int cover_parse(int argc, char **argv, cover_args *a)
+{
+    const char *pos[1], *dir = "auto";
+    double radius = 0.5;
+    long cells = 16;
+    int npos = 0, rc;
+    cli_opt opts[] = {{"eps", CLI_DOUBLE, &a->eps, 0},          {"dir", CLI_STR, &dir, 0},
+                      {"min-depth", CLI_LONG, &a->m, 0},        {"measure", CLI_STR, &a->measure, 0},
+                      {"radius", CLI_DOUBLE, &radius, 0},       {"chord-tol", CLI_DOUBLE, &a->chord, 0},
+                      {"cells", CLI_LONG, &cells, 0},           {"samples", CLI_LONG, &a->samples, 0},
+                      {"output", CLI_STR, &a->out, 0},          {"json", CLI_FLAG, &a->json, 0},
                       {NULL, CLI_FLAG, NULL, 0}};
+    memset(a, 0, sizeof *a);
+    a->measure = "arclen";
+    a->samples = 20000;
     rc = cli_parse("cover", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
-    if (!opts[0].seen || !(eps > 0))
+    a->input = pos[0];
+    if (!cli_given(opts, "eps") || !(a->eps > 0))
         return cli_fail("cover", CLI_USAGE, "--eps E (> 0, mm) is required");
-    amp_cover_opts_default(&o);
-    o.eps = eps;
-    o.radius = radius;
-    o.chord_tol = chord;
+    amp_cover_opts_default(&a->o);
+    a->o.eps = a->eps;
+    a->o.radius = radius;
+    a->o.chord_tol = a->chord;
     if (strcmp(dir, "auto") == 0)
-        o.dir = AMP_COVER_AUTO;
+        a->o.dir = AMP_COVER_AUTO;
     else if (strlen(dir) == 1 && strchr("uvw", dir[0]))
-        o.dir = dir[0] == 'u' ? 0 : dir[0] == 'v' ? 1 : 2;
+        a->o.dir = dir[0] == 'u' ? 0 : dir[0] == 'v' ? 1 : 2;
     else
         return cli_fail("cover", CLI_USAGE, "--dir must be auto, u, v or w");
-    if (strcmp(measure, "arclen") == 0)
-        o.measure = AMP_COVER_ARCLEN;
-    else if (strcmp(measure, "iso") == 0)
-        o.measure = AMP_COVER_ISO;
+    if (strcmp(a->measure, "arclen") == 0)
+        a->o.measure = AMP_COVER_ARCLEN;
+    else if (strcmp(a->measure, "iso") == 0)
+        a->o.measure = AMP_COVER_ISO;
     else
         return cli_fail("cover", CLI_USAGE, "--measure must be iso or arclen");
-    if (m < 0 || m > 30 || cells < 1 || cells > 64 || samples < 0 || !(radius > 0) || chord < 0)
+    if (a->m < 0 || a->m > 30 || cells < 1 || cells > 64 || a->samples < 0 || !(radius > 0) || a->chord < 0)
         return cli_fail("cover", CLI_USAGE, "option out of range (0 <= m <= 30, 1 <= cells <= 64, radius > 0)");
-    o.min_depth = (int)m;
-    o.cells = (int)cells;
-    rc = cli_load_trivariate("cover", pos[0], &v);
-    if (rc != CLI_OK)
-        return rc;
+    a->o.min_depth = (int)a->m;
+    a->o.cells = (int)cells;
+    return CLI_OK;
+}
+
+/* The direction (auto: the picked one) and the work estimate, refused above the limits. */
+static int cover_direction(cover_args *a, const amp_spline *v, cover_figures *f)
+{
+    amp_error err;
+    double curves, length;
+    int picked;
     amp_error_clear(&err);
     /* the scores are reported whatever was asked; the choice is taken only for auto */
-    if (amp_cover_pick_dir(&v, &picked, score, &err) != AMP_OK) {
-        amp_spline_free(&v);
+    if (amp_cover_pick_dir(v, &picked, f->score, &err) != AMP_OK)
         return cli_fail_err("cover", &err);
+    if (a->o.dir == AMP_COVER_AUTO)
+        a->o.dir = picked;
+    f->dirname[0] = "uvw"[a->o.dir];
+    curves = estimate_curves(v, a->o.dir, a->eps, a->chord, &length);
+    if (!(curves <= cli_work.max_curves))
+        return cli_work_refuse("cover", "covering curves", curves, cli_work.max_curves, "max-curves");
+    if (!(length <= cli_work.max_length))
+        return cli_work_refuse("cover", "mm of paths", length, cli_work.max_length, "max-length");
+    return CLI_OK;
+}
+
+static void cover_json(const cover_args *a, const cover_figures *f)
+{
+    cli_json j;
+    cli_json_begin(&j, stdout);
+    cli_json_num(&j, "eps", a->eps);
+    cli_json_str(&j, "measure", a->measure);
+    cli_json_str(&j, "dir", f->dirname);
+    cli_json_obj(&j, "dir_scores");
+    cli_json_num(&j, "u", f->score[0]);
+    cli_json_num(&j, "v", f->score[1]);
+    cli_json_num(&j, "w", f->score[2]);
+    cli_json_close(&j);
+    cli_json_int(&j, "min_depth", a->m);
+    cli_json_int(&j, "surfaces", (long long)f->st.surfaces);
+    cli_json_int(&j, "curves", (long long)f->st.curves);
+    cli_json_int(&j, "vertices", (long long)f->st.vertices);
+    cli_json_num(&j, "length_mm", f->st.length);
+    if (a->samples > 0) {
+        cli_json_num(&j, "coverage_gap_mm", f->gap.gap);
+        cli_json_int(&j, "coverage_samples", (long long)f->gap.samples);
+        cli_json_num(&j, "volume_mm3", f->gap.volume);
+        cli_json_num(&j, "deposited_mm3", f->gap.deposited);
+        cli_json_num(&j, "over_coverage", f->gap.volume > 0 ? f->gap.deposited / f->gap.volume : 0);
     }
-    if (o.dir == AMP_COVER_AUTO)
-        o.dir = picked;
-    dirname[0] = "uvw"[o.dir];
-    t0 = estimate_curves(&v, o.dir, eps, chord, &t1);
-    if (!(t0 <= cli_work.max_curves)) {
-        amp_spline_free(&v);
-        return cli_work_refuse("cover", "covering curves", t0, cli_work.max_curves, "max-curves");
-    }
-    if (!(t1 <= cli_work.max_length)) {
-        amp_spline_free(&v);
-        return cli_work_refuse("cover", "mm of paths", t1, cli_work.max_length, "max-length");
-    }
-    amp_pathset_init(&ps, NULL);
+    cli_json_bool(&j, "depth_limited", f->st.depth_limited);
+    cli_json_num(&j, "time_s", f->seconds);
+    cli_json_end(&j);
+}
+
+/* Algorithm 1 on @p v into @p ps, timed, then the paths saved (-o) and their coverage measured (--json). */
+static int cover_run(cover_args *a, const amp_spline *v, amp_pathset *ps, cover_figures *f)
+{
+    amp_coverage_domain dom = {NULL, NULL, 0.0};
+    amp_error err;
+    cli_progress bar;
+    char comment[200];
+    double t0;
+    amp_status st;
     amp_error_clear(&err);
     cli_progress_begin(&bar, "cover");
-    o.progress = cli_progress_fn;
-    o.progress_user = &bar;
+    a->o.progress = cli_progress_fn;
+    a->o.progress_user = &bar;
     t0 = cli_now();
-    rc = amp_cover_trivariate(&v, &o, &ps, &st, &err);
+    st = amp_cover_trivariate(v, &a->o, ps, &f->st, &err);
     cli_progress_end(&bar);
-    if (rc != AMP_OK) {
-        amp_spline_free(&v);
-        amp_pathset_free(&ps);
+    if (st != AMP_OK)
         return cli_fail_err("cover", &err);
-    }
-    t1 = cli_now();
-    if (st.depth_limited)
+    f->seconds = cli_now() - t0;
+    if (f->st.depth_limited)
         fprintf(stderr, "ampath cover: warning: recursion depth limit reached; coverage is not guaranteed\n");
-    snprintf(comment, sizeof comment, "ampath cover %s: eps %.17g measure %s dir %s min-depth %ld", pos[0], eps,
-             measure, dirname, m);
-    if (out && cli_save_paths("cover", out, &ps, comment) != CLI_OK) {
-        amp_spline_free(&v);
-        amp_pathset_free(&ps);
+    snprintf(comment, sizeof comment, "ampath cover %s: eps %.17g measure %s dir %s min-depth %ld", a->input,
+             a->eps, a->measure, f->dirname, a->m);
+    if (a->out && cli_save_paths("cover", a->out, ps, comment) != CLI_OK)
         return CLI_USAGE;
-    }
-    memset(&gap, 0, sizeof gap);
-    dom.trivariate = &v;
-    if (json && samples > 0 && amp_check_coverage(&ps, &dom, (size_t)samples, 1, &gap, &err) != AMP_OK) {
-        amp_spline_free(&v);
-        amp_pathset_free(&ps);
+    dom.trivariate = v;
+    if (a->json && a->samples > 0 &&
+        amp_check_coverage(ps, &dom, (size_t)a->samples, 1, &f->gap, &err) != AMP_OK)
         return cli_fail_err("cover", &err);
-    }
-    if (json) {
-        cli_json j;
-        cli_json_begin(&j, stdout);
-        cli_json_num(&j, "eps", eps);
-        cli_json_str(&j, "measure", measure);
-        cli_json_str(&j, "dir", dirname);
-        cli_json_obj(&j, "dir_scores");
-        cli_json_num(&j, "u", score[0]);
-        cli_json_num(&j, "v", score[1]);
-        cli_json_num(&j, "w", score[2]);
-        cli_json_close(&j);
-        cli_json_int(&j, "min_depth", m);
-        cli_json_int(&j, "surfaces", (long long)st.surfaces);
-        cli_json_int(&j, "curves", (long long)st.curves);
-        cli_json_int(&j, "vertices", (long long)st.vertices);
-        cli_json_num(&j, "length_mm", st.length);
-        if (samples > 0) {
-            cli_json_num(&j, "coverage_gap_mm", gap.gap);
-            cli_json_int(&j, "coverage_samples", (long long)gap.samples);
-            cli_json_num(&j, "volume_mm3", gap.volume);
-            cli_json_num(&j, "deposited_mm3", gap.deposited);
-            cli_json_num(&j, "over_coverage", gap.volume > 0 ? gap.deposited / gap.volume : 0);
-        }
-        cli_json_bool(&j, "depth_limited", st.depth_limited);
-        cli_json_num(&j, "time_s", t1 - t0);
-        cli_json_end(&j);
-    }
+    return CLI_OK;
+}
+
+int cmd_cover(int argc, char **argv)
+{
+    cover_args a;
+    cover_figures f;
+    amp_spline v;
+    amp_pathset ps;
+    int rc = cover_parse(argc, argv, &a);
+    if (rc != CLI_OK)
+        return rc;
+    rc = cli_load_trivariate("cover", a.input, &v);
+    if (rc != CLI_OK)
+        return rc;
+    memset(&f, 0, sizeof f);
+    amp_pathset_init(&ps, NULL);
+    rc = cover_direction(&a, &v, &f);
+    if (rc == CLI_OK)
+        rc = cover_run(&a, &v, &ps, &f);
+    if (rc == CLI_OK && a.json)
+        cover_json(&a, &f);
     amp_spline_free(&v);
     amp_pathset_free(&ps);
-    return CLI_OK;
+    return rc;
 }

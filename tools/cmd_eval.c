@@ -43,15 +43,89 @@ static int parse_deriv(const char *d, int dim, int k[3])
     return 1;
 }
 
+/* The parameters on one stdin line (a '#' comment cut off): how many, 0 for a blank line, -1 when one is not a
+ * finite number or there are more than 3. */
+static int parse_params(char *line, double par[3])
+{
+    char *p = line, *hash = strchr(line, '#'), *end;
+    int got = 0;
+    if (hash)
+        *hash = '\0';
+    for (;;) {
+        double v;
+        while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
+            p++;
+        if (!*p)
+            break;
+        errno = 0;
+        v = strtod(p, &end);
+        if (end == p || !isfinite(v) || got == 3)
+            return -1;
+        par[got++] = v;
+        p = end;
+    }
+    return got;
+}
+
+/* The first direction whose parameter lies outside the spline's domain, or s->dim when none does. */
+static int outside_domain(const amp_spline *s, const double *par, double *lo, double *hi)
+{
+    int d;
+    for (d = 0; d < s->dim; d++) {
+        amp_spline_domain(s, d, lo, hi);
+        if (par[d] < lo[0] || par[d] > hi[0])
+            break;
+    }
+    return d;
+}
+
+/* Every stdin line evaluated and printed (as JSON into @p j when it is not NULL); the first bad line stops the
+ * run with its message (CLI_USAGE), the points before it printed. */
+static int eval_lines(const amp_spline *s, const int k[3], cli_json *j, int *count)
+{
+    char line[4096];
+    long lineno = 0;
+    amp_error err;
+    amp_error_clear(&err);
+    while (fgets(line, sizeof line, stdin)) {
+        double par[3], lo, hi;
+        amp_vec3 out;
+        int got, d;
+        lineno++;
+        if (!strchr(line, '\n') && !feof(stdin))
+            return cli_fail("eval", CLI_USAGE, "stdin line %ld: too long", lineno);
+        got = parse_params(line, par);
+        if (got == 0)
+            continue;
+        if (got != s->dim)
+            return cli_fail("eval", CLI_USAGE, "stdin line %ld: expected %d finite parameter(s)", lineno, s->dim);
+        if ((d = outside_domain(s, par, &lo, &hi)) < s->dim)
+            return cli_fail("eval", CLI_USAGE,
+                            "stdin line %ld: parameter %d = %.17g outside the domain [%.17g, %.17g]", lineno, d + 1,
+                            par[d], lo, hi);
+        if (amp_spline_eval_partial(s, par, k, &out, &err) != AMP_OK)
+            return cli_fail("eval", CLI_USAGE, "stdin line %ld: %s", lineno, err.msg);
+        (*count)++;
+        if (j) {
+            cli_json_arr(j, NULL);
+            cli_json_num(j, NULL, out.x);
+            cli_json_num(j, NULL, out.y);
+            cli_json_num(j, NULL, out.z);
+            cli_json_close(j);
+        } else
+            printf("%.17g %.17g %.17g\n", out.x, out.y, out.z);
+    }
+    return CLI_OK;
+}
+
 int cmd_eval(int argc, char **argv)
 {
     const char *pos[1], *deriv = NULL;
-    long object = 0, lineno = 0;
-    int json = 0, npos = 0, rc, k[3], d, count = 0;
+    long object = 0;
+    int json = 0, npos = 0, rc, k[3], count = 0;
     amp_spline *list = NULL, *s;
     size_t n = 0;
     amp_error err;
-    char line[4096];
     cli_json j;
     cli_opt opts[] = {{"derivative", CLI_STR, &deriv, 0},
                       {"object", CLI_LONG, &object, 0},
@@ -78,67 +152,7 @@ int cmd_eval(int argc, char **argv)
         cli_json_begin(&j, stdout);
         cli_json_arr(&j, "points");
     }
-    rc = CLI_OK;
-    while (fgets(line, sizeof line, stdin)) {
-        double par[3];
-        char *p = line, *hash = strchr(line, '#'), *end;
-        amp_vec3 out;
-        int got = 0;
-        lineno++;
-        if (!strchr(line, '\n') && !feof(stdin)) {
-            rc = cli_fail("eval", CLI_USAGE, "stdin line %ld: too long", lineno);
-            break;
-        }
-        if (hash)
-            *hash = '\0';
-        for (;;) {
-            double v;
-            while (*p == ' ' || *p == '\t' || *p == '\r' || *p == '\n')
-                p++;
-            if (!*p)
-                break;
-            errno = 0;
-            v = strtod(p, &end);
-            if (end == p || !isfinite(v) || got == 3) {
-                got = -1;
-                break;
-            }
-            par[got++] = v;
-            p = end;
-        }
-        if (got == 0)
-            continue;
-        if (got != s->dim) {
-            rc = cli_fail("eval", CLI_USAGE, "stdin line %ld: expected %d finite parameter(s)", lineno, s->dim);
-            break;
-        }
-        for (d = 0; d < s->dim; d++) {
-            double lo, hi;
-            amp_spline_domain(s, d, &lo, &hi);
-            if (par[d] < lo || par[d] > hi)
-                break;
-        }
-        if (d < s->dim) {
-            double lo, hi;
-            amp_spline_domain(s, d, &lo, &hi);
-            rc = cli_fail("eval", CLI_USAGE, "stdin line %ld: parameter %d = %.17g outside the domain [%.17g, %.17g]",
-                          lineno, d + 1, par[d], lo, hi);
-            break;
-        }
-        if (amp_spline_eval_partial(s, par, k, &out, &err) != AMP_OK) {
-            rc = cli_fail("eval", CLI_USAGE, "stdin line %ld: %s", lineno, err.msg);
-            break;
-        }
-        count++;
-        if (json) {
-            cli_json_arr(&j, NULL);
-            cli_json_num(&j, NULL, out.x);
-            cli_json_num(&j, NULL, out.y);
-            cli_json_num(&j, NULL, out.z);
-            cli_json_close(&j);
-        } else
-            printf("%.17g %.17g %.17g\n", out.x, out.y, out.z);
-    }
+    rc = eval_lines(s, k, json ? &j : NULL, &count);
     if (json) {
         cli_json_close(&j);
         cli_json_int(&j, "count", count);

@@ -215,79 +215,74 @@ static int judge(const amp_field_stats *st, double spacing, double gap_all, size
     return CLI_OK;
 }
 
-int cmd_field(int argc, char **argv)
+/* The command line, validated. */
+typedef struct field_args {
+    const char *mesh, *field, *pattern, *out, *dir, *along, *within, *without;
+    double side, spacing, step, min_len, radius;
+    long samples, shells;
+    int json, builtin, sweep; /* builtin: helix-square or box; sweep: --field sweep; neither: a trivariate */
+} field_args;
+
+/* The command line into @p a; every reason to refuse it is printed here (CLI_USAGE). */
+static int field_parse(int argc, char **argv, field_args *a)
 {
-    const char *pos[1], *field = NULL, *pattern = "grid", *out = NULL, *dir = "auto", *along = NULL;
-    const char *within = NULL, *without = NULL;
-    amp_mesh rm[2];
-    amp_bvh *rb[2] = {NULL, NULL};
-    double side = 6.0, spacing = 1.0, step = 0, min_len = -1, radius = 0, t0, t_cover, t_gap = 0;
-    double gap_all = -1, gap_in = -1, mean = -1;
-    long samples = 10000, shells = 0;
-    int json = 0, npos = 0, rc;
-    amp_mesh m;
-    amp_bvh *b = NULL;
-    amp_field f;
-    amp_spline spl;
-    int builtin, sweep;
-    amp_sweep *sw = NULL;
-    amp_field_opts o;
-    amp_field_stats st;
-    cli_progress bar;
-    amp_pathset ps;
-    amp_error err;
-    cli_opt opts[] = {{"field", CLI_STR, &field, 0},     {"spacing", CLI_DOUBLE, &spacing, 0},
-                      {"pattern", CLI_STR, &pattern, 0}, {"step", CLI_DOUBLE, &step, 0},
-                      {"min-len", CLI_DOUBLE, &min_len, 0}, {"radius", CLI_DOUBLE, &radius, 0},
-                      {"samples", CLI_LONG, &samples, 0}, {"output", CLI_STR, &out, 0},
-                      {"json", CLI_FLAG, &json, 0},      {"dir", CLI_STR, &dir, 0},
-                      {"along", CLI_STR, &along, 0},     {"side", CLI_DOUBLE, &side, 0},
-                      {"shells", CLI_LONG, &shells, 0},  {"within", CLI_STR, &within, 0},
-                      {"without", CLI_STR, &without, 0}, {NULL, CLI_FLAG, NULL, 0}};
+    const char *pos[1];
+    int npos = 0, rc;
+    cli_opt opts[] = {{"field", CLI_STR, &a->field, 0},         {"spacing", CLI_DOUBLE, &a->spacing, 0},
+                      {"pattern", CLI_STR, &a->pattern, 0},     {"step", CLI_DOUBLE, &a->step, 0},
+                      {"min-len", CLI_DOUBLE, &a->min_len, 0},  {"radius", CLI_DOUBLE, &a->radius, 0},
+                      {"samples", CLI_LONG, &a->samples, 0},    {"output", CLI_STR, &a->out, 0},
+                      {"json", CLI_FLAG, &a->json, 0},          {"dir", CLI_STR, &a->dir, 0},
+                      {"along", CLI_STR, &a->along, 0},         {"side", CLI_DOUBLE, &a->side, 0},
+                      {"shells", CLI_LONG, &a->shells, 0},      {"within", CLI_STR, &a->within, 0},
+                      {"without", CLI_STR, &a->without, 0},     {NULL, CLI_FLAG, NULL, 0}};
+    memset(a, 0, sizeof *a);
+    a->pattern = "grid";
+    a->dir = "auto";
+    a->side = 6.0;
+    a->spacing = 1.0;
+    a->min_len = -1;
+    a->samples = 10000;
     rc = cli_parse("field", argc, argv, opts, pos, 1, 1, &npos);
     if (rc != CLI_OK)
         return rc;
-    if (!field)
+    a->mesh = pos[0];
+    if (!a->field)
         return cli_fail("field", CLI_USAGE, "--field NAME is required (helix-square, box, sweep, or a trivariate)");
-    if (strcmp(pattern, "grid") != 0 && strcmp(pattern, "hex") != 0)
-        return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", pattern);
-    if (shells < 0 || shells > 100)
+    if (strcmp(a->pattern, "grid") != 0 && strcmp(a->pattern, "hex") != 0)
+        return cli_fail("field", CLI_USAGE, "--pattern must be grid or hex, not '%s'", a->pattern);
+    if (a->shells < 0 || a->shells > 100)
         return cli_fail("field", CLI_USAGE, "--shells must be in 0..100");
-    if (samples < 0)
+    if (a->samples < 0)
         return cli_fail("field", CLI_USAGE, "--samples must be >= 0");
-    if (strcmp(dir, "auto") != 0 && strcmp(dir, "u") != 0 && strcmp(dir, "v") != 0 && strcmp(dir, "w") != 0)
-        return cli_fail("field", CLI_USAGE, "--dir must be auto, u, v or w, not '%s'", dir);
-    builtin = strcmp(field, "helix-square") == 0 || strcmp(field, "box") == 0;
-    sweep = strcmp(field, "sweep") == 0;
-    if (sweep != (along != NULL))
+    if (strcmp(a->dir, "auto") != 0 && strcmp(a->dir, "u") != 0 && strcmp(a->dir, "v") != 0 &&
+        strcmp(a->dir, "w") != 0)
+        return cli_fail("field", CLI_USAGE, "--dir must be auto, u, v or w, not '%s'", a->dir);
+    a->builtin = strcmp(a->field, "helix-square") == 0 || strcmp(a->field, "box") == 0;
+    a->sweep = strcmp(a->field, "sweep") == 0;
+    if (a->sweep != (a->along != NULL))
         return cli_fail("field", CLI_USAGE, "--along SPINE.amp goes with --field sweep (and is required by it)");
-    amp_spline_init(&spl);
+    return CLI_OK;
+}
+
+/* The covering of @p f over the mesh @p b into @p ps, timed (*seconds), with its progress bar; @p rb are the
+ * --within and --without regions (NULL: none). */
+static int field_cover(const field_args *a, const amp_field *f, const amp_bvh *b, amp_bvh *const rb[2],
+                       amp_pathset *ps, amp_field_stats *st, double *seconds)
+{
+    amp_field_opts o;
+    cli_progress bar;
+    amp_error err;
+    double t0;
+    int rc;
     amp_error_clear(&err);
-    if (sweep) {
-        if ((rc = load_sweep(along, side, &f, &sw)) != CLI_OK)
-            return rc;
-    } else if (!builtin && cli_load_trivariate("field", field, &spl) != CLI_OK)
-        return CLI_USAGE;
-    amp_mesh_init(&m, NULL);
-    amp_mesh_init(&rm[0], NULL);
-    amp_mesh_init(&rm[1], NULL);
-    amp_pathset_init(&ps, NULL);
-    if (load_mesh(within, &rm[0], &rb[0], &err) != AMP_OK || load_mesh(without, &rm[1], &rb[1], &err) != AMP_OK ||
-        load_mesh(pos[0], &m, &b, &err) != AMP_OK ||
-        (sweep ? AMP_OK
-               : builtin ? amp_field_builtin(&f, field, amp_mesh_bbox(&m), &err)
-                         : amp_field_from_spline(&f, &spl, dir[0] == 'a' ? AMP_FIELD_AUTO : dir[0] - 'u', &err)) !=
-                               AMP_OK) {
-        rc = cli_fail_err("field", &err);
-        goto done;
-    }
     amp_field_opts_default(&o);
-    o.spacing = spacing;
-    o.pattern = strcmp(pattern, "hex") == 0 ? AMP_PATTERN_HEX : AMP_PATTERN_GRID;
-    o.step = step;
-    o.min_len = min_len;
-    o.radius = radius;
-    o.shells = (int)shells;
+    o.spacing = a->spacing;
+    o.pattern = strcmp(a->pattern, "hex") == 0 ? AMP_PATTERN_HEX : AMP_PATTERN_GRID;
+    o.step = a->step;
+    o.min_len = a->min_len;
+    o.radius = a->radius;
+    o.shells = (int)a->shells;
     o.within = rb[0];
     o.without = (const amp_bvh *const *)&rb[1];
     o.nwithout = rb[1] != NULL;
@@ -295,37 +290,75 @@ int cmd_field(int argc, char **argv)
     cli_progress_begin(&bar, "field");
     o.progress = cli_progress_fn;
     o.progress_user = &bar;
-    rc = amp_field_cover(&f, b, &o, &ps, &st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
+    rc = amp_field_cover(f, b, &o, ps, st, &err) == AMP_OK ? CLI_OK : cli_fail_err("field", &err);
     cli_progress_end(&bar);
-    t_cover = cli_now() - t0;
-    if (within || without)
-        samples = 0; /* the gap of one part is not the model's: check the merged paths with 'ampath check --mesh' */
-    if (rc == CLI_OK && samples > 0 && ps.npaths > 0) {
+    *seconds = cli_now() - t0;
+    return rc;
+}
+
+int cmd_field(int argc, char **argv)
+{
+    field_args a;
+    amp_mesh m, rm[2];
+    amp_bvh *b = NULL, *rb[2] = {NULL, NULL};
+    double t0, t_cover, t_gap = 0, gap_all = -1, gap_in = -1, mean = -1;
+    amp_field f;
+    amp_spline spl;
+    amp_sweep *sw = NULL;
+    amp_field_stats st;
+    amp_pathset ps;
+    amp_error err;
+    int rc = field_parse(argc, argv, &a);
+    if (rc != CLI_OK)
+        return rc;
+    amp_spline_init(&spl);
+    amp_error_clear(&err);
+    if (a.sweep) {
+        if ((rc = load_sweep(a.along, a.side, &f, &sw)) != CLI_OK)
+            return rc;
+    } else if (!a.builtin && cli_load_trivariate("field", a.field, &spl) != CLI_OK)
+        return CLI_USAGE;
+    amp_mesh_init(&m, NULL);
+    amp_mesh_init(&rm[0], NULL);
+    amp_mesh_init(&rm[1], NULL);
+    amp_pathset_init(&ps, NULL);
+    if (load_mesh(a.within, &rm[0], &rb[0], &err) != AMP_OK || load_mesh(a.without, &rm[1], &rb[1], &err) != AMP_OK ||
+        load_mesh(a.mesh, &m, &b, &err) != AMP_OK ||
+        (a.sweep     ? AMP_OK
+         : a.builtin ? amp_field_builtin(&f, a.field, amp_mesh_bbox(&m), &err)
+                     : amp_field_from_spline(&f, &spl, a.dir[0] == 'a' ? AMP_FIELD_AUTO : a.dir[0] - 'u', &err)) !=
+            AMP_OK) {
+        rc = cli_fail_err("field", &err);
+        goto done;
+    }
+    rc = field_cover(&a, &f, b, rb, &ps, &st, &t_cover);
+    if (a.within || a.without)
+        a.samples = 0; /* the gap of one part is not the model's: check the merged paths with 'ampath check --mesh' */
+    if (rc == CLI_OK && a.samples > 0 && ps.npaths > 0) {
         t0 = cli_now();
-        rc = measure_gap(&ps, b, samples, spacing, &gap_all, &gap_in, &mean);
+        rc = measure_gap(&ps, b, a.samples, a.spacing, &gap_all, &gap_in, &mean);
         t_gap = cli_now() - t0;
     }
-    if (rc == CLI_OK && out) {
+    if (rc == CLI_OK && a.out) {
         /* the covering radius as `cover` records its eps: `check --mesh` holds the paths to it after mdr */
         char note[160];
-        snprintf(note, sizeof note, "ampath field: direction-field curves clipped to the mesh, eps %.10g (covering radius)",
-                 st.target);
-        rc = cli_save_paths("field", out, &ps, note);
+        snprintf(note, sizeof note,
+                 "ampath field: direction-field curves clipped to the mesh, eps %.10g (covering radius)", st.target);
+        rc = cli_save_paths("field", a.out, &ps, note);
     }
     if (rc == CLI_OK) {
         report r;
         memset(&r, 0, sizeof r);
-        r.field = field;
-        r.pattern = pattern;
-        r.dir = builtin || sweep ? -1 : f.dir;
+        r.field = a.field;
+        r.pattern = a.pattern;
+        r.dir = a.builtin || a.sweep ? -1 : f.dir;
         r.st = &st;
-        r.spacing = spacing, r.mesh_volume = amp_mesh_volume(&m), r.deposited = amp_pathset_volume(&ps, -1);
-        r.samples = samples, r.shells = shells, r.gap_all = gap_all, r.gap_in = gap_in, r.mean = mean;
+        r.spacing = a.spacing, r.mesh_volume = amp_mesh_volume(&m), r.deposited = amp_pathset_volume(&ps, -1);
+        r.samples = a.samples, r.shells = a.shells, r.gap_all = gap_all, r.gap_in = gap_in, r.mean = mean;
         r.t_cover = t_cover, r.t_gap = t_gap;
-        print_report(&r, json);
+        print_report(&r, a.json);
+        rc = judge(&st, a.spacing, gap_all, ps.npaths);
     }
-    if (rc == CLI_OK)
-        rc = judge(&st, spacing, gap_all, ps.npaths);
 done:
     amp_bvh_free(b);
     amp_bvh_free(rb[0]);

@@ -448,168 +448,229 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     return rc;
 }
 
-int cmd_slice(int argc, char **argv)
-{
-    double layer = 0, first = 0, radius = 0.225, nozzle = 0, z = 0, t0 = cli_now();
-    long index = -1;
-    int json = 0, polygons = 0, continuous = 0, noperim = 0, stretches = 0, nopseudo = 0, pseudo = 0, nojoin = 0, nocorners = 0, nocap = 0, npos = 0, rc, ok;
-    double cell = 0, offset = 0, infill = 0, skin_bottom = 0.8, skin_top = 0.8, epsc = 1.0;
-    const char *pos[1], *out = NULL, *grid = "square", *tour = "cycle-tree", *printer = NULL;
+/* The command line, validated: what the polygon and the continuous runs read. */
+typedef struct slice_args {
+    const char *mesh, *out;
+    double layer, first, radius, z, epsc;
+    long index;
+    int json, continuous, have_z;
     amp_contpath_opts co;
-    amp_mesh m;
-    amp_slices sl;
-    size_t i, r, rings = 0, holes = 0, islands = 0, flipped = 0;
-    cli_opt opts[] = {{"layer", CLI_DOUBLE, &layer, 0},      {"first-layer", CLI_DOUBLE, &first, 0},
-                      {"polygons", CLI_FLAG, &polygons, 0},  {"output", CLI_STR, &out, 0},
-                      {"layer-index", CLI_LONG, &index, 0},  {"z", CLI_DOUBLE, &z, 0},
-                      {"radius", CLI_DOUBLE, &radius, 0},    {"json", CLI_FLAG, &json, 0},
-                      {"continuous", CLI_FLAG, &continuous, 0}, {"cell", CLI_DOUBLE, &cell, 0},
-                      {"grid", CLI_STR, &grid, 0},          {"offset", CLI_DOUBLE, &offset, 0},
-                      {"no-perimeter", CLI_FLAG, &noperim, 0}, {"support-stretches", CLI_FLAG, &stretches, 0},
-                      {"no-pseudo", CLI_FLAG, &nopseudo, 0},   {"nozzle", CLI_DOUBLE, &nozzle, 0},
-                      {"no-join", CLI_FLAG, &nojoin, 0},     {"pseudo", CLI_FLAG, &pseudo, 0},
-                      {"tour", CLI_STR, &tour, 0},           {"no-corners", CLI_FLAG, &nocorners, 0},
-                      {"no-overlap-cap", CLI_FLAG, &nocap, 0},
-                      {"infill", CLI_DOUBLE, &infill, 0},    {"bottom", CLI_DOUBLE, &skin_bottom, 0},
-                      {"top", CLI_DOUBLE, &skin_top, 0},     {"eps-c", CLI_DOUBLE, &epsc, 0},
-                      {"printer", CLI_STR, &printer, 0},     {NULL, CLI_FLAG, NULL, 0}};
-    rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
-    if (rc != CLI_OK)
-        return rc;
-    if (!opts[0].seen)
-        return cli_fail("slice", CLI_USAGE, "--layer H is required");
-    if (printer && !opts[15].seen && !opts[6].seen) {
+} slice_args;
+
+/* The options as given that only validation reads (slice_parse). */
+typedef struct slice_raw {
+    const char *grid, *tour, *printer;
+    double nozzle, cell, offset, infill, skin_bottom, skin_top;
+    int polygons, noperim, stretches, nopseudo, pseudo, nojoin, nocorners, nocap;
+    int have_nozzle, have_radius, have_cell, have_offset;
+} slice_raw;
+
+/* The bead half-width: --radius, else --nozzle, else the --printer profile's nozzle. */
+static int slice_bead(slice_raw *w, slice_args *a)
+{
+    if (w->printer && !w->have_nozzle && !w->have_radius) {
         /* the profile's nozzle sets the bead (docs/interfaces.md §4: 1.125 x the nozzle), as --nozzle does */
         amp_printer *pr = malloc(sizeof *pr);
         amp_error err;
         if (!pr)
             return cli_fail("slice", CLI_USAGE, "out of memory");
-        if (amp_printer_load(pr, printer, &err) != AMP_OK) {
+        if (amp_printer_load(pr, w->printer, &err) != AMP_OK) {
             free(pr);
             return cli_fail("slice", CLI_USAGE, "%s", err.msg);
         }
-        nozzle = pr->nozzle_diameter;
-        opts[15].seen = 1;
+        w->nozzle = pr->nozzle_diameter;
+        w->have_nozzle = 1;
         free(pr);
     }
-    if (opts[15].seen && !opts[6].seen) {
-        if (!(nozzle > 0) || !isfinite(nozzle))
+    if (w->have_nozzle && !w->have_radius) {
+        if (!(w->nozzle > 0) || !isfinite(w->nozzle))
             return cli_fail("slice", CLI_USAGE, "--nozzle must be positive");
-        radius = 0.5 * 1.125 * nozzle; /* a bead 1.125 x the nozzle wide, as slicers extrude */
+        a->radius = 0.5 * 1.125 * w->nozzle; /* a bead 1.125 x the nozzle wide, as slicers extrude */
     }
-    if (!(radius > 0) || !isfinite(radius))
+    if (!(a->radius > 0) || !isfinite(a->radius))
         return cli_fail("slice", CLI_USAGE, "--radius must be positive");
-    if (continuous && polygons)
-        return cli_fail("slice", CLI_USAGE, "--polygons and --continuous exclude each other");
-    amp_contpath_opts_default(&co, radius);
-    co.verify_stroke = amp_check_path_stroke; /* the skin bands' safety net */
-    co.grid = grid_kind(grid, &ok);
+    return CLI_OK;
+}
+
+/* The options of --continuous (a->co) from the lattice, skin and tour options, checked in the order of the
+ * messages users know. */
+static int slice_contpath(const slice_raw *w, slice_args *a)
+{
+    amp_contpath_opts *co = &a->co;
+    int ok;
+    amp_contpath_opts_default(co, a->radius);
+    co->verify_stroke = amp_check_path_stroke; /* the skin bands' safety net */
+    co->grid = grid_kind(w->grid, &ok);
     if (!ok)
-        return cli_fail("slice", CLI_USAGE, "--grid must be square, tri or hex, not '%s'", grid);
-    if ((opts[9].seen && (!(cell > 0) || !isfinite(cell))) || (opts[11].seen && (!(offset > 0) || !isfinite(offset))))
+        return cli_fail("slice", CLI_USAGE, "--grid must be square, tri or hex, not '%s'", w->grid);
+    if ((w->have_cell && (!(w->cell > 0) || !isfinite(w->cell))) ||
+        (w->have_offset && (!(w->offset > 0) || !isfinite(w->offset))))
         return cli_fail("slice", CLI_USAGE, "--cell and --offset must be positive");
-    if (opts[9].seen)
-        co.cell = cell;
-    if (opts[11].seen)
-        co.offset = offset;
-    co.perimeters = !noperim;
-    co.support_stretches = stretches;
-    co.pseudo_edges = pseudo && !nopseudo;
-    co.join = !nojoin;
-    co.support_corners = !nocorners;
-    co.overlap_cap = !nocap;
-    if (!(skin_bottom >= 0) || !(skin_top >= 0) || !isfinite(skin_bottom) || !isfinite(skin_top))
+    if (w->have_cell)
+        co->cell = w->cell;
+    if (w->have_offset)
+        co->offset = w->offset;
+    co->perimeters = !w->noperim;
+    co->support_stretches = w->stretches;
+    co->pseudo_edges = w->pseudo && !w->nopseudo;
+    co->join = !w->nojoin;
+    co->support_corners = !w->nocorners;
+    co->overlap_cap = !w->nocap;
+    if (!(w->skin_bottom >= 0) || !(w->skin_top >= 0) || !isfinite(w->skin_bottom) || !isfinite(w->skin_top))
         return cli_fail("slice", CLI_USAGE, "--bottom and --top must be thicknesses >= 0 mm");
-    if (!(epsc > 0 && epsc <= 1))
+    if (!(a->epsc > 0 && a->epsc <= 1))
         return cli_fail("slice", CLI_USAGE, "--eps-c must be in (0, 1]");
-    co.skin_bottom = skin_bottom;
-    co.skin_top = skin_top;
-    if (opts[9].seen && infill > 0)
+    co->skin_bottom = w->skin_bottom;
+    co->skin_top = w->skin_top;
+    if (w->have_cell && w->infill > 0)
         return cli_fail("slice", CLI_USAGE, "--cell and --infill exclude each other");
-    if (infill != 0) {
-        if (!(infill > 0 && infill <= 100))
+    if (w->infill != 0) {
+        if (!(w->infill > 0 && w->infill <= 100))
             return cli_fail("slice", CLI_USAGE, "--infill must be a density in %% (0 < P <= 100)");
         /* every line of a square lattice of cell S carries two beads (a
          * band 4r wide): x = 4r / S of the area lies under the bands of one
          * direction, 2x - x^2 under both; solved for the density */
-        co.cell = 4 * radius / (1 - sqrt(1 - infill / 100));
+        co->cell = 4 * a->radius / (1 - sqrt(1 - w->infill / 100));
     }
-    if (strcmp(tour, "cycle-tree") == 0)
-        co.tour = AMP_TOUR_CYCLE_TREE;
-    else if (strcmp(tour, "merge") == 0)
-        co.tour = AMP_TOUR_MERGE;
+    if (strcmp(w->tour, "cycle-tree") == 0)
+        co->tour = AMP_TOUR_CYCLE_TREE;
+    else if (strcmp(w->tour, "merge") == 0)
+        co->tour = AMP_TOUR_MERGE;
     else
-        return cli_fail("slice", CLI_USAGE, "--tour must be cycle-tree or merge, not '%s'", tour);
+        return cli_fail("slice", CLI_USAGE, "--tour must be cycle-tree or merge, not '%s'", w->tour);
+    return CLI_OK;
+}
+
+/* The command line into @p a; every reason to refuse it is printed here (CLI_USAGE). */
+static int slice_parse(int argc, char **argv, slice_args *a)
+{
+    slice_raw w;
+    const char *pos[1];
+    int npos = 0, rc;
+    cli_opt opts[] = {{"layer", CLI_DOUBLE, &a->layer, 0},         {"first-layer", CLI_DOUBLE, &a->first, 0},
+                      {"polygons", CLI_FLAG, &w.polygons, 0},      {"output", CLI_STR, &a->out, 0},
+                      {"layer-index", CLI_LONG, &a->index, 0},     {"z", CLI_DOUBLE, &a->z, 0},
+                      {"radius", CLI_DOUBLE, &a->radius, 0},       {"json", CLI_FLAG, &a->json, 0},
+                      {"continuous", CLI_FLAG, &a->continuous, 0}, {"cell", CLI_DOUBLE, &w.cell, 0},
+                      {"grid", CLI_STR, &w.grid, 0},               {"offset", CLI_DOUBLE, &w.offset, 0},
+                      {"no-perimeter", CLI_FLAG, &w.noperim, 0},   {"support-stretches", CLI_FLAG, &w.stretches, 0},
+                      {"no-pseudo", CLI_FLAG, &w.nopseudo, 0},     {"nozzle", CLI_DOUBLE, &w.nozzle, 0},
+                      {"no-join", CLI_FLAG, &w.nojoin, 0},         {"pseudo", CLI_FLAG, &w.pseudo, 0},
+                      {"tour", CLI_STR, &w.tour, 0},               {"no-corners", CLI_FLAG, &w.nocorners, 0},
+                      {"no-overlap-cap", CLI_FLAG, &w.nocap, 0},
+                      {"infill", CLI_DOUBLE, &w.infill, 0},        {"bottom", CLI_DOUBLE, &w.skin_bottom, 0},
+                      {"top", CLI_DOUBLE, &w.skin_top, 0},         {"eps-c", CLI_DOUBLE, &a->epsc, 0},
+                      {"printer", CLI_STR, &w.printer, 0},         {NULL, CLI_FLAG, NULL, 0}};
+    memset(a, 0, sizeof *a);
+    memset(&w, 0, sizeof w);
+    a->radius = 0.225;
+    a->index = -1;
+    a->epsc = 1.0;
+    w.grid = "square";
+    w.tour = "cycle-tree";
+    w.skin_bottom = w.skin_top = 0.8;
+    rc = cli_parse("slice", argc, argv, opts, pos, 1, 1, &npos);
+    if (rc != CLI_OK)
+        return rc;
+    if (!cli_given(opts, "layer"))
+        return cli_fail("slice", CLI_USAGE, "--layer H is required");
+    a->mesh = pos[0];
+    a->have_z = cli_given(opts, "z");
+    w.have_nozzle = cli_given(opts, "nozzle");
+    w.have_radius = cli_given(opts, "radius");
+    w.have_cell = cli_given(opts, "cell");
+    w.have_offset = cli_given(opts, "offset");
+    if ((rc = slice_bead(&w, a)) != CLI_OK)
+        return rc;
+    if (a->continuous && w.polygons)
+        return cli_fail("slice", CLI_USAGE, "--polygons and --continuous exclude each other");
+    return slice_contpath(&w, a);
+}
+
+/* --polygons (the default): the figures of the layers' rings, one JSON object or a line. */
+static void report_polygons(const slice_args *a, const amp_mesh *m, const amp_slices *sl, size_t flipped, double t0)
+{
+    size_t i, r, rings = 0, holes = 0, islands = 0;
+    cli_json j;
+    for (i = 0; i < sl->nlayers; i++) {
+        rings += sl->layers[i].polys.nrings;
+        islands += sl->layers[i].polys.nislands;
+        for (r = 0; r < sl->layers[i].polys.nrings; r++)
+            holes += sl->layers[i].polys.rings[r].hole != 0;
+    }
+    if (!a->json) {
+        printf("%s: %lu layers, %lu polygons (%lu islands, %lu holes)%s%s\n", a->mesh, (unsigned long)sl->nlayers,
+               (unsigned long)rings, (unsigned long)islands, (unsigned long)holes, a->out ? " -> " : "",
+               a->out ? a->out : "");
+        return;
+    }
+    cli_json_begin(&j, stdout);
+    cli_json_int(&j, "layers", (long long)sl->nlayers);
+    cli_json_int(&j, "polygons", (long long)rings);
+    cli_json_int(&j, "islands", (long long)islands);
+    cli_json_int(&j, "holes", (long long)holes);
+    cli_json_int(&j, "open_chains", (long long)sl->open_chains);
+    cli_json_int(&j, "gaps_closed", (long long)sl->gaps_closed);
+    cli_json_int(&j, "overlapping_layers", (long long)sl->overlaps);
+    cli_json_int(&j, "nonmanifold", (long long)sl->nonmanifold);
+    cli_json_int(&j, "flipped_triangles", (long long)flipped);
+    cli_json_int(&j, "triangles", (long long)m->ntris);
+    cli_json_num(&j, "layer_height", a->layer);
+    cli_json_num(&j, "first_layer", a->first > 0 ? a->first : a->layer);
+    cli_json_num(&j, "time_s", cli_now() - t0);
+    cli_json_arr(&j, "per_layer");
+    for (i = 0; i < sl->nlayers; i++) {
+        size_t nh = 0;
+        for (r = 0; r < sl->layers[i].polys.nrings; r++)
+            nh += sl->layers[i].polys.rings[r].hole != 0;
+        cli_json_obj(&j, NULL);
+        cli_json_int(&j, "index", (long long)i);
+        cli_json_num(&j, "z_cut", sl->layers[i].z_cut);
+        cli_json_num(&j, "z_print", sl->layers[i].z_print);
+        cli_json_int(&j, "islands", (long long)sl->layers[i].polys.nislands);
+        cli_json_int(&j, "polygons", (long long)sl->layers[i].polys.nrings);
+        cli_json_int(&j, "holes", (long long)nh);
+        cli_json_num(&j, "area_mm2", amp_polyset_area(&sl->layers[i].polys));
+        cli_json_int(&j, "open_chains", (long long)sl->layers[i].open_chains);
+        cli_json_close(&j);
+    }
+    cli_json_close(&j);
+    cli_json_end(&j);
+}
+
+int cmd_slice(int argc, char **argv)
+{
+    double t0 = cli_now();
+    slice_args a;
+    amp_mesh m;
+    amp_slices sl;
+    size_t flipped = 0;
+    int svg, rc = slice_parse(argc, argv, &a);
+    if (rc != CLI_OK)
+        return rc;
+    svg = a.out && cli_ends_with(a.out, ".svg");
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
-    rc = slicetool_load("slice", pos[0], layer, first, &m, &sl, &flipped);
+    rc = slicetool_load("slice", a.mesh, a.layer, a.first, &m, &sl, &flipped);
     if (rc == CLI_OK && sl.gaps_closed)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu section gaps closed by straight edges\n",
                 (unsigned long)sl.gaps_closed);
     if (rc == CLI_OK && sl.open_chains)
         fprintf(stderr, "ampath slice: warning: mesh is not closed: %lu open section chains dropped\n",
                 (unsigned long)sl.open_chains);
-    if (rc == CLI_OK && continuous) {
-        long li = -1;
-        if (out && cli_ends_with(out, ".svg"))
-            li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
-        rc = li < -1 || (out && cli_ends_with(out, ".svg") && li < 0) ? CLI_USAGE
-                                                                   : run_continuous(pos[0], out, &sl, &co, json, t0, epsc, li);
-        goto done;
+    if (rc == CLI_OK && a.continuous) {
+        long li = svg ? slicetool_pick("slice", &sl, a.index, a.have_z, a.z) : -1;
+        rc = li < -1 || (svg && li < 0) ? CLI_USAGE
+                                        : run_continuous(a.mesh, a.out, &sl, &a.co, a.json, t0, a.epsc, li);
+    } else {
+        if (rc == CLI_OK && svg) {
+            long li = slicetool_pick("slice", &sl, a.index, a.have_z, a.z);
+            rc = li < 0 ? CLI_USAGE : write_svg(a.out, &sl, li, a.radius);
+        } else if (rc == CLI_OK && a.out)
+            rc = write_amp(a.out, &sl, a.radius, a.layer);
+        if (rc == CLI_OK)
+            report_polygons(&a, &m, &sl, flipped, t0);
     }
-    if (rc == CLI_OK && out) {
-        if (cli_ends_with(out, ".svg")) {
-            long li = slicetool_pick("slice", &sl, index, opts[5].seen, z);
-            rc = li < 0 ? CLI_USAGE : write_svg(out, &sl, li, radius);
-        } else
-            rc = write_amp(out, &sl, radius, layer);
-    }
-    if (rc != CLI_OK)
-        goto done;
-    for (i = 0; i < sl.nlayers; i++) {
-        rings += sl.layers[i].polys.nrings;
-        islands += sl.layers[i].polys.nislands;
-        for (r = 0; r < sl.layers[i].polys.nrings; r++)
-            holes += sl.layers[i].polys.rings[r].hole != 0;
-    }
-    if (json) {
-        cli_json j;
-        cli_json_begin(&j, stdout);
-        cli_json_int(&j, "layers", (long long)sl.nlayers);
-        cli_json_int(&j, "polygons", (long long)rings);
-        cli_json_int(&j, "islands", (long long)islands);
-        cli_json_int(&j, "holes", (long long)holes);
-        cli_json_int(&j, "open_chains", (long long)sl.open_chains);
-        cli_json_int(&j, "gaps_closed", (long long)sl.gaps_closed);
-        cli_json_int(&j, "overlapping_layers", (long long)sl.overlaps);
-        cli_json_int(&j, "nonmanifold", (long long)sl.nonmanifold);
-        cli_json_int(&j, "flipped_triangles", (long long)flipped);
-        cli_json_int(&j, "triangles", (long long)m.ntris);
-        cli_json_num(&j, "layer_height", layer);
-        cli_json_num(&j, "first_layer", first > 0 ? first : layer);
-        cli_json_num(&j, "time_s", cli_now() - t0);
-        cli_json_arr(&j, "per_layer");
-        for (i = 0; i < sl.nlayers; i++) {
-            size_t nh = 0;
-            for (r = 0; r < sl.layers[i].polys.nrings; r++)
-                nh += sl.layers[i].polys.rings[r].hole != 0;
-            cli_json_obj(&j, NULL);
-            cli_json_int(&j, "index", (long long)i);
-            cli_json_num(&j, "z_cut", sl.layers[i].z_cut);
-            cli_json_num(&j, "z_print", sl.layers[i].z_print);
-            cli_json_int(&j, "islands", (long long)sl.layers[i].polys.nislands);
-            cli_json_int(&j, "polygons", (long long)sl.layers[i].polys.nrings);
-            cli_json_int(&j, "holes", (long long)nh);
-            cli_json_num(&j, "area_mm2", amp_polyset_area(&sl.layers[i].polys));
-            cli_json_int(&j, "open_chains", (long long)sl.layers[i].open_chains);
-            cli_json_close(&j);
-        }
-        cli_json_close(&j);
-        cli_json_end(&j);
-    } else
-        printf("%s: %lu layers, %lu polygons (%lu islands, %lu holes)%s%s\n", pos[0], (unsigned long)sl.nlayers,
-               (unsigned long)rings, (unsigned long)islands, (unsigned long)holes, out ? " -> " : "", out ? out : "");
-done:
     amp_slices_free(&sl);
     amp_mesh_free(&m);
     return rc;
