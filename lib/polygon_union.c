@@ -40,6 +40,7 @@ typedef struct uctx {
     pg_splits spl;
     amp_polyindex ix; /* rows of the input's edges, for winding queries */
     double delta; /* side offset of a winding sample */
+    double tol;   /* points closer than this are one node, and a point this close to an edge lies on it */
     int sign;     /* -1 when the rings are all reversed (a mesh facing inward) */
 } uctx;
 
@@ -100,7 +101,13 @@ static amp_status index_rings(uctx *c, const amp_polyset *ps)
         y1 = fmax(y1, c->node[i].y);
     }
     c->delta = 1e-7 * (1.0 + (x1 - x0) + (y1 - y0) + fmax(fmax(fabs(x0), fabs(x1)), fmax(fabs(y0), fabs(y1))));
+    c->tol = 1e-2 * c->delta;
     return amp_polyindex_build(&c->ix, ps, NULL) == AMP_OK ? AMP_OK : AMP_ERR_NOMEM;
+}
+
+static double dist2v(amp_vec2 a, amp_vec2 b)
+{
+    return (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
 }
 
 /* Parameter of point p along the edge a -> b. */
@@ -110,7 +117,13 @@ static double param(amp_vec2 a, amp_vec2 b, amp_vec2 p)
     return ((p.x - a.x) * dx + (p.y - a.y) * dy) / (dx * dx + dy * dy);
 }
 
-/* Edges i and j lie on one line: each is split where the other ends inside it. */
+/* Distance from node @p nd to the line through edge a -> b, times |b - a| (the orientation's magnitude). */
+static double off_line(const uctx *c, amp_vec2 a, amp_vec2 b, size_t nd)
+{
+    return fabs(amp_v2_orient(a, b, c->node[nd]));
+}
+
+/* Edges i and j lie on one line (within c->tol): each is split where the other ends inside it. */
 static amp_status collinear(uctx *c, size_t i, size_t j)
 {
     const useg *e[2];
@@ -123,7 +136,8 @@ static amp_status collinear(uctx *c, size_t i, size_t j)
         for (q = 0; q < 2; q++) {
             size_t nd = q ? e[1 - k]->nb : e[1 - k]->na;
             double t = param(a, b, c->node[nd]);
-            if (nd != e[k]->na && nd != e[k]->nb && t > 0.0 && t < 1.0) {
+            if (nd != e[k]->na && nd != e[k]->nb && t > 0.0 && t < 1.0 &&
+                off_line(c, a, b, nd) <= c->tol * sqrt(dist2v(a, b))) {
                 if (add_split(c, k ? j : i, t, nd) != AMP_OK)
                     return AMP_ERR_NOMEM;
                 overlap = 1;
@@ -142,16 +156,32 @@ static int same(amp_vec2 a, amp_vec2 b)
     return a.x == b.x && a.y == b.y;
 }
 
+/* An end of edge t lying on edge s (within c->tol, strictly between s's ends): s is split there. */
+static amp_status end_on(uctx *c, size_t s, amp_vec2 a, amp_vec2 b, size_t nd)
+{
+    double t = param(a, b, c->node[nd]);
+    if (!(t > 0.0 && t < 1.0) || same(c->node[nd], a) || same(c->node[nd], b))
+        return AMP_OK;
+    return add_split(c, s, t, nd);
+}
+
 /* Where edges i and j meet: a crossing becomes one node shared by both, an
  * end lying on the other edge splits it there. */
+/*
+ * Section points are computed from different mesh edges, so two bodies' faces that meet along a line give
+ * boundaries that differ in their last bits: near-collinear edges that would "cross" at a random point of
+ * their shared stretch, and ends a rounding error beside the other edge. Within c->tol both count as lying
+ * on the other edge (split there, as exact touches are), so that the sides of every piece are constant.
+ */
 static amp_status meet(uctx *c, size_t i, size_t j)
 {
     const useg *s = &c->seg[i], *t = &c->seg[j];
     amp_vec2 a = c->node[s->na], b = c->node[s->nb], p = c->node[t->na], q = c->node[t->nb];
-    double d1, d2, d3, d4, u;
+    double d1, d2, d3, d4, u, ts, tt, tol = c->tol;
+    int on_p, on_q, on_a, on_b;
     size_t id;
-    if (fmax(p.x, q.x) < fmin(a.x, b.x) || fmin(p.x, q.x) > fmax(a.x, b.x) || fmax(p.y, q.y) < fmin(a.y, b.y) ||
-        fmin(p.y, q.y) > fmax(a.y, b.y))
+    if (fmax(p.x, q.x) < fmin(a.x, b.x) - tol || fmin(p.x, q.x) > fmax(a.x, b.x) + tol ||
+        fmax(p.y, q.y) < fmin(a.y, b.y) - tol || fmin(p.y, q.y) > fmax(a.y, b.y) + tol)
         return AMP_OK;
     if (s->nb == t->na && amp_v2_orient(a, b, q) != 0.0)
         return AMP_OK; /* consecutive edges of a ring that do not fold back */
@@ -161,9 +191,16 @@ static amp_status meet(uctx *c, size_t i, size_t j)
     d2 = amp_v2_orient(a, b, q);
     d3 = amp_v2_orient(p, q, a);
     d4 = amp_v2_orient(p, q, b);
-    if (d1 == 0.0 && d2 == 0.0)
+    ts = tol * sqrt(dist2v(a, b));
+    tt = tol * sqrt(dist2v(p, q));
+    on_p = fabs(d1) <= ts;
+    on_q = fabs(d2) <= ts;
+    on_a = fabs(d3) <= tt;
+    on_b = fabs(d4) <= tt;
+    if ((on_p && on_q) || (on_a && on_b))
         return collinear(c, i, j);
-    if ((d1 > 0 && d2 > 0) || (d1 < 0 && d2 < 0) || (d3 > 0 && d4 > 0) || (d3 < 0 && d4 < 0))
+    if (!on_p && !on_q && !on_a && !on_b &&
+        ((d1 > 0 && d2 > 0) || (d1 < 0 && d2 < 0) || (d3 > 0 && d4 > 0) || (d3 < 0 && d4 < 0)))
         return AMP_OK;
     if (s->na == t->na || s->na == t->nb || s->nb == t->na || s->nb == t->nb)
         return AMP_OK; /* they meet at a shared node */
@@ -173,14 +210,9 @@ static amp_status meet(uctx *c, size_t i, size_t j)
         c->junction[same(a, p) || same(b, p) ? t->na : t->nb] = 1;
         return AMP_OK;
     }
-    if (d1 == 0.0 || d2 == 0.0 || d3 == 0.0 || d4 == 0.0) { /* an end on the other edge */
-        if (d1 == 0.0 && add_split(c, i, param(a, b, p), t->na) != AMP_OK)
-            return AMP_ERR_NOMEM;
-        if (d2 == 0.0 && add_split(c, i, param(a, b, q), t->nb) != AMP_OK)
-            return AMP_ERR_NOMEM;
-        if (d3 == 0.0 && add_split(c, j, param(p, q, a), s->na) != AMP_OK)
-            return AMP_ERR_NOMEM;
-        if (d4 == 0.0 && add_split(c, j, param(p, q, b), s->nb) != AMP_OK)
+    if (on_p || on_q || on_a || on_b) { /* an end on the other edge */
+        if ((on_p && end_on(c, i, a, b, t->na) != AMP_OK) || (on_q && end_on(c, i, a, b, t->nb) != AMP_OK) ||
+            (on_a && end_on(c, j, p, q, s->na) != AMP_OK) || (on_b && end_on(c, j, p, q, s->nb) != AMP_OK))
             return AMP_ERR_NOMEM;
         return AMP_OK;
     }
@@ -222,8 +254,8 @@ static amp_status find_meetings(uctx *c)
     }
     qsort(x, c->nseg, sizeof *x, cmp_xspan);
     for (i = 0; i < c->nseg && st == AMP_OK; i++)
-        for (j = i + 1; j < c->nseg && x[j].x0 <= x[i].x1 && st == AMP_OK; j++)
-            if (x[j].y0 <= x[i].y1 && x[j].y1 >= x[i].y0)
+        for (j = i + 1; j < c->nseg && x[j].x0 <= x[i].x1 + c->tol && st == AMP_OK; j++)
+            if (x[j].y0 <= x[i].y1 + c->tol && x[j].y1 >= x[i].y0 - c->tol)
                 st = x[i].seg < x[j].seg ? meet(c, x[i].seg, x[j].seg) : meet(c, x[j].seg, x[i].seg);
     amp_free(c->al, x);
     return st;
@@ -248,7 +280,7 @@ static int cmp_xkey(const void *a, const void *b)
  * be one node for the pieces to chain and coincide. */
 static amp_status merge_nodes(uctx *c)
 {
-    double tol = 1e-2 * c->delta;
+    double tol = c->tol;
     xkey *k = amp_alloc(c->al, (c->nnode + 1) * sizeof *k);
     size_t *rep = amp_alloc(c->al, (c->nnode + 1) * sizeof *rep), i, j;
     if (!k || !rep) {

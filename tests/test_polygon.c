@@ -553,6 +553,73 @@ START_TEST(union_of_boxes_face_to_face_is_one_ring_and_reads_inward_sets_reverse
 }
 END_TEST
 
+/* Distance from q to the nearest edge of @p ps (every edge tried). */
+static double edge_dist(const amp_polyset *ps, amp_vec2 q)
+{
+    double best = HUGE_VAL;
+    size_t r, i;
+    for (r = 0; r < ps->nrings; r++)
+        for (i = 0; i < ps->rings[r].n; i++) {
+            amp_vec2 a = ps->pts[ps->rings[r].first + i], b = ps->pts[ps->rings[r].first + (i + 1) % ps->rings[r].n];
+            double dx = b.x - a.x, dy = b.y - a.y, t = ((q.x - a.x) * dx + (q.y - a.y) * dy) / (dx * dx + dy * dy);
+            t = t < 0 ? 0 : (t > 1 ? 1 : t);
+            best = fmin(best, hypot(a.x + t * dx - q.x, a.y + t * dy - q.y));
+        }
+    return best;
+}
+
+/* Two bodies' faces meeting along a line, as a mesh section computes them from different mesh edges: the
+ * shared stretch differs in its last bits, so the two edges "cross" somewhere along it and a corner of the
+ * upper body lies a rounding error off the lower body's edge (a motor assembly of OpenCascade's samples
+ * gave a 46 mm chord across its section this way, and this case a spike running back along the stretch).
+ * The union is one ring with the bodies' area, every edge on an input edge, none running back along the one
+ * before it, and a second union changes nothing. */
+START_TEST(union_of_bodies_meeting_a_rounding_error_apart_is_exact)
+{
+    int k;
+    for (k = 0; k < 5; k++) {
+        double y = -25.210985109305508, up = nextafter(y, 0.0), y0 = k & 1 ? up : y, y1 = k & 1 ? y : up;
+        double u0 = k & 2 ? up : y, u1 = k & 2 ? y : up, xr = -81.870810028381413;
+        amp_vec2 a[4], b[6];
+        amp_polyset P, R;
+        int changed = 0;
+        size_t r, i;
+        if (k == 4) /* the motor's own figures: the corners of the upper body on either side of the stretch */
+            y0 = u0 = -25.210985109305511, y1 = u1 = y;
+        amp_polyset_init(&P, NULL);
+        amp_polyset_init(&R, NULL);
+        a[0] = amp_v2(-159, -40), a[1] = amp_v2(-63.22291195647901, -40), a[2] = amp_v2(-63.22291195647901, y0);
+        a[3] = amp_v2(-159, y1);
+        b[0] = amp_v2(-130, u0), b[1] = amp_v2(xr, u1), b[2] = amp_v2(xr, -20), b[3] = amp_v2(-120, -20);
+        b[4] = amp_v2(-120, 0), b[5] = amp_v2(-130, 0);
+        ck_assert_int_eq(amp_polyset_add(&P, a, 4, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_add(&P, b, 6, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_add(&R, a, 4, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_add(&R, b, 6, NULL), AMP_OK);
+        ck_assert_int_eq(amp_polyset_union(&P, &changed, NULL), AMP_OK);
+        ck_assert_int_eq(changed, 1);
+        ck_assert_int_eq(crossing_edges(&P), 0);
+        ck_assert_uint_eq(P.nrings, 1);
+        ck_assert_double_eq_tol(amp_polyset_area(&P), amp_polyset_area(&R), 1e-9);
+        for (r = 0; r < P.nrings; r++)
+            for (i = 0; i < P.rings[r].n; i++) {
+                size_t n = P.rings[r].n, f = P.rings[r].first;
+                amp_vec2 p = P.pts[f + i], q = P.pts[f + (i + 1) % n], o = P.pts[f + (i + 2) % n];
+                double ex = q.x - p.x, ey = q.y - p.y, fx = o.x - q.x, fy = o.y - q.y;
+                ck_assert_msg(edge_dist(&R, amp_v2(0.5 * (p.x + q.x), 0.5 * (p.y + q.y))) < 1e-9,
+                              "case %d: edge (%g %g)-(%g %g) leaves the input's boundary", k, p.x, p.y, q.x, q.y);
+                ck_assert_msg(!(fabs(ex * fy - ey * fx) <= 1e-9 * (ex * ex + ey * ey + fx * fx + fy * fy) &&
+                                ex * fx + ey * fy < 0),
+                              "case %d: the ring runs back along itself at (%.17g %.17g)", k, q.x, q.y);
+            }
+        ck_assert_int_eq(amp_polyset_union(&P, &changed, NULL), AMP_OK);
+        ck_assert_int_eq(changed, 0);
+        amp_polyset_free(&P);
+        amp_polyset_free(&R);
+    }
+}
+END_TEST
+
 static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
@@ -571,6 +638,7 @@ static Suite *polygon_suite(void)
     tcase_add_test(tc, union_of_overlapping_shells_matches_the_sampled_nonzero_region);
     tcase_add_test(tc, union_leaves_disjoint_rings_untouched_byte_for_byte);
     tcase_add_test(tc, union_of_boxes_face_to_face_is_one_ring_and_reads_inward_sets_reversed);
+    tcase_add_test(tc, union_of_bodies_meeting_a_rounding_error_apart_is_exact);
     suite_add_tcase(s, tc);
     return s;
 }
