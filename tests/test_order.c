@@ -779,6 +779,37 @@ START_TEST(checker_finds_a_steep_descent_and_accepts_a_climb)
 }
 END_TEST
 
+/* The violation names its paths and segments by their places in the file, whatever empty and one-vertex paths
+ * come before them (the checker keeps no path index per segment: it finds it from the vertex). */
+START_TEST(gouge_violation_names_paths_and_segments_past_empty_and_one_vertex_paths)
+{
+    static const char *const text[2] = {
+        "ampath-paths 1\npath object 0\npath support 1\n200 200 0.2 0.5\npath object 0\n"
+        "path object 3\n0 0 9 0.5\n10 0 9 0.5\n60 0 9 0.5\npath object 0\npath support 0\n"
+        "path object 4\n100 50 1 0.5\n100 30 1 0.5\n100 0 1 0.5\n70 0 1 0.5\npath object 0\n",
+        "ampath-paths 1\npath object 0\npath object 2\n-50 0 1 0.5\n-40 0 1 0.5\npath object 0\n"
+        "path support 1\n0 0 20 0.5\npath object 0\npath object 2\n30 30 1 0.5\n10 0 1 0.5\n"};
+    static const size_t want[2][4] = {{3, 1, 6, 2}, {3, 0, 5, 0}};
+    amp_head h = head(0.5, 72);
+    int c, m;
+    for (c = 0; c < 2; c++)
+        for (m = 0; m < 2; m++) {
+            amp_pathset ps;
+            amp_gouge_violation v;
+            amp_error err;
+            amp_pathset_init(&ps, NULL);
+            ck_assert_int_eq(amp_pathset_parse(&ps, text[c], strlen(text[c]), &err), AMP_OK);
+            ck_assert_int_eq(amp_check_gouge(&ps, &h, m ? AMP_GOUGE_GRID : AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, &v, &err),
+                             AMP_ERR_CHECK);
+            ck_assert_uint_eq(v.earlier_path, want[c][0]);
+            ck_assert_uint_eq(v.earlier_seg, want[c][1]);
+            ck_assert_uint_eq(v.later_path, want[c][2]);
+            ck_assert_uint_eq(v.later_seg, want[c][3]);
+            amp_pathset_free(&ps);
+        }
+}
+END_TEST
+
 START_TEST(bad_head_geometry_is_rejected_with_a_clear_error)
 {
     amp_pathset ps, out;
@@ -900,6 +931,7 @@ static Suite *order_suite(void)
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
     tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);
     tcase_add_test(tc, checker_finds_a_steep_descent_and_accepts_a_climb);
+    tcase_add_test(tc, gouge_violation_names_paths_and_segments_past_empty_and_one_vertex_paths);
     tcase_add_test(tc, bad_head_geometry_is_rejected_with_a_clear_error);
     tcase_add_test(tc, ordering_survives_out_of_memory);
     tcase_add_test(tc, order_and_check_commands_report_and_exit_as_specified);
