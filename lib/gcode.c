@@ -600,7 +600,7 @@ static void reset_run(amp_gcode_iter *it, int pass)
     it->e_units = 0;
     it->f_units = -1;
     it->travel_to = it->travel_from = amp_v3(0, 0, 0);
-    it->layer = 0;
+    it->layer = it->path_layer = 0;
     it->layer_z = it->z_first;
     it->first_done = it->fan_on = it->travel_retract = it->path_first = 0;
     it->hull_n = it->hull_i = 0;
@@ -1414,11 +1414,13 @@ static void begin_path(amp_gcode_iter *it, const amp_path *p, const amp_pvert *v
             it->layer++;
             it->layer_z = zmin;
         }
+        it->path_layer = it->layer;
     } else {
         long lay = (long)floor(bottom / it->o.first_layer_height + 1e-9);
         it->path_first = bottom < it->o.first_layer_height - 1e-6;
-        if (lay > it->layer)
-            it->layer = lay > 100000 ? 100000 : (int)lay;
+        it->path_layer = lay < 0 ? 0 : (lay > 100000 ? 100000 : (int)lay);
+        if (it->path_layer > it->layer)
+            it->layer = it->path_layer;
     }
     if ((size_t)it->layer + 1 > it->stats.layers) /* total_layer_count of the printer macros */
         it->stats.layers = (size_t)it->layer + 1;
@@ -1521,7 +1523,9 @@ static int path_comment(amp_gcode_iter *it, lb *l, const amp_path *p, const amp_
     return 1;
 }
 
-/* Above the first layer: the other layers' temperatures, once; the part-cooling fan from its layer on. */
+/* Above the first layer: the other layers' temperatures, once; the part-cooling fan for every path from its
+ * layer on. A volumetric job may print a path on the bed after higher ones (Algorithm 2 orders by the head
+ * cone, not by height): the fan goes off for it and on again after, as it is off for the first layers. */
 static int layer_settings(amp_gcode_iter *it, lb *l)
 {
     const amp_gcode_opts *o = &it->o;
@@ -1541,11 +1545,16 @@ static int layer_settings(amp_gcode_iter *it, lb *l)
         return 0;
     default: /* PS_FAN */
         it->sub = PS_PLAN;
-        if (!it->fan_on && o->fan_speed > 0.0 && it->layer >= o->fan_off_layers) {
+        if (!it->fan_on && o->fan_speed > 0.0 && it->path_layer >= o->fan_off_layers) {
             it->fan_on = 1;
             lb_str(l, "M106");
             lb_fixed(l, 'S', llround(o->fan_speed * 255.0), 0);
             lb_str(l, " ; part-cooling fan");
+            return 1;
+        }
+        if (it->fan_on && it->path_layer < o->fan_off_layers) {
+            it->fan_on = 0;
+            lb_str(l, "M107 ; part-cooling fan off: this path lies in the first layers");
             return 1;
         }
         return 0;

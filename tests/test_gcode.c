@@ -18,6 +18,7 @@ typedef struct seg {
     double e, feed; /* feed mm/s */
     size_t before;  /* travels: number of extrusion segments printed before */
     int support;    /* extrusions: of a support path (planar layers: the vertex z is the bead's top) */
+    int fan;        /* extrusions: the part-cooling fan was on */
 } seg;
 
 typedef struct gsim {
@@ -26,7 +27,7 @@ typedef struct gsim {
     double filament;  /* mm (1.75) */
     int arcs;         /* accept G2/G3 (firmware with arc support) */
     int xy_known;
-    int rel_e, have_e_mode, g90, homed, heated, line_no, last_path, in_support;
+    int rel_e, have_e_mode, g90, homed, heated, line_no, last_path, in_support, fan;
     amp_box3 box;     /* every position a move went to */
     double first_e_z; /* z of the first extrusion */
     size_t fan_on_line, fan_off_line, first_ext_line, last_ext_line, hot_change_line;
@@ -150,6 +151,8 @@ static int gsim_line(gsim *s, const char *line)
         s->hot_change_line = (size_t)s->line_no;
     if (m == 106 && !s->fan_on_line)
         s->fan_on_line = (size_t)s->line_no;
+    if (m == 106 || m == 107)
+        s->fan = m == 106 && !(have['S' - 'A'] && val['S' - 'A'] == 0);
     if (m == 107 && s->nsegs > 0)
         s->fan_off_line = (size_t)s->line_no;
     if (g == 92 && have['E' - 'A'])
@@ -182,6 +185,7 @@ static int gsim_line(gsim *s, const char *line)
         x.feed = s->f;
         x.before = 0;
         x.support = s->in_support;
+        x.fan = s->fan;
         push_seg(&s->segs, &s->nsegs, &s->cap, x);
         s->pos = to;
         return 1;
@@ -225,6 +229,7 @@ static int gsim_line(gsim *s, const char *line)
             x.feed = s->f;
             x.before = 0;
             x.support = s->in_support;
+            x.fan = s->fan;
             if (de > 0 && isnan(s->first_e_z))
                 s->first_e_z = to.z;
             if (de > 0) {
@@ -1606,6 +1611,49 @@ static size_t line_of(const char *text, const char *what, size_t after)
     return 0;
 }
 
+/* A volumetric job may print a tube on the bed after higher ones (Algorithm 2 orders by the head cone, not
+ * by height; the demo helix has seven such paths): the fan is off for every bead in the first layers, on for
+ * every other one, whatever came before. */
+START_TEST(fan_is_off_for_every_bead_in_the_first_layers_whatever_the_order)
+{
+    static const double zs[5] = {0.25, 2.0, 0.3, 3.0, 0.45};
+    amp_pathset ps;
+    amp_gcode_opts o;
+    gsim s;
+    char *text;
+    size_t k, i, on = 0, off = 0;
+    int layers;
+    amp_pathset_init(&ps, NULL);
+    for (i = 0; i < 5; i++) {
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+        for (k = 0; k < 4; k++)
+            ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(10.0 * (double)i + 3.0 * (double)k, 5.0 * (double)(k % 2), zs[i]),
+                                              0.25, NULL), AMP_OK);
+    }
+    for (layers = 1; layers <= 2; layers++) {
+        amp_gcode_opts_default(&o, AMP_FLAVOR_MARLIN);
+        o.fan_off_layers = layers;
+        text = gen(&ps, &o, NULL);
+        run_in_bed(&s, text, &o);
+        for (k = 0; k < s.nsegs; k++) {
+            /* the bead's bottom, placed: the lowest tube (z 0.25, r 0.25) rests on the bed */
+            double bottom = fmin(s.segs[k].a.z, s.segs[k].b.z) - 0.25;
+            int first = bottom < layers * o.first_layer_height - 1e-6;
+            ck_assert_msg(s.segs[k].fan == !first, "fan_off_layers %d: a bead at bottom %g with the fan %s", layers,
+                          bottom, s.segs[k].fan ? "on" : "off");
+            on += s.segs[k].fan;
+            off += !s.segs[k].fan;
+        }
+        ck_assert_uint_gt(s.fan_off_line, s.last_ext_line);
+        gsim_free(&s);
+        free(text);
+    }
+    ck_assert_uint_gt(on, 0);
+    ck_assert_uint_gt(off, 0);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(first_layer_temperatures_and_fan_come_in_order)
 {
     amp_pathset ps;
@@ -2182,6 +2230,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, a_job_too_big_for_the_bed_is_refused_naming_axis_and_overflow);
     tcase_add_test(tc, simplified_paths_stay_within_tolerance_without_micro_segments);
     tcase_add_test(tc, first_layer_temperatures_and_fan_come_in_order);
+    tcase_add_test(tc, fan_is_off_for_every_bead_in_the_first_layers_whatever_the_order);
     tcase_add_test(tc, travels_go_straight_over_nothing_and_over_material_only_where_it_is);
     tcase_add_test(tc, cone_checker_catches_a_direct_hop_past_a_tower);
     tcase_add_test(tc, direct_hops_cut_travel_time_on_the_helix_without_gouging);

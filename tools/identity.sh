@@ -6,7 +6,9 @@
 #   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
 #   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
 # Only products are hashed (not the --json figures, which hold timings).
-# tools/identity.ref holds the listing of the current behaviour (renewed twice at stop 30: skin bands are as
+# tools/identity.ref holds the listing of the current behaviour (renewed at stop 33: the part-cooling fan goes
+# off for a tube on the bed printed after higher ones, so the helix G-code files gained six M107/M106 pairs and
+# their line count, nothing else; twice at stop 30: skin bands are as
 # deep as the neighbouring sections' edges reach into a region, not a grid cell deeper, then the support
 # corners' bases are r wide, not 2r, so the twisted bridge's continuous paths, their G-code and picture
 # changed, nothing else; at stop 29: slice --continuous

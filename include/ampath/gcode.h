@@ -293,7 +293,8 @@ typedef struct amp_gcode_iter {
     double zlow;        /* lowest bead bottom of the job (model z) */
     double z_first;     /* planar: z of the lowest planar layer (model); HUGE_VAL if none */
     double layer_z;     /* planar: z of the current layer */
-    int layer;          /* layer index of the current path */
+    int layer;          /* highest layer index so far (planar: the current path's) */
+    int path_layer;     /* the current path's own layer (a tube printed after higher ones may lie lower) */
     int first_done, fan_on, travel_retract, path_first;
     amp_vec3 travel_from;
     size_t nxt;         /* end vertex of the next written segment */
