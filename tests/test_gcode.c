@@ -1612,7 +1612,7 @@ static size_t line_of(const char *text, const char *what, size_t after)
 }
 
 /* A volumetric job may print a tube on the bed after higher ones (Algorithm 2 orders by the head cone, not
- * by height; the demo helix has seven such paths): the fan is off for every bead in the first layers, on for
+ * by height; the demo helix has six such paths): the fan is off for every bead in the first layers, on for
  * every other one, whatever came before. */
 START_TEST(fan_is_off_for_every_bead_in_the_first_layers_whatever_the_order)
 {
