@@ -874,6 +874,13 @@ START_TEST(order_and_check_commands_report_and_exit_as_specified)
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_greedy\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"subdivisions_improved\":1,"));
     ck_assert_ptr_nonnull(strstr(out, "\"below_edges_complete\":true"));
+    /* the text report names the input's figures whichever ordering ran (--greedy alone printed zeros) */
+    snprintf(args, sizeof args, "order %s --greedy -o %s", in, ord);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, ": 2 paths, ") != NULL && strstr(out, ": 2 paths, 0 fragments") == NULL, "%s", out);
+    snprintf(args, sizeof args, "order %s -o %s", in, ord);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_ptr_nonnull(strstr(out, ": 2 paths, "));
     snprintf(args, sizeof args, "check %s --json", ord);
     ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"gouge\":{\"ran\":true,\"ok\":true"));

@@ -158,9 +158,9 @@ static void order_json(const order_args *a, const order_result *r)
 
 static void order_text(const order_args *a, const order_result *r)
 {
-    /* the first line is the improved run's figures, zero under --greedy alone, as it always printed */
-    printf("%s: %lu paths, %lu fragments (z_offs %g mm, theta %g deg)\n", a->input, (unsigned long)r->si.paths_in,
-           (unsigned long)r->si.fragments, a->z_offs, a->theta);
+    const amp_order_stats *in = r->do_i ? &r->si : &r->sg; /* --greedy alone runs no improved ordering */
+    printf("%s: %lu paths, %lu fragments (z_offs %g mm, theta %g deg)\n", a->input, (unsigned long)in->paths_in,
+           (unsigned long)in->fragments, a->z_offs, a->theta);
     if (r->graph_done)
         printf("below graph: %lu edges (%.3f s)\n", (unsigned long)r->edges, r->t_graph);
     else if (a->max_edges == 0)
