@@ -238,6 +238,10 @@ int cmd_cover(int argc, char **argv)
         rc = cover_run(&a, &v, &ps, &f);
     if (rc == CLI_OK && a.json)
         cover_json(&a, &f);
+    else if (rc == CLI_OK) /* one line, as every command prints without --json */
+        printf("%s: eps %g mm, dir %s, %lu iso-surfaces, %lu curves, %.1f mm of paths%s%s%s\n", a.input, a.eps,
+               f.dirname, (unsigned long)f.st.surfaces, (unsigned long)f.st.curves, f.st.length,
+               f.st.depth_limited ? " (depth limit reached)" : "", a.out ? " -> " : "", a.out ? a.out : "");
     amp_spline_free(&v);
     amp_pathset_free(&ps);
     return rc;
