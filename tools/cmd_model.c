@@ -54,6 +54,10 @@ static int write_mesh_model(const char *name, const char *out, double tol, int j
         cli_json_int(&j, "vertices", (long long)m.nverts);
         cli_json_box(&j, "bbox", amp_mesh_bbox(&m));
         cli_json_end(&j);
+    } else {
+        amp_box3 bb = amp_mesh_bbox(&m);
+        printf("%s: mesh, %lu triangles, %.1f x %.1f x %.1f mm -> %s\n", name, (unsigned long)m.ntris,
+               bb.max.x - bb.min.x, bb.max.y - bb.min.y, bb.max.z - bb.min.z, out);
     }
     amp_mesh_free(&m);
     return CLI_OK;
@@ -97,6 +101,8 @@ int cmd_model(int argc, char **argv)
         cli_json_int(&j, "control_points", (long long)s.ncp);
         cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
+    } else {
+        printf("%s: trivariate, %lu control points -> %s\n", pos[0], (unsigned long)s.ncp, out);
     }
     amp_spline_free(&s);
     return CLI_OK;

@@ -21,7 +21,7 @@ num() { sed -n "s/.*\"$2\":\([-0-9.e+]*\).*/\1/p" "$1" | head -n 1; }
 step() { printf '%-9s %s\n' "$1" "$2"; }
 
 echo "ampath demo ($($A --version)) — helix, eps $EPS mm, default head (z_offs 0.5 mm, theta 72 deg)"
-$A model helix -o $D/helix.spl
+$A model helix -o $D/helix.spl > /dev/null
 $A model helix -o $D/helix.stl --json > $D/model.json
 step model "helix trivariate $D/helix.spl and its boundary mesh $D/helix.stl ($(num $D/model.json triangles) triangles)"
 
