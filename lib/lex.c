@@ -15,7 +15,7 @@ void amp_lex_init(amp_lex *lx, const char *buf, size_t len, int strip_comments)
     lx->strip_comments = strip_comments;
 }
 
-static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+int amp_lex_is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *err)
 {
@@ -33,7 +33,7 @@ int amp_lex_next_line(amp_lex *lx, const char **line, size_t *len, amp_error *er
             if (h)
                 end = (size_t)(h - lx->buf);
         }
-        for (i = start; i < end && is_space(lx->buf[i]); i++)
+        for (i = start; i < end && amp_lex_is_space(lx->buf[i]); i++)
             ;
         /* The documented 4,096-byte line limit holds for every physical line: a long
          * comment or blank line is refused here, a long content line by amp_lex_next (only
@@ -56,12 +56,12 @@ int amp_lex_split(amp_lex *lx, const char *line, size_t len, amp_error *err)
     lx->ntok = 0;
     while (i < len) {
         size_t t;
-        while (i < len && is_space(line[i]))
+        while (i < len && amp_lex_is_space(line[i]))
             i++;
         if (i >= len)
             break;
         t = i;
-        while (i < len && !is_space(line[i]))
+        while (i < len && !amp_lex_is_space(line[i]))
             i++;
         if (lx->ntok == AMP_LEX_MAX_TOKENS)
             return amp_fail(err, AMP_ERR_PARSE, lx->line, "line %ld: more than %d fields", lx->line,

@@ -28,6 +28,9 @@ typedef struct amp_lex {
 
 void amp_lex_init(amp_lex *lx, const char *buf, size_t len, int strip_comments);
 
+/** Non-zero for the characters that separate tokens (space, tab, CR, VT, FF; a newline ends the line). */
+int amp_lex_is_space(char c);
+
 /**
  * Advance to the next line that has at least one token (blank and comment-only
  * lines are skipped). Returns 1 with tokens set, 0 at end of input, or a

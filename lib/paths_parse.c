@@ -143,16 +143,14 @@ static amp_status parse_one_piece(amp_pathset *ps, const char *text, size_t len,
     return st;
 }
 
-static int is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
 /* Is "path" the first token of the line from @p at (as the lexer splits it, comments cut)? */
 static int path_token(const char *t, size_t at, size_t len)
 {
-    while (at < len && is_space(t[at]))
+    while (at < len && amp_lex_is_space(t[at]))
         at++;
     if (len - at < 4 || memcmp(t + at, "path", 4) != 0)
         return 0;
-    return at + 4 == len || is_space(t[at + 4]) || t[at + 4] == '\n' || t[at + 4] == '#';
+    return at + 4 == len || amp_lex_is_space(t[at + 4]) || t[at + 4] == '\n' || t[at + 4] == '#';
 }
 
 /* The start of the first line after @p from that is a path header (len: none). */

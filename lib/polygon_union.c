@@ -105,7 +105,7 @@ static amp_status index_rings(uctx *c, const amp_polyset *ps)
     return amp_polyindex_build(&c->ix, ps, NULL) == AMP_OK ? AMP_OK : AMP_ERR_NOMEM;
 }
 
-static double dist2v(amp_vec2 a, amp_vec2 b)
+static double dist2(amp_vec2 a, amp_vec2 b)
 {
     return (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
 }
@@ -137,7 +137,7 @@ static amp_status collinear(uctx *c, size_t i, size_t j)
             size_t nd = q ? e[1 - k]->nb : e[1 - k]->na;
             double t = param(a, b, c->node[nd]);
             if (nd != e[k]->na && nd != e[k]->nb && t > 0.0 && t < 1.0 &&
-                off_line(c, a, b, nd) <= c->tol * sqrt(dist2v(a, b))) {
+                off_line(c, a, b, nd) <= c->tol * sqrt(dist2(a, b))) {
                 if (add_split(c, k ? j : i, t, nd) != AMP_OK)
                     return AMP_ERR_NOMEM;
                 overlap = 1;
@@ -191,8 +191,8 @@ static amp_status meet(uctx *c, size_t i, size_t j)
     d2 = amp_v2_orient(a, b, q);
     d3 = amp_v2_orient(p, q, a);
     d4 = amp_v2_orient(p, q, b);
-    ts = tol * sqrt(dist2v(a, b));
-    tt = tol * sqrt(dist2v(p, q));
+    ts = tol * sqrt(dist2(a, b));
+    tt = tol * sqrt(dist2(p, q));
     on_p = fabs(d1) <= ts;
     on_q = fabs(d2) <= ts;
     on_a = fabs(d3) <= tt;
@@ -358,11 +358,6 @@ static amp_status cut_pieces(uctx *c, const amp_polyset *ps, upiece **pc, size_t
     }
     ring_piece[ps->nrings] = *npc;
     return AMP_OK;
-}
-
-static double dist2(amp_vec2 a, amp_vec2 b)
-{
-    return (b.x - a.x) * (b.x - a.x) + (b.y - a.y) * (b.y - a.y);
 }
 
 static double piece_len2(const uctx *c, const upiece *p)
