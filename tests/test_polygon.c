@@ -262,6 +262,35 @@ START_TEST(inset_survives_near_duplicate_points_from_a_section_through_vertices)
 }
 END_TEST
 
+START_TEST(inset_keeps_a_ring_past_a_micrometre_notch_at_a_pinch)
+{
+    /* seven vertices left of a Menger sponge's section at z 14 (OpenSCAD's example024, rotated onto a corner,
+     * sliced at 0.2 mm): two cubes meet at an edge, and the union leaves a notch of 2 micrometres at the
+     * pinch (the first two and last two vertices). The raw arcs of its reflex corners crossed nearly
+     * tangentially, an arc step went missing, and the whole offset ring was dropped: no perimeter, and the
+     * infill of the island drawn in its hole */
+    static const double xy[7][2] = {
+        {-46.872434279567877, 44.52247984380115},  {-46.874131366038441, 44.521500000000003},
+        {-51.408434316980781, 47.139520156198856}, {-10.583644076383477, 18.331357157703302},
+        {-51.408418151900932, 52.379290993331608}, {-46.87073719309732, 44.5195403872235},
+        {-46.872434298274328, 44.520520193611752}};
+    amp_polyset in, out;
+    amp_vec2 p[7];
+    int k;
+    amp_polyset_init(&in, NULL);
+    amp_polyset_init(&out, NULL);
+    for (k = 0; k < 7; k++)
+        p[k] = amp_v2(xy[k][0], xy[k][1]);
+    ck_assert_int_eq(amp_polyset_add(&in, p, 7, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_organize(&in, NULL), AMP_OK);
+    ck_assert_int_eq(amp_polyset_inset(&in, 0.225, 0, &out, NULL), AMP_OK);
+    ck_assert_uint_eq(out.nislands, 1);
+    ck_assert_int_eq(inset_disagreements(&in, 0.225, &out, 0.05, 0.01), 0);
+    amp_polyset_free(&in);
+    amp_polyset_free(&out);
+}
+END_TEST
+
 START_TEST(inset_of_marching_tetrahedra_torus_sections_matches_sampling)
 {
     /* sections of a meshed torus have many short edges at grid-plane
@@ -695,6 +724,7 @@ static Suite *polygon_suite(void)
     tcase_add_test(tc, inset_checker_rejects_a_wrong_offset);
     tcase_add_test(tc, inset_of_a_star_with_reflex_vertices_matches_sampling);
     tcase_add_test(tc, inset_survives_near_duplicate_points_from_a_section_through_vertices);
+    tcase_add_test(tc, inset_keeps_a_ring_past_a_micrometre_notch_at_a_pinch);
     tcase_add_test(tc, inset_of_marching_tetrahedra_torus_sections_matches_sampling);
     tcase_add_test(tc, row_index_answers_as_the_plain_scans);
     tcase_add_test(tc, union_of_overlapping_shells_matches_the_sampled_nonzero_region);
