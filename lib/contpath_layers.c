@@ -39,12 +39,23 @@ typedef struct lctx {
 
 /* Closed path @p k of @p ps (last vertex = first) is rotated to start at
  * its vertex nearest to @p q among those whose two segments are printed, so
- * that the stroke begins where the nozzle is (less travel between strokes). */
+ * that the stroke begins where the nozzle is (less travel between strokes);
+ * an open one is reversed when its end is the nearer. */
 static amp_status rotate_to(amp_pathset *ps, size_t k, amp_vec2 q, amp_error *err)
 {
     amp_pvert *v = amp_pathset_path_verts(ps, k), *w;
     size_t n = ps->paths[k].n, i, best = 0;
     double bd = HUGE_VAL;
+    if (n >= 2 && (v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y) &&
+        hypot(v[n - 1].p.x - q.x, v[n - 1].p.y - q.y) < hypot(v[0].p.x - q.x, v[0].p.y - q.y)) {
+        /* an open path (a thin wall) starts at its end nearer to q */
+        for (i = 0; i < n / 2; i++) {
+            amp_pvert t = v[i];
+            v[i] = v[n - 1 - i];
+            v[n - 1 - i] = t;
+        }
+        return AMP_OK;
+    }
     if (n < 4 || v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y || v[0].r != v[n - 1].r)
         return AMP_OK;
     for (i = 0; i + 1 < n; i++) {
@@ -134,6 +145,52 @@ static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpa
         rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
         for (q = 0; q <= n && rc == AMP_OK; q++)
             rc = amp_pathset_push(&c->tmp, amp_v3(p[q % n].x, p[q % n].y, z), c->o->radius, err);
+        s0->perimeter_loops++;
+    }
+    return rc;
+}
+
+/* The perimeters of a thin island (rings of its inset by d < r). A ring whose
+ * two sides lie closer than r/4 (its mean width 2 area / length) would be a
+ * loop printed there and back over the same line, the second pass on the
+ * first (an OpenSCAD part's sliver 0.23 mm wide, 12 mm long: after the merge
+ * of points within a micrometre, A-B-A, an edge printed twice): it is printed
+ * once, from one end to the other along one side, as slicers print a thin
+ * wall. A ring under r/2 long stays a loop (a speck, for the join's rule). */
+static amp_status thin_ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpath_stats *s0, amp_error *err)
+{
+    size_t r, q, a, b;
+    amp_status rc = AMP_OK;
+    for (r = 0; r < P->nrings && rc == AMP_OK; r++) {
+        const amp_vec2 *p = amp_polyset_ring(P, r);
+        size_t n = P->rings[r].n;
+        double len = 0.0, da = -1.0, db = -1.0;
+        for (q = 0; q < n; q++)
+            len += hypot(p[(q + 1) % n].x - p[q].x, p[(q + 1) % n].y - p[q].y);
+        if (!(2.0 * fabs(amp_ring_area(p, n)) < 0.25 * c->o->radius * len) || len < c->o->radius) {
+            amp_polyset one = *P;
+            one.rings = P->rings + r;
+            one.nrings = 1;
+            rc = ring_paths(c, &one, z, s0, err);
+            continue;
+        }
+        /* its ends: the vertex farthest from the first, and the one farthest from that */
+        for (q = 0, a = 0; q < n; q++)
+            if (hypot(p[q].x - p[0].x, p[q].y - p[0].y) > da) {
+                da = hypot(p[q].x - p[0].x, p[q].y - p[0].y);
+                a = q;
+            }
+        for (q = 0, b = a; q < n; q++)
+            if (hypot(p[q].x - p[a].x, p[q].y - p[a].y) > db) {
+                db = hypot(p[q].x - p[a].x, p[q].y - p[a].y);
+                b = q;
+            }
+        rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
+        for (q = a; rc == AMP_OK; q = (q + 1) % n) {
+            rc = amp_pathset_push(&c->tmp, amp_v3(p[q].x, p[q].y, z), c->o->radius, err);
+            if (q == b)
+                break;
+        }
         s0->perimeter_loops++;
     }
     return rc;
@@ -238,6 +295,26 @@ static amp_status skin_band(lctx *c, double w, amp_error *err)
     return rc == AMP_OK ? amp_polyset_organize(&c->band, err) : rc;
 }
 
+/* Does every ring of @p P fit in a box of diagonal @p d (a speck for the join, amp_cp_join_loops)? */
+static int all_specks(const amp_polyset *P, double d)
+{
+    size_t i;
+    for (i = 0; i < P->nrings; i++) {
+        const amp_vec2 *p = amp_polyset_ring(P, i);
+        double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+        size_t k;
+        for (k = 0; k < P->rings[i].n; k++) {
+            x0 = fmin(x0, p[k].x);
+            y0 = fmin(y0, p[k].y);
+            x1 = fmax(x1, p[k].x);
+            y1 = fmax(y1, p[k].y);
+        }
+        if (!(hypot(x1 - x0, y1 - y0) < d))
+            return 0;
+    }
+    return 1;
+}
+
 /* One island (c->isl) of a layer into c->tmp: perimeter loop(s) at r (or,
  * for an island narrower than 2r, at the deepest smaller inset that exists:
  * every island with area is printed) and the strokes of its regions. */
@@ -248,7 +325,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
     double d, dp = o->radius;
     size_t q, nperim = 0;
     amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
-    int thin = rc == AMP_OK && c->ins.nrings == 0;
+    int thin = rc == AMP_OK && (c->ins.nrings == 0 || all_specks(&c->ins, 0.25 * o->radius));
     if (rc == AMP_OK && c->ins.nislands > 1) {
         /* the perimeter falls apart into lobes joined by necks thinner than
          * a bead; without infill (a sliver) the island is treated as thin,
@@ -263,18 +340,22 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * centre line is the inset by the largest d < r that exists and
          * falls apart into the fewest pieces (a wavy sliver splits where it
          * is thinnest; a piece each would be a stroke each) */
+        int speck = c->ins.nrings == 0 || all_specks(&c->ins, 0.25 * o->radius);
         double best_d = c->ins.nrings ? o->radius : 0;
         size_t best_n = c->ins.nrings ? c->ins.nislands : (size_t)-1;
-        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && best_n > 1; d *= 0.5) {
+        for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && (best_n > 1 || speck); d *= 0.5) {
             rc = amp_polyset_inset(&c->isl, d, 0, &c->ins, err);
-            if (rc == AMP_OK && c->ins.nrings && c->ins.nislands < best_n) {
+            if (rc == AMP_OK && c->ins.nrings && (c->ins.nislands < best_n || speck)) {
+                /* a loop under r/4 across is a speck the join leaves out (inside the beads
+                 * around it): an island whose inset at r is one gets a deeper loop, whole */
+                speck = all_specks(&c->ins, 0.25 * o->radius);
                 best_n = c->ins.nislands;
                 best_d = d;
             }
         }
         if (rc == AMP_OK && best_d > 0 && (rc = amp_polyset_inset(&c->isl, best_d, 0, &c->ins, err)) == AMP_OK) {
             s0->thin_islands += best_d < o->radius;
-            return ring_paths(c, &c->ins, L->z_print, s0, err);
+            return thin_ring_paths(c, &c->ins, L->z_print, s0, err);
         }
         if (rc == AMP_OK)
             s0->dropped_islands++;

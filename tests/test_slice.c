@@ -576,6 +576,78 @@ START_TEST(check_fails_a_job_with_a_layer_left_out_or_without_paths)
 }
 END_TEST
 
+/* A triangular prism over (x, y) corners @p t (counter-clockwise), from z0 to z1, normals outward. */
+static void add_prism(amp_mesh *m, const double t[3][2], double z0, double z1)
+{
+    uint32_t v[6];
+    int i;
+    for (i = 0; i < 6; i++)
+        ck_assert_int_eq(amp_mesh_add_vertex(m, amp_v3(t[i % 3][0], t[i % 3][1], i < 3 ? z0 : z1), &v[i], NULL), AMP_OK);
+    ck_assert_int_eq(amp_mesh_add_tri(m, v[0], v[2], v[1], NULL), AMP_OK);
+    ck_assert_int_eq(amp_mesh_add_tri(m, v[3], v[4], v[5], NULL), AMP_OK);
+    for (i = 0; i < 3; i++) {
+        ck_assert_int_eq(amp_mesh_add_tri(m, v[i], v[(i + 1) % 3], v[(i + 1) % 3 + 3], NULL), AMP_OK);
+        ck_assert_int_eq(amp_mesh_add_tri(m, v[i], v[(i + 1) % 3 + 3], v[i + 3], NULL), AMP_OK);
+    }
+}
+
+START_TEST(thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all)
+{
+    /* on a 12 x 8 x 4 mm block, 0.2 mm layers, 0.45 mm beads: a wall 0.23 mm thick and 10 mm long (its
+     * inset at r/2 is a loop 5 micrometres wide: printed there and back it was an edge printed twice, the
+     * slice failed its own check), a triangular pin of inradius 0.23 mm (its inset at r is a speck the join
+     * left out: its layers had no path) and, on the wall, a sliver 4 micrometres thick (no centre line a
+     * bead could follow: no path, and the check must not ask for one) */
+    static const double tri[3][2] = {{6.0, 6.46}, {5.601628, 5.77}, {6.398372, 5.77}};
+    amp_mesh m;
+    amp_pathset ps;
+    amp_error err;
+    char args[1024], out[1 << 14];
+    const char *stl = fx_tmp("thin.stl"), *amp = fx_tmp("thin.amp");
+    size_t i, walls[12] = {0}, pins[12] = {0}, above = 0;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    add_box(&m, amp_v3(0, 0, 0), amp_v3(12, 8, 4), 0);
+    add_box(&m, amp_v3(1, 2, 4), amp_v3(11, 2.23, 6), 0);
+    add_prism(&m, tri, 4, 6);
+    add_box(&m, amp_v3(1, 2.1, 6), amp_v3(11, 2.104, 6.6), 0);
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s --json", stl, amp);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"empty_layers\":3,") != NULL, "%s", out);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.2 --json", amp, stl);
+    ck_assert_int_eq(fx_run_tool(args, out, sizeof out), 0);
+    ck_assert_msg(strstr(out, "\"layers_without_paths\":0") != NULL, "%s", out);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, &err), AMP_OK);
+    for (i = 0; i < ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
+        size_t n = ps.paths[i].n, k;
+        long li = lround(v[0].p.z / 0.2) - 21; /* layers 21..30 print the wall and the pin */
+        double len = 0;
+        for (k = 1; k < n; k++)
+            len += amp_v3_dist(v[k].p, v[k - 1].p);
+        above += v[0].p.z > 6.1;
+        if (li < 0 || li > 9)
+            continue;
+        if (v[0].p.y < 3) {
+            /* the wall: one open stroke along it, not a loop */
+            ck_assert_msg(v[0].p.x != v[n - 1].p.x || v[0].p.y != v[n - 1].p.y, "z %g: a loop", v[0].p.z);
+            ck_assert_msg(len > 9.0 && len < 10.2, "z %g: wall stroke %g mm", v[0].p.z, len);
+            walls[li]++;
+        } else if (v[0].p.y > 5 && v[0].p.x > 5 && v[0].p.x < 7) {
+            pins[li]++;
+        }
+    }
+    for (i = 0; i < 10; i++) {
+        ck_assert_msg(walls[i] == 1, "layer %lu: %lu wall strokes", (unsigned long)i + 21, (unsigned long)walls[i]);
+        ck_assert_msg(pins[i] == 1, "layer %lu: %lu pin strokes", (unsigned long)i + 21, (unsigned long)pins[i]);
+    }
+    ck_assert_uint_eq(above, 0);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -593,6 +665,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, overlapping_shells_are_sliced_as_their_union);
     tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
     tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);
+    tcase_add_test(tc, thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -27,14 +27,50 @@ static int is_planar(const amp_pvert *v, size_t n)
     return n > 0;
 }
 
-/* Layers of the mesh with a section (1e-3 mm2 or more: the slicer prints even a cone's tip) but no
- * planar path at their height: a layer left out lays everything above it one layer too high. */
+/* Is some island of section @p P printable by a bead of half-width @p r: 1e-3 mm2 or more (the slicer prints even a
+ * cone's tip), a box diagonal of r/2 or more, and a mean half-width (area / boundary length) of r/16 or more? A sliver
+ * thinner than r/8 (a sphere's top ring cut around a hole, 4 micrometres wide) or a speck under a quarter bead
+ * across has no centre line a bead could follow: no slicer prints it. */
+static int printable_section(const amp_polyset *P, double r)
+{
+    size_t k, i, q;
+    for (k = 0; k < P->nislands; k++) {
+        double area = 0, len = 0, x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+        for (i = 0; i < P->nrings; i++) {
+            const amp_vec2 *p = amp_polyset_ring(P, i);
+            size_t n = P->rings[i].n;
+            if (P->rings[i].island != (long)k)
+                continue;
+            area += amp_ring_area(p, n);
+            for (q = 0; q < n; q++) {
+                len += hypot(p[(q + 1) % n].x - p[q].x, p[(q + 1) % n].y - p[q].y);
+                x0 = fmin(x0, p[q].x);
+                x1 = fmax(x1, p[q].x);
+                y0 = fmin(y0, p[q].y);
+                y1 = fmax(y1, p[q].y);
+            }
+        }
+        if (area >= 1e-3 && hypot(x1 - x0, y1 - y0) >= 0.5 * r && area >= len * r / 16)
+            return 1;
+    }
+    return 0;
+}
+
+/* Layers of the mesh with a printable section (printable_section, for the widest bead of the file's planar paths)
+ * but no planar path at their height: a layer left out lays everything above it one layer too high. */
 static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
 {
-    size_t li, i, missing = 0;
+    size_t li, i, k, missing = 0;
+    double r = 0;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        if (is_planar(v, ps->paths[i].n))
+            for (k = 0; k < ps->paths[i].n; k++)
+                r = fmax(r, v[k].r);
+    }
     for (li = 0; li < sl->nlayers; li++) {
         int found = 0;
-        if (amp_polyset_area(&sl->layers[li].polys) < 1e-3)
+        if (!printable_section(&sl->layers[li].polys, r))
             continue;
         for (i = 0; i < ps->npaths && !found; i++) {
             const amp_pvert *v = amp_pathset_path_verts(ps, i);

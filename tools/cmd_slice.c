@@ -441,7 +441,9 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
         rc = CLI_FAILED;
     }
     if (rc == CLI_OK && st.empty_layers)
-        fprintf(stderr, "ampath slice: warning: %lu layers with section area got no path\n",
+        fprintf(stderr,
+                "ampath slice: warning: %lu layers with section area got no path (slivers thinner than r/16 or "
+                "specks under r/4 across: no centre line for a bead)\n",
                 (unsigned long)st.empty_layers);
     amp_pathset_free(&ps);
     free(per);

@@ -107,7 +107,8 @@ void amp_contpath_opts_default(amp_contpath_opts *o, double r);
 
 typedef struct amp_contpath_stats {
     size_t layers;
-    size_t empty_layers;     /**< layers with section area that received no path (0 expected) */
+    size_t empty_layers;     /**< layers with section area that received no path: only slivers thinner than r/16
+                                  and specks under r/4 across (a sphere's top cut around a hole) */
     size_t islands;          /**< islands of the sections (outer ring with its holes) that received paths */
     size_t thin_islands;     /**< islands narrower than 2r printed by a perimeter of a smaller inset */
     size_t dropped_islands;  /**< islands narrower than r/32: nothing printed */
