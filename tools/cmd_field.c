@@ -204,6 +204,13 @@ static int judge(const amp_field_stats *st, double spacing, double gap_all, size
         }
         fprintf(stderr, "ampath field: the field cannot meet spacing %g mm: covering bound %.3f mm > %.3f mm\n",
                 spacing, st->bound, st->target);
+        if (st->gap_left > 0)
+            /* the curve through such a gap was clipped to a piece shorter than --min-len (a sliver of the part
+             * thinner than the spacing: a cube less a sphere, OpenSCAD's example004) */
+            fprintf(stderr, "ampath field: %lu sampled points are still farther than %.3f mm from every path, in "
+                            "features too thin for a piece of --min-len (default S/2 = %g mm): a smaller --min-len "
+                            "(e.g. %g) covers them\n",
+                    (unsigned long)st->gap_left, st->target, 0.5 * spacing, 0.1 * spacing);
         return CLI_FAILED;
     }
     if (gap_all > st->target * (1 + 1e-6)) {
