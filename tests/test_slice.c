@@ -648,6 +648,28 @@ START_TEST(thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all)
 }
 END_TEST
 
+START_TEST(cli_warns_that_a_part_under_3_mm_may_be_in_inches)
+{
+    /* a 40 x 30 x 20 mm box exported in inches is 1.57 x 1.18 x 0.79: sliced (it has layers), with the
+     * warning PrusaSlicer's question stands for; the box in millimetres gets none */
+    amp_mesh m;
+    amp_error err;
+    char args[1024], out[1 << 12];
+    const char *stl = fx_tmp("inch.stl"), *amp = fx_tmp("inch.amp");
+    int k;
+    for (k = 0; k < 2; k++) {
+        double s = k ? 1.0 : 1.0 / 25.4;
+        amp_mesh_init(&m, NULL);
+        add_box(&m, amp_v3(0, 0, 0), amp_v3(40 * s, 30 * s, 20 * s), 0);
+        ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+        snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous -o %s", stl, amp);
+        ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, out, sizeof out), 0);
+        ck_assert_msg((strstr(out, "scaled by 25.4") != NULL) == (k == 0), "%s", out);
+        amp_mesh_free(&m);
+    }
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -666,6 +688,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
     tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);
     tcase_add_test(tc, thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all);
+    tcase_add_test(tc, cli_warns_that_a_part_under_3_mm_may_be_in_inches);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -45,11 +45,17 @@ amp_status slicetool_outward(amp_mesh *m, size_t *flipped, amp_error *err)
 static int slicetool_nonempty(const char *cmd, const amp_mesh *m, const amp_slices *sl, double layer)
 {
     size_t i;
-    amp_box3 b;
+    amp_box3 b = amp_mesh_bbox(m);
     for (i = 0; i < sl->nlayers; i++)
-        if (sl->layers[i].polys.nrings)
+        if (sl->layers[i].polys.nrings) {
+            /* as PrusaSlicer asks on loading: a part under 3 mm every way is likely in inches (or cm) */
+            if (b.max.x - b.min.x < 3 && b.max.y - b.min.y < 3 && b.max.z - b.min.z < 3)
+                fprintf(stderr,
+                        "ampath %s: warning: the part is only %.3g x %.3g x %.3g mm: a model made in inches must be "
+                        "scaled by 25.4 (in centimetres, by 10) before slicing\n",
+                        cmd, b.max.x - b.min.x, b.max.y - b.min.y, b.max.z - b.min.z);
             return CLI_OK;
-    b = amp_mesh_bbox(m);
+        }
     return cli_fail(cmd, CLI_USAGE,
                     "the mesh gives no layer: it is %.4g x %.4g x %.4g mm, %s layer of %g mm (a part in metres "
                     "or inches must be scaled to millimetres)",
