@@ -22,11 +22,12 @@ typedef struct builtin {
     double acc_xy, acc_z, acc_e, acc_retract; /* the firmware's per-axis and retraction accelerations */
 } builtin;
 
-/* Prusa-style start: heat, home without and then with mesh-bed levelling, an intro line at the bed's front edge. */
+/* Prusa-style start: heat, home without and then with mesh-bed levelling (Prusa's G80; a Klipper MK3S levels in its
+ * own macros), an intro line at the bed's front edge. */
 static const char mk3s_start[] = "M140 S[first_layer_bed_temperature] ; bed\n"
                                  "M104 S[first_layer_temperature] ; hot end\n"
                                  "G28 W ; home all without mesh bed levelling\n"
-                                 "G80 ; mesh bed levelling\n"
+                                 "{if gcode_flavor != \"klipper\"}G80 ; mesh bed levelling (Prusa's firmware)\n{endif}"
                                  "M190 S[first_layer_bed_temperature] ; wait for the bed\n"
                                  "M109 S[first_layer_temperature] ; wait for the hot end\n"
                                  "G1 Z0.2 F720\n"

@@ -247,7 +247,7 @@ static amp_status raw_value(amp_pr_ctx *c, const char *name, size_t n, const cha
 /* ---------------------------------------------------------------- the profile's fields */
 
 enum { F_TEMP, F_TEMP1, F_BED, F_BED1, F_NOZZLE, F_FILAMENT, F_LAYER, F_LAYER1, F_HEIGHT, F_TRAVEL, F_RETRACT,
-       F_RETRACT_SPEED, F_LIFT, F_BEFORE, F_MULT, F_FAN_OFF, F_MODEL };
+       F_RETRACT_SPEED, F_LIFT, F_BEFORE, F_MULT, F_FAN_OFF, F_MODEL, F_FLAVOR };
 
 /* A name and the id it stands for: the profile's fields and the runtime variables. */
 typedef struct kw_id {
@@ -279,7 +279,8 @@ static int field_id(const char *name, size_t n)
                 {"retract_lift", F_LIFT}, {"z_hop", F_LIFT}, {"retract_before_travel", F_BEFORE},
                 {"retraction_minimum_travel", F_BEFORE}, {"extrusion_multiplier", F_MULT},
                 {"filament_flow_ratio", F_MULT}, {"disable_fan_first_layers", F_FAN_OFF},
-                {"close_fan_the_first_x_layers", F_FAN_OFF}, {"printer_model", F_MODEL}};
+                {"close_fan_the_first_x_layers", F_FAN_OFF}, {"printer_model", F_MODEL},
+                {"gcode_flavor", F_FLAVOR}};
     return kw_find(keys, sizeof keys / sizeof keys[0], name, n);
 }
 
@@ -313,6 +314,16 @@ static void field_value(const amp_pr_ctx *c, int f, amp_pr_val *v)
         v->t = MV_STR;
         v->s = c->p->model;
         v->n = strlen(c->p->model);
+        return;
+    }
+    if (f == F_FLAVOR) {
+        /* the file's own name for it ("marlin2", "reprap", ...) unless the job writes another flavour
+         * (gcode --flavor): a start sequence can then leave out what the other firmware lacks */
+        const char *raw = vars_get(c->p, "gcode_flavor", 12);
+        int fl = c->job && c->job->opts ? c->job->opts->flavor : c->p->flavor;
+        v->t = MV_STR;
+        v->s = raw && fl == c->p->flavor ? raw : fl == AMP_FLAVOR_KLIPPER ? "klipper" : "marlin2";
+        v->n = strlen(v->s);
         return;
     }
     x = field_number(c->p, c->job ? c->job->opts : NULL, f);

@@ -778,11 +778,28 @@ START_TEST(built_in_sequences_expand_as_before)
     ck_assert_int_eq(amp_printer_builtin(&p, "prusa-mk3s", &err), AMP_OK);
     ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
     ck_assert_str_eq(o.start_gcode, "M140 S60 ; bed\nM104 S215 ; hot end\nG28 W ; home all without mesh bed levelling\n"
-                                    "G80 ; mesh bed levelling\nM190 S60 ; wait for the bed\nM109 S215 ; wait for the "
-                                    "hot end\nG1 Z0.2 F720\nG1 X10 Y1 F3000\nM83 ; relative E for the intro line\n"
-                                    "G1 X70 Y1 E9 F1000 ; intro line\nG1 X110 Y1 E12.5 F1000 ; intro line\nG92 E0\n");
+                                    "G80 ; mesh bed levelling (Prusa's firmware)\nM190 S60 ; wait for the bed\nM109 "
+                                    "S215 ; wait for the hot end\nG1 Z0.2 F720\nG1 X10 Y1 F3000\nM83 ; relative E for "
+                                    "the intro line\nG1 X70 Y1 E9 F1000 ; intro line\nG1 X110 Y1 E12.5 F1000 ; intro "
+                                    "line\nG92 E0\n");
     ck_assert_str_eq(o.end_gcode, "M104 S0 ; hot end off\nM140 S0 ; bed off\nM107 ; fan off\nG1 X0 Y200 F3000 ; "
                                   "present the print\nM84 ; motors off\n");
+    {
+        /* an MK3S run by Klipper (gcode --flavor klipper): Klipper has no G80, its own macros level the bed */
+        static char buf[2048];
+        amp_printer_job j;
+        amp_gcode_opts k = o;
+        amp_printer_job_none(&p, &j);
+        k.flavor = AMP_FLAVOR_KLIPPER;
+        j.opts = &k;
+        ck_assert_int_eq(amp_printer_expand_job(&p, &j, p.start_gcode, buf, sizeof buf, &err), AMP_OK);
+        ck_assert_ptr_null(strstr(buf, "G80"));
+        ck_assert_ptr_nonnull(strstr(buf, "G28 W"));
+        j.opts = &o;
+        ck_assert_int_eq(amp_printer_expand_job(&p, &j, p.start_gcode, buf, sizeof buf, &err), AMP_OK);
+        ck_assert_ptr_nonnull(strstr(buf, "G80 ;"));
+        expands_to(&p, "{gcode_flavor}", "marlin2");
+    }
     ck_assert_int_eq(amp_printer_builtin(&p, "ender3", &err), AMP_OK);
     ck_assert_int_eq(amp_printer_gcode_opts(&p, &o, &err), AMP_OK);
     ck_assert_str_eq(o.start_gcode, "M140 S60 ; bed\nM104 S205 ; hot end\nG28 ; home all axes\nM190 S60 ; wait for "
