@@ -27,6 +27,7 @@ typedef struct lctx {
     amp_polyset bin, core, band, reg2; /* a skin band split off a region (skin_band) */
     int no_bands;                      /* 1: skin regions whole (an island printed again) */
     double reg_shift;                  /* extra inset of R̃ (mm; +-r/20 when an island is printed again) */
+    double perim_in;                   /* perimeter this much nearer the boundary than r (r/16 on a last retry) */
     amp_pathset tmp;  /* one island's paths before joining */
     amp_pathset bare; /* one island's unprinted ring stretches (step 6) */
     amp_pathset bare_skin; /* those of its solid regions */
@@ -322,9 +323,9 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
 {
     const amp_layer *L = &c->sl->layers[li];
     const amp_contpath_opts *o = c->o;
-    double d, dp = o->radius;
+    double d, dp = o->radius - c->perim_in;
     size_t q, nperim = 0;
-    amp_status rc = amp_polyset_inset(&c->isl, o->radius, 0, &c->ins, err);
+    amp_status rc = amp_polyset_inset(&c->isl, dp, 0, &c->ins, err);
     int thin = rc == AMP_OK && (c->ins.nrings == 0 || all_specks(&c->ins, 0.25 * o->radius));
     if (rc == AMP_OK && c->ins.nislands > 1) {
         /* the perimeter falls apart into lobes joined by necks thinner than
@@ -341,7 +342,7 @@ static amp_status island_paths(lctx *c, size_t li, amp_contpath_stats *s0, amp_e
          * falls apart into the fewest pieces (a wavy sliver splits where it
          * is thinnest; a piece each would be a stroke each) */
         int speck = c->ins.nrings == 0 || all_specks(&c->ins, 0.25 * o->radius);
-        double best_d = c->ins.nrings ? o->radius : 0;
+        double best_d = c->ins.nrings ? dp : 0;
         size_t best_n = c->ins.nrings ? c->ins.nislands : (size_t)-1;
         for (d = 0.5 * o->radius; d >= o->radius / 32 && rc == AMP_OK && (best_n > 1 || speck); d *= 0.5) {
             rc = amp_polyset_inset(&c->isl, d, 0, &c->ins, err);
@@ -551,23 +552,27 @@ static double overlap_cap(amp_pathset *ps, const amp_polyset *isl, double h)
  * crossing back to a lattice vertex crosses the ring stretch before it). Such
  * a touch does not survive a small move: the island is made again with its
  * infill region R̃ moved in by r/20, then out by r/20 (the beads stay within
- * the part: R̃ lies 3r inside it, the lattice's beads reach r beyond it), the
- * first that passes kept; with neither, the first try stays in j (the
+ * the part: R̃ lies 3r inside it, the lattice's beads reach r beyond it), then
+ * with its perimeter r/16 nearer the boundary (a strip exactly 2r wide makes
+ * the inset by r touch itself along a stretch, which the loop then runs both
+ * ways: an edge printed twice, OpenSCAD's example013 at 0.1 mm layers), the
+ * first that passes kept; with none, the first try stays in j (the
  * caller's final check reports it). Counted in shift_retries.
  */
 static void shift_retry(lctx *w, ijob *j, double h)
 {
-    static const double shift[2] = {0.05, -0.05};
+    static const double shift[3] = {0.05, -0.05, 0.0}, perim[3] = {0.0, 0.0, 1.0 / 16};
     int k, bands = j->s.band_retries > 0;
-    for (k = 0; k < 2; k++) {
+    for (k = 0; k < 3; k++) {
         amp_contpath_stats s;
         size_t nobj = 0;
         memset(&s, 0, sizeof s);
         amp_pathset_clear(&w->retry);
         w->reg_shift = shift[k] * w->o->radius;
+        w->perim_in = perim[k] * w->o->radius;
         w->no_bands = bands;
         j->rc = island_once(w, j->li, h, &w->retry, 0, &nobj, &s, &j->err);
-        w->reg_shift = 0.0;
+        w->reg_shift = w->perim_in = 0.0;
         w->no_bands = 0;
         if (j->rc != AMP_OK)
             return;
@@ -718,7 +723,7 @@ static void scratch_init(lctx *w, const amp_allocator *al)
     amp_pathset_init(&w->bare_skin, al);
     amp_pathset_init(&w->retry, al);
     w->no_bands = 0;
-    w->reg_shift = 0.0;
+    w->reg_shift = w->perim_in = 0.0;
 }
 
 static void scratch_free(lctx *w)

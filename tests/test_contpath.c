@@ -1760,6 +1760,53 @@ START_TEST(a_neck_narrower_than_a_bead_joins_its_lobes_in_one_stroke)
 }
 END_TEST
 
+START_TEST(a_perimeter_that_touches_itself_is_made_again_nearer_the_boundary)
+{
+    /* OpenSCAD's example013 cut at 10.45 mm (0.1 mm layers): a V notch whose tip lies exactly 2r = 0.45 mm
+     * from the opposite wall. The inset by r touches itself there along one tangent step of the tip's arc,
+     * and the perimeter loop ran that stretch both ways: an edge printed twice, the slice failed (exit 1).
+     * Moving the infill region does not help; the perimeter r/16 nearer the boundary does */
+    static const double xy[11][2] = {{20.225, -0.45000000000000284}, {20.0, 0.0}, {20.225, 0.45000000000000284},
+                                     {29.775, 19.549999999999997}, {20.225, 19.549999999999997},
+                                     {19.549999999999997, 19.549999999999997}, {19.549999999999997, 0.45000000000000284},
+                                     {19.549999999999997, -0.45000000000000284},
+                                     {19.549999999999997, -19.549999999999997}, {20.225, -19.549999999999997},
+                                     {29.775, -19.549999999999997}};
+    amp_slices sl;
+    amp_layer L;
+    amp_vec2 p[11];
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_pathset ps;
+    amp_error err;
+    size_t i;
+    for (i = 0; i < 11; i++)
+        p[i] = amp_v2(xy[i][0], xy[i][1]);
+    amp_slices_init(&sl, NULL);
+    amp_pathset_init(&ps, NULL);
+    memset(&L, 0, sizeof L);
+    amp_polyset_init(&L.polys, NULL);
+    L.z_cut = 10.45;
+    L.z_print = 10.5;
+    ck_assert_int_eq(amp_polyset_add(&L.polys, p, 11, &err), AMP_OK);
+    ck_assert_int_eq(amp_polyset_organize(&L.polys, &err), AMP_OK);
+    sl.layers = &L;
+    sl.nlayers = 1;
+    amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = amp_check_path_stroke;
+    ck_assert_msg(amp_contpath_layers(&sl, &o, &ps, &st, &err) == AMP_OK, "%s", err.msg);
+    ck_assert_uint_eq(ps.npaths, 1);
+    ck_assert_uint_eq(st.shift_retries, 1);
+    for (i = 0; i < ps.npaths; i++) {
+        amp_stroke_report rep;
+        ck_assert_int_eq(amp_check_path_stroke(&ps, i, &L.polys, 1e-6, &rep, NULL), AMP_OK);
+        ck_assert_uint_eq(rep.repeated_edges, 0);
+    }
+    amp_pathset_free(&ps);
+    amp_polyset_free(&L.polys);
+}
+END_TEST
+
 static Suite *contpath_suite(void)
 {
     Suite *s = suite_create("contpath");
@@ -1795,6 +1842,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
     tcase_add_test(tc, beads_that_overlap_are_narrowed_to_the_volume_of_their_slab);
     tcase_add_test(tc, a_band_that_fails_the_final_check_makes_the_tool_slice_again_with_the_verifier);
+    tcase_add_test(tc, a_perimeter_that_touches_itself_is_made_again_nearer_the_boundary);
     suite_add_tcase(s, tc);
     return s;
 }
