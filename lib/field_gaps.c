@@ -20,6 +20,7 @@
 #define GAP_SEED 0x6A9C0F3Bull
 #define GAP_POINTS_MAX 4096   /* gaps looked at per round */
 #define GAP_SEEDS_MAX 65536   /* curve samples tried as Newton's starting point */
+#define VOXELS_MAX (1u << 21) /* cells of the solid's voxel map (a byte each) */
 
 /* ------------------------------------------- which samples are near a path */
 
@@ -248,6 +249,7 @@ typedef struct gap_ctx {
     amp_pathset *out;
     size_t *added, tried;
     amp_error *err;
+    const amp_bvh_voxels *vox; /* the solid's voxel map (NULL: every sample asks the BVH) */
 } gap_ctx;
 
 /* The curve through gap @p p, and the index told of it; nothing when the field does not reach p. */
@@ -260,6 +262,18 @@ static amp_status close_gap(gap_ctx *c, amp_vec3 p)
     (*c->added)++;
     st = add_curve(c->f, c->b, c->o, x, c->nc, c->r, c->min_len, p, c->target, c->curve, c->out, c->err);
     return st == AMP_OK ? near_add(c->nx, c->out->alloc, c->err) : st;
+}
+
+/* amp_field_member(), the mesh's side read off the voxel map away from the surface (the same answer: a round
+ * samples up to 100 points for each one inside a part that fills little of its box, and each asked the BVH) */
+static int member(const gap_ctx *c, amp_vec3 p)
+{
+    int side = c->vox ? amp_bvh_voxels_side(c->vox, p) : -1;
+    if (side == 0)
+        return 0;
+    if (side == 1 && !c->o->within && c->o->nwithout == 0)
+        return 1;
+    return amp_field_member(c->b, c->o, p);
 }
 
 /* One round: sample the covered part uniformly and close each sample left far from the paths (the index
@@ -277,7 +291,7 @@ static amp_status gap_round(gap_ctx *c, int add, size_t samples, unsigned long l
                             box.min.y + rnd(&seed) * (box.max.y - box.min.y),
                             box.min.z + rnd(&seed) * (box.max.z - box.min.z));
         tries++;
-        if (!amp_field_member(c->b, c->o, p))
+        if (!member(c, p))
             continue;
         got++;
         if (near_material(c->nx, p))
@@ -295,6 +309,7 @@ amp_status amp_field_fill_gaps(const amp_field *f, const amp_bvh *b, const amp_f
 {
     gap_ctx c;
     near_index nx;
+    amp_bvh_voxels *vox = NULL;
     int round;
     amp_status st;
     *added = *left = 0;
@@ -316,6 +331,9 @@ amp_status amp_field_fill_gaps(const amp_field *f, const amp_bvh *b, const amp_f
     if (!(c.curve = amp_calloc(out->alloc, nc + 1, sizeof *c.curve)))
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gap curves");
     st = near_init(&nx, out, target, out->alloc, err);
+    if (st == AMP_OK)
+        st = amp_bvh_voxels_build(b, VOXELS_MAX, &vox, err);
+    c.vox = vox;
     /* gaps are rare where the lattice is fine: a round that finds some samples twice as densely next time,
      * to find the rest of the feature they lie in */
     for (round = 0; st == AMP_OK; round++) {
@@ -326,6 +344,7 @@ amp_status amp_field_fill_gaps(const amp_field *f, const amp_bvh *b, const amp_f
             break;
     }
     near_free(&nx, out->alloc);
+    amp_bvh_voxels_free(vox);
     amp_free(out->alloc, c.curve);
     return st;
 }

@@ -424,6 +424,52 @@ START_TEST(clip_helix_field_curve_to_helix_mesh)
 }
 END_TEST
 
+START_TEST(voxel_map_answers_as_the_ray_test_and_defers_only_near_the_surface)
+{
+    /* a torus with a box around it and a cavity in the box (three shells, one solid): sampled over a box
+     * larger than the mesh's, every answer of the map equals amp_bvh_inside, and most samples are answered
+     * (the field's gap rounds sample a part that fills a few per cent of its box: every sample was a ray) */
+    amp_mesh m;
+    amp_bvh *b;
+    amp_bvh_voxels *v = NULL;
+    amp_error err;
+    unsigned long long seed = 11;
+    size_t i, deferred = 0, inside = 0, wrong = 0, n = 200000;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(30, -8, -8), amp_v3(46, 8, 8), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(34, -4, -4), amp_v3(42, 4, 4), 1), AMP_OK);
+    b = build(&m);
+    ck_assert_int_eq(amp_bvh_voxels_build(b, 1u << 16, &v, &err), AMP_OK);
+    ck_assert_ptr_nonnull(v);
+    for (i = 0; i < n; i++) {
+        amp_vec3 p = amp_v3(-30 + 80 * fx_rand(&seed), -30 + 60 * fx_rand(&seed), -10 + 20 * fx_rand(&seed));
+        int side = amp_bvh_voxels_side(v, p), in = amp_bvh_inside(b, p);
+        inside += in;
+        if (side < 0)
+            deferred++;
+        else
+            wrong += side != in;
+    }
+    ck_assert_uint_eq(wrong, 0);
+    ck_assert_uint_gt(inside, n / 20);
+    ck_assert_msg(deferred < n / 4, "%lu of %lu samples deferred", (unsigned long)deferred, (unsigned long)n);
+    ck_assert_int_eq(amp_bvh_voxels_side(v, amp_v3(38, 0, 0)), 0); /* the cavity */
+    ck_assert_int_eq(amp_bvh_voxels_side(v, amp_v3(31, 7, 0)), 1);
+    ck_assert_int_eq(amp_bvh_voxels_side(v, amp_v3(NAN, 0, 0)), -1);
+    amp_bvh_voxels_free(v);
+    ck_assert_int_eq(amp_bvh_voxels_build(b, 0, &v, &err), AMP_ERR_ARG);
+    amp_bvh_free(b);
+    /* an open mesh has no map: its winding number is not constant away from the surface near a hole */
+    m.tris[100] = m.tris[--m.ntris];
+    b = build(&m);
+    ck_assert_int_eq(amp_bvh_voxels_build(b, 1u << 16, &v, &err), AMP_OK);
+    ck_assert_ptr_null(v);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(bvh_rejects_empty_and_degenerate_meshes)
 {
     amp_mesh m;
@@ -458,6 +504,7 @@ static Suite *bvh_suite(void)
     tcase_add_test(tc, clip_circle_in_torus_with_missing_triangle_stays_whole);
     tcase_add_test(tc, clip_helix_field_curve_to_helix_mesh);
     tcase_add_test(tc, bvh_rejects_empty_and_degenerate_meshes);
+    tcase_add_test(tc, voxel_map_answers_as_the_ray_test_and_defers_only_near_the_surface);
     suite_add_tcase(s, tc);
     return s;
 }
