@@ -21,11 +21,14 @@ struct amp_bvh_voxels {
     unsigned char *c;   /* VOX_* per cell, x fastest */
 };
 
+/* Coordinate k (0: x, 1: y, 2: z) of p. */
+static double axis(amp_vec3 p, int k) { return k == 0 ? p.x : k == 1 ? p.y : p.z; }
+
 /* The cell range [*i0, *i1] along axis k that the interval [a, b] reaches, widened by a millionth of a cell
  * so that a triangle on a cell's face marks the cells on both sides. */
 static void cell_range(const amp_bvh_voxels *v, int k, double a, double b, size_t *i0, size_t *i1)
 {
-    const double lo = k == 0 ? v->lo.x : k == 1 ? v->lo.y : v->lo.z;
+    const double lo = axis(v->lo, k);
     double f0 = floor((a - lo) * v->inv - 1e-6), f1 = floor((b - lo) * v->inv + 1e-6);
     *i0 = f0 < 0 ? 0 : (size_t)f0;
     *i1 = f1 < 0 ? 0 : f1 > (double)(v->n[k] - 1) ? v->n[k] - 1 : (size_t)f1;
@@ -39,14 +42,8 @@ static void mark_surface(amp_bvh_voxels *v, const amp_bvh *b)
     for (t = 0; t < b->ntris; t++) {
         const amp_vec3 *p = b->tris[t].p;
         for (k = 0; k < 3; k++) {
-            double a = k == 0 ? p[0].x : k == 1 ? p[0].y : p[0].z, c = a, q;
-            int j;
-            for (j = 1; j < 3; j++) {
-                q = k == 0 ? p[j].x : k == 1 ? p[j].y : p[j].z;
-                a = q < a ? q : a;
-                c = q > c ? q : c;
-            }
-            cell_range(v, k, a, c, &r[k][0], &r[k][1]);
+            double a = axis(p[0], k), b1 = axis(p[1], k), c = axis(p[2], k);
+            cell_range(v, k, fmin(a, fmin(b1, c)), fmax(a, fmax(b1, c)), &r[k][0], &r[k][1]);
         }
         for (z = r[2][0]; z <= r[2][1]; z++)
             for (y = r[1][0]; y <= r[1][1]; y++)
