@@ -136,18 +136,23 @@ static void compact_tail(amp_pathset *ps, size_t first, double tol)
 }
 
 /* Closed paths of every ring of @p P at height z, radius r, into c->tmp. */
+/* Ring p[0..n-1] as one closed perimeter loop at height z into c->tmp. */
+static amp_status loop_path(lctx *c, const amp_vec2 *p, size_t n, double z, amp_contpath_stats *s0, amp_error *err)
+{
+    size_t q;
+    amp_status rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
+    for (q = 0; q <= n && rc == AMP_OK; q++)
+        rc = amp_pathset_push(&c->tmp, amp_v3(p[q % n].x, p[q % n].y, z), c->o->radius, err);
+    s0->perimeter_loops++;
+    return rc;
+}
+
 static amp_status ring_paths(lctx *c, const amp_polyset *P, double z, amp_contpath_stats *s0, amp_error *err)
 {
-    size_t r, q;
+    size_t r;
     amp_status rc = AMP_OK;
-    for (r = 0; r < P->nrings && rc == AMP_OK; r++) {
-        const amp_vec2 *p = amp_polyset_ring(P, r);
-        size_t n = P->rings[r].n;
-        rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
-        for (q = 0; q <= n && rc == AMP_OK; q++)
-            rc = amp_pathset_push(&c->tmp, amp_v3(p[q % n].x, p[q % n].y, z), c->o->radius, err);
-        s0->perimeter_loops++;
-    }
+    for (r = 0; r < P->nrings && rc == AMP_OK; r++)
+        rc = loop_path(c, amp_polyset_ring(P, r), P->rings[r].n, z, s0, err);
     return rc;
 }
 
@@ -165,25 +170,22 @@ static amp_status thin_ring_paths(lctx *c, const amp_polyset *P, double z, amp_c
     for (r = 0; r < P->nrings && rc == AMP_OK; r++) {
         const amp_vec2 *p = amp_polyset_ring(P, r);
         size_t n = P->rings[r].n;
-        double len = 0.0, da = -1.0, db = -1.0;
+        double len = 0.0, da = -1.0, db = -1.0, d;
         for (q = 0; q < n; q++)
             len += hypot(p[(q + 1) % n].x - p[q].x, p[(q + 1) % n].y - p[q].y);
         if (!(2.0 * fabs(amp_ring_area(p, n)) < 0.25 * c->o->radius * len) || len < c->o->radius) {
-            amp_polyset one = *P;
-            one.rings = P->rings + r;
-            one.nrings = 1;
-            rc = ring_paths(c, &one, z, s0, err);
+            rc = loop_path(c, p, n, z, s0, err);
             continue;
         }
         /* its ends: the vertex farthest from the first, and the one farthest from that */
         for (q = 0, a = 0; q < n; q++)
-            if (hypot(p[q].x - p[0].x, p[q].y - p[0].y) > da) {
-                da = hypot(p[q].x - p[0].x, p[q].y - p[0].y);
+            if ((d = hypot(p[q].x - p[0].x, p[q].y - p[0].y)) > da) {
+                da = d;
                 a = q;
             }
         for (q = 0, b = a; q < n; q++)
-            if (hypot(p[q].x - p[a].x, p[q].y - p[a].y) > db) {
-                db = hypot(p[q].x - p[a].x, p[q].y - p[a].y);
+            if ((d = hypot(p[q].x - p[a].x, p[q].y - p[a].y)) > db) {
+                db = d;
                 b = q;
             }
         rc = amp_pathset_begin(&c->tmp, AMP_ROLE_OBJECT, err);
