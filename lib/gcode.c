@@ -416,6 +416,29 @@ static int chord_keeps(const amp_gcode_opts *o, const amp_pvert *v, size_t k, si
 }
 
 /*
+ * Length of the move v[a] -> v[b] as the firmware reads it: both ends placed
+ * and rounded to the 3 decimals put_coord writes. A chord of 0.0201 mm may be
+ * written as 0.019 mm, so min_segment is tested on this, with half a unit of
+ * the last digit to spare for readers that subtract the decimals in floating
+ * point (0.199 - 0.179 < 0.02 there).
+ */
+static double written_length(const amp_gcode_iter *it, amp_vec3 a, amp_vec3 b)
+{
+    double d = amp_v3_dist(a, b), q[3];
+    int c;
+    if (d > it->o.min_segment + 2e-3) /* rounding moves a length by at most sqrt(3) 1e-3 */
+        return d;
+    a = amp_v3_add(a, it->off);
+    b = amp_v3_add(b, it->off);
+    q[0] = (double)(llround(b.x * 1e3) - llround(a.x * 1e3));
+    q[1] = (double)(llround(b.y * 1e3) - llround(a.y * 1e3));
+    q[2] = (double)(llround(b.z * 1e3) - llround(a.z * 1e3));
+    for (d = 0.0, c = 0; c < 3; c++)
+        d += q[c] * q[c];
+    return sqrt(d) * 1e-3 - 5e-4;
+}
+
+/*
  * End vertex of the written segment that starts at vertex @p k of path @p i
  * (clean segments, docs/interfaces.md §5): the farthest vertex whose chord keeps every
  * vertex in between within the tolerances, extended while the chord is
@@ -434,7 +457,7 @@ static size_t next_vertex(const amp_gcode_iter *it, size_t i, size_t k)
         return j;
     lim = k + AMP_GCODE_MERGE_MAX < n - 1 ? k + AMP_GCODE_MERGE_MAX : n - 1;
     for (m = j + 1; m <= lim; m++) {
-        int keep = amp_v3_dist(v[k].p, v[j].p) < o->min_segment; /* a chord still too short must grow */
+        int keep = written_length(it, v[k].p, v[j].p) < o->min_segment; /* a chord still too short must grow */
         size_t t;
         if (!keep && o->chord_tol > 0.0)
             for (keep = 1, t = k + 1; t < m && keep; t++)
@@ -444,10 +467,11 @@ static size_t next_vertex(const amp_gcode_iter *it, size_t i, size_t k)
         if (amp_v3_dist(v[k].p, v[m].p) > GC_MIN_SEG) /* never a chord of zero length (closed loops) */
             j = m;
     }
-    /* a remainder shorter than min_segment joins this segment */
-    for (m = j; m + 1 < n && rest < o->min_segment; m++)
+    /* a remainder shorter than min_segment (as written) joins this segment */
+    for (m = j; m + 1 < n && rest < o->min_segment + 2e-3; m++)
         rest += amp_v3_dist(v[m].p, v[m + 1].p);
-    if (rest < o->min_segment && amp_v3_dist(v[k].p, v[n - 1].p) > GC_MIN_SEG)
+    if (m + 1 >= n && (rest < o->min_segment || written_length(it, v[j].p, v[n - 1].p) < o->min_segment) &&
+        amp_v3_dist(v[k].p, v[n - 1].p) > GC_MIN_SEG)
         j = n - 1;
     return j;
 }

@@ -55,7 +55,9 @@
  * sum of the replaced segments' E, so the volume is exact. With min_segment
  * > 0 no extruding segment is shorter than min_segment unless it is a whole
  * path (short pieces are merged with the next, or the last with the one
- * before). chord_tol = min_segment = 0 writes every input segment. With
+ * before), measured on the coordinates as written (3 decimals, with half a
+ * unit of the last one to spare: a chord of 0.0200 mm that rounds to
+ * 0.020 grows past it). chord_tol = min_segment = 0 writes every input segment. With
  * arcs = 1 a run of vertices on one circle in XY (z and radius linear in the
  * angle, each polyline piece within chord_tol of the arc, circle radius
  * 0.5..1000 mm, sweep below 2 pi) that reaches beyond the straight segment is
