@@ -30,14 +30,26 @@ typedef struct sctx {
     size_t *first; /* columns of grid point i: [first[i], first[i+1]) */
     size_t nx, ny;
     double x0, y0, sp;
-    double plate; /* z of the bed under the job (plate_of) */
+    amp_support_layers L; /* L.plate: z of the bed under the job (plate_of) */
 } sctx;
 
-static int active(const sctx *c, size_t ix, size_t iy, double z, double h)
+double amp_support_layer_z(const amp_support_layers *L, size_t j) { return L->plate + L->first + (double)j * L->step; }
+
+double amp_support_layer_h(const amp_support_layers *L, size_t j) { return j == 0 ? L->h0 : L->h; }
+
+/*
+ * Does support layer @p layer print at grid point (ix, iy)? Its bead's middle lies in a column's air above
+ * the plate or a lower solid, and under the underside: a tube's centre half a layer under it, a planar
+ * bead's top half a layer under it, so that the object bead cut above the underside rests one layer of
+ * air above the support (the contact gap slicers leave to break support off).
+ */
+static int active(const sctx *c, size_t ix, size_t iy, size_t layer)
 {
     size_t q, g = iy * c->nx + ix;
+    double z = amp_support_layer_z(&c->L, layer), h = amp_support_layer_h(&c->L, layer);
+    double mid = z - 0.5 * h;
     for (q = c->first[g]; q < c->first[g + 1]; q++)
-        if (z > c->col[q].z0 && z <= c->col[q].z1 - 0.5 * h)
+        if (mid > c->col[q].z0 && z + 0.5 * c->L.step <= c->col[q].z1)
             return 1;
     return 0;
 }
@@ -61,10 +73,10 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the support grid");
     for (iy = 0; iy < c->ny; iy++)
         for (ix = 0; ix < c->nx; ix++) {
-            amp_vec3 org = amp_v3(c->x0 + (double)ix * c->sp, c->y0 + (double)iy * c->sp, fmin(bb.min.z, c->plate) - 1.0);
+            amp_vec3 org = amp_v3(c->x0 + (double)ix * c->sp, c->y0 + (double)iy * c->sp, fmin(bb.min.z, c->L.plate) - 1.0);
             amp_bvh_hit *hits = NULL;
             size_t n = 0, h;
-            double below = c->plate; /* top of the last solid stretch, or the plate */
+            double below = c->L.plate; /* top of the last solid stretch, or the plate */
             int inside = 0;
             amp_status s = amp_bvh_ray_all(model, org, amp_v3(0, 0, 1), HUGE_VAL, &hits, &n, err);
             if (s != AMP_OK)
@@ -74,7 +86,7 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
                 double z = hits[h].p.z;
                 if (hits[h].entering && !inside) {
                     inside = 1;
-                    if (z - below >= o->min_gap && z > c->plate) {
+                    if (z - below >= o->min_gap && z > c->L.plate) {
                         void *p = c->col;
                         if (amp_grow(c->a, &p, &c->capcol, c->ncol + 1, sizeof *c->col) != AMP_OK) {
                             amp_bvh_hits_free(model, hits);
@@ -83,7 +95,7 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
                         c->col = p;
                         c->col[c->ncol].ix = ix;
                         c->col[c->ncol].iy = iy;
-                        c->col[c->ncol].z0 = fmax(below, c->plate);
+                        c->col[c->ncol].z0 = fmax(below, c->L.plate);
                         c->col[c->ncol].z1 = z;
                         c->ncol++;
                     }
@@ -99,11 +111,6 @@ static amp_status cast_rays(sctx *c, const amp_bvh *model, const amp_support_opt
     return AMP_OK;
 }
 
-/* Height of the rows of support layer @p layer: the lowest rows rest on the plate (bead bottom z - radius). */
-static double row_z(const sctx *c, const amp_support_opts *o, size_t layer)
-{
-    return c->plate + o->radius + (double)layer * o->layer_height;
-}
 
 /*
  * A run of active rays along one row of a layer. Runs of neighbouring rows
@@ -122,16 +129,15 @@ typedef struct srun {
 #define NORUN ((size_t)-1)
 
 /* The runs of one layer, row by row, left to right. */
-static amp_status layer_runs(const sctx *c, const amp_support_opts *o, size_t layer, srun **runs, size_t *cap,
+static amp_status layer_runs(const sctx *c, size_t layer, srun **runs, size_t *cap,
                              size_t *n, amp_error *err)
 {
-    double z = row_z(c, o, layer), h = o->layer_height;
     int along_x = layer % 2 == 0;
     size_t nrow = along_x ? c->ny : c->nx, nlen = along_x ? c->nx : c->ny, row, i, j;
     *n = 0;
     for (row = 0; row < nrow; row++)
         for (i = 0; i < nlen; i = j) {
-            for (j = i; j < nlen && active(c, along_x ? j : row, along_x ? row : j, z, h); j++)
+            for (j = i; j < nlen && active(c, along_x ? j : row, along_x ? row : j, layer); j++)
                 ;
             if (j == i) {
                 j = i + 1;
@@ -189,7 +195,7 @@ static void link_runs(srun *r, size_t n)
 static amp_status emit_runs(const sctx *c, const amp_support_opts *o, size_t layer, const srun *r, size_t n,
                             amp_pathset *sup, amp_error *err)
 {
-    double z = row_z(c, o, layer);
+    double z = amp_support_layer_z(&c->L, layer), bh = amp_support_layer_h(&c->L, layer);
     int along_x = layer % 2 == 0;
     size_t h, q, k;
     amp_status s = AMP_OK;
@@ -197,6 +203,8 @@ static amp_status emit_runs(const sctx *c, const amp_support_opts *o, size_t lay
         if (r[h].linked)
             continue;
         s = amp_pathset_begin(sup, AMP_ROLE_SUPPORT, err);
+        if (s == AMP_OK && bh > 0.0)
+            s = amp_pathset_set_height(sup, bh, err);
         if (s == AMP_OK && r[h].next == NORUN && r[h].j == r[h].i + 1) {
             double gx = c->x0 + (double)(along_x ? r[h].i : r[h].row) * c->sp;
             double gy = c->y0 + (double)(along_x ? r[h].row : r[h].i) * c->sp;
@@ -220,14 +228,14 @@ static amp_status emit_runs(const sctx *c, const amp_support_opts *o, size_t lay
 /* Fill the columns on every layer: rows along x on even layers, along y on odd ones, joined in zigzags. */
 static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *sup, amp_error *err)
 {
-    double ztop = c->plate;
+    double ztop = c->L.plate;
     size_t q, layer, n = 0, cap = 0;
     srun *runs = NULL;
     amp_status s = AMP_OK;
     for (q = 0; q < c->ncol; q++)
         ztop = fmax(ztop, c->col[q].z1);
-    for (layer = 0; s == AMP_OK && row_z(c, o, layer) < ztop; layer++) {
-        s = layer_runs(c, o, layer, &runs, &cap, &n, err);
+    for (layer = 0; s == AMP_OK && amp_support_layer_z(&c->L, layer) < ztop; layer++) {
+        s = layer_runs(c, layer, &runs, &cap, &n, err);
         if (s == AMP_OK) {
             link_runs(runs, n);
             s = emit_runs(c, o, layer, runs, n, sup, err);
@@ -237,16 +245,16 @@ static amp_status fill(const sctx *c, const amp_support_opts *o, amp_pathset *su
     return s;
 }
 
-/* Layer of support row @p i of @p ps (rows are flat, on z = row_z(layer)). */
-static size_t layer_of(const sctx *c, const amp_support_opts *o, const amp_pathset *ps, size_t i)
+/* Layer of support row @p i of @p ps (rows are flat, on z = amp_support_layer_z(layer)). */
+static size_t layer_of(const sctx *c, const amp_pathset *ps, size_t i)
 {
-    double z = (ps->verts[ps->paths[i].first].p.z - row_z(c, o, 0)) / o->layer_height;
+    double z = (ps->verts[ps->paths[i].first].p.z - amp_support_layer_z(&c->L, 0)) / c->L.step;
     return z > 0.0 ? (size_t)floor(z + 0.5) : 0;
 }
 
 /* The support rows of @p all (from path nobj on) again layer by layer, lowest first, each layer in the order
  * made (place_pieces takes the rows of one layer as one range: the pads come after fill's rows). */
-static amp_status rows_by_layer(const sctx *c, const amp_support_opts *o, amp_pathset *all, size_t nobj,
+static amp_status rows_by_layer(const sctx *c, amp_pathset *all, size_t nobj,
                                 amp_error *err)
 {
     amp_pathset out;
@@ -255,7 +263,7 @@ static amp_status rows_by_layer(const sctx *c, const amp_support_opts *o, amp_pa
     amp_pathset_init(&out, all->alloc);
     if (lay) {
         for (i = 0; i < nr; i++) {
-            lay[i] = layer_of(c, o, all, nobj + i);
+            lay[i] = layer_of(c, all, nobj + i);
             nl = lay[i] + 1 > nl ? lay[i] + 1 : nl;
         }
         at = amp_calloc(c->a, nl + 2, sizeof *at);
@@ -631,7 +639,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
                                const uint32_t *first, uint32_t *late, piece **pcs, size_t *npc, amp_support_stats *s,
                                amp_error *err)
 {
-    double cs = c->sp / SUB, h = o->layer_height, cot = 1.0 / tan(o->head.theta);
+    double cs = c->sp / SUB, h = c->L.step, cot = 1.0 / tan(o->head.theta);
     size_t nx = c->nx * SUB + 1, ny = c->ny * SUB + 1, i, nl = 0, pcap = 0;
     size_t step = (size_t)ceil(h / cot / cs), lag = (size_t)floor(o->head.z_offs / h) + 1;
     size_t *rfirst, *pfirst;
@@ -639,7 +647,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     amp_status st = AMP_OK;
     long l;
     for (i = nobj; i < fs->npaths; i++)
-        nl = layer_of(c, o, fs->ps, i) + 1 > nl ? layer_of(c, o, fs->ps, i) + 1 : nl;
+        nl = layer_of(c, fs->ps, i) + 1 > nl ? layer_of(c, fs->ps, i) + 1 : nl;
     if (nl == 0)
         return AMP_OK;
     d = amp_calloc(c->a, nx * ny, sizeof *d);
@@ -653,7 +661,7 @@ static amp_status place_pieces(const sctx *c, const amp_support_opts *o, const a
     }
     /* fill() makes the rows layer by layer: rows of layer l are nobj + [rfirst[l], rfirst[l + 1]) */
     for (i = nobj; i < fs->npaths; i++)
-        rfirst[layer_of(c, o, fs->ps, i) + 1]++;
+        rfirst[layer_of(c, fs->ps, i) + 1]++;
     for (i = 0; i <= nl; i++)
         rfirst[i + 1] += rfirst[i];
     for (i = 0; i < nx * ny; i++)
@@ -733,7 +741,7 @@ static amp_status emit_slot(amp_pathset *out, const amp_fragments *fs, const uin
                 }
             }
             used[best - k0] = 1;
-            st = emit_frags(out, fs, AMP_ROLE_SUPPORT, 0.0, pcs[ord[best]].f0, pcs[ord[best]].f1, late, 1, run, cap,
+            st = emit_frags(out, fs, AMP_ROLE_SUPPORT, fs->ps->paths[fs->frag[pcs[ord[best]].f0].path].h, pcs[ord[best]].f0, pcs[ord[best]].f1, late, 1, run, cap,
                             err);
             if (st == AMP_OK && rev)
                 reverse_paths(out, p0);
@@ -830,6 +838,100 @@ static double plate_of(const amp_pathset *in, double min_gap)
     return z < min_gap ? z : 0.0;
 }
 
+/*
+ * A sliced job (paper 2's layers, `slice --continuous`): every object path a planar bead (h > 0) on one
+ * height, the heights never going down along the print order, and the job resting on @p plate. Its support
+ * is laid on the same layers, as planar beads of the same heights (L), and printed layer by layer with it
+ * (emit_by_layer) instead of in the cone slots of Def. 5.1. Returns 0 for any other job (tubes).
+ */
+static int sliced_layers(const amp_pathset *in, double plate, amp_support_layers *L)
+{
+    double zlast = -HUGE_VAL, z0 = HUGE_VAL, h0 = 0.0, h = 0.0;
+    size_t i, k;
+    for (i = 0; i < in->npaths; i++) {
+        const amp_path *p = &in->paths[i];
+        const amp_pvert *v = &in->verts[p->first];
+        if (p->role != AMP_ROLE_OBJECT || p->n == 0)
+            continue;
+        if (!(p->h > 0.0) || v[0].p.z < zlast - 1e-9)
+            return 0;
+        for (k = 1; k < p->n; k++)
+            if (fabs(v[k].p.z - v[0].p.z) > 1e-9)
+                return 0;
+        if (v[0].p.z < z0 - 1e-9) {
+            z0 = v[0].p.z;
+            h0 = p->h;
+        } else if (v[0].p.z > z0 + 1e-9 && h == 0.0) {
+            h = p->h; /* the layers above the first */
+        }
+        zlast = v[0].p.z;
+    }
+    if (!(z0 < HUGE_VAL) || fabs(z0 - h0 - plate) > 1e-6)
+        return 0;
+    L->plate = plate;
+    L->first = h0;
+    L->h0 = h0;
+    L->h = L->step = h > 0.0 ? h : h0;
+    return 1;
+}
+
+/* Height of path @p i's first vertex. */
+static double path_z(const amp_pathset *ps, size_t i) { return ps->verts[ps->paths[i].first].p.z; }
+
+/*
+ * Emit a sliced job: the object paths in their order, and before the first object path of each height the
+ * support paths of the layers up to it (all's paths [nobj, npaths), lowest layer first), nearest next from
+ * either end. The support of a layer is printed before the object beads of that layer, which lie beside it
+ * (never above: a row ends a layer under the underside), so no cone check is needed.
+ */
+static amp_status emit_by_layer(const amp_pathset *all, size_t nobj, amp_pathset *out, amp_support_stats *s,
+                                amp_error *err)
+{
+    size_t i, k = nobj, n = all->npaths, m, best;
+    unsigned char *used = amp_calloc(out->alloc, n - nobj + 1, 1);
+    amp_status st = AMP_OK;
+    if (!used)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+    for (i = 0; i <= nobj && st == AMP_OK; i++) {
+        double z = i < nobj && all->paths[i].role == AMP_ROLE_OBJECT ? path_z(all, i) : i < nobj ? -HUGE_VAL : HUGE_VAL;
+        size_t k1 = k;
+        while (k1 < n && path_z(all, k1) <= z + 1e-9)
+            k1++;
+        for (m = k; st == AMP_OK && m < k1; m++) { /* k1 - k paths, each the nearest of the lowest layer left */
+            amp_vec3 cur = out->nverts ? out->verts[out->nverts - 1].p : all->verts[all->paths[k].first].p;
+            double bd = HUGE_VAL, zl = HUGE_VAL;
+            size_t q, p0 = out->npaths;
+            int rev = 0;
+            for (q = k; q < k1; q++)
+                zl = used[q - nobj] ? zl : fmin(zl, path_z(all, q));
+            for (best = q = k; q < k1; q++) {
+                const amp_pvert *v = amp_pathset_path_verts(all, q);
+                double ds, de;
+                if (used[q - nobj] || path_z(all, q) > zl + 1e-9)
+                    continue;
+                ds = amp_v3_dist2(cur, v[0].p);
+                de = amp_v3_dist2(cur, v[all->paths[q].n - 1].p);
+                if (ds < bd || de < bd) {
+                    best = q;
+                    rev = de < ds;
+                    bd = fmin(ds, de);
+                }
+            }
+            used[best - nobj] = 1;
+            st = amp_pathset_copy_path(out, all, best, err);
+            if (st == AMP_OK && rev)
+                reverse_paths(out, p0);
+        }
+        if (i == nobj)
+            s->unplaced = k1 - k;
+        else if (st == AMP_OK)
+            st = amp_pathset_copy_path(out, all, i, err);
+        k = k1;
+    }
+    amp_free(out->alloc, used);
+    return st;
+}
+
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
                        amp_support_stats *st, amp_error *err)
 {
@@ -841,6 +943,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     uint32_t *first = NULL, *late = NULL;
     piece *pcs = NULL;
     size_t npc = 0, i, nobj;
+    int sliced;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
@@ -861,7 +964,13 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     if (i == in->npaths)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: no object path to support");
     c.a = out->alloc;
-    c.plate = plate_of(in, o->min_gap);
+    c.L.plate = plate_of(in, o->min_gap);
+    sliced = sliced_layers(in, c.L.plate, &c.L);
+    if (!sliced) {
+        c.L.first = o->radius;
+        c.L.step = o->layer_height;
+        c.L.h0 = c.L.h = 0.0;
+    }
     amp_pathset_init(&all, out->alloc);
     if ((stt = cast_rays(&c, model, o, &s, err)) != AMP_OK)
         goto done;
@@ -872,15 +981,20 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         s.length += amp_path_length(&all, i);
     if (o->find_unheld) {
         amp_support_pads_stats ps;
-        if ((stt = amp_support_pads(&all, nobj, model, o, c.plate, &ps, err)) != AMP_OK)
+        if ((stt = amp_support_pads(&all, nobj, model, o, &c.L, &ps, err)) != AMP_OK)
             goto done;
         s.pads = ps.paths;
         s.pad_length = ps.length;
-        if (ps.paths && (stt = rows_by_layer(&c, o, &all, nobj, err)) != AMP_OK)
+        if (ps.paths && (stt = rows_by_layer(&c, &all, nobj, err)) != AMP_OK)
             goto done;
     }
     if (o->progress)
         o->progress(o->progress_user, 0.1);
+    if (sliced) {
+        if ((stt = emit_by_layer(&all, nobj, out, &s, err)) != AMP_OK)
+            goto done;
+        goto count;
+    }
     /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
      * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
     if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
@@ -915,6 +1029,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     if ((stt = emit_all(in, nobj, &fs, late, pcs, npc, out, &s, err)) != AMP_OK)
         goto done;
+count:
     s.paths = 0;
     for (i = 0; i < out->npaths; i++)
         s.paths += out->paths[i].role == AMP_ROLE_SUPPORT;

@@ -25,7 +25,7 @@
 #define TOP_STEP 0.25
 
 typedef struct ptop {
-    double x, y, top, z;
+    double x, y, top, z, w; /* w: how far the bead reaches sideways from its centre line */
 } ptop;
 
 typedef struct pads {
@@ -33,7 +33,7 @@ typedef struct pads {
     size_t nobj;
     const amp_bvh *model;
     const amp_support_opts *o;
-    double plate;
+    const amp_support_layers *L;
     amp_box3 bb; /* the model's box */
     ptop *tp;    /* object bead samples sorted by cell */
     size_t ntp, captp, *cell, nx, ny;
@@ -51,7 +51,7 @@ static size_t cell_of(const pads *c, double x, double y)
     return iy * c->nx + ix;
 }
 
-static amp_status add_top(pads *c, amp_vec3 p, double half, amp_error *err)
+static amp_status add_top(pads *c, amp_vec3 p, double top, double w, amp_error *err)
 {
     void *q = c->tp;
     if (amp_grow(c->all->alloc, &q, &c->captp, c->ntp + 1, sizeof *c->tp) != AMP_OK)
@@ -59,14 +59,16 @@ static amp_status add_top(pads *c, amp_vec3 p, double half, amp_error *err)
     c->tp = q;
     c->tp[c->ntp].x = p.x;
     c->tp[c->ntp].y = p.y;
-    c->tp[c->ntp].top = p.z + half;
+    c->tp[c->ntp].top = top;
     c->tp[c->ntp].z = p.z;
+    c->tp[c->ntp].w = w;
     c->ntp++;
-    c->reach = fmax(c->reach, half);
+    c->reach = fmax(c->reach, w);
     return AMP_OK;
 }
 
-/* The object beads' samples (a planar bead reaches h/2 above its centre, a tube r), bucketed by cell. */
+/* The object beads' samples (a planar bead's top is its path, docs/interfaces.md §3; a tube reaches r above it),
+ * bucketed by cell. */
 static amp_status tops_build(pads *c, amp_error *err)
 {
     const amp_pathset *ps = c->all;
@@ -81,8 +83,9 @@ static amp_status tops_build(pads *c, amp_error *err)
             size_t m = (size_t)ceil(amp_v3_dist(v[k].p, v[k + 1].p) / TOP_STEP), j;
             for (j = 0; j <= m && st == AMP_OK; j++) {
                 double t = m ? (double)j / (double)m : 0.0, r = v[k].r + t * (v[k + 1].r - v[k].r);
-                if (r > 0.0)
-                    st = add_top(c, amp_v3_lerp(v[k].p, v[k + 1].p, t), h > 0.0 ? 0.5 * h : r, err);
+                amp_vec3 q = amp_v3_lerp(v[k].p, v[k + 1].p, t);
+                if (r > 0.0) /* a planar bead counts under a pad within h/2 of its centre line, as high as wide */
+                    st = add_top(c, q, h > 0.0 ? q.z : q.z + r, h > 0.0 ? 0.5 * h : r, err);
             }
         }
     }
@@ -132,9 +135,8 @@ static double object_top_below(const pads *c, amp_vec3 p, double bottom, double 
         for (x = x0; x <= x1; x++)
             for (k = c->cell[y * c->nx + x]; k < c->cell[y * c->nx + x + 1]; k++) {
                 const ptop *q = &c->tp[k];
-                double half = q->top - q->z;
                 if (q->z < p.z - 1e-9 && q->top <= bottom + 1e-9 && q->top > best &&
-                    hypot(q->x - p.x, q->y - p.y) <= rs + half)
+                    hypot(q->x - p.x, q->y - p.y) <= rs + q->w)
                     best = q->top;
             }
     return best;
@@ -143,7 +145,7 @@ static double object_top_below(const pads *c, amp_vec3 p, double bottom, double 
 /* The top of the highest solid stretch of the model that ends at or below @p bottom under (p.x, p.y). */
 static amp_status solid_top_below(const pads *c, amp_vec3 p, double bottom, double *below, amp_error *err)
 {
-    amp_vec3 org = amp_v3(p.x, p.y, fmin(c->bb.min.z, c->plate) - 1.0);
+    amp_vec3 org = amp_v3(p.x, p.y, fmin(c->bb.min.z, c->L->plate) - 1.0);
     amp_bvh_hit *hits = NULL;
     size_t n = 0, h;
     int inside = 0;
@@ -162,13 +164,16 @@ static amp_status solid_top_below(const pads *c, amp_vec3 p, double bottom, doub
     return AMP_OK;
 }
 
-/* One pad bead path along samples [i, e) of a run at height z (a lone sample: a short stroke along the run). */
-static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, size_t i, size_t e, double z,
+/* One pad bead path along samples [i, e) of a run on support layer j (a lone sample: a short stroke along
+ * the run). */
+static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, size_t i, size_t e, size_t j,
                                amp_error *err)
 {
-    double rs = c->o->radius;
+    double rs = c->o->radius, z = amp_support_layer_z(c->L, j), h = amp_support_layer_h(c->L, j);
     size_t k;
     amp_status st = amp_pathset_begin(c->all, AMP_ROLE_SUPPORT, err);
+    if (st == AMP_OK && h > 0.0)
+        st = amp_pathset_set_height(c->all, h, err);
     if (st == AMP_OK && e == i + 1) {
         amp_vec3 a = run[i > 0 ? i - 1 : i].p, b = run[i + 1 < n ? i + 1 : i].p, d;
         double len = hypot(b.x - a.x, b.y - a.y);
@@ -187,11 +192,20 @@ static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, si
     return st;
 }
 
-/* Does a pad bead at height z fit under sample k: above what lies under it, below its bead? */
-static int fits(const pads *c, const amp_bead_sample *run, size_t k, double z)
+/* Bottom of the bead of a sample: a sliced job's planar bead hangs its whole height h = 2 half under its path. */
+static double sample_bottom(const pads *c, const amp_bead_sample *q)
 {
-    double rs = c->o->radius;
-    return z - rs >= c->base[k] - 1e-9 && z + rs <= run[k].p.z - run[k].half + 1e-9;
+    return q->p.z - (c->L->h > 0.0 ? 2.0 : 1.0) * q->half;
+}
+
+/* Does a pad bead of support layer j fit under sample k: above what lies under it, below its bead (planar
+ * layers: one layer under it, the rows' contact gap)? */
+static int fits(const pads *c, const amp_bead_sample *run, size_t k, size_t j)
+{
+    double z = amp_support_layer_z(c->L, j), h = amp_support_layer_h(c->L, j), rs = c->o->radius;
+    if (h > 0.0)
+        return z - h >= c->base[k] - 1e-9 && z <= sample_bottom(c, &run[k]) - c->L->step + 1e-9;
+    return z - rs >= c->base[k] - 1e-9 && z + rs <= sample_bottom(c, &run[k]) + 1e-9;
 }
 
 /* amp_bead_run_fn: the stack of pads under one unheld run. */
@@ -208,8 +222,8 @@ static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support pads");
     c->base = q;
     for (i = 0; i < n && st == AMP_OK; i++) {
-        double bottom = run[i].p.z - run[i].half;
-        c->base[i] = c->plate;
+        double bottom = sample_bottom(c, &run[i]);
+        c->base[i] = c->L->plate;
         st = solid_top_below(c, run[i].p, bottom, &c->base[i], err);
         c->base[i] = fmax(c->base[i], object_top_below(c, run[i].p, bottom, rs));
         zmax = fmax(zmax, bottom);
@@ -218,23 +232,23 @@ static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_
     /* layer j's beads lie on the row height of lib/support.c; a sample takes the layers between its base and
      * its bottom, so the top one ends less than a layer under it */
     for (j = 0; st == AMP_OK; j++) {
-        double z = c->plate + rs + (double)j * c->o->layer_height;
-        if (z + rs > zmax + 1e-9)
+        double z = amp_support_layer_z(c->L, j);
+        if ((amp_support_layer_h(c->L, j) > 0.0 ? z : z + rs) > zmax + 1e-9)
             break;
         for (i = 0; st == AMP_OK && i < n; i = e) {
-            for (e = i; e < n && fits(c, run, e, z); e++)
+            for (e = i; e < n && fits(c, run, e, j); e++)
                 ;
             if (e == i)
                 e = i + 1;
             else
-                st = emit_stretch(c, run, n, i, e, z, err);
+                st = emit_stretch(c, run, n, i, e, j, err);
         }
     }
     return st;
 }
 
 amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model, const amp_support_opts *o,
-                            double plate, amp_support_pads_stats *out, amp_error *err)
+                            const amp_support_layers *L, amp_support_pads_stats *out, amp_error *err)
 {
     amp_pathset probe;
     pads c;
@@ -245,7 +259,7 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
     c.nobj = nobj;
     c.model = model;
     c.o = o;
-    c.plate = plate;
+    c.L = L;
     c.bb = amp_bvh_bbox(model);
     /* the judge sees the support first (the order support.c then aims at), then the objects in their order */
     amp_pathset_init(&probe, all->alloc);

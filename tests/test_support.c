@@ -10,6 +10,7 @@
 #endif
 
 #include "fx_meshes.h"
+#include "fx_parts.h"
 #include "runtool.h"
 #include "testutil.h"
 
@@ -476,6 +477,79 @@ START_TEST(support_warns_when_the_rows_do_not_rest_on_each_other)
 }
 END_TEST
 
+/* Height of the mesh's underside straight above @p p (the first surface a ray up meets); HUGE_VAL if none. */
+static double underside_above(const amp_bvh *b, amp_vec3 p)
+{
+    amp_bvh_hit *hits = NULL;
+    size_t n = 0, k;
+    double z = HUGE_VAL;
+    ck_assert_int_eq(amp_bvh_ray_all(b, p, amp_v3(0, 0, 1), HUGE_VAL, &hits, &n, NULL), AMP_OK);
+    for (k = 0; k < n; k++)
+        z = fmin(z, hits[k].p.z);
+    amp_bvh_hits_free(b, hits);
+    return z;
+}
+
+/*
+ * A sliced job (`slice --continuous`, 0.3 mm first layer, 0.2 mm layers) of the blobby bunny (head and ears
+ * overhang its body): its support is laid on the job's own layers as planar beads of the layer's height
+ * (round tubes 0.4 mm apart would extrude the wrong plastic and stand between the layers), printed with each
+ * layer before the object beads of that layer (heights never go down along the job), its top one layer
+ * under the underside above it; `check --layer --support` passes it (strokes, gouge, every bead held).
+ */
+START_TEST(a_sliced_job_gets_planar_support_on_its_own_layers)
+{
+    char args[4096], js[16384], stl[1024], sl[1024], sup[1024];
+    amp_mesh m;
+    amp_bvh *b = NULL;
+    amp_pathset ps;
+    amp_error err;
+    size_t i, k, nsup = 0;
+    double zlast = 0.0;
+    amp_mesh_init(&m, NULL);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(fx_part_mesh(&m, FX_PART_BUNNY, 0.0), AMP_OK);
+    snprintf(stl, sizeof stl, "%s", fx_tmp("sbunny.stl"));
+    snprintf(sl, sizeof sl, "%s", fx_tmp("sbunny.amp"));
+    snprintf(sup, sizeof sup, "%s", fx_tmp("sbunny-sup.amp"));
+    ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    snprintf(args, sizeof args, "slice %s --layer 0.2 --first-layer 0.3 --continuous -o %s", stl, sl);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "support %s --mesh %s -o %s", sl, stl, sup);
+    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, sup, &err), AMP_OK);
+    for (i = 0; i < ps.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&ps, i);
+        double z = v[0].p.z, layer = (z - 0.3) / 0.2, h = ps.paths[i].h;
+        ck_assert_msg(z >= zlast - 1e-9, "path %lu at z %g after z %g", (unsigned long)i, z, zlast);
+        zlast = z;
+        if (ps.paths[i].role != AMP_ROLE_SUPPORT)
+            continue;
+        nsup++;
+        ck_assert_msg(fabs(layer - floor(layer + 0.5)) < 1e-6, "support path %lu at z %g: not a layer", (unsigned long)i, z);
+        ck_assert_msg(fabs(h - (z < 0.31 ? 0.3 : 0.2)) < 1e-9, "support path %lu at z %g has bead height %g",
+                      (unsigned long)i, z, h);
+        for (k = 0; k < ps.paths[i].n; k++) {
+            ck_assert(fabs(v[k].p.z - z) < 1e-9);
+            /* on the grid's rays (a lone ray's short row ends a quarter spacing off them) */
+            if (ps.paths[i].n > 2 || amp_path_length(&ps, i) > 0.6)
+                ck_assert_msg(underside_above(b, v[k].p) >= z + 0.5 * h - 1e-6, "support at (%g %g %g) reaches the part",
+                              v[k].p.x, v[k].p.y, z);
+        }
+    }
+    ck_assert_uint_gt(nsup, 50);
+    snprintf(args, sizeof args, "check %s --mesh %s --layer 0.2 --first-layer 0.3 --support --json", sup, stl);
+    ck_assert_msg(fx_run_tool(args, js, sizeof js) == 0, "%s", js);
+    amp_pathset_free(&ps);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+    remove(stl);
+    remove(sl);
+    remove(sup);
+}
+END_TEST
+
 /* One straight object path from a to b, radius r, sampled in vertices 0.5 mm apart or closer. */
 static void line_path(amp_pathset *ps, amp_role role, amp_vec3 a, amp_vec3 b, double r)
 {
@@ -668,6 +742,7 @@ static Suite *support_suite(void)
     tcase_add_test(tc, helix_support_keeps_every_fragment_and_holds_every_path);
     tcase_add_test(tc, support_warns_when_the_rows_do_not_rest_on_each_other);
     tcase_add_test(tc, pads_hold_the_lowest_rows_of_a_field_over_a_shallow_underside);
+    tcase_add_test(tc, a_sliced_job_gets_planar_support_on_its_own_layers);
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
     tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);
     tcase_add_test(tc, hold_check_applies_the_overhang_rule);

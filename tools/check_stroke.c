@@ -17,10 +17,15 @@ static long layer_at(const amp_slices *sl, double z)
     return -1;
 }
 
-/* Planar paths are layer strokes; a path that climbs is a volumetric path, not checked here. */
-static int is_planar(const amp_pvert *v, size_t n)
+/* Planar object paths are layer strokes; a path that climbs is a volumetric path, and support paths (`ampath
+ * support` under a sliced job's overhangs, Remark 2.1's stretches) lie outside the section by design: the
+ * support and gouge checks hold them, not this one. */
+static int is_planar(const amp_pathset *ps, size_t i)
 {
-    size_t k;
+    const amp_pvert *v = amp_pathset_path_verts(ps, i);
+    size_t k, n = ps->paths[i].n;
+    if (ps->paths[i].role != AMP_ROLE_OBJECT)
+        return 0;
     for (k = 1; k < n; k++)
         if (fabs(v[k].p.z - v[0].p.z) > 1e-9)
             return 0;
@@ -64,7 +69,7 @@ static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
     double r = 0;
     for (i = 0; i < ps->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        if (is_planar(v, ps->paths[i].n))
+        if (is_planar(ps, i))
             for (k = 0; k < ps->paths[i].n; k++)
                 r = fmax(r, v[k].r);
     }
@@ -74,7 +79,7 @@ static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
             continue;
         for (i = 0; i < ps->npaths && !found; i++) {
             const amp_pvert *v = amp_pathset_path_verts(ps, i);
-            found = is_planar(v, ps->paths[i].n) && layer_at(sl, v[0].p.z) == (long)li;
+            found = is_planar(ps, i) && layer_at(sl, v[0].p.z) == (long)li;
         }
         missing += !found;
     }
@@ -92,7 +97,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
     for (i = 0; i < ps->npaths; i++)
-        planar += is_planar(amp_pathset_path_verts(ps, i), ps->paths[i].n);
+        planar += is_planar(ps, i);
     if (planar == 0 && mesh) {
         if (j) {
             cli_json_bool(j, "ran", 1);
@@ -120,7 +125,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
         amp_stroke_report rep;
         const amp_polyset *region = NULL;
         amp_status st;
-        if (!is_planar(v, ps->paths[i].n))
+        if (!is_planar(ps, i))
             continue;
         if (mesh) {
             long li = layer_at(&sl, v[0].p.z);

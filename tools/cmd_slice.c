@@ -409,7 +409,8 @@ static int run_continuous(const char *file, const char *out, const amp_slices *s
     if (over && worst < HUGE_VAL)
         fprintf(stderr,
                 "ampath slice: warning: %lu layer pairs are not eps-continuous (overhang > %g r = %g mm; worst %.3g mm "
-                "under layer %lu at z %.4g): the layer above may sag\n",
+                "under layer %lu at z %.4g): the layer above may sag (`ampath support` lays support under the "
+                "overhangs on the job's layers)\n",
                 (unsigned long)over, epsc, epsc * o->radius, worst, (unsigned long)at, sl->layers[at].z_print);
     else if (over) /* a section over an empty layer: a piece of the part that starts in mid-air */
         fprintf(stderr,

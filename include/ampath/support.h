@@ -15,6 +15,13 @@
  * on odd ones, the rows of a layer whose facing ends are at most one ray
  * apart joined into one zigzag path (a one-ray column
  * gets a row 0.25 spacing long: no support path has zero length).
+ * A sliced job (every object path flat with a bead height h > 0, heights
+ * never going down along the job, its first layer resting on the plate:
+ * paper 2's layers, contpath.h) gets its support on its own layers instead:
+ * planar beads of radius o->radius and the layer's height (layer_height is
+ * not used), the top of a row half a layer under the underside (one layer of
+ * air under the object bead above), each layer's support printed just before
+ * that layer's object paths, nearest next; no object path is split.
  * Pads (opts.find_unheld set, as the tool does): the rays see the model, not
  * the paths, so object beads can still float (a field's first row over a
  * shallow underside); the judge (the held-path check of check.h), run with
