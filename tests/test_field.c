@@ -212,6 +212,48 @@ START_TEST(curves_through_measured_gaps_cover_a_fin_thinner_than_the_cell_sample
 }
 END_TEST
 
+/* Distance from @p p to the nearest segment of @p ps (every segment: an independent measure). */
+static double nearest_segment(const amp_pathset *ps, amp_vec3 p)
+{
+    double d2 = HUGE_VAL;
+    size_t i, k;
+    for (i = 0; i < ps->npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(ps, i);
+        for (k = 0; k + 1 < ps->paths[i].n; k++)
+            d2 = fmin(d2, amp_v3_seg_dist2(p, v[k].p, v[k + 1].p, NULL));
+    }
+    return sqrt(d2);
+}
+
+START_TEST(curves_through_measured_gaps_reach_a_rod_too_thin_for_uniform_samples)
+{
+    /* A 60 x 60 x 30 mm block and, 3 mm beside it, a rod 0.1 mm square and 20 mm long along x (the box
+     * field's curves): 1.5e-6 of the solid, so a round of 100,000 uniform samples meets it once in seven,
+     * and the lattice's cell samples (every 0.25 mm) pass beside it. Its surface is 4e-4 of the part's: the
+     * samples drawn under the surface find it, and the field's curve through it covers it. */
+    amp_mesh m;
+    amp_bvh *b;
+    amp_field_stats st;
+    amp_pathset ps;
+    amp_error err;
+    double worst = 0.0, target = sqrt(2.0) / 2;
+    int k;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0, 0, 0), amp_v3(60, 60, 30), 0), AMP_OK);
+    ck_assert_int_eq(fx_box(&m, amp_v3(5, -3.137, 10.113), amp_v3(25, -3.037, 10.213), 0), AMP_OK);
+    ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
+    box_cover(&m, b, 1.0, &ps, &st);
+    for (k = 0; k <= 20; k++)
+        worst = fmax(worst, nearest_segment(&ps, amp_v3(5.0 + k, -3.087, 10.163)));
+    ck_assert_msg(worst <= target, "the rod is %g mm from the paths (%lu gap curves)", worst,
+                  (unsigned long)st.gap_curves);
+    ck_assert_uint_gt(st.gap_curves, 0);
+    amp_bvh_free(b);
+    amp_pathset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces)
 {
     /* a 10 x 6 x 4 mm box at integer coordinates, S = 1: a lattice from the
@@ -996,6 +1038,7 @@ static Suite *field_suite(void)
     tcase_add_test(tc, box_field_gives_straight_x_lines_inside_the_bridge);
     tcase_add_test(tc, box_field_on_a_box_meets_its_bound_with_curves_inside_the_faces);
     tcase_add_test(tc, curves_through_measured_gaps_cover_a_fin_thinner_than_the_cell_samples);
+    tcase_add_test(tc, curves_through_measured_gaps_reach_a_rod_too_thin_for_uniform_samples);
     tcase_add_test(tc, cli_field_fails_a_part_smaller_than_the_spacing);
     tcase_add_test(tc, field_errors_are_reported);
     tcase_add_test(tc, cli_field_reports_figures_and_writes_paths);
