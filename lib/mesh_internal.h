@@ -23,4 +23,12 @@ void amp_weld_free(amp_weld_table *t);
 /** Index of the vertex of @p m at exactly @p p, appending it when new. AMP_ERR_NOMEM, AMP_ERR_LIMIT. */
 amp_status amp_weld_vertex(amp_weld_table *t, amp_mesh *m, amp_vec3 p, uint32_t *out, amp_error *err);
 
+/**
+ * Split the triangles of @p m from @p t0 on whose boundary edges (used by one triangle) a boundary vertex
+ * lies (within float rounding): a fan from the opposite corner, so the neighbours' edges meet again
+ * (lib/mesh_tjunction.c). *splits counts the vertices inserted into edges. Skipped when boundary edges x
+ * boundary vertices exceed 5e7 (an open scan). AMP_ERR_NOMEM, AMP_ERR_LIMIT.
+ */
+amp_status amp_mesh_split_tjunctions(amp_mesh *m, size_t t0, size_t *splits, amp_error *err);
+
 #endif

@@ -438,7 +438,7 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
 {
     const unsigned char *d = data;
     stl_reader r;
-    size_t nv0, nt0, dups = 0;
+    size_t nv0, nt0, dups = 0, tj = 0;
     int binary;
     amp_status st;
     if (!m || (!data && len))
@@ -457,6 +457,8 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
     st = binary ? read_binary(&r, d, len, err) : read_ascii(&r, (const char *)d, len, err);
     if (st == AMP_OK)
         st = drop_duplicates(m, nv0, nt0, &dups, err);
+    if (st == AMP_OK) /* an exporter's T-junctions (lib/mesh_tjunction.c) */
+        st = amp_mesh_split_tjunctions(m, nt0, &tj, err);
     if (st == AMP_OK && m->ntris == nt0)
         st = dups ? amp_fail(err, AMP_ERR_GEOMETRY, 0,
                              "no STL triangle is left: %lu have zero area, %lu are duplicates or cancelling opposite "
@@ -475,6 +477,7 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
         stats->triangles = r.triangles;
         stats->degenerate = r.degenerate;
         stats->duplicates = dups;
+        stats->tjunctions = tj;
         stats->vertices = m->nverts - nv0;
     }
     return AMP_OK;

@@ -116,6 +116,53 @@ START_TEST(degenerate_triangles_are_dropped_and_counted)
 }
 END_TEST
 
+/*
+ * A 10 mm cube whose front face was split at M = (5, 0, 10), the middle of its top edge, and whose top face
+ * was not (OpenSCAD's issue 945 and 1580 files: an exporter's T-junction, with the needle triangle D M C of
+ * three collinear corners that the reader drops). The top face's edge D C meets the front's D M and M C:
+ * the reader splits the top triangle at M, and the surface is closed with the cube's volume.
+ */
+START_TEST(t_junctions_are_split_so_an_exported_cube_closes)
+{
+#define P_A 0, 0, 0
+#define P_B 10, 0, 0
+#define P_C 10, 0, 10
+#define P_D 0, 0, 10
+#define P_E 0, 10, 0
+#define P_F 10, 10, 0
+#define P_G 10, 10, 10
+#define P_H 0, 10, 10
+#define P_M 5, 0, 10
+    static const float t[] = {P_A, P_E, P_F, P_A, P_F, P_B, P_D, P_C, P_G, P_D, P_G, P_H, /* bottom, top */
+                              P_A, P_B, P_M, P_B, P_C, P_M, P_A, P_M, P_D,                /* front, split */
+                              P_E, P_H, P_G, P_E, P_G, P_F, P_A, P_D, P_H, P_A, P_H, P_E, /* back, left */
+                              P_B, P_F, P_G, P_B, P_G, P_C, P_D, P_M, P_C};               /* right, needle */
+    unsigned char buf[84 + 50 * 14];
+    amp_mesh m;
+    amp_stl_stats st;
+    amp_mesh_edge_report er;
+    amp_error err;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, make_binary(buf, NULL, t, 14, 14), &st, &err), AMP_OK);
+    ck_assert_uint_eq(st.degenerate, 1);
+    ck_assert_uint_eq(st.tjunctions, 1);
+    ck_assert_uint_eq(m.ntris, 14); /* 13 kept, the top triangle D C G split in two */
+    ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+    ck_assert_msg(er.closed, "%lu boundary edges", (unsigned long)er.boundary);
+    ck_assert_double_eq_tol(amp_mesh_volume(&m), 1000.0, 1e-9);
+    amp_mesh_free(&m);
+#undef P_A
+#undef P_B
+#undef P_C
+#undef P_D
+#undef P_E
+#undef P_F
+#undef P_G
+#undef P_H
+#undef P_M
+}
+END_TEST
+
 /* Binary STL bytes of @p m into @p buf (initialised by the caller). */
 static void stl_bytes(const amp_mesh *m, amp_buf *buf)
 {
@@ -680,6 +727,7 @@ static Suite *mesh_suite(void)
     tcase_add_test(tc, binary_stl_starting_with_solid_is_read_as_binary);
     tcase_add_test(tc, ascii_stl_with_crlf_and_uppercase_is_read);
     tcase_add_test(tc, degenerate_triangles_are_dropped_and_counted);
+    tcase_add_test(tc, t_junctions_are_split_so_an_exported_cube_closes);
     tcase_add_test(tc, duplicate_triangles_are_dropped_and_counted);
     tcase_add_test(tc, a_face_and_its_reverse_are_both_dropped);
     tcase_add_test(tc, cancelled_faces_leave_no_unused_vertices);

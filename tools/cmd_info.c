@@ -45,6 +45,7 @@ static int info_mesh(const char *file, int json)
         cli_json_int(&j, "triangles", (long long)m.ntris);
         cli_json_int(&j, "degenerate", (long long)st.degenerate);
         cli_json_int(&j, "duplicates", (long long)st.duplicates);
+        cli_json_int(&j, "tjunctions", (long long)st.tjunctions);
         cli_json_int(&j, "vertices", (long long)m.nverts);
         cli_json_num(&j, "volume_mm3", vol);
         cli_json_bool(&j, "closed", er.closed);
@@ -55,10 +56,12 @@ static int info_mesh(const char *file, int json)
         cli_json_box(&j, "bbox", b);
         cli_json_end(&j);
     } else {
-        printf("%s: %s STL, %lu triangles (%lu degenerate dropped, %lu duplicates dropped), %lu vertices after "
-               "welding\n",
-               file, st.binary ? "binary" : "ASCII", (unsigned long)m.ntris, (unsigned long)st.degenerate,
-               (unsigned long)st.duplicates, (unsigned long)m.nverts);
+        printf("%s: %s STL, %lu triangles (%lu degenerate dropped, %lu duplicates dropped", file,
+               st.binary ? "binary" : "ASCII", (unsigned long)m.ntris, (unsigned long)st.degenerate,
+               (unsigned long)st.duplicates);
+        if (st.tjunctions)
+            printf(", split at %lu T-junctions", (unsigned long)st.tjunctions);
+        printf("), %lu vertices after welding\n", (unsigned long)m.nverts);
         printf("bbox (%.3f %.3f %.3f) .. (%.3f %.3f %.3f), volume %.3f mm^3\n", b.min.x, b.min.y, b.min.z, b.max.x,
                b.max.y, b.max.z, vol);
         printf("%s: %lu edges, %lu boundary, %lu non-manifold, %lu misoriented\n",

@@ -93,6 +93,7 @@ typedef struct amp_stl_stats {
     size_t degenerate;   /**< triangles dropped: zero area (repeated or collinear corners) */
     size_t vertices;     /**< distinct vertices after exact welding */
     size_t duplicates;   /**< triangles dropped: exact copies of another (same corners), or pairs of opposite faces */
+    size_t tjunctions;   /**< vertices found on a neighbour's edge (a T-junction): that triangle is split there */
 } amp_stl_stats;
 
 /** Largest STL accepted by amp_mesh_read_stl_file() (bytes). */
