@@ -893,7 +893,8 @@ static amp_status emit_by_layer(const amp_pathset *all, size_t nobj, amp_pathset
     if (!used)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
     for (i = 0; i <= nobj && st == AMP_OK; i++) {
-        double z = i < nobj && all->paths[i].role == AMP_ROLE_OBJECT ? path_z(all, i) : i < nobj ? -HUGE_VAL : HUGE_VAL;
+        double z = i == nobj ? HUGE_VAL : all->paths[i].role == AMP_ROLE_OBJECT && all->paths[i].n ? path_z(all, i)
+                                                                                                  : -HUGE_VAL;
         size_t k1 = k;
         while (k1 < n && path_z(all, k1) <= z + 1e-9)
             k1++;
