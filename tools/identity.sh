@@ -6,7 +6,9 @@
 #   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
 #   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
 # Only products are hashed (not the --json figures, which hold timings).
-# tools/identity.ref holds the listing of the current behaviour (renewed at stop 34: a thin island's perimeter
+# tools/identity.ref holds the listing of the current behaviour (renewed at stop 35: gcode's min_segment is
+# measured on the coordinates as written, so the twisted bridge's continuous G-code changed, nothing else; at
+# stop 34: a thin island's perimeter
 # whose two sides lie closer than r/4 is printed once along one side, an open stroke started at its end nearer
 # the nozzle, not as a loop there and back, so the twisted bridge's continuous paths, their G-code and picture
 # changed, nothing else; at stop 33: the part-cooling fan goes
