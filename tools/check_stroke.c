@@ -17,19 +17,24 @@ static long layer_at(const amp_slices *sl, double z)
     return -1;
 }
 
-/* Planar object paths are layer strokes; a path that climbs is a volumetric path, and support paths (`ampath
- * support` under a sliced job's overhangs, Remark 2.1's stretches) lie outside the section by design: the
- * support and gouge checks hold them, not this one. */
+/* A path on one height: a layer's stroke or a flat support row (a path that climbs is a volumetric path, not
+ * checked here). */
 static int is_planar(const amp_pathset *ps, size_t i)
 {
     const amp_pvert *v = amp_pathset_path_verts(ps, i);
     size_t k, n = ps->paths[i].n;
-    if (ps->paths[i].role != AMP_ROLE_OBJECT)
-        return 0;
     for (k = 1; k < n; k++)
         if (fabs(v[k].p.z - v[0].p.z) > 1e-9)
             return 0;
     return n > 0;
+}
+
+/* A layer's stroke: a planar object path. Support paths (`ampath support` under a sliced job's overhangs,
+ * Remark 2.1's stretches) are checked for crossings like the strokes, but lie outside the section by design
+ * and print no layer of the part. */
+static int is_stroke(const amp_pathset *ps, size_t i)
+{
+    return ps->paths[i].role == AMP_ROLE_OBJECT && is_planar(ps, i);
 }
 
 /* Is some island of section @p P printable by a bead of half-width @p r: 1e-3 mm2 or more (the slicer prints even a
@@ -69,7 +74,7 @@ static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
     double r = 0;
     for (i = 0; i < ps->npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        if (is_planar(ps, i))
+        if (is_stroke(ps, i))
             for (k = 0; k < ps->paths[i].n; k++)
                 r = fmax(r, v[k].r);
     }
@@ -79,7 +84,7 @@ static size_t layers_without_paths(const amp_slices *sl, const amp_pathset *ps)
             continue;
         for (i = 0; i < ps->npaths && !found; i++) {
             const amp_pvert *v = amp_pathset_path_verts(ps, i);
-            found = is_planar(ps, i) && layer_at(sl, v[0].p.z) == (long)li;
+            found = is_stroke(ps, i) && layer_at(sl, v[0].p.z) == (long)li;
         }
         missing += !found;
     }
@@ -94,11 +99,14 @@ int check_stroke(const check_ctx *c, cli_json *j)
     amp_mesh m;
     amp_slices sl;
     size_t i, segs = 0, pseudo = 0, cross = 0, reps = 0, outside = 0, failed = 0, nolayer = 0, flipped, planar = 0;
+    size_t strokes = 0;
     amp_mesh_init(&m, NULL);
     amp_slices_init(&sl, NULL);
-    for (i = 0; i < ps->npaths; i++)
+    for (i = 0; i < ps->npaths; i++) {
         planar += is_planar(ps, i);
-    if (planar == 0 && mesh) {
+        strokes += is_stroke(ps, i);
+    }
+    if (strokes == 0 && mesh) {
         if (j) {
             cli_json_bool(j, "ran", 1);
             cli_json_bool(j, "ok", 0);
@@ -127,7 +135,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
         amp_status st;
         if (!is_planar(ps, i))
             continue;
-        if (mesh) {
+        if (mesh && is_stroke(ps, i)) {
             long li = layer_at(&sl, v[0].p.z);
             if (li < 0)
                 nolayer++;

@@ -161,9 +161,15 @@ def _gouge(ps, head):
 
 
 def _planar(ps, i):
+    """A path on one height: a layer's stroke or a flat support row."""
     p = ps._ps.paths[i]
     v = ps._ps.verts
     return p.n > 0 and all(abs(v[k].p.z - v[p.first].p.z) <= 1e-9 for k in range(p.first + 1, p.first + p.n))
+
+
+def _stroke(ps, i):
+    """A layer's stroke: a planar object path (support paths lie outside the section and print no layer)."""
+    return ps._ps.paths[i].role == 0 and _planar(ps, i)
 
 
 def _layer_index(sl, z):
@@ -188,7 +194,8 @@ def _layers_without_paths(ps, sl, planar):
 
 def _strokes(ps, sl, tol):
     planar = [i for i in range(ps._ps.npaths) if _planar(ps, i)]
-    if not planar and sl is not None:
+    strokes = [i for i in planar if _stroke(ps, i)]
+    if not strokes and sl is not None:
         return {"ran": True, "ok": False, "reason": "no planar paths: nothing prints the layers of the mesh"}
     if not planar:
         return {"ran": False, "reason": "no planar paths"}
@@ -196,7 +203,7 @@ def _strokes(ps, sl, tol):
     failed = nolayer = 0
     for i in planar:
         region = None
-        if sl is not None:
+        if sl is not None and _stroke(ps, i):
             region = _layer_at(sl, ps._ps.verts[ps._ps.paths[i].first].p.z)
             nolayer += region is None
         rep, err = L.new(L.amp_stroke_report), _err()
@@ -208,7 +215,7 @@ def _strokes(ps, sl, tol):
         failed += st != 0
         for k in tot:
             tot[k] += getattr(rep, k)
-    missing = _layers_without_paths(ps, sl, planar) if sl is not None else 0
+    missing = _layers_without_paths(ps, sl, strokes) if sl is not None else 0
     return {"ran": True, "ok": failed == 0 and nolayer == 0 and missing == 0, "paths": len(planar),
             "segments": tot["segments"], "pseudo_segments": tot["pseudo"], "crossings": tot["crossings"],
             "repeated_edges": tot["repeated_edges"], "outside": tot["outside"], "paths_without_layer": nolayer,
