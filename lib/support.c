@@ -933,23 +933,73 @@ static amp_status emit_by_layer(const amp_pathset *all, size_t nobj, amp_pathset
     return st;
 }
 
+/*
+ * §5.3 ordering of @p all (the object paths of @p in, then the support made) into @p out: the support below an
+ * object fragment is printed before it. Fragments shorter than z_offs sin(theta) make every support fragment's
+ * slot non-empty (make_pieces).
+ */
+static amp_status order_by_cones(const sctx *c, const amp_support_opts *o, const amp_pathset *in,
+                                 const amp_pathset *all, size_t nobj, amp_pathset *out, amp_support_stats *s,
+                                 amp_error *err)
+{
+    amp_fragments fs;
+    otree t;
+    uint32_t *first = NULL, *late = NULL;
+    piece *pcs = NULL;
+    size_t npc = 0;
+    amp_status stt;
+    memset(&t, 0, sizeof t);
+    memset(&fs, 0, sizeof fs);
+    if ((stt = amp_fragments_build(&fs, all, 0.95 * o->head.z_offs * sin(o->head.theta), c->a, err)) != AMP_OK ||
+        (stt = otree_build(&t, &fs, (uint32_t)fs.first[nobj], c->a, err)) != AMP_OK)
+        goto done;
+    if (fs.n >= LEFT_OUT) {
+        stt = amp_fail(err, AMP_ERR_LIMIT, 0, "too many fragments for support");
+        goto done;
+    }
+    first = amp_calloc(c->a, fs.n + 1, sizeof *first);
+    late = amp_calloc(c->a, fs.n + 1, sizeof *late);
+    if (!first || !late) {
+        stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
+        goto done;
+    }
+    /* per support fragment: the first object fragment above it (it must come before) and the last one below
+     * it (it must come after) */
+    {
+        long f0 = (long)fs.first[nobj], nb = ((long)fs.n - f0 + BLOCK - 1) / BLOCK, q;
+        double k = 1.0 / tan(o->head.theta);
+#pragma omp parallel for schedule(dynamic, 4)
+        for (q = 0; q < nb; q++) {
+            uint32_t b0 = (uint32_t)(f0 + q * BLOCK), b1 = (uint32_t)(f0 + q * BLOCK + BLOCK < (long)fs.n ? f0 + q * BLOCK + BLOCK : (long)fs.n);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 1, first);
+            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 0, late);
+        }
+    }
+    /* object before support above it, support before object and support above it (Def. 5.1) */
+    if (o->progress)
+        o->progress(o->progress_user, 0.6);
+    if ((stt = place_pieces(c, o, &fs, nobj, first, late, &pcs, &npc, s, err)) == AMP_OK)
+        stt = emit_all(in, nobj, &fs, late, pcs, npc, out, s, err);
+done:
+    amp_free(c->a, t.box);
+    amp_free(c->a, first);
+    amp_free(c->a, late);
+    amp_free(c->a, pcs);
+    amp_fragments_free(&fs);
+    return stt;
+}
+
 amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_support_opts *o, amp_pathset *out,
                        amp_support_stats *st, amp_error *err)
 {
     sctx c;
     amp_support_stats s;
     amp_pathset all;
-    amp_fragments fs;
-    otree t;
-    uint32_t *first = NULL, *late = NULL;
-    piece *pcs = NULL;
-    size_t npc = 0, i, nobj;
+    size_t i, nobj;
     int sliced;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
-    memset(&t, 0, sizeof t);
-    memset(&fs, 0, sizeof fs);
     if (!in || !model || !o || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: NULL argument");
     if ((stt = amp_head_validate(&o->head, err)) != AMP_OK)
@@ -991,46 +1041,9 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     }
     if (o->progress)
         o->progress(o->progress_user, 0.1);
-    if (sliced) {
-        if ((stt = emit_by_layer(&all, nobj, out, &s, err)) != AMP_OK)
-            goto done;
-        goto count;
-    }
-    /* §5.3 ordering: the support below an object fragment is printed before it. Fragments shorter than
-     * z_offs sin(theta) make every support fragment's slot non-empty (make_pieces). */
-    if ((stt = amp_fragments_build(&fs, &all, 0.95 * o->head.z_offs * sin(o->head.theta), c.a, err)) != AMP_OK ||
-        (stt = otree_build(&t, &fs, (uint32_t)fs.first[nobj], c.a, err)) != AMP_OK)
+    stt = sliced ? emit_by_layer(&all, nobj, out, &s, err) : order_by_cones(&c, o, in, &all, nobj, out, &s, err);
+    if (stt != AMP_OK)
         goto done;
-    if (fs.n >= LEFT_OUT) {
-        stt = amp_fail(err, AMP_ERR_LIMIT, 0, "too many fragments for support");
-        goto done;
-    }
-    first = amp_calloc(c.a, fs.n + 1, sizeof *first);
-    late = amp_calloc(c.a, fs.n + 1, sizeof *late);
-    if (!first || !late) {
-        stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for ordering support");
-        goto done;
-    }
-    /* per support fragment: the first object fragment above it (it must come before) and the last one below
-     * it (it must come after) */
-    {
-        long f0 = (long)fs.first[nobj], nb = ((long)fs.n - f0 + BLOCK - 1) / BLOCK, q;
-        double k = 1.0 / tan(o->head.theta);
-#pragma omp parallel for schedule(dynamic, 4)
-        for (q = 0; q < nb; q++) {
-            uint32_t b0 = (uint32_t)(f0 + q * BLOCK), b1 = (uint32_t)(f0 + q * BLOCK + BLOCK < (long)fs.n ? f0 + q * BLOCK + BLOCK : (long)fs.n);
-            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 1, first);
-            search_block(&t, &fs, o->head.z_offs, k, b0, b1, 0, late);
-        }
-    }
-    /* object before support above it, support before object and support above it (Def. 5.1) */
-    if (o->progress)
-        o->progress(o->progress_user, 0.6);
-    if ((stt = place_pieces(&c, o, &fs, nobj, first, late, &pcs, &npc, &s, err)) != AMP_OK)
-        goto done;
-    if ((stt = emit_all(in, nobj, &fs, late, pcs, npc, out, &s, err)) != AMP_OK)
-        goto done;
-count:
     s.paths = 0;
     for (i = 0; i < out->npaths; i++)
         s.paths += out->paths[i].role == AMP_ROLE_SUPPORT;
@@ -1039,11 +1052,6 @@ count:
 done:
     amp_free(c.a, c.col);
     amp_free(c.a, c.first);
-    amp_free(c.a, t.box);
-    amp_free(c.a, first);
-    amp_free(c.a, late);
-    amp_free(c.a, pcs);
-    amp_fragments_free(&fs);
     amp_pathset_free(&all);
     return stt;
 }
