@@ -110,6 +110,9 @@ static amp_status split_edge(amp_mesh *m, const tj_edge *e, const uint32_t *cand
 
 amp_status amp_mesh_split_tjunctions(amp_mesh *m, size_t t0, size_t *splits, amp_error *err)
 {
+    /* a file of collinear slivers could fan every boundary edge at every vertex: at most as many new triangles
+     * as the file had (a real export has a few T-junctions per seam) */
+    size_t cap = 2 * (m->ntris - t0) + 1024;
     int pass;
     amp_status st = AMP_OK;
     *splits = 0;
@@ -136,7 +139,7 @@ amp_status amp_mesh_split_tjunctions(amp_mesh *m, size_t t0, size_t *splits, amp
                 if (mark[i])
                     cand[nv++] = (uint32_t)i;
             /* one edge per triangle a pass: a split triangle's other edges wait for the next pass */
-            for (i = 0; i < nb && st == AMP_OK; i++) {
+            for (i = 0; i < nb && st == AMP_OK && m->ntris - t0 < cap; i++) {
                 size_t added = 0;
                 if (busy[e[i].tri - t0])
                     continue;
