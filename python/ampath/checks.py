@@ -185,11 +185,34 @@ def _layer_at(sl, z):
     return None if i is None else ctypes.pointer(sl._sl.layers[i].polys)
 
 
-def _layers_without_paths(ps, sl, planar):
-    """Layers with a section (1e-3 mm2 or more) but no planar path at their height, as the tool counts them."""
-    printed = {_layer_index(sl, ps._ps.verts[ps._ps.paths[i].first].p.z) for i in planar}
+def _printable_section(P, r):
+    """Some island of 1e-3 mm2 or more, a box diagonal of r/2 or more and a mean half-width (area / boundary
+    length) of r/16 or more, as the tool asks (a sliver or a speck has no centre line a bead could follow)."""
+    isl = {}
+    for i in range(P.nrings):
+        ring = P.rings[i]
+        pts = [P.pts[ring.first + q] for q in range(ring.n)]
+        a = 0.5 * sum(pts[q].x * pts[(q + 1) % ring.n].y - pts[(q + 1) % ring.n].x * pts[q].y for q in range(ring.n))
+        ln = sum(math.hypot(pts[(q + 1) % ring.n].x - pts[q].x, pts[(q + 1) % ring.n].y - pts[q].y)
+                 for q in range(ring.n))
+        f = isl.setdefault(ring.island, [0.0, 0.0, math.inf, math.inf, -math.inf, -math.inf])
+        f[0] += a
+        f[1] += ln
+        for p in pts:
+            f[2], f[3], f[4], f[5] = min(f[2], p.x), min(f[3], p.y), max(f[4], p.x), max(f[5], p.y)
+    return any(a >= 1e-3 and math.hypot(x1 - x0, y1 - y0) >= 0.5 * r and a >= ln * r / 16
+               for a, ln, x0, y0, x1, y1 in isl.values())
+
+
+def _layers_without_paths(ps, sl, strokes):
+    """Layers with a printable section (for the widest bead of the strokes) but no stroke at their height, as
+    the tool counts them."""
+    v = ps._ps.verts
+    r = max((v[k].r for i in strokes for k in range(ps._ps.paths[i].first, ps._ps.paths[i].first + ps._ps.paths[i].n)),
+            default=0.0)
+    printed = {_layer_index(sl, v[ps._ps.paths[i].first].p.z) for i in strokes}
     return sum(1 for li in range(sl._sl.nlayers)
-               if lib.amp_polyset_area(ctypes.byref(sl._sl.layers[li].polys)) >= 1e-3 and li not in printed)
+               if li not in printed and _printable_section(sl._sl.layers[li].polys, r))
 
 
 def _strokes(ps, sl, tol):

@@ -3,6 +3,7 @@ and of a mesh, gouge, strokes with and without layer polygons, support holding) 
 the same figures (the tool prints numbers with 12 significant digits; only the timings differ)."""
 
 import json
+import struct
 
 from amptest import TmpCase, ampath, as_tool_prints, tool
 
@@ -80,6 +81,33 @@ class CheckFigures(TmpCase):
                             mesh=self.p("h.stl"), layer=0.5)
         self.assertFalse(ours["strokes"]["ok"])
         self.assertGreater(ours["strokes"]["paths_without_layer"], 0)
+
+    def test_slivers_and_support_of_a_sliced_job_count_as_in_the_tool(self):
+        # a 20 x 20 x 2 mm block with a wall 4 um thin and 3 mm tall on it: its layers above the block are
+        # slivers no bead could follow, printed by nothing and asked for by neither check
+        def box(lo, hi):
+            c = [(hi[0] if i in (1, 2, 5, 6) else lo[0], hi[1] if i in (2, 3, 6, 7) else lo[1],
+                  hi[2] if i >= 4 else lo[2]) for i in range(8)]
+            f = [(0, 2, 1), (0, 3, 2), (4, 5, 6), (4, 6, 7), (0, 1, 5), (0, 5, 4), (1, 2, 6), (1, 6, 5), (2, 3, 7),
+                 (2, 7, 6), (3, 0, 4), (3, 4, 7)]
+            return [(c[a], c[b], c[d]) for a, b, d in f]
+        tris = box((0, 0, 0), (20, 20, 2)) + box((5, 10, 1.5), (15, 10.004, 5))
+        with open(self.p("w.stl"), "wb") as out:
+            out.write(b"\0" * 80 + struct.pack("<I", len(tris)))
+            for t in tris:
+                out.write(struct.pack("<12fH", 0, 0, 0, *t[0], *t[1], *t[2], 0))
+        tool("slice", self.p("w.stl"), "--layer", 0.2, "--continuous", "-o", self.p("w.amp"))
+        ours, _ = self.same(self.p("w.amp"), ["--mesh", self.p("w.stl"), "--layer", 0.2],
+                            mesh=self.p("w.stl"), layer=0.2)
+        self.assertTrue(ours["strokes"]["ok"])
+        self.assertEqual(ours["strokes"]["layers_without_paths"], 0)
+        # the helix sliced, with support on its layers: the support paths lie outside the section by design
+        tool("slice", self.p("h.stl"), "--layer", 0.6, "--continuous", "-o", self.p("hs.amp"))
+        tool("support", self.p("hs.amp"), "--mesh", self.p("h.stl"), "-o", self.p("hss.amp"))
+        ours, _ = self.same(self.p("hss.amp"), ["--mesh", self.p("h.stl"), "--layer", 0.6, "--support"],
+                            mesh=self.p("h.stl"), layer=0.6, support=True)
+        self.assertTrue(ours["strokes"]["ok"] and ours["support"]["ok"])
+        self.assertEqual(ours["strokes"]["outside"], 0)
 
     def test_a_gouge_and_a_bead_in_the_air_fail_as_in_the_tool(self):
         with ampath.PathSet() as bad:
