@@ -1047,6 +1047,8 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     s.paths = 0;
     for (i = 0; i < out->npaths; i++)
         s.paths += out->paths[i].role == AMP_ROLE_SUPPORT;
+    s.sliced = sliced;
+    s.layer_height = c.L.step;
     if (st)
         *st = s;
 done:

@@ -516,8 +516,9 @@ START_TEST(a_sliced_job_gets_planar_support_on_its_own_layers)
     ck_assert_int_eq(amp_bvh_build(&b, &m, &err), AMP_OK);
     snprintf(args, sizeof args, "slice %s --layer 0.2 --first-layer 0.3 --continuous -o %s", stl, sl);
     ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
-    snprintf(args, sizeof args, "support %s --mesh %s -o %s", sl, stl, sup);
-    ck_assert_int_eq(fx_run_tool(args, NULL, 0), 0);
+    snprintf(args, sizeof args, "support %s --mesh %s -o %s --json", sl, stl, sup);
+    ck_assert_int_eq(fx_run_tool(args, js, sizeof js), 0);
+    ck_assert_msg(strstr(js, "\"layer\":0.2,\"sliced\":true") != NULL, "%s", js);
     ck_assert_int_eq(amp_pathset_read_file(&ps, sup, &err), AMP_OK);
     for (i = 0; i < ps.npaths; i++) {
         const amp_pvert *v = amp_pathset_path_verts(&ps, i);

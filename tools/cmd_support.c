@@ -12,7 +12,8 @@ const char cmd_support_usage[] =
     "  --mesh FILE     the model as a closed STL mesh; vertical rays through it find the support volume\n"
     "  --trivariate F  the model as a trivariate (.spl or built-in name): its boundary is tessellated\n"
     "  --spacing S     grid spacing of the rays and of the support rows, mm (default 2)\n"
-    "  --layer H       height between support layers, mm (default 0.4)\n"
+    "  --layer H       height between support layers, mm (default 0.4; a sliced job's support takes the\n"
+    "                  job's own layers, as planar beads printed with each layer)\n"
     "  --radius R      deposition radius of support paths, mm (default 0.2)\n"
     "  --min-gap G     air gaps under the model lower than G need no support, mm (default 1)\n"
     "  --no-pads       no pads: support only where the rays find air of --min-gap or more under the model,\n"
@@ -35,7 +36,8 @@ static void print_json(const char *input, const char *tri, const char *mesh, con
     cli_json_str(&j, "input", input);
     cli_json_str(&j, tri ? "trivariate" : "mesh", tri ? tri : mesh);
     cli_json_num(&j, "spacing", o->spacing);
-    cli_json_num(&j, "layer", o->layer_height);
+    cli_json_num(&j, "layer", st->layer_height);
+    cli_json_bool(&j, "sliced", st->sliced);
     cli_json_int(&j, "rays", (long long)st->rays);
     cli_json_int(&j, "columns", (long long)st->columns);
     cli_json_int(&j, "support_paths", (long long)st->paths);

@@ -94,6 +94,8 @@ typedef struct amp_support_stats {
     double trimmed;       /**< length left out for those conflicts, mm */
     size_t pads;          /**< pad paths traced under object beads the rows leave in the air (opts.find_unheld) */
     double pad_length;    /**< their length, mm */
+    int sliced;           /**< 1: a sliced job, supported on its own layers (planar beads); 0: tubes */
+    double layer_height;  /**< height between the support layers made: opts.layer_height, or a sliced job's */
 } amp_support_stats;
 
 /**
