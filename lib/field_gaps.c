@@ -323,8 +323,9 @@ static amp_vec3 surface_point(const gap_ctx *c, unsigned long long *seed)
 }
 
 /* One round: sample the covered part, every other draw uniformly in its box and the others under its surface
- * (surface_point: nearly all kept, so a part that fills little of its box keeps mostly those), and close each sample left far from the paths (the index learns every curve at once, so
- * a gap it closes is not filled twice). *left counts the samples found far (before this round's curves). */
+ * (surface_point: nearly all kept, so a part that fills little of its box keeps mostly those), and close each
+ * sample left far from the paths (the index learns every curve at once, so a gap it closes is not filled
+ * twice). *left counts the samples found far (before this round's curves). */
 static amp_status gap_round(gap_ctx *c, int add, size_t samples, unsigned long long seed, size_t *left)
 {
     amp_box3 box = amp_bvh_bbox(c->b);
