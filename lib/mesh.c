@@ -82,16 +82,9 @@ double amp_mesh_volume(const amp_mesh *m)
     return v / 6.0;
 }
 
-/* A directed edge (lo, hi) with the direction it was used in. */
-typedef struct edge_rec {
-    uint32_t lo, hi;
-    uint32_t up;  /* 1: lo -> hi in the triangle, 0: hi -> lo */
-    uint32_t tri; /* triangle index, for adjacency */
-} edge_rec;
-
 static int edge_cmp(const void *pa, const void *pb)
 {
-    const edge_rec *a = pa, *b = pb;
+    const amp_edge_rec *a = pa, *b = pb;
     if (a->lo != b->lo)
         return a->lo < b->lo ? -1 : 1;
     if (a->hi != b->hi)
@@ -99,15 +92,10 @@ static int edge_cmp(const void *pa, const void *pb)
     return a->up < b->up ? -1 : a->up > b->up;
 }
 
-/*
- * The 3 directed edges of every non-degenerate triangle into e (room for
- * 3 ntris), sorted so that the uses of one undirected edge are adjacent.
- * Returns the count; *degenerate (if not NULL) counts skipped triangles.
- */
-static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t ntris, edge_rec *e,
-                            size_t *degenerate)
+size_t amp_mesh_collect_edges(const amp_allocator *al, const amp_tri *tris, size_t ntris, amp_edge_rec *e,
+                              size_t *degenerate)
 {
-    static const size_t key[3] = {offsetof(edge_rec, lo), offsetof(edge_rec, hi), offsetof(edge_rec, up)};
+    static const size_t key[3] = {offsetof(amp_edge_rec, lo), offsetof(amp_edge_rec, hi), offsetof(amp_edge_rec, up)};
     size_t i, n = 0;
     for (i = 0; i < ntris; i++) {
         const amp_tri *t = &tris[i];
@@ -132,7 +120,7 @@ static size_t collect_edges(const amp_allocator *al, const amp_tri *tris, size_t
 
 amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_error *err)
 {
-    edge_rec *e;
+    amp_edge_rec *e;
     size_t i, n = 0;
     if (!m || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_mesh_edges: NULL argument");
@@ -142,7 +130,7 @@ amp_status amp_mesh_edges(const amp_mesh *m, amp_mesh_edge_report *out, amp_erro
     e = amp_calloc(m->alloc, m->ntris, 3 * sizeof *e);
     if (!e)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the edge list");
-    n = collect_edges(m->alloc, m->tris, m->ntris, e, &out->degenerate);
+    n = amp_mesh_collect_edges(m->alloc, m->tris, m->ntris, e, &out->degenerate);
     for (i = 0; i < n;) {
         size_t j = i, pos = 0, neg = 0;
         while (j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi) {
@@ -175,7 +163,7 @@ static double tri_area(const amp_vec3 *verts, const amp_tri *t)
 amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_tri *tris, size_t ntris,
                            size_t *flipped, amp_error *err)
 {
-    edge_rec *e = NULL;
+    amp_edge_rec *e = NULL;
     uint32_t *nb = NULL, *queue = NULL;
     unsigned char *rel = NULL, *flip = NULL, *seen = NULL;
     size_t i, n = 0, nflip = 0;
@@ -197,7 +185,7 @@ amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_t
         goto done; /* one exit that frees every temporary */
     }
     memset(nb, 0xff, ntris * 3 * sizeof *nb);
-    n = collect_edges(al, tris, ntris, e, NULL);
+    n = amp_mesh_collect_edges(al, tris, ntris, e, NULL);
     /* adjacency across manifold edges only: rel = 1 when the neighbour must be flipped relative to us */
     for (i = 0; i + 1 < n; i++) {
         if (e[i].lo == e[i + 1].lo && e[i].hi == e[i + 1].hi &&

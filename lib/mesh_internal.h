@@ -11,6 +11,21 @@
 amp_status amp_orient_tris(const amp_allocator *al, const amp_vec3 *verts, amp_tri *tris, size_t ntris,
                            size_t *flipped, amp_error *err);
 
+/** A directed edge (lo, hi) with the direction it was used in. */
+typedef struct amp_edge_rec {
+    uint32_t lo, hi;
+    uint32_t up;  /* 1: lo -> hi in the triangle, 0: hi -> lo */
+    uint32_t tri; /* triangle index in @p tris, for adjacency */
+} amp_edge_rec;
+
+/**
+ * The 3 directed edges of every non-degenerate triangle of @p tris into e (room for 3 ntris), sorted so that
+ * the uses of one undirected edge are adjacent (triangle order within them). Returns the count;
+ * *degenerate (if not NULL) counts skipped triangles.
+ */
+size_t amp_mesh_collect_edges(const amp_allocator *al, const amp_tri *tris, size_t ntris, amp_edge_rec *e,
+                              size_t *degenerate);
+
 /** Exact vertex welding table (open addressing over coordinate bits; -0 == +0). */
 typedef struct amp_weld_table {
     const amp_allocator *alloc;

@@ -8,50 +8,25 @@
  * edges meet again; the surface does not move.
  */
 #include <math.h>
-#include <string.h>
 
-#include "keysort.h"
 #include "mesh_internal.h"
 
 /* Boundary edges and boundary vertices beyond which the pairwise search is not tried (an open scan). */
 #define TJ_PAIRS_MAX 50000000.0
 #define TJ_PASSES 3
 
-typedef struct tj_edge {
-    uint32_t lo, hi, tri, k; /* undirected key; the triangle and which of its edges (k: corners k, k + 1) */
-} tj_edge;
-
-static int tj_cmp(const void *pa, const void *pb)
+/* The edges of triangles [t0, ntris) used once (boundary), packed at the front of e (tri: the mesh's index);
+ * returns their count. */
+static size_t boundary_edges(const amp_mesh *m, size_t t0, amp_edge_rec *e)
 {
-    const tj_edge *a = pa, *b = pb;
-    if (a->lo != b->lo)
-        return a->lo < b->lo ? -1 : 1;
-    if (a->hi != b->hi)
-        return a->hi < b->hi ? -1 : 1;
-    return a->tri < b->tri ? -1 : a->tri > b->tri;
-}
-
-/* The edges of triangles [t0, ntris) used once (boundary), packed at the front of e; returns their count. */
-static size_t boundary_edges(const amp_mesh *m, size_t t0, tj_edge *e)
-{
-    static const size_t key[3] = {offsetof(tj_edge, lo), offsetof(tj_edge, hi), offsetof(tj_edge, tri)};
-    size_t i, j, n = 0, nb = 0;
-    for (i = t0; i < m->ntris; i++) {
-        uint32_t k;
-        for (k = 0; k < 3; k++) {
-            uint32_t a = m->tris[i].v[k], b = m->tris[i].v[(k + 1) % 3];
-            e[n].lo = a < b ? a : b;
-            e[n].hi = a < b ? b : a;
-            e[n].tri = (uint32_t)i;
-            e[n++].k = k;
-        }
-    }
-    amp_radix_sort(m->alloc, e, n, sizeof *e, key, 3, tj_cmp);
+    size_t i, j, nb = 0, n = amp_mesh_collect_edges(m->alloc, m->tris + t0, m->ntris - t0, e, NULL);
     for (i = 0; i < n; i = j) {
         for (j = i + 1; j < n && e[j].lo == e[i].lo && e[j].hi == e[i].hi; j++)
             ;
-        if (j == i + 1)
-            e[nb++] = e[i];
+        if (j == i + 1) {
+            e[nb] = e[i];
+            e[nb++].tri += (uint32_t)t0;
+        }
     }
     return nb;
 }
@@ -71,13 +46,14 @@ static double on_segment(amp_vec3 a, amp_vec3 b, amp_vec3 v)
     return amp_v3_dist(amp_v3_add(a, amp_v3_scale(d, t)), v) <= tol ? t : -1.0;
 }
 
-/* Split triangle e->tri at the vertices of @p cand (boundary vertices) that lie on its edge e->k, in order
+/* Split triangle e->tri at the vertices of @p cand (boundary vertices) that lie on its edge e, in order
  * along it: a fan from the opposite corner. Returns the number of vertices inserted (0: none on it). */
-static amp_status split_edge(amp_mesh *m, const tj_edge *e, const uint32_t *cand, size_t nc, double *t,
+static amp_status split_edge(amp_mesh *m, const amp_edge_rec *e, const uint32_t *cand, size_t nc, double *t,
                              uint32_t *on, size_t *added, amp_error *err)
 {
     amp_tri tr = m->tris[e->tri];
-    uint32_t a = tr.v[e->k], b = tr.v[(e->k + 1) % 3], c = tr.v[(e->k + 2) % 3], prev = a;
+    uint32_t a = e->up ? e->lo : e->hi, k = tr.v[0] == a ? 0 : tr.v[1] == a ? 1 : 2;
+    uint32_t b = tr.v[(k + 1) % 3], c = tr.v[(k + 2) % 3], prev = a;
     size_t i, j, n = 0;
     amp_status st = AMP_OK;
     *added = 0;
@@ -118,7 +94,7 @@ amp_status amp_mesh_split_tjunctions(amp_mesh *m, size_t t0, size_t *splits, amp
     *splits = 0;
     for (pass = 0; pass < TJ_PASSES && st == AMP_OK; pass++) {
         size_t nt = m->ntris, nb, nv = 0, i, found = 0;
-        tj_edge *e = amp_calloc(m->alloc, 3 * (nt - t0) + 1, sizeof *e);
+        amp_edge_rec *e = amp_calloc(m->alloc, 3 * (nt - t0) + 1, sizeof *e);
         unsigned char *mark = amp_calloc(m->alloc, m->nverts + 1, 1), *busy = amp_calloc(m->alloc, nt - t0 + 1, 1);
         uint32_t *cand = NULL, *on = NULL;
         double *t = NULL;
