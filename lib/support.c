@@ -709,6 +709,17 @@ static void reverse_paths(amp_pathset *out, size_t p0)
     }
 }
 
+/* Is the nearer end (s, or e: *rev) of a piece closer to @p cur than *bd? Then *bd is its squared distance. */
+static int nearer(amp_vec3 cur, amp_vec3 s, amp_vec3 e, double *bd, int *rev)
+{
+    double ds = amp_v3_dist2(cur, s), de = amp_v3_dist2(cur, e);
+    if (!(ds < *bd || de < *bd))
+        return 0;
+    *rev = de < ds;
+    *bd = fmin(ds, de);
+    return 1;
+}
+
 /*
  * The pieces ord[k0, k1) of one slot, layer by layer (lowest first, as made);
  * within a layer (one height: no piece is below another) the nearest piece
@@ -732,13 +743,8 @@ static amp_status emit_slot(amp_pathset *out, const amp_fragments *fs, const uin
             int rev = 0;
             for (k = g0; k < g1; k++) {
                 const piece *pc = &pcs[ord[k]];
-                double ds = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f0].p0);
-                double de = used[k - k0] ? HUGE_VAL : amp_v3_dist2(cur, fs->frag[pc->f1 - 1].p1);
-                if (ds < bd || de < bd) {
+                if (!used[k - k0] && nearer(cur, fs->frag[pc->f0].p0, fs->frag[pc->f1 - 1].p1, &bd, &rev))
                     best = k;
-                    rev = de < ds;
-                    bd = fmin(ds, de);
-                }
             }
             used[best - k0] = 1;
             st = emit_frags(out, fs, AMP_ROLE_SUPPORT, fs->ps->paths[fs->frag[pcs[ord[best]].f0].path].h, pcs[ord[best]].f0, pcs[ord[best]].f1, late, 1, run, cap,
@@ -907,16 +913,9 @@ static amp_status emit_by_layer(const amp_pathset *all, size_t nobj, amp_pathset
                 zl = used[q - nobj] ? zl : fmin(zl, path_z(all, q));
             for (best = q = k; q < k1; q++) {
                 const amp_pvert *v = amp_pathset_path_verts(all, q);
-                double ds, de;
-                if (used[q - nobj] || path_z(all, q) > zl + 1e-9)
-                    continue;
-                ds = amp_v3_dist2(cur, v[0].p);
-                de = amp_v3_dist2(cur, v[all->paths[q].n - 1].p);
-                if (ds < bd || de < bd) {
+                if (!used[q - nobj] && path_z(all, q) <= zl + 1e-9 &&
+                    nearer(cur, v[0].p, v[all->paths[q].n - 1].p, &bd, &rev))
                     best = q;
-                    rev = de < ds;
-                    bd = fmin(ds, de);
-                }
             }
             used[best - nobj] = 1;
             st = amp_pathset_copy_path(out, all, best, err);
