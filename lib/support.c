@@ -994,11 +994,13 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     sctx c;
     amp_support_stats s;
     amp_pathset all;
+    amp_unheld_runs runs;
     size_t i, nobj;
     int sliced;
     amp_status stt;
     memset(&c, 0, sizeof c);
     memset(&s, 0, sizeof s);
+    memset(&runs, 0, sizeof runs);
     if (!in || !model || !o || !out)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_support: NULL argument");
     if ((stt = amp_head_validate(&o->head, err)) != AMP_OK)
@@ -1029,9 +1031,11 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
         goto done;
     for (i = nobj; i < all.npaths; i++)
         s.length += amp_path_length(&all, i);
+    if (!sliced && (stt = amp_support_settle(&all, nobj, o, &s.settled, &runs, err)) != AMP_OK)
+        goto done;
     if (o->find_unheld) {
         amp_support_pads_stats ps;
-        if ((stt = amp_support_pads(&all, nobj, model, o, &c.L, &ps, err)) != AMP_OK)
+        if ((stt = amp_support_pads(&all, nobj, model, o, &c.L, &runs, &ps, err)) != AMP_OK)
             goto done;
         s.pads = ps.paths;
         s.pad_length = ps.length;
@@ -1040,7 +1044,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     }
     if (o->progress)
         o->progress(o->progress_user, 0.1);
-    stt = sliced ? emit_by_layer(&all, nobj, out, &s, err) : order_by_cones(&c, o, in, &all, nobj, out, &s, err);
+    stt = sliced ? emit_by_layer(&all, nobj, out, &s, err) : order_by_cones(&c, o, &all, &all, nobj, out, &s, err);
     if (stt != AMP_OK)
         goto done;
     s.paths = 0;
@@ -1053,6 +1057,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
 done:
     amp_free(c.a, c.col);
     amp_free(c.a, c.first);
+    amp_unheld_runs_free(&runs);
     amp_pathset_free(&all);
     return stt;
 }

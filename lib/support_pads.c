@@ -20,14 +20,6 @@
 
 #include "support_internal.h"
 
-/* Object bead tops on a grid of 1 mm cells (samples every 0.25 mm), for what lies under a pad. */
-#define TOP_CELL 1.0
-#define TOP_STEP 0.25
-
-typedef struct ptop {
-    double x, y, top, z, w; /* w: how far the bead reaches sideways from its centre line */
-} ptop;
-
 typedef struct pads {
     amp_pathset *all;
     size_t nobj;
@@ -35,106 +27,25 @@ typedef struct pads {
     const amp_support_opts *o;
     const amp_support_layers *L;
     amp_box3 bb; /* the model's box */
-    ptop *tp;    /* object bead samples sorted by cell */
-    size_t ntp, captp, *cell, nx, ny;
-    double x0, y0, reach; /* grid origin; farthest a bead's edge reaches from its centre line */
+    amp_bead_tops tops;
+    int have_tops;
     double *base;
     size_t capbase;
     amp_support_pads_stats st;
 } pads;
 
-static size_t cell_of(const pads *c, double x, double y)
-{
-    double fx = (x - c->x0) / TOP_CELL, fy = (y - c->y0) / TOP_CELL;
-    size_t ix = fx <= 0.0 ? 0 : (size_t)fx >= c->nx ? c->nx - 1 : (size_t)fx;
-    size_t iy = fy <= 0.0 ? 0 : (size_t)fy >= c->ny ? c->ny - 1 : (size_t)fy;
-    return iy * c->nx + ix;
-}
-
-static amp_status add_top(pads *c, amp_vec3 p, double top, double w, amp_error *err)
-{
-    void *q = c->tp;
-    if (amp_grow(c->all->alloc, &q, &c->captp, c->ntp + 1, sizeof *c->tp) != AMP_OK)
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support pads");
-    c->tp = q;
-    c->tp[c->ntp].x = p.x;
-    c->tp[c->ntp].y = p.y;
-    c->tp[c->ntp].top = top;
-    c->tp[c->ntp].z = p.z;
-    c->tp[c->ntp].w = w;
-    c->ntp++;
-    c->reach = fmax(c->reach, w);
-    return AMP_OK;
-}
-
-/* The object beads' samples (a planar bead's top is its path, docs/interfaces.md §3; a tube reaches r above it),
- * bucketed by cell. */
-static amp_status tops_build(pads *c, amp_error *err)
-{
-    const amp_pathset *ps = c->all;
-    amp_box3 b = amp_box3_empty();
-    size_t i, k, n, *cnt;
-    ptop *sorted;
-    amp_status st = AMP_OK;
-    for (i = 0; i < c->nobj && st == AMP_OK; i++) {
-        const amp_pvert *v = amp_pathset_path_verts(ps, i);
-        double h = ps->paths[i].h;
-        for (k = 0; k + 1 < ps->paths[i].n && st == AMP_OK; k++) {
-            size_t m = (size_t)ceil(amp_v3_dist(v[k].p, v[k + 1].p) / TOP_STEP), j;
-            for (j = 0; j <= m && st == AMP_OK; j++) {
-                double t = m ? (double)j / (double)m : 0.0, r = v[k].r + t * (v[k + 1].r - v[k].r);
-                amp_vec3 q = amp_v3_lerp(v[k].p, v[k + 1].p, t);
-                if (r > 0.0) /* a planar bead counts under a pad within h/2 of its centre line, as high as wide */
-                    st = add_top(c, q, h > 0.0 ? q.z : q.z + r, h > 0.0 ? 0.5 * h : r, err);
-            }
-        }
-    }
-    if (st != AMP_OK)
-        return st;
-    for (i = 0; i < c->ntp; i++)
-        b = amp_box3_add(b, amp_v3(c->tp[i].x, c->tp[i].y, 0.0));
-    c->x0 = c->ntp ? b.min.x : 0.0;
-    c->y0 = c->ntp ? b.min.y : 0.0;
-    c->nx = c->ntp ? (size_t)((b.max.x - b.min.x) / TOP_CELL) + 1 : 1;
-    c->ny = c->ntp ? (size_t)((b.max.y - b.min.y) / TOP_CELL) + 1 : 1;
-    if ((double)c->nx * (double)c->ny > 4e7)
-        return amp_fail(err, AMP_ERR_LIMIT, 0, "object too wide for support pads (%lu x %lu cells)",
-                        (unsigned long)c->nx, (unsigned long)c->ny);
-    n = c->nx * c->ny;
-    c->cell = amp_calloc(c->all->alloc, n + 1, sizeof *c->cell);
-    cnt = amp_calloc(c->all->alloc, n + 1, sizeof *cnt);
-    sorted = amp_calloc(c->all->alloc, c->ntp + 1, sizeof *sorted);
-    if (!c->cell || !cnt || !sorted) {
-        amp_free(c->all->alloc, cnt);
-        amp_free(c->all->alloc, sorted);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support pads");
-    }
-    for (i = 0; i < c->ntp; i++)
-        c->cell[cell_of(c, c->tp[i].x, c->tp[i].y) + 1]++;
-    for (i = 0; i < n; i++)
-        c->cell[i + 1] += c->cell[i];
-    for (i = 0; i < c->ntp; i++) {
-        size_t q = cell_of(c, c->tp[i].x, c->tp[i].y);
-        sorted[c->cell[q] + cnt[q]++] = c->tp[i];
-    }
-    amp_free(c->all->alloc, c->tp);
-    amp_free(c->all->alloc, cnt);
-    c->tp = sorted;
-    c->captp = c->ntp;
-    return AMP_OK;
-}
-
 /* The highest object bead top under @p p (centre line lower than p, within a bead's reach of a pad bead of
  * radius rs at p) that is no higher than @p bottom; -HUGE_VAL if none. */
 static double object_top_below(const pads *c, amp_vec3 p, double bottom, double rs)
 {
-    double best = -HUGE_VAL, d = rs + c->reach;
-    size_t lo = cell_of(c, p.x - d, p.y - d), hi = cell_of(c, p.x + d, p.y + d);
-    size_t x0 = lo % c->nx, y0 = lo / c->nx, x1 = hi % c->nx, y1 = hi / c->nx, x, y, k;
+    const amp_bead_tops *t = &c->tops;
+    double best = -HUGE_VAL;
+    size_t x0, y0, x1, y1, x, y, k;
+    amp_bead_tops_near(t, p.x, p.y, rs + t->reach, &x0, &y0, &x1, &y1);
     for (y = y0; y <= y1; y++)
         for (x = x0; x <= x1; x++)
-            for (k = c->cell[y * c->nx + x]; k < c->cell[y * c->nx + x + 1]; k++) {
-                const ptop *q = &c->tp[k];
+            for (k = t->cell[y * t->nx + x]; k < t->cell[y * t->nx + x + 1]; k++) {
+                const amp_bead_top *q = &t->tp[k];
                 if (q->z < p.z - 1e-9 && q->top <= bottom + 1e-9 && q->top > best &&
                     hypot(q->x - p.x, q->y - p.y) <= rs + q->w)
                     best = q->top;
@@ -216,8 +127,11 @@ static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_
     size_t i, j, e;
     amp_status st = AMP_OK;
     void *q = c->base;
-    if (!c->cell && (st = tops_build(c, err)) != AMP_OK)
-        return st;
+    if (!c->have_tops) {
+        c->have_tops = 1;
+        if ((st = amp_bead_tops_build(&c->tops, c->all, c->nobj, err)) != AMP_OK)
+            return st;
+    }
     if (amp_grow(c->all->alloc, &q, &c->capbase, n, sizeof *c->base) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for support pads");
     c->base = q;
@@ -248,7 +162,8 @@ static amp_status pad_run(void *user, const amp_bead_sample *run, size_t n, amp_
 }
 
 amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model, const amp_support_opts *o,
-                            const amp_support_layers *L, amp_support_pads_stats *out, amp_error *err)
+                            const amp_support_layers *L, const amp_unheld_runs *known, amp_support_pads_stats *out,
+                            amp_error *err)
 {
     amp_pathset probe;
     pads c;
@@ -261,16 +176,20 @@ amp_status amp_support_pads(amp_pathset *all, size_t nobj, const amp_bvh *model,
     c.o = o;
     c.L = L;
     c.bb = amp_bvh_bbox(model);
-    /* the judge sees the support first (the order support.c then aims at), then the objects in their order */
-    amp_pathset_init(&probe, all->alloc);
-    for (k = 0; k < 2 && st == AMP_OK; k++)
-        for (i = k ? 0 : nobj; i < (k ? nobj : all->npaths) && st == AMP_OK; i++)
-            st = amp_pathset_copy_path(&probe, all, i, err);
-    if (st == AMP_OK) /* air lower than min_gap is left on purpose (check.h) */
-        st = o->find_unheld(&probe, o->min_gap, pad_run, &c, err);
-    amp_pathset_free(&probe);
-    amp_free(all->alloc, c.tp);
-    amp_free(all->alloc, c.cell);
+    if (known && known->valid) {
+        for (i = k = 0; i < known->nruns && st == AMP_OK; k = known->end[i++])
+            st = pad_run(&c, known->sm + k, known->end[i] - k, err);
+    } else {
+        /* the judge sees the support first (the order support.c then aims at), then the objects in their order */
+        amp_pathset_init(&probe, all->alloc);
+        for (k = 0; k < 2 && st == AMP_OK; k++)
+            for (i = k ? 0 : nobj; i < (k ? nobj : all->npaths) && st == AMP_OK; i++)
+                st = amp_pathset_copy_path(&probe, all, i, err);
+        if (st == AMP_OK) /* air lower than min_gap is left on purpose (check.h) */
+            st = o->find_unheld(&probe, o->min_gap, pad_run, &c, err);
+        amp_pathset_free(&probe);
+    }
+    amp_bead_tops_free(&c.tops);
     amp_free(all->alloc, c.base);
     if (out)
         *out = c.st;

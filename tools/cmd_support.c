@@ -24,7 +24,9 @@ const char cmd_support_usage[] =
     "  -o FILE         write object and support paths in print order (.amp)\n"
     "Each support piece is printed just before the first object fragment whose head cone lies above it (an\n"
     "object path is split there when needed); object paths the support still leaves unheld (the check of\n"
-    "'ampath check', 45-degree rule, air under a bead up to --min-gap) are named.\n";
+    "'ampath check', 45-degree rule, air under a bead up to --min-gap) are named. Before the pads, an object\n"
+    "path that the check finds in the air over an object path printed later is printed after it when the head\n"
+    "cone allows (reported as settled).\n";
 
 
 static void print_json(const char *input, const char *tri, const char *mesh, const amp_support_opts *o,
@@ -46,6 +48,7 @@ static void print_json(const char *input, const char *tri, const char *mesh, con
     cli_json_int(&j, "object_splits", (long long)st->splits);
     cli_json_int(&j, "conflicts", (long long)st->conflicts);
     cli_json_num(&j, "trimmed_mm", st->trimmed);
+    cli_json_int(&j, "settled", (long long)st->settled);
     cli_json_int(&j, "pads", (long long)st->pads);
     cli_json_num(&j, "pad_length_mm", st->pad_length);
     cli_json_int(&j, "paths_out", (long long)paths_out);
@@ -66,6 +69,9 @@ static void print_text(const char *input, const amp_support_stats *st, const amp
            "split, %lu conflicts: %.1f mm left out)\n",
            input, (unsigned long)st->rays, (unsigned long)st->columns, (unsigned long)st->paths, st->length,
            (unsigned long)st->unplaced, (unsigned long)st->splits, (unsigned long)st->conflicts, st->trimmed);
+    if (st->settled)
+        printf("%lu object paths moved so that none is printed before the object bead under it\n",
+               (unsigned long)st->settled);
     if (hr->npaths_failed) {
         printf("%lu object paths are not held (%.1f mm in the air), e.g. path", (unsigned long)hr->npaths_failed,
                hr->failed_mm);

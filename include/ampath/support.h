@@ -22,6 +22,12 @@
  * not used), the top of a row half a layer under the underside (one layer of
  * air under the object bead above), each layer's support printed just before
  * that layer's object paths, nearest next; no object path is split.
+ * Settling (opts.find_unheld set, tubes only): two object beads stacked less
+ * than z_offs apart are in no Def. 5.1 relation, so the upper may come first,
+ * in the air, with no room for a pad under it. Before the pads, each object
+ * path the judge finds in the air over an object path printed later is moved
+ * after it (or that one before it) when no gouge rule forbids it; rounds are
+ * kept while they leave fewer samples in the air (amp_support_stats.settled).
  * Pads (opts.find_unheld set, as the tool does): the rays see the model, not
  * the paths, so object beads can still float (a field's first row over a
  * shallow underside); the judge (the held-path check of check.h), run with
@@ -92,6 +98,7 @@ typedef struct amp_support_stats {
     size_t splits;        /**< object paths split to let support in between their fragments */
     size_t conflicts;     /**< support fragments with no gouge-free slot, left out (0 unless rounding bites) */
     double trimmed;       /**< length left out for those conflicts, mm */
+    size_t settled;       /**< object paths moved so that none is printed before the object bead it rests on */
     size_t pads;          /**< pad paths traced under object beads the rows leave in the air (opts.find_unheld) */
     double pad_length;    /**< their length, mm */
     int sliced;           /**< 1: a sliced job, supported on its own layers (planar beads); 0: tubes */
@@ -101,7 +108,7 @@ typedef struct amp_support_stats {
 /**
  * Add support for @p model (BVH of the closed model mesh) under the paths of
  * @p in (a gouge-free print order) and append everything to @p out in print
- * order (object paths keep their order, some split in two or more; support
+ * order (object paths keep their order but for settled ones, some split in two or more; support
  * paths are interleaved as described above; support paths already in @p in
  * are kept in place). @p st may be NULL.
  * Errors: AMP_ERR_ARG (NULL arguments, or @p in without an object path), AMP_ERR_RANGE (bad options or head),

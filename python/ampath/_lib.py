@@ -185,7 +185,7 @@ class amp_support_opts(Structure):
 class amp_support_stats(Structure):
     _fields_ = [("rays", c_size_t), ("columns", c_size_t), ("paths", c_size_t), ("length", c_double),
                 ("unplaced", c_size_t), ("splits", c_size_t), ("conflicts", c_size_t), ("trimmed", c_double),
-                ("pads", c_size_t), ("pad_length", c_double), ("sliced", c_int), ("layer_height", c_double)]
+                ("settled", c_size_t), ("pads", c_size_t), ("pad_length", c_double), ("sliced", c_int), ("layer_height", c_double)]
 
 
 class amp_ring(Structure):
