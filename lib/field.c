@@ -937,32 +937,76 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_f
     return st;
 }
 
-/* The plain lattice (honeycomb): curves at the cell centres of an na x nb pattern, no adaptivity. */
+/* Curve k of the honeycomb as a seed of the gap rounds: its lattice position in half cells, and ncs + 1 samples
+ * (the curve's own when ncs = nc). */
+static amp_status uniform_seed(const amp_field *f, amp_field_seeds *sd, amp_vec3 *pts, uint64_t *key, size_t k,
+                               uint64_t ia, uint64_t ib, const amp_pvert *curve, size_t nc, amp_error *err)
+{
+    size_t i;
+    key[k] = ia << 32 | ib;
+    for (i = 0; i <= sd->ncs; i++) {
+        double uvw[3];
+        amp_status st;
+        if (sd->ncs == nc) {
+            pts[k * (sd->ncs + 1) + i] = curve[i].p;
+            continue;
+        }
+        amp_field_to_uvw(f, (double)ia / sd->da, (double)ib / sd->db, (double)i / (double)sd->ncs, uvw);
+        if ((st = f->eval(f, uvw, &pts[k * (sd->ncs + 1) + i], err)) != AMP_OK)
+            return st;
+    }
+    return AMP_OK;
+}
+
+/* The plain lattice (honeycomb): curves at the cell centres of an na x nb pattern, then the field's curves
+ * through the gaps that sampling the solid finds (as the adaptive route's last step): the lattice alone
+ * leaves thin features uncovered (0.87 mm against the 0.58 mm covering radius on CGAL's bull at S = 1). */
 static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, size_t na, size_t nb,
-                                size_t nc, double r, double min_len, amp_pathset *out, amp_field_stats *stats,
-                                amp_error *err)
+                                size_t nc, double target, double r, double min_len, amp_pathset *out,
+                                amp_field_stats *stats, amp_error *err)
 {
     amp_field_stats s = *stats;
-    size_t j, i, p0;
+    size_t j, i, p0, ncur = 0;
     amp_pvert *curve = NULL;
+    amp_vec3 *pts;
+    uint64_t *key;
+    amp_field_seeds sd;
     amp_status st = AMP_OK;
+    sd.ncs = nc < 64 ? nc : 64 + (nc - 64) / 4;
+    sd.da = 2.0 * (double)na;
+    sd.db = 2.0 * (double)nb;
     curve = amp_calloc(out->alloc, nc + 1, sizeof *curve);
-    if (!curve)
+    key = amp_calloc(out->alloc, (na + 1) * nb + 1, sizeof *key);
+    pts = amp_calloc(out->alloc, ((na + 1) * nb + 1) * (sd.ncs + 1), sizeof *pts);
+    if (!curve || !key || !pts) {
+        amp_free(out->alloc, curve);
+        amp_free(out->alloc, key);
+        amp_free(out->alloc, pts);
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for a covering curve");
+    }
     p0 = out->npaths;
     for (j = 0; j < nb && st == AMP_OK; j++) {
         int odd = o->pattern == AMP_PATTERN_HEX && (j & 1);
         size_t count = na + (size_t)odd;
         for (i = 0; i < count && st == AMP_OK; i++) {
             /* cell centres; odd honeycomb rows are shifted by half a spacing (and gain one curve) */
-            double a = ((double)i + (odd ? 0.0 : 0.5)) / (double)na, bb = ((double)j + 0.5) / (double)nb;
-            st = amp_field_curve(f, a, bb, nc, r, curve, &s.length_before, err);
+            uint64_t ia = 2 * i + (odd ? 0 : 1), ib = 2 * j + 1;
+            st = amp_field_curve(f, (double)ia / sd.da, (double)ib / sd.db, nc, r, curve, &s.length_before, err);
             if (st == AMP_OK)
                 st = amp_field_clip(b, o, curve, nc + 1, min_len, out, err);
+            if (st == AMP_OK)
+                st = uniform_seed(f, &sd, pts, key, ncur++, ia, ib, curve, nc, err);
             s.curves++;
         }
     }
+    sd.pts = pts;
+    sd.key = key;
+    sd.ncur = ncur;
+    if (st == AMP_OK)
+        st = amp_field_fill_gaps(f, b, o, &sd, nc, target, r, min_len, out, &s.gap_curves, &s.gap_left, err);
     amp_free(out->alloc, curve);
+    amp_free(out->alloc, key);
+    amp_free(out->alloc, pts);
     for (i = p0; i < out->npaths; i++)
         s.length_after += amp_path_length(out, i);
     s.pieces = out->npaths - p0;
@@ -972,7 +1016,6 @@ static amp_status cover_uniform(const amp_field *f, const amp_bvh *b, const amp_
     *stats = s;
     return st;
 }
-
 
 amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field_opts *o, amp_pathset *out,
                            amp_field_stats *stats, amp_error *err)
@@ -1033,7 +1076,7 @@ amp_status amp_field_cover(const amp_field *f, const amp_bvh *b, const amp_field
         s.grid_a = na;
         s.grid_b = nb;
         st = o->pattern == AMP_PATTERN_GRID ? cover_adaptive(f, b, o, na, nb, nc, target, r, min_len, out, &s, err)
-                                            : cover_uniform(f, b, o, na, nb, nc, r, min_len, out, &s, err);
+                                            : cover_uniform(f, b, o, na, nb, nc, target, r, min_len, out, &s, err);
     }
     if (st == AMP_OK && o->shells > 0)
         st = cover_shells(f, b, o, na, nb, nc, S, r, o->shells, min_len, out, &s, err);

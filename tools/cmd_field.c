@@ -39,7 +39,7 @@ const char cmd_field_usage[] =
     "grid pattern by an adaptive lattice that inserts curves where neighbours drift apart and next to the\n"
     "surface (route adaptive; bound_mm is the sampled bound it meets), then adds the field's curve through\n"
     "every gap a sampled measure of the result finds (gap_curves; features finer than the cells' samples);\n"
-    "hex is the plain lattice (uniform).\n"
+    "hex is the plain lattice (uniform), with the same curves through the measured gaps.\n"
     "exit status: 0 ok, 1 the field cannot meet the spacing (its cells' bound fails and the curves through the\n"
     "measured gaps do not close them) or the measured gap exceeds the covering radius\n"
     "(paths still written), 2 bad usage or input\n";
@@ -91,7 +91,7 @@ static void print_report(const report *r, int json)
         if (r->st->bound_met >= 0)
             cli_json_bool(&j, "bound_met", r->st->bound_met);
         cli_json_int(&j, "inserted_curves", (long long)r->st->inserted);
-        if (r->st->route == AMP_FIELD_ROUTE_ADAPTIVE) {
+        if (r->st->route != AMP_FIELD_ROUTE_ALGORITHM1) {
             cli_json_int(&j, "gap_curves", (long long)r->st->gap_curves);
             cli_json_int(&j, "gap_samples_left", (long long)r->st->gap_left);
         }
@@ -116,6 +116,9 @@ static void print_report(const report *r, int json)
                    r->st->route == AMP_FIELD_ROUTE_ALGORITHM1 ? "Algorithm 1" : "adaptive", r->st->bound, r->st->target,
                    (unsigned long)r->st->inserted, (unsigned long)r->st->gap_curves,
                    r->st->bound_met ? "" : ": the cells cannot meet the spacing");
+        else if (r->st->route == AMP_FIELD_ROUTE_UNIFORM)
+            printf("plain lattice: %lu curves through measured gaps, %lu samples of the last round still farther than "
+                   "the covering radius\n", (unsigned long)r->st->gap_curves, (unsigned long)r->st->gap_left);
     }
 }
 

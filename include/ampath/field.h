@@ -158,8 +158,8 @@ typedef struct amp_field_stats {
     amp_field_route route; /**< which covering was used */
     size_t shell_paths;    /**< surface layer: shell paths written (after the covering curves) */
     double shell_length;   /**< their length, mm */
-    size_t gap_curves;     /**< adaptive route: curves added through the gaps the sampled measure found */
-    size_t gap_left;       /**< adaptive route: samples still farther than the target in the last round */
+    size_t gap_curves;     /**< adaptive and uniform routes: curves added through the gaps the sampled measure found */
+    size_t gap_left;       /**< adaptive and uniform routes: samples still farther than the target in the last round */
 } amp_field_stats;
 
 /**
@@ -188,7 +188,8 @@ typedef struct amp_field_stats {
  *   field), in up to 6 rounds: features finer than the cell samples
  *   (threads, thin ribs) get their curves; stats.gap_curves
  *   counts them, stats.gap_left the samples a last round still finds far;
- * - the honeycomb is the plain lattice at the cell centres (no bound checked).
+ * - the honeycomb is the plain lattice at the cell centres (no bound checked), then the same curves through
+ *   the measured gaps (its curves are the seeds; stats.gap_curves, stats.gap_left).
  * With o->shells = N > 0 a surface layer follows: N shells of curves on the
  * surface offset inward by S/2, 3S/2, ...: the lattice curves (corners of the
  * base cells) that run within S/2 of the surface (shifted j S inward for
