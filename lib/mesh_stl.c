@@ -434,11 +434,28 @@ static int starts_solid(const unsigned char *d, size_t len)
     return len - i >= 5 && (memcmp(d + i, "solid", 5) == 0 || memcmp(d + i, "SOLID", 5) == 0);
 }
 
+/*
+ * Vertices less than 1e-9 of the part's diagonal apart are one vertex: the exact weld keeps two corners that an
+ * ASCII exporter wrote as 0 and -5.66485e-16 (OpenSCAD's issue945e.stl), and the mesh stays open there. Far
+ * below any printable feature (60 nm on a 60 mm part), and the triangles that collapse had no area to print.
+ */
+static amp_status weld_near(amp_mesh *m, size_t *merged, amp_error *err)
+{
+    amp_box3 b = amp_mesh_bbox(m);
+    size_t nv = m->nverts;
+    amp_status st;
+    if (nv < 2)
+        return AMP_OK;
+    st = amp_mesh_weld(m, 1e-9 * amp_v3_len(amp_v3_sub(b.max, b.min)), err);
+    *merged = nv - m->nverts;
+    return st;
+}
+
 amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_stl_stats *stats, amp_error *err)
 {
     const unsigned char *d = data;
     stl_reader r;
-    size_t nv0, nt0, dups = 0, tj = 0;
+    size_t nv0, nt0, dups = 0, tj = 0, near = 0;
     int binary;
     amp_status st;
     if (!m || (!data && len))
@@ -455,6 +472,8 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
     nv0 = m->nverts;
     nt0 = m->ntris;
     st = binary ? read_binary(&r, d, len, err) : read_ascii(&r, (const char *)d, len, err);
+    if (st == AMP_OK && nv0 == 0 && nt0 == 0) /* a fresh mesh: nothing of the caller's is welded */
+        st = weld_near(m, &near, err);
     if (st == AMP_OK)
         st = drop_duplicates(m, nv0, nt0, &dups, err);
     if (st == AMP_OK) /* an exporter's T-junctions (lib/mesh_tjunction.c) */
@@ -478,6 +497,7 @@ amp_status amp_mesh_read_stl_ex(amp_mesh *m, const void *data, size_t len, amp_s
         stats->degenerate = r.degenerate;
         stats->duplicates = dups;
         stats->tjunctions = tj;
+        stats->near_welded = near;
         stats->vertices = m->nverts - nv0;
     }
     return AMP_OK;

@@ -163,6 +163,59 @@ START_TEST(t_junctions_are_split_so_an_exported_cube_closes)
 }
 END_TEST
 
+/* ASCII STL text of the 10 mm cube with corner (0, 0, 0) written as (0, @p dy, 0) in its first triangle only. */
+static size_t nudged_cube_ascii(char *buf, size_t cap, double dy)
+{
+    amp_mesh m;
+    size_t i, n;
+    int k, nudged = 0;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    n = (size_t)snprintf(buf, cap, "solid cube\n");
+    for (i = 0; i < m.ntris; i++) {
+        n += (size_t)snprintf(buf + n, cap - n, "facet normal 0 0 0\nouter loop\n");
+        for (k = 0; k < 3; k++) {
+            amp_vec3 p = m.verts[m.tris[i].v[k]];
+            if (!nudged && p.x == 0 && p.y == 0 && p.z == 0) {
+                p.y = dy;
+                nudged = 1;
+            }
+            n += (size_t)snprintf(buf + n, cap - n, "vertex %.17g %.17g %.17g\n", p.x, p.y, p.z);
+        }
+        n += (size_t)snprintf(buf + n, cap - n, "endloop\nendfacet\n");
+    }
+    n += (size_t)snprintf(buf + n, cap - n, "endsolid cube\n");
+    ck_assert_uint_lt(n, cap);
+    ck_assert_int_eq(nudged, 1);
+    amp_mesh_free(&m);
+    return n;
+}
+
+/* OpenSCAD's issue945e.stl writes one corner as 0 in some facets and -5.66485e-16 in others: the exact weld
+ * keeps two vertices and the part stays open there. Corners under 1e-9 of the diagonal apart are one; a
+ * micrometre apart they stay two (a real, if tiny, feature: the cube is then reported open). */
+START_TEST(near_coincident_corners_of_an_ascii_export_are_welded)
+{
+    static char buf[16384];
+    static const double dy[] = {-5.66485e-16, 1e-3};
+    int i;
+    for (i = 0; i < 2; i++) {
+        amp_mesh m;
+        amp_stl_stats st;
+        amp_mesh_edge_report er;
+        amp_error err;
+        size_t n = nudged_cube_ascii(buf, sizeof buf, dy[i]);
+        amp_mesh_init(&m, NULL);
+        ck_assert_int_eq(amp_mesh_read_stl_ex(&m, buf, n, &st, &err), AMP_OK);
+        ck_assert_int_eq(amp_mesh_edges(&m, &er, &err), AMP_OK);
+        ck_assert_uint_eq(st.near_welded, i == 0);
+        ck_assert_uint_eq(m.nverts, i == 0 ? 8 : 9);
+        ck_assert_msg(er.closed == (i == 0), "dy %g: %lu boundary edges", dy[i], (unsigned long)er.boundary);
+        amp_mesh_free(&m);
+    }
+}
+END_TEST
+
 /* Binary STL bytes of @p m into @p buf (initialised by the caller). */
 static void stl_bytes(const amp_mesh *m, amp_buf *buf)
 {
@@ -728,6 +781,7 @@ static Suite *mesh_suite(void)
     tcase_add_test(tc, ascii_stl_with_crlf_and_uppercase_is_read);
     tcase_add_test(tc, degenerate_triangles_are_dropped_and_counted);
     tcase_add_test(tc, t_junctions_are_split_so_an_exported_cube_closes);
+    tcase_add_test(tc, near_coincident_corners_of_an_ascii_export_are_welded);
     tcase_add_test(tc, duplicate_triangles_are_dropped_and_counted);
     tcase_add_test(tc, a_face_and_its_reverse_are_both_dropped);
     tcase_add_test(tc, cancelled_faces_leave_no_unused_vertices);

@@ -46,6 +46,7 @@ static int info_mesh(const char *file, int json)
         cli_json_int(&j, "degenerate", (long long)st.degenerate);
         cli_json_int(&j, "duplicates", (long long)st.duplicates);
         cli_json_int(&j, "tjunctions", (long long)st.tjunctions);
+        cli_json_int(&j, "near_welded", (long long)st.near_welded);
         cli_json_int(&j, "vertices", (long long)m.nverts);
         cli_json_num(&j, "volume_mm3", vol);
         cli_json_bool(&j, "closed", er.closed);
@@ -61,6 +62,8 @@ static int info_mesh(const char *file, int json)
                (unsigned long)st.duplicates);
         if (st.tjunctions)
             printf(", split at %lu T-junctions", (unsigned long)st.tjunctions);
+        if (st.near_welded)
+            printf(", %lu vertices merged into a neighbour under 1e-9 of the diagonal away", (unsigned long)st.near_welded);
         printf("), %lu vertices after welding\n", (unsigned long)m.nverts);
         printf("bbox (%.3f %.3f %.3f) .. (%.3f %.3f %.3f), volume %.3f mm^3\n", b.min.x, b.min.y, b.min.z, b.max.x,
                b.max.y, b.max.z, vol);

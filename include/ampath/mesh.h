@@ -91,9 +91,11 @@ typedef struct amp_stl_stats {
     int binary;          /**< 1 binary, 0 ASCII */
     size_t triangles;    /**< triangles in the file */
     size_t degenerate;   /**< triangles dropped: zero area (repeated or collinear corners) */
-    size_t vertices;     /**< distinct vertices after exact welding */
+    size_t vertices;     /**< distinct vertices after welding (exact, then near_welded) */
     size_t duplicates;   /**< triangles dropped: exact copies of another (same corners), or pairs of opposite faces */
     size_t tjunctions;   /**< vertices found on a neighbour's edge (a T-junction): that triangle is split there */
+    size_t near_welded;  /**< vertices merged into another less than 1e-9 of the part's diagonal away (an ASCII
+                              exporter's -5.7e-16 for 0), with the triangles that collapse */
 } amp_stl_stats;
 
 /** Largest STL accepted by amp_mesh_read_stl_file() (bytes). */

@@ -124,7 +124,8 @@ class amp_mesh(Structure):
 
 class amp_stl_stats(Structure):
     _fields_ = [("binary", c_int), ("triangles", c_size_t), ("degenerate", c_size_t), ("vertices", c_size_t),
-                ("duplicates", c_size_t), ("tjunctions", c_size_t)]
+                ("duplicates", c_size_t), ("tjunctions", c_size_t),
+                ("near_welded", c_size_t)]
 
 
 class amp_head(Structure):
