@@ -5,6 +5,7 @@
 
 #include "ampath/order.h"
 #include "heap.h"
+#include "keysort.h"
 #include "order_internal.h"
 
 #define NONE AMP_FBVH_NONE
@@ -169,7 +170,7 @@ typedef struct orderer {
     uint32_t *whead, *wnext, *rs, *re;
     uint32_t *waits; /* the blocker an unprinted, unready fragment waits on */
     uint32_t *clear; /* per fragment, a subtree of the hierarchy its earlier queries proved free of blockers */
-    uint32_t *batch, *found; /* fragments to query again and their answers (release_range) */
+    uint32_t *batch, *found, *sorttmp; /* fragments to query again, their answers, room to sort them (release_range) */
     double *rz;
     amp_heap heap; /* of runent, best by run_better: GetBest's candidates */
     piece *pc;
@@ -402,8 +403,8 @@ static int pop_valid(orderer *o, runent *out)
 
 static int open_at(const orderer *o, uint32_t f) { return o->ready[f] && !o->done[f]; }
 
-/* f entered B (Alg. 2, line 4): join it with the printable neighbours on its curve. */
-static amp_status make_ready(orderer *o, uint32_t f)
+/* f entered B (Alg. 2, line 4): join it with the printable neighbours on its curve; the start of its run. */
+static uint32_t join_ready(orderer *o, uint32_t f)
 {
     uint32_t s = f, e = f;
     double z = o->fs->frag[f].box.min.z;
@@ -419,7 +420,31 @@ static amp_status make_ready(orderer *o, uint32_t f)
     o->re[s] = e;
     o->rs[e] = s;
     o->rz[s] = z;
-    return heap_push(o, s, e);
+    return s;
+}
+
+/* Fragments that entered B together: joined one by one, and each run they end in offered to GetBest once (a
+ * run pushed at every fragment that joins it leaves the heap mostly stale entries: a line of 250 fragments
+ * becoming printable in one batch pushed 250 runs). starts[i] is overwritten with the run start of
+ * entered[i]. Offering the runs after the whole batch changes no choice: the heap and the grid order runs
+ * by their own keys, and the stale entries were skipped. */
+static amp_status enter_batch(orderer *o, const uint32_t *entered, uint32_t *starts, size_t n)
+{
+    size_t i;
+    amp_status st = AMP_OK;
+    for (i = 0; i < n; i++)
+        starts[i] = join_ready(o, entered[i]);
+    for (i = 0; i < n && st == AMP_OK; i++) {
+        uint32_t s = starts[i];
+        /* still a run start (not joined into a run further back since) and not offered yet in this batch */
+        if (o->rs[o->re[s]] == s && !(o->ready[s] & 2)) {
+            o->ready[s] |= 2;
+            st = heap_push(o, s, o->re[s]);
+        }
+    }
+    for (i = 0; i < n; i++)
+        o->ready[starts[i]] &= 1;
+    return st;
 }
 
 static void mark_done(orderer *o, uint32_t f)
@@ -435,10 +460,9 @@ static void mark_done(orderer *o, uint32_t f)
  * and a thread waiting between batches slows the ordering on a shared machine.) */
 static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
 {
-    size_t nb = 0, k;
+    size_t nb = 0, nr = 0, k;
     long q;
     uint32_t f;
-    amp_status st = AMP_OK;
     for (f = s; f <= e; f++) {
         uint32_t w = o->whead[f];
         o->whead[f] = NONE;
@@ -446,22 +470,37 @@ static amp_status release_range(orderer *o, uint32_t s, uint32_t e)
             if (!o->done[w])
                 o->batch[nb++] = w;
     }
-    for (q = 0; q < (long)nb; q++)
-        o->found[q] =
-            amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, o->batch[q], o->done, o->waits[o->batch[q]],
-                                    &o->clear[o->batch[q]]);
+    /* in fragment order: neighbours on a curve follow each other, so the hint below finds a live blocker at
+     * once more often (8.6 M queries instead of 9.2 M on 10^6 layered fragments), and their loads go forward.
+     * The answers are applied in this order too: which fragment enters B first in one batch changes nothing */
+    if (nb > 1) {
+        static const size_t off[1] = {0};
+        amp_radix_u32(o->batch, o->sorttmp, nb, sizeof *o->batch, off, 1);
+    }
+    for (q = 0; q < (long)nb; q++) {
+        /* a waiter next to the previous one on its curve is most likely blocked by the same live fragment: the
+         * search starts there rather than at its own blocker just printed */
+        uint32_t w = o->batch[q], near = o->waits[w];
+        if (q + 1 < (long)nb) /* the next waiter's box, a cache miss otherwise (the queries wait on memory) */
+            AMP_PREFETCH(&o->fs->frag[o->batch[q + 1]].box);
+        if (q > 0 && o->found[q - 1] != NONE && (o->batch[q - 1] == w + 1 || o->batch[q - 1] + 1 == w) &&
+            o->fs->frag[w].path == o->fs->frag[o->batch[q - 1]].path)
+            near = o->found[q - 1];
+        o->found[q] = amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, w, o->done, near, &o->clear[w]);
+    }
     o->st.queries += nb;
-    for (k = 0; k < nb && st == AMP_OK; k++) {
+    /* the blocked ones wait on their new blocker; the others (kept at the front of batch) enter B */
+    for (k = 0; k < nb; k++) {
         uint32_t w = o->batch[k], g = o->found[k];
         if (g == NONE)
-            st = make_ready(o, w);
+            o->batch[nr++] = w;
         else {
             o->wnext[w] = o->whead[g];
             o->whead[g] = w;
             o->waits[w] = g;
         }
     }
-    return st;
+    return enter_batch(o, o->batch, o->found, nr);
 }
 
 static amp_status release(orderer *o, uint32_t f) { return release_range(o, f, f); }
@@ -973,25 +1012,24 @@ static amp_status emit(const orderer *o, const amp_pathset *in, amp_pathset *out
 /* Alg. 2, line 4 for the initial set: independent queries, run in parallel, applied in fragment order. */
 static amp_status initial_set(orderer *o)
 {
-    size_t i, n = o->fs->n;
+    size_t i, n = o->fs->n, nr = 0;
     long f;
-    amp_status st = AMP_OK;
 #pragma omp parallel for schedule(dynamic, 256)
     for (f = 0; f < (long)n; f++)
         o->found[f] =
             amp_fbvh_find_any_below(&o->bvh, o->fs, o->h->z_offs, o->k, (uint32_t)f, o->done, NONE, &o->clear[f]);
     o->st.queries += n;
-    for (i = 0; i < n && st == AMP_OK; i++) {
+    for (i = 0; i < n; i++) {
         uint32_t g = o->found[i];
         if (g == NONE)
-            st = make_ready(o, (uint32_t)i);
+            o->batch[nr++] = (uint32_t)i;
         else {
             o->wnext[i] = o->whead[g];
             o->whead[g] = (uint32_t)i;
             o->waits[i] = g;
         }
     }
-    return st;
+    return enter_batch(o, o->batch, o->found, nr);
 }
 
 static void orderer_free(orderer *o)
@@ -1007,6 +1045,7 @@ static void orderer_free(orderer *o)
     amp_free(o->a, o->waits);
     amp_free(o->a, o->clear);
     amp_free(o->a, o->batch);
+    amp_free(o->a, o->sorttmp);
     amp_free(o->a, o->found);
     amp_heap_free(&o->heap);
     amp_free(o->a, o->pc);
@@ -1028,8 +1067,9 @@ static amp_status orderer_alloc(orderer *o, size_t n)
     o->clear = amp_calloc(o->a, n + 1, sizeof *o->clear);
     o->batch = amp_calloc(o->a, n + 1, sizeof *o->batch);
     o->found = amp_calloc(o->a, n + 1, sizeof *o->found);
+    o->sorttmp = amp_calloc(o->a, n + 1, sizeof *o->sorttmp);
     if (!o->done || !o->ready || !o->whead || !o->wnext || !o->rs || !o->re || !o->rz || !o->waits || !o->clear ||
-        !o->batch || !o->found)
+        !o->batch || !o->found || !o->sorttmp)
         return amp_fail(o->err, AMP_ERR_NOMEM, 0, "out of memory for ordering %lu fragments", (unsigned long)n);
     for (i = 0; i < n; i++)
         o->whead[i] = o->wnext[i] = o->clear[i] = NONE;

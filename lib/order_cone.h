@@ -13,6 +13,14 @@
 
 #include "ampath/order.h"
 
+/* A hint to fetch the cache line at p ahead of its use (the blocker queries wait on memory); nothing where the
+ * compiler has no such builtin. */
+#if defined(__GNUC__)
+#define AMP_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define AMP_PREFETCH(p) ((void)(p))
+#endif
+
 /* amp_cone_clearance and amp_fragment_below with k = cot(theta) precomputed (hot loops). */
 double amp_cone_clearance_k(double zo, double k, amp_vec3 a0, amp_vec3 a1, amp_vec3 b0, amp_vec3 b1);
 int amp_fragment_below_k(const amp_fragments *fs, double zo, double k, size_t a, size_t b);

@@ -226,6 +226,7 @@ static void fbvh_fill_boxes(amp_fbvh *b, const amp_fragments *fs)
         b->act[i].right = nd->right;
         b->act[i].lo = nd->lo;
         b->act[i].hi = nd->hi;
+        b->act[i].parent = nd->parent;
     }
 }
 
@@ -355,8 +356,8 @@ void amp_fbvh_deactivate(amp_fbvh *b, const amp_fragments *fs, const unsigned ch
         dmin_leaf(b, done, id);
     b->node[id].minz = b->act[id].bx.minz;
     /* the printed regions shrink out of the boxes: the queries below prune on what is still unprinted */
-    while (b->node[id].parent != AMP_FBVH_NONE) {
-        uint32_t p = b->node[id].parent;
+    while (b->act[id].parent != AMP_FBVH_NONE) {
+        uint32_t p = b->act[id].parent;
         const amp_fbvh_box5 *l = &b->act[b->act[p].left].bx, *r = &b->act[b->act[p].right].bx;
         amp_fbvh_box5 *a = &b->act[p].bx;
         double x0 = amp_dmin(l->x0, r->x0), y0 = amp_dmin(l->y0, r->y0), x1 = amp_dmax(l->x1, r->x1), y1 = amp_dmax(l->y1, r->y1);
@@ -580,7 +581,7 @@ uint32_t amp_fbvh_find_any_below_x(const amp_fbvh *b, const amp_fragments *fs, d
     coneq_init(&c, b, k, &fr->box, fr->box.max.z - zo - AMP_CONE_TOL, rank);
     /* the hierarchy from the leaf of @p near upwards: every level adds the sibling subtree, so the fragments
      * near it are tried first and the whole tree is covered once the root is reached */
-    for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->node[id].parent) {
+    for (id = b->leaf[near == AMP_FBVH_NONE ? f : near]; id != AMP_FBVH_NONE; prev = id, id = b->act[id].parent) {
         uint32_t g;
         if (id == cl)
             continue; /* proven clear by an earlier query of f */

@@ -41,7 +41,8 @@ typedef struct amp_fbvh_act {
     amp_fbvh_box5 bx;
     uint32_t left, right, lo, hi;
     uint32_t minrank; /* lowest rank of those fragments (amp_fbvh_set_rank; 0 without ranks, empty: NONE) */
-    uint32_t pad;     /* 64 bytes, and the array 64-byte aligned: one cache line a node */
+    uint32_t parent;  /* as in the node (AMP_FBVH_NONE at the root): the walks up read one cache line a level.
+                       * 64 bytes, and the array 64-byte aligned: one cache line a node */
 } amp_fbvh_act;
 
 /* A node's cone bounds (amp_fbvh_set_cone): per direction u, the lowest z - k u.q over the box corners q of
