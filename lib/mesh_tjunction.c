@@ -92,6 +92,8 @@ amp_status amp_mesh_split_tjunctions(amp_mesh *m, size_t t0, size_t *splits, amp
     int pass;
     amp_status st = AMP_OK;
     *splits = 0;
+    if (m->ntris <= t0) /* no triangle read (every one degenerate or collapsed): the caller says so */
+        return AMP_OK;
     for (pass = 0; pass < TJ_PASSES && st == AMP_OK; pass++) {
         size_t nt = m->ntris, nb, nv = 0, i, found = 0;
         amp_edge_rec *e = amp_calloc(m->alloc, 3 * (nt - t0) + 1, sizeof *e);

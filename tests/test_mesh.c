@@ -213,6 +213,23 @@ START_TEST(near_coincident_corners_of_an_ascii_export_are_welded)
         ck_assert_msg(er.closed == (i == 0), "dy %g: %lu boundary edges", dy[i], (unsigned long)er.boundary);
         amp_mesh_free(&m);
     }
+    {
+        /* two 10 nm triangles 50 mm apart collapse into points; needles of collinear corners never enter the
+         * mesh: either way no triangle is left, said as such (the fuzzer found the T-junction pass reading
+         * through the triangles of a mesh that never had any) */
+        static const float specks[] = {0, 0, 0, 1e-8f, 0, 0, 0, 1e-8f, 0, 50, 0, 0, 50, 1e-8f, 0, 50, 0, 1e-8f};
+        static const float needles[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 0, 0, 1, 0, 0, 2, 0, 0, 3};
+        unsigned char bin[84 + 50 * 2];
+        amp_mesh m;
+        amp_error err;
+        amp_mesh_init(&m, NULL);
+        ck_assert_int_eq(amp_mesh_read_stl(&m, bin, make_binary(bin, NULL, specks, 2, 2), &err), AMP_ERR_GEOMETRY);
+        ck_assert_ptr_nonnull(strstr(err.msg, "triangle"));
+        ck_assert_uint_eq(m.ntris, 0);
+        ck_assert_int_eq(amp_mesh_read_stl(&m, bin, make_binary(bin, NULL, needles, 2, 2), &err), AMP_ERR_GEOMETRY);
+        ck_assert_ptr_nonnull(strstr(err.msg, "zero area"));
+        amp_mesh_free(&m);
+    }
 }
 END_TEST
 
