@@ -933,13 +933,12 @@ static amp_status emit_by_layer(const amp_pathset *all, size_t nobj, amp_pathset
 }
 
 /*
- * §5.3 ordering of @p all (the object paths of @p in, then the support made) into @p out: the support below an
- * object fragment is printed before it. Fragments shorter than z_offs sin(theta) make every support fragment's
- * slot non-empty (make_pieces).
+ * §5.3 ordering of @p all (the object paths [0, nobj), settled, then the support made) into @p out: the
+ * support below an object fragment is printed before it. Fragments shorter than z_offs sin(theta) make every
+ * support fragment's slot non-empty (make_pieces).
  */
-static amp_status order_by_cones(const sctx *c, const amp_support_opts *o, const amp_pathset *in,
-                                 const amp_pathset *all, size_t nobj, amp_pathset *out, amp_support_stats *s,
-                                 amp_error *err)
+static amp_status order_by_cones(const sctx *c, const amp_support_opts *o, const amp_pathset *all, size_t nobj,
+                                 amp_pathset *out, amp_support_stats *s, amp_error *err)
 {
     amp_fragments fs;
     otree t;
@@ -978,7 +977,7 @@ static amp_status order_by_cones(const sctx *c, const amp_support_opts *o, const
     if (o->progress)
         o->progress(o->progress_user, 0.6);
     if ((stt = place_pieces(c, o, &fs, nobj, first, late, &pcs, &npc, s, err)) == AMP_OK)
-        stt = emit_all(in, nobj, &fs, late, pcs, npc, out, s, err);
+        stt = emit_all(all, nobj, &fs, late, pcs, npc, out, s, err);
 done:
     amp_free(c->a, t.box);
     amp_free(c->a, first);
@@ -1044,7 +1043,7 @@ amp_status amp_support(const amp_pathset *in, const amp_bvh *model, const amp_su
     }
     if (o->progress)
         o->progress(o->progress_user, 0.1);
-    stt = sliced ? emit_by_layer(&all, nobj, out, &s, err) : order_by_cones(&c, o, &all, &all, nobj, out, &s, err);
+    stt = sliced ? emit_by_layer(&all, nobj, out, &s, err) : order_by_cones(&c, o, &all, nobj, out, &s, err);
     if (stt != AMP_OK)
         goto done;
     s.paths = 0;
