@@ -23,7 +23,7 @@ static const char usage[] =
     "Streams JOB (.gcode, or .amp converted with the G-code writer) to the printer on DEVICE\n"
     "(a serial port, a /dev/serial/by-id link, or a pty such as Klipper's /tmp/printer).\n"
     "  --baud N             link rate (default 115200; 250000 and other rates work)\n"
-    "  --flavor F           marlin | klipper | auto (asks M115) (default marlin)\n"
+    "  --flavor F           marlin | klipper | auto (asks M115) (default marlin, or the --printer profile's)\n"
     "  --window W           pingpong | N lines in flight | advanced (ADVANCED_OK) (default 4; klipper 16)\n"
     "  --bufsize N          printer command queue, Marlin BUFSIZE (default 4)\n"
     "  --rx-bytes N         printer serial RX buffer in bytes (default 128)\n"
@@ -161,8 +161,9 @@ typedef struct bopts {
     const char *printer, *on_error, *flavor, *window, *log, *socket;
 } bopts;
 
-/* A printer profile is checked now, so that a bad one is bad usage before the port is opened. */
-static int check_printer(const char *spec)
+/* A printer profile is checked now, so that a bad one is bad usage before the port is opened; *flavor: its
+ * firmware (AMP_FLAVOR_*). */
+static int check_printer(const char *spec, int *flavor)
 {
     amp_printer *pr = malloc(sizeof *pr);
     amp_error err;
@@ -171,6 +172,8 @@ static int check_printer(const char *spec)
         return fail("out of memory%s", "");
     if (amp_printer_load(pr, spec, &err) != AMP_OK)
         rc = fail("%s", err.msg);
+    else
+        *flavor = pr->flavor;
     free(pr);
     return rc;
 }
@@ -208,8 +211,15 @@ static int apply_words(const bopts *o, const cli_opt *opts, br_cfg *cfg)
         cfg->resend_ok = o->resend_ok;
         cfg->learn = 0;
     }
-    if (o->printer && check_printer(o->printer) != 0)
-        return 2;
+    if (o->printer) {
+        int fl = AMP_FLAVOR_MARLIN;
+        if (check_printer(o->printer, &fl) != 0)
+            return 2;
+        /* the profile names the firmware: a Klipper printer is not handshaken as a Marlin one (and its .amp jobs
+         * are written with Klipper's commands) unless --flavor says otherwise */
+        if (!cli_given(opts, "flavor"))
+            cfg->flavor = fl == AMP_FLAVOR_KLIPPER ? AMP_PROTO_KLIPPER : AMP_PROTO_MARLIN;
+    }
     cfg->printer = o->printer ? o->printer : cfg->printer;
     return 0;
 }

@@ -666,6 +666,27 @@ START_TEST(amp_job_is_written_for_the_printer_profile_given)
     ck_assert_int_eq(bridge_run(&v, amp, "--printer ender3", &out), 0);
     vp_stop(&v);
     assert_executed_equals_job(&v, gc, -1);
+    /* a Klipper profile makes the bridge talk Klipper and write the job with Klipper's commands, without
+     * --flavor (it was handshaken as a Marlin printer, and its job written for Marlin) */
+    ck_assert_int_eq(amp_printer_load(&pr, "voron-350", NULL), AMP_OK);
+    ck_assert_int_eq(pr.flavor, AMP_FLAVOR_KLIPPER);
+    ck_assert_int_eq(amp_printer_gcode_opts(&pr, &o, NULL), AMP_OK);
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, NULL), AMP_OK);
+    amp_buf_init(&b, NULL);
+    ck_assert_int_eq(amp_printer_gcode_job(&pr, &o, &ps, NULL, NULL), AMP_OK);
+    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
+    f = fopen(gc, "w");
+    fwrite(b.data, 1, b.len, f);
+    fclose(f);
+    amp_buf_free(&b);
+    amp_pathset_free(&ps);
+    vp_start(&v, "--flavor klipper --bed 350,350,340");
+    ck_assert_int_eq(bridge_run(&v, amp, "--printer voron-350", &out), 0);
+    vp_stop(&v);
+    assert_executed_equals_job(&v, gc, -1);
+    ck_assert_int_eq(count_in_file(v.log, "SET_VELOCITY_LIMIT"), 1);
+    ck_assert_int_eq(count_in_file(v.log, "M204"), 0);
     /* a profile that does not exist is bad usage, before the port is opened */
     vp_start(&v, "");
     ck_assert_int_eq(bridge_run(&v, amp, "--printer no-such-printer", &out), 2);
