@@ -634,53 +634,55 @@ START_TEST(amp_job_is_converted_on_the_fly_with_the_gcode_writer)
 END_TEST
 
 
+/* The G-code the writer makes of the paths file @p amp for printer profile @p name, as the bridge makes it
+ * (start/end macros expanded for the placed job), into @p gc; the profile's flavour. */
+static int profile_gcode(const char *name, const char *amp, const char *gc)
+{
+    amp_pathset ps;
+    amp_printer pr;
+    amp_gcode_opts o;
+    amp_buf b;
+    FILE *f;
+    amp_pathset_init(&ps, NULL);
+    amp_buf_init(&b, NULL);
+    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, NULL), AMP_OK);
+    ck_assert_int_eq(amp_printer_load(&pr, name, NULL), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_opts(&pr, &o, NULL), AMP_OK);
+    ck_assert_int_eq(amp_printer_gcode_job(&pr, &o, &ps, NULL, NULL), AMP_OK);
+    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
+    f = fopen(gc, "w");
+    ck_assert_ptr_nonnull(f);
+    fwrite(b.data, 1, b.len, f);
+    fclose(f);
+    amp_buf_free(&b);
+    amp_pathset_free(&ps);
+    return pr.flavor;
+}
+
 START_TEST(amp_job_is_written_for_the_printer_profile_given)
 {
     /* --printer as for ampath gcode: the same job lands centred on the ender3's bed with its start
        sequence when the bridge is told the printer, and exactly as the writer makes it for that profile */
     amp_pathset ps;
-    amp_buf b;
-    amp_printer pr;
-    amp_gcode_opts o;
     vpr v;
     char *out, amp[256], gc[256];
-    FILE *f;
     int k;
     snprintf(amp, sizeof amp, "%s", fx_tmp("prof.amp"));
     snprintf(gc, sizeof gc, "%s", fx_tmp("prof.gcode"));
     amp_pathset_init(&ps, NULL);
-    amp_buf_init(&b, NULL);
     amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
     for (k = 0; k < 60; k++)
         amp_pathset_push(&ps, amp_v3(10 * cos(0.1 * k), 10 * sin(0.1 * k), 0.3 + 0.01 * k), 0.3, NULL);
     ck_assert_int_eq(amp_pathset_write_file(&ps, amp, NULL, NULL), AMP_OK);
-    ck_assert_int_eq(amp_printer_load(&pr, "ender3", NULL), AMP_OK);
-    ck_assert_int_eq(amp_printer_gcode_opts(&pr, &o, NULL), AMP_OK);
-    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
-    f = fopen(gc, "w");
-    fwrite(b.data, 1, b.len, f);
-    fclose(f);
-    amp_buf_free(&b);
     amp_pathset_free(&ps);
+    ck_assert_int_eq(profile_gcode("ender3", amp, gc), AMP_FLAVOR_MARLIN);
     vp_start(&v, "");
     ck_assert_int_eq(bridge_run(&v, amp, "--printer ender3", &out), 0);
     vp_stop(&v);
     assert_executed_equals_job(&v, gc, -1);
     /* a Klipper profile makes the bridge talk Klipper and write the job with Klipper's commands, without
      * --flavor (it was handshaken as a Marlin printer, and its job written for Marlin) */
-    ck_assert_int_eq(amp_printer_load(&pr, "voron-350", NULL), AMP_OK);
-    ck_assert_int_eq(pr.flavor, AMP_FLAVOR_KLIPPER);
-    ck_assert_int_eq(amp_printer_gcode_opts(&pr, &o, NULL), AMP_OK);
-    amp_pathset_init(&ps, NULL);
-    ck_assert_int_eq(amp_pathset_read_file(&ps, amp, NULL), AMP_OK);
-    amp_buf_init(&b, NULL);
-    ck_assert_int_eq(amp_printer_gcode_job(&pr, &o, &ps, NULL, NULL), AMP_OK);
-    ck_assert_int_eq(amp_gcode_write(&ps, &o, amp_buf_sink, &b, NULL, NULL), AMP_OK);
-    f = fopen(gc, "w");
-    fwrite(b.data, 1, b.len, f);
-    fclose(f);
-    amp_buf_free(&b);
-    amp_pathset_free(&ps);
+    ck_assert_int_eq(profile_gcode("voron-350", amp, gc), AMP_FLAVOR_KLIPPER);
     vp_start(&v, "--flavor klipper --bed 350,350,340");
     ck_assert_int_eq(bridge_run(&v, amp, "--printer voron-350", &out), 0);
     vp_stop(&v);
