@@ -938,24 +938,18 @@ static amp_status cover_shells(const amp_field *f, const amp_bvh *b, const amp_f
 }
 
 /* Curve k of the honeycomb as a seed of the gap rounds: its lattice position in half cells, and ncs + 1 samples
- * (the curve's own when ncs = nc). */
+ * (the curve's own when ncs = nc; else @p curve, clipped and written already, is evaluated again at ncs). */
 static amp_status uniform_seed(const amp_field *f, amp_field_seeds *sd, amp_vec3 *pts, uint64_t *key, size_t k,
-                               uint64_t ia, uint64_t ib, const amp_pvert *curve, size_t nc, amp_error *err)
+                               uint64_t ia, uint64_t ib, amp_pvert *curve, size_t nc, amp_error *err)
 {
     size_t i;
+    amp_status st = AMP_OK;
     key[k] = ia << 32 | ib;
-    for (i = 0; i <= sd->ncs; i++) {
-        double uvw[3];
-        amp_status st;
-        if (sd->ncs == nc) {
-            pts[k * (sd->ncs + 1) + i] = curve[i].p;
-            continue;
-        }
-        amp_field_to_uvw(f, (double)ia / sd->da, (double)ib / sd->db, (double)i / (double)sd->ncs, uvw);
-        if ((st = f->eval(f, uvw, &pts[k * (sd->ncs + 1) + i], err)) != AMP_OK)
-            return st;
-    }
-    return AMP_OK;
+    if (sd->ncs != nc)
+        st = amp_field_curve(f, (double)ia / sd->da, (double)ib / sd->db, sd->ncs, 0.0, curve, NULL, err);
+    for (i = 0; st == AMP_OK && i <= sd->ncs; i++)
+        pts[k * (sd->ncs + 1) + i] = curve[i].p;
+    return st;
 }
 
 /* The plain lattice (honeycomb): curves at the cell centres of an na x nb pattern, then the field's curves
