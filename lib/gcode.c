@@ -4,7 +4,8 @@
  * The iterator is a small state machine (header, start sequence, set-up,
  * paths with their travels, teardown, end sequence). Init checks the job,
  * places it on the bed and runs the machine once without formatting (pass 1)
- * to obtain the figures the header prints; the caller's calls to
+ * to obtain the figures the header prints (amp_gcode_iter_init_body skips that
+ * run and the header; amp_gcode_iter_header writes it after the last line); the caller's calls to
  * amp_gcode_iter_next() then run it again (pass 2) and format each line with
  * an integer fixed-point formatter (no printf on the hot path, no locale, no
  * exponents). The print-time estimate lives in gcode_estimate.c.
@@ -648,9 +649,10 @@ static void reset_run(amp_gcode_iter *it, int pass)
 
 static int step(amp_gcode_iter *it, lb *l);
 
-amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, amp_error *err)
+/* What both inits share: check the options and the job, place it, frame the material grids. */
+static amp_status prepare(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, job_scan *js,
+                          amp_error *err)
 {
-    job_scan js;
     double margin, ext;
     amp_status st;
     if (!it)
@@ -664,22 +666,45 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
         amp_gcode_opts_default(&it->o, AMP_FLAVOR_MARLIN);
     st = check_opts(&it->o, err);
     if (st == AMP_OK)
-        st = scan_paths(ps, &js, err);
+        st = scan_paths(ps, js, err);
     if (st == AMP_OK)
-        st = place_job(it, ps, &js, err);
+        st = place_job(it, ps, js, err);
     if (st != AMP_OK)
         return st;
-    if (js.bb.max.z + it->off.z + js.rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
+    if (js->bb.max.z + it->off.z + js->rmax + it->o.z_hop + it->o.end_lift > GC_COORD_MAX)
         return amp_fail(err, AMP_ERR_RANGE, 0, "gcode: the job rises beyond %g mm", GC_COORD_MAX);
     it->ps = ps;
     it->fil_area = AMP_PI * 0.25 * it->o.filament_diameter * it->o.filament_diameter;
     /* the grid (model coordinates) covers every vertex with its radius and a travel corridor around it */
-    margin = js.rmax + it->o.travel_corridor + 1.0;
-    ext = fmax(js.bb.max.x - js.bb.min.x, js.bb.max.y - js.bb.min.y) + 2.0 * margin;
-    it->grid_x0 = js.bb.min.x - margin;
-    it->grid_y0 = js.bb.min.y - margin;
+    margin = js->rmax + it->o.travel_corridor + 1.0;
+    ext = fmax(js->bb.max.x - js->bb.min.x, js->bb.max.y - js->bb.min.y) + 2.0 * margin;
+    it->grid_x0 = js->bb.min.x - margin;
+    it->grid_y0 = js->bb.min.y - margin;
     it->grid_cell = ext / AMP_GCODE_GRID;
-    it->band_lazy = js.rising;
+    it->band_lazy = js->rising;
+    it->body_only = 0;
+    memset(&it->est, 0, sizeof it->est);
+    it->est.input_segments = js->input_segments;
+    return AMP_OK;
+}
+
+/* The job refused for a move over the printer's cross-section (found by either pass). */
+static amp_status xs_fail(const amp_gcode_iter *it, amp_error *err)
+{
+    return amp_fail(err, AMP_ERR_LIMIT, 0,
+                    "gcode: path %lu extrudes %.3g mm^2 of cross-section (a bead of radius %.3g mm), more than the "
+                    "printer takes (%.3g mm^2: Klipper's max_extrude_cross_section, 4 x nozzle^2, would stop the "
+                    "job there): lower the radius (ampath mdr --nominal, field --radius) or, if printer.cfg allows "
+                    "more, say so with --max-cross-section",
+                    (unsigned long)it->xs_path, it->xs_area, sqrt(it->xs_area / AMP_PI), it->o.max_cross_section);
+}
+
+amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, amp_error *err)
+{
+    job_scan js;
+    amp_status st = prepare(it, ps, o, &js, err);
+    if (st != AMP_OK)
+        return st;
     /* pass 1: the whole job without formatting, for the figures of the header */
     reset_run(it, 1);
     {
@@ -691,13 +716,20 @@ amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const 
     }
     it->stats.input_segments = js.input_segments;
     if (it->xs_path != (size_t)-1)
-        return amp_fail(err, AMP_ERR_LIMIT, 0,
-                        "gcode: path %lu extrudes %.3g mm^2 of cross-section (a bead of radius %.3g mm), more than the "
-                        "printer takes (%.3g mm^2: Klipper's max_extrude_cross_section, 4 x nozzle^2, would stop the "
-                        "job there): lower the radius (ampath mdr --nominal, field --radius) or, if printer.cfg allows "
-                        "more, say so with --max-cross-section",
-                        (unsigned long)it->xs_path, it->xs_area, sqrt(it->xs_area / AMP_PI), it->o.max_cross_section);
+        return xs_fail(it, err);
     it->est = it->stats;
+    it->magic = GC_MAGIC;
+    return amp_gcode_iter_rewind(it, err);
+}
+
+amp_status amp_gcode_iter_init_body(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o,
+                                    amp_error *err)
+{
+    job_scan js;
+    amp_status st = prepare(it, ps, o, &js, err);
+    if (st != AMP_OK)
+        return st;
+    it->body_only = 1;
     it->magic = GC_MAGIC;
     return amp_gcode_iter_rewind(it, err);
 }
@@ -1719,7 +1751,7 @@ static int step(amp_gcode_iter *it, lb *l)
     int r;
     switch (it->phase) {
     case PH_HEADER:
-        if (it->pass == 1 ? it->sub < GC_HEADER_LINES : header_line(it, l, it->sub)) {
+        if (it->body_only ? 0 : it->pass == 1 ? it->sub < GC_HEADER_LINES : header_line(it, l, it->sub)) {
             it->sub++;
             return 1;
         }
@@ -1758,6 +1790,10 @@ static int step(amp_gcode_iter *it, lb *l)
             return 1;
         amp_gc_plan_flush(it);
         it->phase = PH_DONE;
+        if (it->body_only) { /* the figures of the whole job, as pass 1 finds them (header lines included) */
+            it->stats.lines += GC_HEADER_LINES;
+            it->est = it->stats;
+        }
         return 0;
     default: return -1;
     }
@@ -1780,6 +1816,8 @@ int amp_gcode_iter_next(amp_gcode_iter *it, char *line, size_t cap, amp_error *e
     for (;;) {
         it->last.kind = MOVE_NONE;
         r = step(it, &l);
+        if (it->xs_path != (size_t)-1) /* only a body-only run gets here: init refused the job otherwise */
+            return xs_fail(it, err);
         if (r == 1) {
             it->stats.lines++;
             return 1;
@@ -1812,6 +1850,32 @@ amp_status amp_gcode_iter_write(amp_gcode_iter *it, amp_sink_fn sink, void *user
     if (stats)
         *stats = it->stats;
     return AMP_OK;
+}
+
+amp_status amp_gcode_iter_header(amp_gcode_iter *it, amp_sink_fn sink, void *user, amp_error *err)
+{
+    char line[AMP_GCODE_LINE_CAP + 1];
+    size_t k;
+    if (!it || !sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "gcode: NULL iterator or sink");
+    if (it->magic != GC_MAGIC)
+        return amp_fail(err, AMP_ERR_STATE, 0, "gcode: iterator not initialised (or init failed)");
+    if (it->body_only && it->est.lines == 0)
+        return amp_fail(err, AMP_ERR_STATE, 0, "gcode: the header's figures are known once the body's last line is out");
+    for (k = 0;; k++) {
+        lb l;
+        amp_status st;
+        l.b = line;
+        l.n = 0;
+        line[0] = '\0';
+        if (!header_line(it, &l, k))
+            return AMP_OK;
+        line[l.n] = '\n';
+        st = sink(user, line, l.n + 1);
+        if (st != AMP_OK)
+            return amp_fail(err, st, 0, "gcode: writing header line %lu failed: %s", (unsigned long)k + 1,
+                            amp_strerror(st));
+    }
 }
 
 amp_status amp_gcode_write(const amp_pathset *ps, const amp_gcode_opts *o, amp_sink_fn sink, void *user,

@@ -1,5 +1,6 @@
 /* G-code writer (docs/interfaces.md §5): extrusion, volumetric cap, travels, flavors, limits, and a G-code reader. */
 #define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -1113,6 +1114,71 @@ START_TEST(a_rewound_iterator_writes_the_same_job_again)
 }
 END_TEST
 
+/* A caller that can put the header in front afterwards runs the job once (amp_gcode_iter_init_body): the
+ * body and then the header are the job init writes, byte for byte, with the same figures; a move over
+ * Klipper's cross-section, which init refuses up front, stops the body where it is reached. */
+START_TEST(a_body_run_and_its_header_write_the_job_init_writes)
+{
+    static amp_gcode_iter it;
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st, st2;
+    amp_buf head, body;
+    amp_error err;
+    char *once, line[AMP_GCODE_LINE_CAP];
+    int r;
+    demo_like(&ps);
+    once = gen(&ps, NULL, &st);
+    ck_assert_int_eq(amp_gcode_iter_init_body(&it, &ps, NULL, &err), AMP_OK);
+    amp_buf_init(&head, NULL);
+    amp_buf_init(&body, NULL);
+    ck_assert_int_eq(amp_gcode_iter_header(&it, amp_buf_sink, &head, &err), AMP_ERR_STATE); /* not known yet */
+    ck_assert_int_eq(amp_gcode_iter_write(&it, amp_buf_sink, &body, &st2, &err), AMP_OK);
+    ck_assert_int_eq(amp_gcode_iter_header(&it, amp_buf_sink, &head, &err), AMP_OK);
+    ck_assert_ptr_nonnull(head.data);
+    ck_assert_uint_eq(strlen(head.data) + strlen(body.data), strlen(once));
+    ck_assert_msg(strncmp(once, head.data, strlen(head.data)) == 0, "the header differs from init's");
+    ck_assert_msg(strcmp(once + strlen(head.data), body.data) == 0, "the body differs from init's job");
+    ck_assert_uint_eq(it.est.lines, st.lines);
+    ck_assert_uint_eq(st2.lines, st.lines);
+    ck_assert_double_eq(it.est.time, st.time);
+    ck_assert_double_eq(it.est.filament_length, st.filament_length);
+    ck_assert_uint_eq(it.est.input_segments, st.input_segments);
+    amp_buf_free(&head);
+    amp_buf_free(&body);
+    /* fat tubes for Klipper: init refuses, the body run stops at the path, with the same message */
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER);
+    set_radius(&ps, 0.5);
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_LIMIT);
+    ck_assert_int_eq(amp_gcode_iter_init_body(&it, &ps, &o, &err), AMP_OK);
+    while ((r = amp_gcode_iter_next(&it, line, sizeof line, &err)) == 1) /* nothing extruded before the stop */
+        ck_assert_msg(!(strncmp(line, "G1 X", 4) == 0 && strstr(line, " E")), "extruded before the stop: %s", line);
+    ck_assert_int_eq(r, AMP_ERR_LIMIT);
+    ck_assert_ptr_nonnull(strstr(err.msg, "path 0 extrudes 0.785 mm^2"));
+    ck_assert_int_eq(amp_gcode_iter_next(&it, line, sizeof line, &err), AMP_ERR_LIMIT); /* and stays stopped */
+    free(once);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+/* Files named like the safe writer's temporaries of @p target (".NAME.XXXXXXXX.tmp") in its directory. */
+static int temporaries_of(const char *target)
+{
+    const char *slash = strrchr(target, '/');
+    char dir[256], prefix[256];
+    struct dirent *e;
+    DIR *d;
+    int n = 0;
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - target) : 1, slash ? target : ".");
+    snprintf(prefix, sizeof prefix, ".%s.", slash ? slash + 1 : target);
+    d = opendir(dir);
+    ck_assert_ptr_nonnull(d);
+    while ((e = readdir(d)) != NULL)
+        n += strncmp(e->d_name, prefix, strlen(prefix)) == 0;
+    closedir(d);
+    return n;
+}
+
 START_TEST(gcode_command_writes_file_and_reports_json)
 {
     amp_pathset ps;
@@ -1163,6 +1229,17 @@ START_TEST(gcode_command_writes_file_and_reports_json)
     snprintf(args, sizeof args, "gcode %s -o %s", fx_tmp("nope.amp"), out);
     ck_assert_int_eq(fx_run_tool(args, NULL, 0), 2);
     ck_assert_ptr_null(fopen(out, "rb"));
+    /* refused halfway through the one run that writes a file (tubes over Klipper's cross-section): no file,
+     * and neither the body's temporary nor the output's left beside it */
+    amp_pathset_free(&ps);
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 6, 60);
+    set_radius(&ps, 0.5);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    snprintf(args, sizeof args, "gcode %s --flavor klipper -o %s", in, out);
+    ck_assert_int_eq(fx_run_tool(args, json, sizeof json), 2);
+    ck_assert_ptr_null(fopen(out, "rb"));
+    ck_assert_int_eq(temporaries_of(out), 0);
     remove(in);
     remove(start);
     amp_pathset_free(&ps);
@@ -2227,6 +2304,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, bad_input_gives_clear_errors);
     tcase_add_test(tc, sink_failure_stops_the_writer);
     tcase_add_test(tc, a_rewound_iterator_writes_the_same_job_again);
+    tcase_add_test(tc, a_body_run_and_its_header_write_the_job_init_writes);
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
     tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);

@@ -91,6 +91,16 @@ static amp_status count_sink(void *user, const char *data, size_t len)
     return AMP_OK;
 }
 
+/* The G-code stage as `ampath gcode -o FILE` runs it: the job once, body then header (the hash covers them
+ * in that order, the same for every thread count). */
+static int gcode_once(const amp_pathset *ps, const amp_gcode_opts *go, gsink *g, amp_gcode_stats *gs)
+{
+    static amp_gcode_iter it;
+    return amp_gcode_iter_init_body(&it, ps, go, NULL) == AMP_OK &&
+           amp_gcode_iter_write(&it, count_sink, g, gs, NULL) == AMP_OK &&
+           amp_gcode_iter_header(&it, count_sink, g, NULL) == AMP_OK;
+}
+
 enum { ST_COVER, ST_ORDER, ST_MDR, ST_SUPPORT, ST_GCODE, ST_CHECK, NSTAGES };
 static const char *const stage_name[NSTAGES] = {"cover", "order", "mdr", "support", "gcode", "check"};
 
@@ -219,7 +229,7 @@ static int volumetric(double eps, double travel_z, int threads, int check, vrun 
     amp_mesh_free(&m);
     amp_pathset_clear(&a);
     stage_begin(&cnt, &t0);
-    ok = ok && amp_gcode_write(&b, &go, count_sink, &r->g, &r->gs, NULL) == AMP_OK;
+    ok = ok && gcode_once(&b, &go, &r->g, &r->gs);
     stage_end(&cnt, r, ST_GCODE, t0);
     if (ok && check) {
         stage_begin(&cnt, &t0);

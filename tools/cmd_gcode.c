@@ -69,17 +69,58 @@ static int read_text(const char *file, char **text)
     return CLI_OK;
 }
 
-/* Through the one safe writer (io.h amp_out): symlinks followed, devices written directly, a
- * unique temporary renamed into place only after a complete, synced write. */
-static int write_gcode(const char *out, amp_gcode_iter *it, amp_gcode_stats *st)
+/* Put the body written to @p body's temporary after the header, into @p f. */
+static amp_status append_body(amp_out *f, amp_out *body, amp_error *err)
 {
-    amp_out f;
+    static char buf[1 << 16];
+    FILE *in;
+    size_t n;
+    amp_status s = AMP_OK;
+    if (fflush(body->f) != 0 || body->werr)
+        return amp_fail(err, AMP_ERR_IO, 0, "%s: %s", body->tmp, strerror(body->werr ? body->werr : errno));
+    in = fopen(body->tmp, "rb");
+    if (!in)
+        return amp_fail(err, AMP_ERR_IO, 0, "%s: %s", body->tmp, strerror(errno));
+    while (s == AMP_OK && (n = fread(buf, 1, sizeof buf, in)) > 0)
+        s = amp_out_sink(f, buf, n);
+    if (s == AMP_OK && ferror(in))
+        s = amp_fail(err, AMP_ERR_IO, 0, "%s: %s", body->tmp, strerror(errno));
+    fclose(in);
+    return s;
+}
+
+/* Write the job of @p it through the one safe writer (io.h amp_out: symlinks followed, devices written
+ * directly, a unique temporary renamed into place only after a complete, synced write). A file gets the
+ * job run once: the body first, into a second temporary beside it, then the header with the figures
+ * that run found, then the body (amp_gcode_iter_init_body). A device gets it as init ran it (the header
+ * figures from its dry run) since nothing written to it can be taken back. */
+static int write_gcode(const char *out, amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o,
+                       amp_gcode_stats *st)
+{
+    amp_out f, body;
     amp_error err;
     amp_status s;
     amp_error_clear(&err);
     if (amp_out_open(&f, out, &err) != AMP_OK)
         return cli_fail_err("gcode", &err);
-    s = amp_gcode_iter_write(it, amp_out_sink, &f, st, &err); /* init already ran the job once: not again */
+    if (f.direct) {
+        s = amp_gcode_iter_init(it, ps, o, &err);
+        if (s == AMP_OK)
+            s = amp_gcode_iter_write(it, amp_out_sink, &f, st, &err);
+    } else {
+        memset(&body, 0, sizeof body);
+        s = amp_gcode_iter_init_body(it, ps, o, &err);
+        if (s == AMP_OK)
+            s = amp_out_open(&body, out, &err);
+        if (s == AMP_OK && (s = amp_gcode_iter_write(it, amp_out_sink, &body, st, &err)) != AMP_OK && body.werr)
+            amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", body.tmp, strerror(body.werr));
+        if (s == AMP_OK)
+            s = amp_gcode_iter_header(it, amp_out_sink, &f, &err);
+        if (s == AMP_OK)
+            s = append_body(&f, &body, &err);
+        amp_out_abort(&body);
+        *st = it->est;
+    }
     if (s != AMP_OK) {
         if (f.werr)
             amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));
@@ -283,11 +324,12 @@ static int run_job(const char *in, const char *out, int json, amp_printer *pr, a
     t0 = cli_now();
     if (rc == CLI_OK && amp_printer_gcode_job(pr, o, &ps, &it, &err) != AMP_OK)
         rc = cli_fail_err("gcode", &err);
-    if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, o, &err) != AMP_OK)
-        rc = cli_fail_err("gcode", &err);
-    st = it.est;
     if (rc == CLI_OK && out)
-        rc = write_gcode(out, &it, &st);
+        rc = write_gcode(out, &it, &ps, o, &st);
+    else if (rc == CLI_OK && amp_gcode_iter_init(&it, &ps, o, &err) != AMP_OK)
+        rc = cli_fail_err("gcode", &err);
+    else
+        st = it.est;
     if (rc == CLI_OK && json)
         print_json(in, out, pr, &it, &st, &ps, part, cli_now() - t0);
     else if (rc == CLI_OK)

@@ -7,7 +7,9 @@
  * Nothing is allocated (the iterator is plain data of a few kilobytes), so
  * the printer bridge and small firmware can pull lines as the printer takes
  * them without building the file. amp_gcode_write() is the convenience that
- * pushes every line, newline-terminated, into an amp_sink_fn.
+ * pushes every line, newline-terminated, into an amp_sink_fn. A caller that
+ * can put the header in front afterwards (a file) runs the job once with
+ * amp_gcode_iter_init_body() and amp_gcode_iter_header().
  *
  * What is emitted, in order:
  *   1. a header of `;` comments: profile, flavor, placement offset and the
@@ -282,6 +284,7 @@ typedef struct amp_gcode_iter {
     size_t path, seg;   /* current path and segment */
     const char *text;   /* position in a start or end sequence */
     int pass;           /* 1 = estimate (init), 2 = lines */
+    int body_only;      /* amp_gcode_iter_init_body: no header lines; est filled at the end */
     size_t xs_path;     /* pass 1: the first path with a move over max_cross_section ((size_t)-1: none) */
     double xs_area;     /* its cross-section, mm^2 */
     int have_pos, retracted, printed_any;
@@ -342,6 +345,32 @@ void amp_gcode_opts_default(amp_gcode_opts *o, int flavor);
  * coordinates beyond +-99999 mm.
  */
 amp_status amp_gcode_iter_init(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o, amp_error *err);
+
+/**
+ * amp_gcode_iter_init() without its run of the whole job: for a caller that
+ * can put the header in front afterwards (the ampath tool writes the body to a
+ * temporary file), so the job is run once instead of twice. Checks and places
+ * the job as init does; the lines are then those of amp_gcode_iter_init() but
+ * for the header comment, which is left out (its figures are not known yet).
+ * Once amp_gcode_iter_next() has returned 0, it->est holds the figures of the
+ * whole job (the header lines counted) and amp_gcode_iter_header() writes the
+ * header. A move over max_cross_section, which init refuses, is reported by
+ * amp_gcode_iter_next() when reached (AMP_ERR_LIMIT, same message): the lines
+ * before it must then be thrown away. amp_gcode_iter_rewind() keeps the
+ * header left out. Errors: those of amp_gcode_iter_init() but AMP_ERR_LIMIT.
+ */
+amp_status amp_gcode_iter_init_body(amp_gcode_iter *it, const amp_pathset *ps, const amp_gcode_opts *o,
+                                    amp_error *err);
+
+/**
+ * Write the header comment of the job (profile, placement, bounding box, time
+ * and filament estimate; newline-terminated lines through @p sink): the lines
+ * amp_gcode_iter_init()'s iterator starts with, from it->est. Errors:
+ * AMP_ERR_ARG for NULL, AMP_ERR_STATE before the figures are known (an
+ * iterator init did not accept, or a body-only one before its end), or the
+ * sink's status.
+ */
+amp_status amp_gcode_iter_header(amp_gcode_iter *it, amp_sink_fn sink, void *user, amp_error *err);
 
 /**
  * Write the next line into @p line (NUL-terminated, no newline, at most
