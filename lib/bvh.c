@@ -248,7 +248,7 @@ static void finish_moments(build_ctx *c, double *absarea)
     }
 }
 
-static int tri_ok(amp_vec3 a, amp_vec3 b, amp_vec3 c)
+int amp_bvh_tri_ok(amp_vec3 a, amp_vec3 b, amp_vec3 c)
 {
     amp_vec3 ab = amp_v3_sub(b, a), ac = amp_v3_sub(c, a);
     double l = fmax(amp_v3_len2(ab), fmax(amp_v3_len2(ac), amp_v3_dist2(b, c)));
@@ -267,18 +267,83 @@ static amp_status closed_after_orienting(const amp_mesh *m, amp_tri *tris, int *
     return st;
 }
 
-amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
+amp_status amp_bvh_build_tris(amp_bvh **out, const amp_allocator *al, const amp_vec3 *verts, const amp_tri *tris,
+                              size_t ntris, amp_error *err)
 {
     amp_bvh *b;
-    amp_tri *tris;
     build_ctx c;
     double *absarea;
     size_t i, n = 0;
+    *out = NULL;
+    memset(&c, 0, sizeof c);
+    for (i = 0; i < ntris; i++)
+        n += amp_bvh_tri_ok(verts[tris[i].v[0]], verts[tris[i].v[1]], verts[tris[i].v[2]]);
+    if (n == 0)
+        return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mesh has no triangle with positive area");
+    b = amp_calloc(al, 1, sizeof *b);
+    if (!b)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
+    b->alloc = al;
+    b->tris = amp_calloc(al, n, sizeof *b->tris);
+    c.cap = n;
+    c.nodes = amp_calloc(al, c.cap, sizeof *c.nodes);
+    c.cent = amp_calloc(al, n, sizeof *c.cent);
+    c.tbox = amp_calloc(al, n, sizeof *c.tbox);
+    if (!b->tris || !c.nodes || !c.cent || !c.tbox) {
+        amp_free(al, c.cent);
+        amp_free(al, c.tbox);
+        amp_free(al, c.nodes);
+        amp_bvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
+    }
+    b->bbox = amp_box3_empty();
+    for (i = 0, n = 0; i < ntris; i++) {
+        amp_vec3 p0 = verts[tris[i].v[0]], p1 = verts[tris[i].v[1]], p2 = verts[tris[i].v[2]];
+        if (!amp_bvh_tri_ok(p0, p1, p2))
+            continue;
+        b->tris[n].p[0] = p0;
+        b->tris[n].p[1] = p1;
+        b->tris[n].p[2] = p2;
+        b->tris[n].src = i;
+        c.cent[n] = amp_v3_scale(amp_v3_add(amp_v3_add(p0, p1), p2), 1.0 / 3.0);
+        c.tbox[n] = tri_box(&b->tris[n]);
+        b->bbox = amp_box3_union(b->bbox, c.tbox[n]);
+        n++;
+    }
+    b->ntris = n;
+    c.a = al;
+    c.tris = b->tris;
+    build_node(&c, 0, n, 0);
+    amp_free(al, c.cent);
+    amp_free(al, c.tbox);
+    b->nodes = c.nodes;
+    b->nnodes = c.nnodes;
+    absarea = c.nomem ? NULL : amp_calloc(al, c.nnodes, sizeof *absarea);
+    if (!absarea) {
+        amp_bvh_free(b);
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
+    }
+    finish_moments(&c, absarea);
+    amp_free(al, absarea);
+    if (c.nnodes < c.cap) { /* the slack back (a failed shrink keeps the block) */
+        bvh_node *q = amp_realloc_array(al, c.nodes, c.nnodes, sizeof *c.nodes);
+        if (q)
+            b->nodes = q;
+    }
+    *out = b;
+    return AMP_OK;
+}
+
+amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
+{
+    amp_bvh *b = NULL;
+    amp_tri *tris;
+    size_t i, flipped = 0;
+    int closed = 0;
     amp_status st;
     if (!out || !m)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_bvh_build: NULL argument");
     *out = NULL;
-    memset(&c, 0, sizeof c);
     if (m->ntris > 0x7fffffffUL)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "amp_bvh_build: more than 2^31 triangles");
     for (i = 0; i < m->ntris; i++) {
@@ -293,83 +358,30 @@ amp_status amp_bvh_build(amp_bvh **out, const amp_mesh *m, amp_error *err)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
     if (m->ntris)
         memcpy(tris, m->tris, m->ntris * sizeof *tris);
-    b = amp_calloc(m->alloc, 1, sizeof *b);
-    if (!b) {
-        amp_free(m->alloc, tris);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
-    }
-    b->alloc = m->alloc;
-    st = amp_orient_tris(m->alloc, m->verts, tris, m->ntris, &b->flipped, err);
+    st = amp_orient_tris(m->alloc, m->verts, tris, m->ntris, &flipped, err);
     if (st == AMP_OK)
-        st = closed_after_orienting(m, tris, &b->closed, err);
-    if (st != AMP_OK) {
-        amp_free(m->alloc, tris);
-        amp_free(m->alloc, b);
-        return st;
-    }
-    for (i = 0; i < m->ntris; i++)
-        n += tri_ok(m->verts[tris[i].v[0]], m->verts[tris[i].v[1]], m->verts[tris[i].v[2]]);
-    if (n == 0) {
-        amp_free(m->alloc, tris);
-        amp_free(m->alloc, b);
-        return amp_fail(err, AMP_ERR_GEOMETRY, 0, "mesh has no triangle with positive area");
-    }
-    b->tris = amp_calloc(m->alloc, n, sizeof *b->tris);
-    c.cap = n;
-    c.nodes = amp_calloc(m->alloc, c.cap, sizeof *c.nodes);
-    c.cent = amp_calloc(m->alloc, n, sizeof *c.cent);
-    c.tbox = amp_calloc(m->alloc, n, sizeof *c.tbox);
-    if (!b->tris || !c.nodes || !c.cent || !c.tbox) {
-        amp_free(m->alloc, c.cent);
-        amp_free(m->alloc, c.tbox);
-        amp_free(m->alloc, c.nodes);
-        amp_free(m->alloc, tris);
-        amp_bvh_free(b);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
-    }
-    b->bbox = amp_box3_empty();
-    for (i = 0, n = 0; i < m->ntris; i++) {
-        amp_vec3 p0 = m->verts[tris[i].v[0]], p1 = m->verts[tris[i].v[1]], p2 = m->verts[tris[i].v[2]];
-        if (!tri_ok(p0, p1, p2))
-            continue;
-        b->tris[n].p[0] = p0;
-        b->tris[n].p[1] = p1;
-        b->tris[n].p[2] = p2;
-        b->tris[n].src = i;
-        c.cent[n] = amp_v3_scale(amp_v3_add(amp_v3_add(p0, p1), p2), 1.0 / 3.0);
-        c.tbox[n] = tri_box(&b->tris[n]);
-        b->bbox = amp_box3_union(b->bbox, c.tbox[n]);
-        n++;
+        st = closed_after_orienting(m, tris, &closed, err);
+    if (st == AMP_OK)
+        st = amp_bvh_build_tris(&b, m->alloc, m->verts, tris, m->ntris, err);
+    if (st == AMP_OK) {
+        b->flipped = flipped;
+        b->closed = closed;
+        /* an open mesh: caps over its boundary make the winding number a ray's count again (bvh_cap.c) */
+        if (!closed && (st = amp_bvh_cap_build(b, m->verts, tris, m->ntris, err)) != AMP_OK) {
+            amp_bvh_free(b);
+            b = NULL;
+        }
     }
     amp_free(m->alloc, tris);
-    b->ntris = n;
-    c.a = m->alloc;
-    c.tris = b->tris;
-    build_node(&c, 0, n, 0);
-    amp_free(m->alloc, c.cent);
-    amp_free(m->alloc, c.tbox);
-    b->nodes = c.nodes;
-    b->nnodes = c.nnodes;
-    absarea = c.nomem ? NULL : amp_calloc(m->alloc, c.nnodes, sizeof *absarea);
-    if (!absarea) {
-        amp_bvh_free(b);
-        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory building the BVH");
-    }
-    finish_moments(&c, absarea);
-    amp_free(m->alloc, absarea);
-    if (c.nnodes < c.cap) { /* the slack back (a failed shrink keeps the block) */
-        bvh_node *q = amp_realloc_array(m->alloc, c.nodes, c.nnodes, sizeof *c.nodes);
-        if (q)
-            b->nodes = q;
-    }
     *out = b;
-    return AMP_OK;
+    return st;
 }
 
 void amp_bvh_free(amp_bvh *b)
 {
     if (!b)
         return;
+    amp_bvh_free(b->cap);
     amp_free(b->alloc, b->tris);
     amp_free(b->alloc, b->nodes);
     amp_free(b->alloc, b);
@@ -378,6 +390,7 @@ void amp_bvh_free(amp_bvh *b)
 size_t amp_bvh_triangles(const amp_bvh *b) { return b->ntris; }
 size_t amp_bvh_flipped(const amp_bvh *b) { return b->flipped; }
 int amp_bvh_closed(const amp_bvh *b) { return b->closed; }
+long amp_bvh_cap_triangles(const amp_bvh *b) { return b->closed ? 0 : !b->capped ? -1 : b->cap ? (long)b->cap->ntris : 0; }
 amp_box3 amp_bvh_bbox(const amp_bvh *b) { return b->bbox; }
 
 /* ------------------------------------------------------------------- rays */
@@ -746,15 +759,16 @@ static int ray_count(const amp_bvh *b, amp_vec3 o, amp_vec3 d, int *w)
 /*
  * The winding number at @p p. On a closed, consistently oriented mesh it is an integer off the surface, the
  * signed crossing count of any ray from p: one walk down the tree, where the generalised winding number
- * evaluates a solid angle per near triangle (on a coarse mesh, nearly all of them). The ray leaves through
- * the nearest side of the box; when it proves nothing (see ray_count) the next direction is tried, and after
- * the sixth, or on an open mesh, the generalised winding number decides.
+ * evaluates a solid angle per near triangle (on a coarse mesh, nearly all of them). An open mesh closed by
+ * its caps (bvh_cap.c) is such a surface too: the count over mesh and caps, less the caps' solid angles. The
+ * ray leaves through the nearest side of the box; when it proves nothing (see ray_count) the next direction
+ * is tried, and after the sixth, or on a mesh left uncapped, the generalised winding number decides.
  */
 static double winding_of(const amp_bvh *b, amp_vec3 p)
 {
     double side[6];
-    int k, first = 0, w;
-    if (!b->closed || !amp_v3_finite(p))
+    int k, first = 0, w, wc = 0;
+    if (!(b->closed || b->capped) || !amp_v3_finite(p))
         return amp_bvh_winding(b, p);
     side[0] = b->bbox.max.x - p.x;
     side[1] = p.x - b->bbox.min.x;
@@ -767,8 +781,9 @@ static double winding_of(const amp_bvh *b, amp_vec3 p)
             first = k;
     for (k = 0; k < 6; k++) {
         const double *d = RAY_DIRS[(first + k) % 6];
-        if (ray_count(b, p, amp_v3(d[0], d[1], d[2]), &w))
-            return (double)w;
+        amp_vec3 dir = amp_v3(d[0], d[1], d[2]);
+        if (ray_count(b, p, dir, &w) && (!b->cap || ray_count(b->cap, p, dir, &wc)))
+            return b->cap ? (double)(w + wc) - amp_bvh_winding(b->cap, p) : (double)w;
     }
     return amp_bvh_winding(b, p);
 }

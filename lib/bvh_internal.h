@@ -28,9 +28,24 @@ struct amp_bvh {
     bvh_tri *tris;
     size_t ntris, flipped;
     int closed; /* every edge shared by two oppositely oriented triangles (after orienting): see winding_of */
+    int capped; /* open, with its boundary chain closed by cap (bvh_cap.c): winding_of counts rays too */
+    struct amp_bvh *cap; /* the caps' own tree (NULL when every edge is used as often each way) */
     bvh_node *nodes;
     size_t nnodes;
     amp_box3 bbox; /* of the triangles (node boxes are slightly inflated) */
 };
+
+/* Non-zero when triangle abc has an area the tree keeps (not a sliver of zero area). */
+int amp_bvh_tri_ok(amp_vec3 a, amp_vec3 b, amp_vec3 c);
+
+/* The tree over the non-degenerate triangles of @p tris (indices into @p verts), taken as oriented: no
+ * orienting, no closedness test (closed = capped = 0, cap = NULL). Errors: AMP_ERR_GEOMETRY when no triangle
+ * has an area, AMP_ERR_NOMEM. */
+amp_status amp_bvh_build_tris(amp_bvh **out, const amp_allocator *al, const amp_vec3 *verts, const amp_tri *tris,
+                              size_t ntris, amp_error *err);
+
+/* The caps of an open mesh (bvh_cap.c): b->cap over the boundary chain of the oriented @p tris (the
+ * triangles b was built from), b->capped set. AMP_ERR_NOMEM only; a chain it cannot close leaves b uncapped. */
+amp_status amp_bvh_cap_build(amp_bvh *b, const amp_vec3 *verts, const amp_tri *tris, size_t ntris, amp_error *err);
 
 #endif

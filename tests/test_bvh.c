@@ -233,6 +233,104 @@ START_TEST(ray_inside_test_agrees_with_exact_winding_where_rays_meet_edges)
 }
 END_TEST
 
+/* Points of @p n random ones around box @p lo..hi where amp_bvh_inside() and the exact winding number
+ * disagree, among those off the surface whose exact winding is clearly on one side of 1/2 (*tested). */
+static size_t open_disagreements(const amp_bvh *b, amp_vec3 lo, amp_vec3 hi, size_t n, size_t *tested)
+{
+    unsigned long long s = 99;
+    size_t i, bad = 0;
+    *tested = 0;
+    for (i = 0; i < n; i++) {
+        amp_vec3 p = amp_v3(lo.x + (hi.x - lo.x) * fx_rand(&s), lo.y + (hi.y - lo.y) * fx_rand(&s),
+                            lo.z + (hi.z - lo.z) * fx_rand(&s));
+        double w = amp_bvh_winding_exact(b, p);
+        if (fabs(w - 0.5) < 0.02 || amp_bvh_closest(b, p, NULL, NULL) < 1e-6)
+            continue;
+        (*tested)++;
+        bad += amp_bvh_inside(b, p) != (w >= 0.5);
+    }
+    return bad;
+}
+
+/* Append box @p lo..hi to @p m, its corners welded to the vertices @p m has at the same place. */
+static void add_welded_box(amp_mesh *m, amp_vec3 lo, amp_vec3 hi)
+{
+    amp_mesh b;
+    size_t i, k, t;
+    uint32_t idx[8];
+    amp_mesh_init(&b, NULL);
+    ck_assert_int_eq(fx_box(&b, lo, hi, 0), AMP_OK);
+    for (i = 0; i < b.nverts; i++) {
+        for (k = 0; k < m->nverts && !(m->verts[k].x == b.verts[i].x && m->verts[k].y == b.verts[i].y &&
+                                      m->verts[k].z == b.verts[i].z);
+             k++)
+            ;
+        if (k == m->nverts)
+            ck_assert_int_eq(amp_mesh_add_vertex(m, b.verts[i], NULL, NULL), AMP_OK);
+        idx[i] = (uint32_t)k;
+    }
+    for (t = 0; t < b.ntris; t++)
+        ck_assert_int_eq(amp_mesh_add_tri(m, idx[b.tris[t].v[0]], idx[b.tris[t].v[1]], idx[b.tris[t].v[2]], NULL),
+                         AMP_OK);
+    amp_mesh_free(&b);
+}
+
+/*
+ * An open mesh is closed by caps over its boundary chain (lib/bvh_cap.c), and its inside test counts a ray's
+ * crossings over mesh and caps less the caps' winding number: the generalised winding number, without a solid
+ * angle per near triangle. Wherever the exact winding number is clearly on one side of 1/2 the answer is its:
+ * on a box with its top missing (inside, the winding is between 1/2 and 1 up to the opening: one square cap of
+ * 2 triangles), on the torus with holes and flipped triangles (a cap per hole), and on two boxes sharing an
+ * edge (non-manifold, each edge used as often both ways: no cap, the count alone).
+ */
+START_TEST(open_mesh_inside_test_counts_rays_over_caps_of_its_boundary)
+{
+    amp_mesh m;
+    amp_bvh *b;
+    size_t i, tested, holes = 0;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_box(&m, amp_v3(0, 0, 0), amp_v3(10, 10, 10), 0), AMP_OK);
+    m.tris[3] = m.tris[--m.ntris]; /* the top face's two triangles (faces 2 and 3 of fx_box) */
+    m.tris[2] = m.tris[--m.ntris];
+    b = build(&m);
+    ck_assert_int_eq(amp_bvh_closed(b), 0);
+    ck_assert_int_eq(amp_bvh_cap_triangles(b), 2);
+    ck_assert_int_eq(amp_bvh_inside(b, amp_v3(5, 5, 9.9)), 1); /* winding just above 1/2 under the opening */
+    ck_assert_int_eq(amp_bvh_inside(b, amp_v3(5, 5, 10.1)), 0);
+    ck_assert_uint_eq(open_disagreements(b, amp_v3(-3, -3, -3), amp_v3(13, 13, 13), 4000, &tested), 0);
+    ck_assert_uint_gt(tested, 3000);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), TR, Tr, 96, 48), AMP_OK);
+    for (i = 0; i < m.ntris; i += 17) {
+        uint32_t t = m.tris[i].v[1];
+        m.tris[i].v[1] = m.tris[i].v[2];
+        m.tris[i].v[2] = t;
+    }
+    for (i = 0; i < m.ntris; i += 23, holes++)
+        m.tris[i] = m.tris[--m.ntris];
+    b = build(&m);
+    ck_assert_int_eq(amp_bvh_closed(b), 0);
+    ck_assert_int_ge(amp_bvh_cap_triangles(b), (long)holes); /* a hole is a loop of 3 or more edges */
+    ck_assert_uint_eq(open_disagreements(b, amp_v3(-30, -30, -8), amp_v3(30, 30, 8), 4000, &tested), 0);
+    ck_assert_uint_gt(tested, 3000);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+    amp_mesh_init(&m, NULL);
+    add_welded_box(&m, amp_v3(0, 0, 0), amp_v3(10, 10, 10));
+    add_welded_box(&m, amp_v3(10, 10, 0), amp_v3(20, 20, 10)); /* the edge x = y = 10 is used four times */
+    ck_assert_uint_eq(m.nverts, 14);
+    b = build(&m);
+    ck_assert_int_eq(amp_bvh_closed(b), 0);
+    ck_assert_int_eq(amp_bvh_cap_triangles(b), 0);
+    ck_assert_uint_eq(open_disagreements(b, amp_v3(-3, -3, -3), amp_v3(23, 23, 13), 4000, &tested), 0);
+    ck_assert_uint_gt(tested, 3500);
+    amp_bvh_free(b);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(inward_inner_shell_is_a_cavity_not_flipped)
 {
     amp_mesh m;
@@ -497,6 +595,7 @@ static Suite *bvh_suite(void)
     tcase_add_test(tc, closest_point_matches_brute_force);
     tcase_add_test(tc, hierarchical_winding_number_matches_exact);
     tcase_add_test(tc, inside_test_is_right_on_torus_with_holes_and_flips);
+    tcase_add_test(tc, open_mesh_inside_test_counts_rays_over_caps_of_its_boundary);
     tcase_add_test(tc, ray_inside_test_agrees_with_exact_winding_where_rays_meet_edges);
     tcase_add_test(tc, inward_inner_shell_is_a_cavity_not_flipped);
     tcase_add_test(tc, concurrent_queries_match_serial);

@@ -61,6 +61,13 @@ size_t amp_bvh_triangles(const amp_bvh *b);
 size_t amp_bvh_flipped(const amp_bvh *b);
 /** 1 when every edge is shared by exactly two oppositely oriented triangles after the build's orienting. */
 int amp_bvh_closed(const amp_bvh *b);
+/**
+ * Triangles of the caps that close an open mesh for amp_bvh_inside(): fans over the loops of its boundary
+ * chain (the edges used more often in one direction than in the other). 0 for a closed mesh and for one
+ * whose edges are each used as often both ways (two solids sharing an edge); -1 when the build left the mesh
+ * uncapped (not expected; amp_bvh_winding() then decides every inside test).
+ */
+long amp_bvh_cap_triangles(const amp_bvh *b);
 /** Bounding box of the indexed triangles. */
 amp_box3 amp_bvh_bbox(const amp_bvh *b);
 
@@ -111,9 +118,11 @@ double amp_bvh_winding_exact(const amp_bvh *b, amp_vec3 p);
 /**
  * Non-zero when the winding number at @p p is >= 0.5: robust on meshes with small holes and flipped
  * triangles. On a closed mesh (amp_bvh_closed()) the winding number is an integer off the surface and is
- * taken from the signed crossings of one ray (up to six directions when a ray meets an edge or a vertex);
- * on an open mesh, or for a point on the surface, amp_bvh_winding() decides. The answers agree wherever
- * both are defined; the ray costs about log n where the solid angles cost every near triangle.
+ * taken from the signed crossings of one ray (up to six directions when a ray meets an edge or a vertex).
+ * An open mesh is closed by caps over its boundary (amp_bvh_cap_triangles()): its winding number is then
+ * the ray's signed count over mesh and caps less the caps' own winding number, the same function. Where
+ * every ray meets an edge, or for a point on the surface, amp_bvh_winding() decides. The answers agree
+ * wherever both are defined; the ray costs about log n where the solid angles cost every near triangle.
  */
 int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
 
