@@ -789,6 +789,7 @@ static double winding_of(const amp_bvh *b, amp_vec3 p)
 }
 
 int amp_bvh_inside(const amp_bvh *b, amp_vec3 p) { return winding_of(b, p) >= 0.5; }
+double amp_bvh_inside_winding(const amp_bvh *b, amp_vec3 p) { return winding_of(b, p); }
 
 /* --------------------------------------------------------------- clipping */
 

@@ -37,7 +37,7 @@ int check_mesh(const check_ctx *c, cli_json *j)
         rmax = ps->verts[i].r > rmax ? ps->verts[i].r : rmax;
         /* an open mesh's inside ends at winding 1/2 across its holes, where `field` cuts its curves: a vertex
          * written there reads back a hair off it (10 digits), so within 1e-4 of 1/2 is on it */
-        if (!amp_bvh_inside(b, p) && (amp_bvh_closed(b) || amp_bvh_winding(b, p) < 0.5 - 1e-4)) {
+        if (!amp_bvh_inside(b, p) && (amp_bvh_closed(b) || amp_bvh_inside_winding(b, p) < 0.5 - 1e-4)) {
             double d = amp_bvh_closest(b, p, NULL, NULL);
             worst_out = d > worst_out ? d : worst_out;
             outside += d > fmax(OUTSIDE_TOL, c->tol);

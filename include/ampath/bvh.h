@@ -126,6 +126,14 @@ double amp_bvh_winding_exact(const amp_bvh *b, amp_vec3 p);
  */
 int amp_bvh_inside(const amp_bvh *b, amp_vec3 p);
 
+/**
+ * The winding number amp_bvh_inside() compares with 1/2: an integer off a closed mesh, the count over the
+ * caps less their winding number on an open one, amp_bvh_winding() where no ray decides. For a caller that
+ * needs the margin of a decision (`ampath check` takes a vertex within 1e-4 of 1/2 as on an open mesh's
+ * boundary, where `field` cut its curve). Thread-safe.
+ */
+double amp_bvh_inside_winding(const amp_bvh *b, amp_vec3 p);
+
 /** A voxel map of a closed mesh's solid: opaque, see amp_bvh_voxels_build(). */
 typedef struct amp_bvh_voxels amp_bvh_voxels;
 
