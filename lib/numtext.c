@@ -18,9 +18,18 @@ static const double p10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1
 static int g10_digits(double a, double *m, int *e)
 {
     double f;
+    int k;
     if (!(a > 1e-12) || !(a < 1e12))
         return 0;
-    *e = (int)floor(log10(a));
+    /* the exponent by comparisons (log10 and floor were half of formatting a vertex); one off either way
+     * near a decade is corrected below, as floor(log10(a)) was */
+    if (a >= 1.0)
+        for (k = 0; k < 12 && a >= p10[k + 1]; k++)
+            ;
+    else
+        for (k = -1; k > -12 && a * p10[-k] < 1.0; k--)
+            ;
+    *e = k;
     if (*e >= 9)
         return 0;
     *m = a * p10[9 - *e];
@@ -35,10 +44,10 @@ static int g10_digits(double a, double *m, int *e)
     }
     if (*m < 1e9 || *m >= 1e10)
         return 0;
-    f = *m - floor(*m);
+    f = *m - (double)(uint64_t)*m; /* 1e9 <= m < 1e10: the cast is floor */
     if (fabs(f - 0.5) < 1e-4)
         return 0;
-    *m = floor(*m + 0.5);
+    *m = (double)(uint64_t)(*m + 0.5);
     if (*m >= 1e10) { /* 9999999999.6 rounds up to the next decade */
         *m = 1e9;
         ++*e;

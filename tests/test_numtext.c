@@ -41,6 +41,18 @@ START_TEST(g10_format_writes_printfs_bytes)
         ck_assert_msg(strcmp(a, b) == 0, "%.17g: '%s' vs printf '%s'", v, a, b);
         ck_assert_uint_eq(n, strlen(b));
     }
+    /* at every decade and a few ulps either side of it: the writer finds the exponent by comparisons */
+    for (i = 0; i <= 26 * 7; i++) {
+        double d = pow(10.0, (double)(i / 7) - 13.0), v = d;
+        int k;
+        for (k = 0; k < (int)(i % 7) - 3; k++)
+            v = nextafter(v, HUGE_VAL);
+        for (k = 0; k < 3 - (int)(i % 7); k++)
+            v = nextafter(v, 0.0);
+        amp_g10_format(v, a);
+        snprintf(b, sizeof b, "%.10g", v);
+        ck_assert_msg(strcmp(a, b) == 0, "%.17g: '%s' vs printf '%s'", v, a, b);
+    }
 }
 END_TEST
 
