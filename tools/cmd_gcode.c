@@ -89,6 +89,22 @@ static amp_status append_body(amp_out *f, amp_out *body, amp_error *err)
     return s;
 }
 
+/* The output sink with a progress bar: the share of the job's paths written, every 2^14 lines. */
+typedef struct bar_sink {
+    amp_out *o;
+    const amp_gcode_iter *it;
+    cli_progress bar;
+    size_t lines;
+} bar_sink;
+
+static amp_status bar_write(void *user, const char *data, size_t len)
+{
+    bar_sink *b = user;
+    if ((++b->lines & 0x3fff) == 0 && b->it->ps->npaths)
+        cli_progress_update(&b->bar, (double)b->it->path / (double)b->it->ps->npaths);
+    return amp_out_sink(b->o, data, len);
+}
+
 /* Write the job of @p it through the one safe writer (io.h amp_out: symlinks followed, devices written
  * directly, a unique temporary renamed into place only after a complete, synced write). A file gets the
  * job run once: the body first, into a second temporary beside it, then the header with the figures
@@ -100,19 +116,25 @@ static int write_gcode(const char *out, amp_gcode_iter *it, const amp_pathset *p
     amp_out f, body;
     amp_error err;
     amp_status s;
+    bar_sink bar;
     amp_error_clear(&err);
     if (amp_out_open(&f, out, &err) != AMP_OK)
         return cli_fail_err("gcode", &err);
+    bar.it = it;
+    bar.lines = 0;
+    cli_progress_begin(&bar.bar, "gcode");
     if (f.direct) {
+        bar.o = &f;
         s = amp_gcode_iter_init(it, ps, o, &err);
         if (s == AMP_OK)
-            s = amp_gcode_iter_write(it, amp_out_sink, &f, st, &err);
+            s = amp_gcode_iter_write(it, bar_write, &bar, st, &err);
     } else {
         memset(&body, 0, sizeof body);
+        bar.o = &body;
         s = amp_gcode_iter_init_body(it, ps, o, &err);
         if (s == AMP_OK)
             s = amp_out_open(&body, out, &err);
-        if (s == AMP_OK && (s = amp_gcode_iter_write(it, amp_out_sink, &body, st, &err)) != AMP_OK && body.werr)
+        if (s == AMP_OK && (s = amp_gcode_iter_write(it, bar_write, &bar, st, &err)) != AMP_OK && body.werr)
             amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", body.tmp, strerror(body.werr));
         if (s == AMP_OK)
             s = amp_gcode_iter_header(it, amp_out_sink, &f, &err);
@@ -121,6 +143,7 @@ static int write_gcode(const char *out, amp_gcode_iter *it, const amp_pathset *p
         amp_out_abort(&body);
         *st = it->est;
     }
+    cli_progress_end(&bar.bar);
     if (s != AMP_OK) {
         if (f.werr)
             amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));
