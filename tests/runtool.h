@@ -18,4 +18,10 @@ int fx_run_tool(const char *args, char *out, size_t cap);
  */
 int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap);
 
+/**
+ * As fx_run_tool() with stderr on a pseudo-terminal (as a user at a terminal sees it), which is read into
+ * @p err (NUL-terminated, at most cap - 1 bytes); stdout is discarded. For the progress bars.
+ */
+int fx_run_tool_tty(const char *args, char *err, size_t cap);
+
 #endif
