@@ -1250,12 +1250,13 @@ static void run_in_bed(gsim *s, const char *text, const amp_gcode_opts *o);
 static double gsim_filament(const gsim *s);
 
 /* "Any command that can run for more than a second shows progress on a terminal": `gcode` draws its bar on a
- * terminal's stderr while it writes a large job, and writes none into a pipe. */
-START_TEST(gcode_draws_a_progress_bar_on_a_terminal_only)
+ * terminal's stderr while it writes a large job, and `check` one naming the check that runs, and neither
+ * writes one into a pipe; check's result lines stay whole on stdout. */
+START_TEST(gcode_and_check_draw_a_progress_bar_on_a_terminal_only)
 {
     amp_pathset ps;
     const char *in = fx_tmp("bar.amp"), *out = fx_tmp("bar.gcode");
-    char args[1024], *err = malloc(1 << 16);
+    char args[1024], args2[1024], *err = malloc(1 << 16);
     if (!getenv("AMP_TOOL"))
         return;
     ck_assert_ptr_nonnull(err);
@@ -1267,6 +1268,12 @@ START_TEST(gcode_draws_a_progress_bar_on_a_terminal_only)
     ck_assert_msg(strstr(err, "gcode        [") && strstr(err, "%"), "no bar on the terminal: '%.300s'", err);
     ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, err, 1 << 16), 0);
     ck_assert_msg(!strstr(err, "gcode        ["), "a bar in a pipe: '%.300s'", err);
+    snprintf(args2, sizeof args2, "check %s --no-support", in);
+    fx_run_tool_tty(args2, err, 1 << 16);
+    ck_assert_msg(strstr(err, "check gouge"), "no bar on the terminal: '%.300s'", err);
+    fx_run_tool_ex(args2, NULL, 1, err, 1 << 16);
+    ck_assert_msg(!strstr(err, "check gouge") && strstr(err, "\ngouge: ") && strstr(err, "\nstrokes: "),
+                  "a bar in a pipe, or a result line broken: '%.300s'", err);
     remove(in);
     remove(out);
     free(err);
@@ -2330,7 +2337,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, sink_failure_stops_the_writer);
     tcase_add_test(tc, a_rewound_iterator_writes_the_same_job_again);
     tcase_add_test(tc, a_body_run_and_its_header_write_the_job_init_writes);
-    tcase_add_test(tc, gcode_draws_a_progress_bar_on_a_terminal_only);
+    tcase_add_test(tc, gcode_and_check_draw_a_progress_bar_on_a_terminal_only);
     tcase_add_test(tc, gcode_command_writes_file_and_reports_json);
     tcase_add_test(tc, demo_pipeline_gcode_parses_in_the_reader);
     tcase_add_test(tc, planar_beads_extrude_the_rounded_rectangle);

@@ -17,7 +17,7 @@ static int run_on_objects(const check_ctx *c, cli_json *j, int (*run)(const chec
             cli_json_bool(j, "ok", 0);
             cli_json_str(j, "reason", "no object path with a segment");
         } else {
-            printf("coverage: no object path with a segment covers the model: FAILED\n");
+            fprintf(c->out, "coverage: no object path with a segment covers the model: FAILED\n");
         }
         return CLI_FAILED;
     }
@@ -52,7 +52,7 @@ int check_coverage(const check_ctx *c, cli_json *j)
         cli_json_bool(j, "ran", 0);
         cli_json_str(j, "reason", why);
     } else {
-        printf("coverage: not run (%s)\n", why);
+        fprintf(c->out, "coverage: not run (%s)\n", why);
     }
     return CLI_OK;
 }

@@ -17,7 +17,7 @@ int check_gouge(const check_ctx *c, cli_json *j)
             cli_json_bool(j, "ran", 0);
             cli_json_str(j, "reason", "no object paths");
         } else {
-            printf("gouge: not run (no object paths)\n");
+            fprintf(c->out, "gouge: not run (no object paths)\n");
         }
         return CLI_OK;
     }
@@ -49,10 +49,10 @@ int check_gouge(const check_ctx *c, cli_json *j)
         }
         cli_json_num(j, "time_s", cli_now() - t0);
     } else if (st == AMP_OK) {
-        printf("gouge: ok (%lu segments, z_offs %g mm, theta %g deg)\n", (unsigned long)nseg, c->head.z_offs,
+        fprintf(c->out, "gouge: ok (%lu segments, z_offs %g mm, theta %g deg)\n", (unsigned long)nseg, c->head.z_offs,
                c->head.theta * 57.295779513082320876);
     } else {
-        printf("gouge: FAILED: %s\n", err.msg);
+        fprintf(c->out, "gouge: FAILED: %s\n", err.msg);
     }
     if (st == AMP_ERR_CHECK && !j)
         fprintf(stderr, "ampath check: %s\n", err.msg);

@@ -73,7 +73,7 @@ int check_mesh(const check_ctx *c, cli_json *j)
             cli_json_num(j, "deposited_mm3", amp_pathset_volume(ps, AMP_ROLE_OBJECT));
             cli_json_num(j, "over_coverage", amp_over_coverage(ps, amp_mesh_volume(&m)));
         } else {
-            printf("coverage: gap %.4f mm (mean %.4f) against eps %.4f over %ld samples; %lu vertices more than "
+            fprintf(c->out, "coverage: gap %.4f mm (mean %.4f) against eps %.4f over %ld samples; %lu vertices more than "
                    "%.2f mm outside (worst %.4f mm): %s; over-coverage %.3f\n",
                    gap, mean, eps, c->samples, (unsigned long)outside, fmax(OUTSIDE_TOL, c->tol), worst_out,
                    rc == CLI_OK ? "ok" : "FAILED", amp_over_coverage(ps, amp_mesh_volume(&m)));

@@ -112,7 +112,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
             cli_json_bool(j, "ok", 0);
             cli_json_str(j, "reason", "no planar paths: nothing prints the layers of the mesh");
         } else {
-            printf("strokes: no planar paths: nothing prints the layers of the mesh: FAILED\n");
+            fprintf(c->out, "strokes: no planar paths: nothing prints the layers of the mesh: FAILED\n");
         }
         fprintf(stderr, "ampath check: no planar paths to print the layers of %s\n", mesh);
         return CLI_FAILED;
@@ -122,7 +122,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
             cli_json_bool(j, "ran", 0);
             cli_json_str(j, "reason", "no planar paths");
         } else {
-            printf("strokes: not run (no planar paths)\n");
+            fprintf(c->out, "strokes: not run (no planar paths)\n");
         }
         return CLI_OK;
     }
@@ -170,7 +170,7 @@ int check_stroke(const check_ctx *c, cli_json *j)
             cli_json_int(j, "layers_without_paths", (long long)missing);
             cli_json_int(j, "failed_paths", (long long)failed);
         } else {
-            printf("strokes: %lu planar paths, %lu crossings, %lu edges printed twice, %lu points outside%s%s: %s\n",
+            fprintf(c->out, "strokes: %lu planar paths, %lu crossings, %lu edges printed twice, %lu points outside%s%s: %s\n",
                    (unsigned long)planar, (unsigned long)cross, (unsigned long)reps, (unsigned long)outside,
                    nolayer ? " (some paths match no layer)" : "", missing ? " (some layers have no path)" : "",
                    ok ? "ok" : "FAILED");

@@ -3,13 +3,13 @@
 
 #define DEG 57.295779513082320876
 
-static void not_run(cli_json *j, const char *why)
+static void not_run(const check_ctx *c, cli_json *j, const char *why)
 {
     if (j) {
         cli_json_bool(j, "ran", 0);
         cli_json_str(j, "reason", why);
     } else {
-        printf("support: not run (%s)\n", why);
+        fprintf(c->out, "support: not run (%s)\n", why);
     }
 }
 
@@ -54,11 +54,11 @@ int check_support(const check_ctx *c, cli_json *j)
         nobj += c->ps->paths[i].role == AMP_ROLE_OBJECT;
     }
     if (nobj == 0) {
-        not_run(j, "no object paths");
+        not_run(c, j, "no object paths");
         return CLI_OK;
     }
     if (nsup == 0 && !c->support) {
-        not_run(j, "no support paths (--support requires every object path to be held)");
+        not_run(c, j, "no support paths (--support requires every object path to be held)");
         return CLI_OK;
     }
     amp_hold_opts_default(&o);
@@ -74,10 +74,10 @@ int check_support(const check_ctx *c, cli_json *j)
     if (j) {
         report_json(j, &o, &r, cli_now() - t0);
     } else if (r.failures == 0) {
-        printf("support: ok (every object bead held: %lu samples, %lu bridges up to %g mm, overhang %g deg)\n",
+        fprintf(c->out, "support: ok (every object bead held: %lu samples, %lu bridges up to %g mm, overhang %g deg)\n",
                (unsigned long)r.samples, (unsigned long)r.bridges, o.bridge, o.overhang * DEG);
     } else {
-        printf("support: FAILED: %lu object paths unheld, %.1f mm in the air (worst: path %lu, %.1f mm at %.2f %.2f %.2f)\n",
+        fprintf(c->out, "support: FAILED: %lu object paths unheld, %.1f mm in the air (worst: path %lu, %.1f mm at %.2f %.2f %.2f)\n",
                (unsigned long)r.npaths_failed, r.failed_mm, (unsigned long)r.worst_path, r.worst_mm, r.worst_at.x,
                r.worst_at.y, r.worst_at.z);
     }

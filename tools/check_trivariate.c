@@ -73,9 +73,9 @@ int check_trivariate(const check_ctx *c, cli_json *j)
         cli_json_num(j, "deposited_mm3", amp_pathset_volume(c->ps, AMP_ROLE_OBJECT));
         cli_json_num(j, "over_coverage", amp_over_coverage(c->ps, g.volume));
     } else {
-        printf("coverage: largest distance to a path %.4f mm over %lu samples (eps %.4f mm from %s): %s\n", g.gap,
+        fprintf(c->out, "coverage: largest distance to a path %.4f mm over %lu samples (eps %.4f mm from %s): %s\n", g.gap,
                (unsigned long)g.samples, eps, eps_from, rc == CLI_OK ? "ok" : "FAILED");
-        printf("coverage: worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n",
+        fprintf(c->out, "coverage: worst point (%.3f %.3f %.3f) at parameters (%.4f %.4f %.4f); over-coverage %.3f\n",
                g.worst.x, g.worst.y, g.worst.z, g.worst_par[0], g.worst_par[1], g.worst_par[2],
                amp_over_coverage(c->ps, g.volume));
     }

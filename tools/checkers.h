@@ -6,7 +6,7 @@
  * implements
  *     int check_NAME(const check_ctx *c, cli_json *j);
  * It decides itself whether it applies (the gouge check needs object paths,
- * the coverage check a model), prints one human line when j == NULL, or fills
+ * the coverage check a model), prints one human line to c->out when j == NULL, or fills
  * its own JSON section (the dispatcher has already opened "NAME": {...}) with
  * at least "ran" (bool) and, when it ran, "ok" (bool). It returns CLI_OK
  * (passed or not applicable), CLI_FAILED (a violation) or CLI_USAGE (bad
@@ -39,6 +39,7 @@ typedef struct check_ctx {
     double overhang;         /* --overhang DEG, radians (default 45 degrees) */
     double max_gap;          /* --max-gap G, mm (default 1) */
     double bridge;           /* --bridge B, mm (default 5) */
+    FILE *out;               /* where a checker prints its human line (stdout, or the dispatcher's buffer) */
 } check_ctx;
 
 /* No gouging (paper 1, §5.1): no earlier point inside the head cone while a later point prints. */

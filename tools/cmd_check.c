@@ -1,4 +1,7 @@
 /* ampath check — independent verification: a dispatcher over the checkers of checkers.h. */
+#define _POSIX_C_SOURCE 200809L /* open_memstream */
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "checkers.h"
@@ -113,6 +116,34 @@ static int check_parse(int argc, char **argv, check_ctx *c, int *skip, int *json
     return CLI_OK;
 }
 
+/* Run one checker under the progress bar (on a terminal: the checker running and the share of the checks done;
+ * a large job's gouge or coverage check takes seconds). Its human line is held back until the bar's line is
+ * cleared, so that the two never share a line of the terminal. */
+static int run_checker(const checker *k, check_ctx *c, cli_json *j, double done)
+{
+    cli_progress bar;
+    char *text = NULL, label[32];
+    size_t len = 0;
+    int rc;
+    snprintf(label, sizeof label, "check %s", k->name);
+    cli_progress_begin(&bar, label);
+    c->out = stdout;
+    if (bar.enabled && !j && (c->out = open_memstream(&text, &len)) == NULL)
+        c->out = stdout;
+    cli_progress_update(&bar, done);
+    rc = k->run(c, j);
+    if (bar.enabled)
+        fputs("\r\033[K", stderr); /* the bar's line cleared: the result takes its place */
+    if (c->out != stdout) {
+        fclose(c->out);
+        if (text)
+            fputs(text, stdout);
+        free(text);
+        c->out = stdout;
+    }
+    return rc;
+}
+
 int cmd_check(int argc, char **argv)
 {
     int json = 0, rc, failed = 0, usage = 0;
@@ -122,6 +153,7 @@ int cmd_check(int argc, char **argv)
     cli_json j;
     size_t i;
     memset(&c, 0, sizeof c);
+    c.out = stdout;
     memset(skip, 0, sizeof skip);
     if ((rc = check_parse(argc, argv, &c, skip, &json)) != CLI_OK)
         return rc;
@@ -144,7 +176,7 @@ int cmd_check(int argc, char **argv)
                 printf("%s: skipped (--no-%s)\n", checkers[i].name, checkers[i].name);
             }
         } else {
-            rc = checkers[i].run(&c, json ? &j : NULL);
+            rc = run_checker(&checkers[i], &c, json ? &j : NULL, (double)i / NCHECKERS);
             failed |= rc == CLI_FAILED;
             usage |= rc == CLI_USAGE;
         }
