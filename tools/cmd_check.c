@@ -132,7 +132,9 @@ static int run_checker(const checker *k, check_ctx *c, cli_json *j, double done)
         c->out = stdout;
     cli_progress_update(&bar, done);
     rc = k->run(c, j);
-    if (bar.enabled)
+    if (bar.enabled && j) /* the JSON object goes on at the end: the bar keeps its line, as in other commands */
+        cli_progress_end(&bar);
+    else if (bar.enabled)
         fputs("\r\033[K", stderr); /* the bar's line cleared: the result takes its place */
     if (c->out != stdout) {
         fclose(c->out);
