@@ -163,13 +163,23 @@ static int hent_better(const void *a, const void *b, const void *ctx)
  * growth over the kept pairs is exactly the growth over all pairs within 2 r_max, with a bounded number of
  * neighbours per tube instead of every fragment within 2 r_max (57 M pairs at eps 0.5 on the helix).
  */
+/* What a neighbour search reads of a candidate, in the grid's item order: a search runs along consecutive
+ * entries of each row of cells, and most candidates are turned away by these alone (a load of the fragment
+ * itself, far away in memory, was most of the search's time). */
+typedef struct gtube {
+    amp_vec3 ctr;
+    double rho;
+    amp_box3 box;
+    uint32_t f, path;
+} gtube;
+
 typedef struct mdr_ctx {
     const amp_allocator *a;
     const amp_fragments *fs;
     const amp_mdr_opts *o;
     ugrid g;
     amp_vec3 *ctr;
-    amp_vec3 *gpts; /* ctr in the grid's item order */
+    gtube *gt;      /* the candidates in the grid's item order */
     double *rho;   /* half the box diagonal: every point of the fragment is this close to its centre */
     double *arc;   /* arc length at each fragment's end along its path */
     double rho_max, reach;
@@ -178,13 +188,14 @@ typedef struct mdr_ctx {
 
 static double pair_upper(const mdr_ctx *c, double d) { return fmax(0.5 * d, d - c->o->r_min); }
 
-/* Fragments i and j may be neighbours at all: along one path only parts further apart than 2 r_max count. */
-static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j)
+/* Fragments i and j (of path pj) may be neighbours at all: along one path only parts further apart than
+ * 2 r_max count. */
+static int pair_allowed(const mdr_ctx *c, uint32_t i, uint32_t j, uint32_t pj)
 {
     const amp_fragments *fs = c->fs;
     if (i == j)
         return 0;
-    if (fs->frag[i].path == fs->frag[j].path) {
+    if (fs->frag[i].path == pj) {
         uint32_t lo = i < j ? i : j, hi = i < j ? j : i;
         return c->arc[hi - 1] - c->arc[lo] >= c->reach;
     }
@@ -218,15 +229,17 @@ static double box_dist2(const amp_box3 *a, const amp_box3 *b)
     return gx * gx + gy * gy + gz * gz;
 }
 
-/* Candidate j of tube i at squared centre distance d2; returns 1 when the buffer overflowed. */
-static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double d2, scan_state *s)
+/* Candidate t (grid entry) of tube i (box @p bi) at squared centre distance d2; returns 1 when the buffer
+ * overflowed. */
+static int scan_visit(mdr_ctx *c, uint32_t i, const amp_box3 *bi, const gtube *t, double d2, scan_state *s)
 {
-    double d, far = s->cut + c->rho[i] + c->rho[j];
+    uint32_t j = t->f;
+    double d, far = s->cut + c->rho[i] + t->rho;
     /* the centre bound sqrt(d2) - rho_i - rho_j > cut; its square root only near the bound (a margin of
      * 2e-9 relative keeps the skipped cases far from rounding) */
-    if (!(d2 < far * far * (1.0 - 2e-9)) && sqrt(d2) - c->rho[i] - c->rho[j] > s->cut)
+    if (!(d2 < far * far * (1.0 - 2e-9)) && sqrt(d2) - c->rho[i] - t->rho > s->cut)
         return 0;
-    if (box_dist2(&c->fs->frag[i].box, &c->fs->frag[j].box) > s->cut * s->cut || !pair_allowed(c, i, j))
+    if (box_dist2(bi, &t->box) > s->cut * s->cut || !pair_allowed(c, i, j, t->path))
         return 0;
     d = frag_dist(c->fs, i, j);
     if (d >= c->reach)
@@ -251,6 +264,7 @@ static int scan_visit(mdr_ctx *c, uint32_t i, uint32_t j, double d2, scan_state 
 static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, scan_state *st)
 {
     const ugrid *g = &c->g;
+    const amp_box3 *bi = &c->fs->frag[i].box;
     amp_vec3 p = c->ctr[i];
     size_t x0, y0, z0, x1, y1, z1, y, z;
     double R2 = R * R, s2 = skip_r > 0.0 ? skip_r * skip_r : -1.0;
@@ -258,12 +272,13 @@ static void for_near(mdr_ctx *c, uint32_t i, double R, double skip_r, scan_state
     cell_of(g, amp_v3(p.x + R, p.y + R, p.z + R), &x1, &y1, &z1);
     for (z = z0; z <= z1; z++)
         for (y = y0; y <= y1; y++) {
-            /* the cells of one row are consecutive in the grid's item order, and gpts holds their centres */
+            /* the cells of one row are consecutive in the grid's item order, as the candidates in gt */
             size_t row = (z * g->ny + y) * g->nx, q, qe = g->start[row + x1 + 1];
             for (q = g->start[row + x0]; q < qe; q++) {
-                double dx = c->gpts[q].x - p.x, dy = c->gpts[q].y - p.y, dz = c->gpts[q].z - p.z;
+                const gtube *t = &c->gt[q];
+                double dx = t->ctr.x - p.x, dy = t->ctr.y - p.y, dz = t->ctr.z - p.z;
                 double d2 = dx * dx + dy * dy + dz * dz;
-                if (d2 <= R2 && d2 > s2 && scan_visit(c, i, g->item[q], d2, st))
+                if (d2 <= R2 && d2 > s2 && scan_visit(c, i, bi, t, d2, st))
                     return;
             }
         }
@@ -592,13 +607,19 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
     /* cells about a fragment long: the searches reach only a few cells beyond the nearest neighbour */
     if ((stt = ugrid_build(&c.g, a, c.ctr, fs.n, fmax(o->fragment, 2.0 * c.rho_max), err)) != AMP_OK)
         goto done;
-    c.gpts = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.gpts);
-    if (!c.gpts) {
+    c.gt = amp_calloc(a, fs.n ? fs.n : 1, sizeof *c.gt);
+    if (!c.gt) {
         stt = amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for %lu tubes", (unsigned long)fs.n);
         goto done;
     }
-    for (i = 0; i < fs.n; i++)
-        c.gpts[i] = c.ctr[c.g.item[i]];
+    for (i = 0; i < fs.n; i++) {
+        uint32_t f = c.g.item[i];
+        c.gt[i].ctr = c.ctr[f];
+        c.gt[i].rho = c.rho[f];
+        c.gt[i].box = fs.frag[f].box;
+        c.gt[i].f = f;
+        c.gt[i].path = fs.frag[f].path;
+    }
     if ((stt = find_neighbours(&c, &nb)) != AMP_OK)
         goto done;
     s.pairs = nb.n;
@@ -610,7 +631,7 @@ amp_status amp_mdr(const amp_pathset *in, const amp_mdr_opts *o, amp_pathset *ou
 done:
     ugrid_free(&c.g, a);
     amp_free(a, c.ctr);
-    amp_free(a, c.gpts);
+    amp_free(a, c.gt);
     amp_free(a, c.rho);
     amp_free(a, c.arc);
     amp_free(a, nb.row);
