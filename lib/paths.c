@@ -172,12 +172,19 @@ amp_box3 amp_pathset_bbox(const amp_pathset *ps)
 
 amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err)
 {
+    return amp_pathset_read_file_progress(ps, path, NULL, NULL, err);
+}
+
+amp_status amp_pathset_read_file_progress(amp_pathset *ps, const char *path,
+                                          void (*progress)(void *user, double fraction), void *user,
+                                          amp_error *err)
+{
     char *text;
     size_t len;
     amp_status st = amp_read_file(path, ps->alloc, AMP_PATHS_READ_MAX, &text, &len, err);
     if (st != AMP_OK)
         return st;
-    st = amp_pathset_parse(ps, text, len, err);
+    st = amp_pathset_parse_progress(ps, text, len, progress, user, err);
     amp_free(ps->alloc, text);
     if (st != AMP_OK && err) {
         char msg[AMP_ERROR_MSG_SIZE];

@@ -259,10 +259,11 @@ static size_t split_chunks(const char *text, size_t len, size_t body, size_t nch
     return n;
 }
 
-/* The chunks read in their places; 0 (and the set as it was) when one is not clean or the room is missing. */
-static int parse_chunked(amp_pathset *ps, const char *text, chunk *c, size_t n)
+/* The chunks read in their places; 0 (and the set as it was) when one is not clean or the room is missing.
+ * @p pg (may be NULL) hears of the chunks done, from the calling thread. */
+static int parse_chunked(amp_pathset *ps, const char *text, chunk *c, size_t n, const amp_parse_progress *pg)
 {
-    size_t np0 = ps->npaths, nv0 = ps->nverts, np = np0, nv = nv0, j;
+    size_t np0 = ps->npaths, nv0 = ps->nverts, np = np0, nv = nv0, j, done = 0;
     long k;
     int ok = 1;
     void *p = ps->paths, *v = ps->verts;
@@ -279,8 +280,22 @@ static int parse_chunked(amp_pathset *ps, const char *text, chunk *c, size_t n)
         return 0;
     ps->verts = v;
 #pragma omp parallel for schedule(dynamic, 1)
-    for (k = 0; k < (long)n; k++)
+    for (k = 0; k < (long)n; k++) {
         parse_chunk(ps, text, &c[k]);
+        if (pg && pg->fn) {
+            size_t d;
+#pragma omp atomic capture
+            d = ++done;
+#ifdef _OPENMP
+            if (omp_get_thread_num() == 0 && d < n)
+#else
+            if (d < n)
+#endif
+                pg->fn(pg->user, (double)d / (double)n);
+        }
+    }
+    if (pg && pg->fn)
+        pg->fn(pg->user, 1.0); /* the last chunk may end on another thread */
     for (j = 0; j < n; j++)
         ok = ok && c[j].ok;
     ps->npaths = ok ? np : np0;
@@ -290,6 +305,12 @@ static int parse_chunked(amp_pathset *ps, const char *text, chunk *c, size_t n)
 
 amp_status amp_pathset_parse_chunks(amp_pathset *ps, const char *text, size_t len, size_t nchunks, size_t *used,
                                     amp_error *err)
+{
+    return amp_pathset_parse_chunks_progress(ps, text, len, nchunks, used, NULL, err);
+}
+
+amp_status amp_pathset_parse_chunks_progress(amp_pathset *ps, const char *text, size_t len, size_t nchunks,
+                                             size_t *used, const amp_parse_progress *pg, amp_error *err)
 {
     chunk c[CHUNKS_MAX];
     amp_lex lx;
@@ -307,7 +328,7 @@ amp_status amp_pathset_parse_chunks(amp_pathset *ps, const char *text, size_t le
     n = split_chunks(text, len, lx.pos, nchunks, c);
     for (j = 0; j < n && ok; j++)
         ok = count_chunk(text, c[j].b, c[j].e, &c[j].np, &c[j].nv);
-    if (n < 2 || !ok || !parse_chunked(ps, text, c, n))
+    if (n < 2 || !ok || !parse_chunked(ps, text, c, n, pg))
         return parse_one_piece(ps, text, len, err);
     if (used)
         *used = n;
@@ -324,4 +345,22 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
     n = 1; /* one thread: the chunks would only add their counting */
 #endif
     return amp_pathset_parse_chunks(ps, text, len, n, NULL, err);
+}
+
+amp_status amp_pathset_parse_progress(amp_pathset *ps, const char *text, size_t len,
+                                      void (*progress)(void *user, double fraction), void *user, amp_error *err)
+{
+    amp_parse_progress pg;
+    amp_status st;
+    size_t n = len / CHUNK_MIN_BYTES, used = 1;
+    if (!progress)
+        return amp_pathset_parse(ps, text, len, err);
+    /* chunks of a megabyte or more, up to CHUNKS_MAX, on any thread count: the report counts them (one
+     * thread pays for their counting, about a tenth of the read) */
+    pg.fn = progress;
+    pg.user = user;
+    st = amp_pathset_parse_chunks_progress(ps, text, len, n > CHUNKS_MAX ? CHUNKS_MAX : n, &used, &pg, err);
+    if (st == AMP_OK && used == 1)
+        progress(user, 1.0); /* read in one piece */
+    return st;
 }

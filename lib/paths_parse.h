@@ -15,4 +15,14 @@
 amp_status amp_pathset_parse_chunks(amp_pathset *ps, const char *text, size_t len, size_t nchunks, size_t *used,
                                     amp_error *err);
 
+/** A progress report of the chunked read: fn(user, chunks done / chunks), from the calling thread. */
+typedef struct amp_parse_progress {
+    void (*fn)(void *user, double fraction);
+    void *user;
+} amp_parse_progress;
+
+/** amp_pathset_parse_chunks() reporting to @p pg (may be NULL) as chunks are read. */
+amp_status amp_pathset_parse_chunks_progress(amp_pathset *ps, const char *text, size_t len, size_t nchunks,
+                                             size_t *used, const amp_parse_progress *pg, amp_error *err);
+
 #endif

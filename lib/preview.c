@@ -129,6 +129,29 @@ static void summary(const amp_pathset *ps, char *buf, size_t cap, size_t *suppor
  */
 typedef void (*seg_fn)(void *user, const double a[5], const double b[5]);
 
+/* The progress report: vertices walked of the two views' total, reported at every 1/256 of it. */
+typedef struct pv_prog {
+    const amp_preview_opts *o;
+    size_t total, done, next;
+} pv_prog;
+
+static void prog_init(pv_prog *g, const amp_preview_opts *o, const amp_pathset *ps)
+{
+    g->o = o;
+    g->total = 2 * ps->nverts;
+    g->done = 0;
+    g->next = g->total / 256;
+}
+
+static void prog_add(pv_prog *g, size_t n)
+{
+    g->done += n;
+    if (g->o->progress && (g->done >= g->next || g->done == g->total) && g->total > 0) {
+        g->o->progress(g->o->progress_user, (double)g->done / (double)g->total);
+        g->next = g->done + g->total / 256;
+    }
+}
+
 static size_t walk_path(const amp_pathset *ps, size_t i, const view *v, seg_fn fn, void *user)
 {
     const amp_pvert *p = amp_pathset_path_verts(ps, i);
@@ -315,7 +338,7 @@ static amp_status finish(const amp_pathset *ps, const pv_out *o, int width, int 
 }
 
 /* Both views and the legend into the raster; returns the number of support paths. */
-static size_t draw_png(raster *r, const amp_pathset *ps, amp_preview_stats *st)
+static size_t draw_png(raster *r, const amp_pathset *ps, amp_preview_stats *st, pv_prog *g)
 {
     static const unsigned char frame[3] = {210, 210, 205}, grey[3] = {150, 150, 150};
     view v[2];
@@ -330,6 +353,7 @@ static size_t draw_png(raster *r, const amp_pathset *ps, amp_preview_stats *st)
         for (i = ps->npaths; i-- > 0;) {
             path_colour(ps, i, r->col);
             st->drawn += walk_path(ps, i, &v[k], raster_seg, r);
+            prog_add(g, ps->paths[i].n);
         }
         text(r, (int)v[k].x0 + 4 * u, 10, u, k == 0 ? "isometric view" : "top view");
     }
@@ -353,17 +377,36 @@ static size_t draw_png(raster *r, const amp_pathset *ps, amp_preview_stats *st)
     return support;
 }
 
+void amp_preview_opts_default(amp_preview_opts *o)
+{
+    o->width = 1600;
+    o->progress = NULL;
+    o->progress_user = NULL;
+}
+
 amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
                            amp_error *err)
+{
+    amp_preview_opts o;
+    amp_preview_opts_default(&o);
+    o.width = width;
+    return amp_preview_png_opts(ps, &o, sink, user, st, err);
+}
+
+amp_status amp_preview_png_opts(const amp_pathset *ps, const amp_preview_opts *opt, amp_sink_fn sink, void *user,
+                                amp_preview_stats *st, amp_error *err)
 {
     static const unsigned char bg[3] = {250, 250, 247};
     amp_preview_stats tmp;
     pv_out o;
+    pv_prog g;
     raster r;
     size_t i, npix, support;
-    amp_status s = check_args(ps, width, sink, err);
+    int width = opt ? opt->width : 0;
+    amp_status s = opt ? check_args(ps, width, sink, err) : amp_fail(err, AMP_ERR_ARG, 0, "preview: NULL options");
     if (s != AMP_OK)
         return s;
+    prog_init(&g, opt, ps);
     if (!st)
         st = &tmp;
     memset(st, 0, sizeof *st);
@@ -381,7 +424,7 @@ amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, v
         memcpy(r.rgb + 3 * i, bg, 3);
         r.depth[i] = -HUGE_VALF;
     }
-    support = draw_png(&r, ps, st);
+    support = draw_png(&r, ps, st, &g);
     o.sink = sink;
     o.user = user;
     o.bytes = 0;
@@ -457,16 +500,27 @@ static void svg_legend(pv_out *o, const amp_pathset *ps, int width, int h, size_
 amp_status amp_preview_svg(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
                            amp_error *err)
 {
+    amp_preview_opts o;
+    amp_preview_opts_default(&o);
+    o.width = width;
+    return amp_preview_svg_opts(ps, &o, sink, user, st, err);
+}
+
+amp_status amp_preview_svg_opts(const amp_pathset *ps, const amp_preview_opts *opt, amp_sink_fn sink, void *user,
+                                amp_preview_stats *st, amp_error *err)
+{
     amp_preview_stats tmp;
     view v[2];
     size_t i, support;
-    int k, h = width / 2 + LEGEND_H;
+    int width = opt ? opt->width : 0, k, h = width / 2 + LEGEND_H;
     char col[8];
     svgw s;
     pv_out o;
-    amp_status rc = check_args(ps, width, sink, err);
+    pv_prog g;
+    amp_status rc = opt ? check_args(ps, width, sink, err) : amp_fail(err, AMP_ERR_ARG, 0, "preview: NULL options");
     if (rc != AMP_OK)
         return rc;
+    prog_init(&g, opt, ps);
     if (!st)
         st = &tmp;
     memset(st, 0, sizeof *st);
@@ -494,6 +548,7 @@ amp_status amp_preview_svg(const amp_pathset *ps, int width, amp_sink_fn sink, v
             s.col = col;
             st->drawn += walk_path(ps, i, &v[k], svg_seg, &s);
             svg_close(&s);
+            prog_add(&g, ps->paths[i].n);
         }
         pv_printf(&o, "</g>\n");
     }

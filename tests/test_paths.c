@@ -404,6 +404,64 @@ START_TEST(chunked_read_gives_the_one_piece_read_at_every_chunk_count)
 }
 END_TEST
 
+/* The fractions a progress report heard. */
+typedef struct heard {
+    double f[256];
+    size_t n;
+} heard;
+
+static void hear(void *user, double fraction)
+{
+    heard *h = user;
+    if (h->n < 256)
+        h->f[h->n] = fraction;
+    h->n++;
+}
+
+/* A read with a progress report is the read without one (a text of several megabytes, so that it is read in
+ * chunks), and the report rises to 1 in at most 64 steps; a text under a megabyte is read in one piece and
+ * reports 1 once it is read. */
+START_TEST(a_read_with_progress_reads_the_same_set_and_reports_up_to_one)
+{
+    size_t len, k;
+    char *text = varied_text(11, 8000, &len);
+    amp_pathset plain, reported;
+    amp_error err;
+    heard h;
+    ck_assert_uint_gt(len, (size_t)3 << 20);
+    amp_pathset_init(&plain, NULL);
+    amp_pathset_init(&reported, NULL);
+    ck_assert_int_eq(amp_pathset_parse(&plain, text, len, &err), AMP_OK);
+    h.n = 0;
+    ck_assert_int_eq(amp_pathset_parse_progress(&reported, text, len, hear, &h, &err), AMP_OK);
+    same_sets(&plain, &reported);
+    ck_assert_uint_ge(h.n, 2); /* at least one chunk before the last, on the calling thread */
+    ck_assert_uint_le(h.n, 64);
+    for (k = 0; k < h.n; k++) {
+        ck_assert(h.f[k] > 0.0 && h.f[k] <= 1.0);
+        ck_assert(k == 0 || h.f[k] > h.f[k - 1]);
+    }
+    ck_assert(h.f[h.n - 1] == 1.0);
+    amp_pathset_free(&reported);
+    /* no report: exactly amp_pathset_parse() */
+    amp_pathset_init(&reported, NULL);
+    ck_assert_int_eq(amp_pathset_parse_progress(&reported, text, len, NULL, NULL, &err), AMP_OK);
+    same_sets(&plain, &reported);
+    amp_pathset_free(&reported);
+    amp_pathset_free(&plain);
+    free(text);
+    text = varied_text(11, 40, &len);
+    amp_pathset_init(&plain, NULL);
+    h.n = 0;
+    ck_assert_int_eq(amp_pathset_parse_progress(&plain, text, len, hear, &h, &err), AMP_OK);
+    ck_assert_uint_eq(plain.npaths, 40);
+    ck_assert_uint_eq(h.n, 1);
+    ck_assert(h.f[0] == 1.0);
+    amp_pathset_free(&plain);
+    free(text);
+}
+END_TEST
+
 /* Replace the line that starts at or after byte @p at (the header line excluded) with @p line. */
 static char *with_line(const char *text, size_t len, size_t at, const char *line, size_t *olen)
 {
@@ -501,6 +559,7 @@ static Suite *paths_suite(void)
     tcase_add_test(tc, file_write_is_atomic_and_reads_back);
     tcase_add_test(tc, written_text_equals_printf_across_blocks_and_empty_paths);
     tcase_add_test(tc, chunked_read_gives_the_one_piece_read_at_every_chunk_count);
+    tcase_add_test(tc, a_read_with_progress_reads_the_same_set_and_reports_up_to_one);
     tcase_add_test(tc, chunked_read_fails_exactly_as_the_one_piece_read);
     tcase_add_test(tc, chunked_read_out_of_memory_leaves_the_set_as_it_was);
     suite_add_tcase(s, tc);

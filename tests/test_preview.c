@@ -493,6 +493,103 @@ START_TEST(library_preview_reports_sink_memory_and_argument_errors)
 }
 END_TEST
 
+/* The fractions a progress report heard. */
+typedef struct heard {
+    double last;
+    size_t n;
+    int rising;
+} heard;
+
+static void hear(void *user, double fraction)
+{
+    heard *h = user;
+    h->rising = h->rising && fraction > h->last && fraction <= 1.0;
+    h->last = fraction;
+    h->n++;
+}
+
+/* A picture drawn with a progress report is the picture drawn without one, byte for byte; the report rises
+ * through a few hundred steps at most to the whole of both views. */
+START_TEST(preview_progress_reports_the_vertices_walked_and_changes_no_byte)
+{
+    amp_pathset ps;
+    amp_preview_opts o;
+    amp_error err;
+    int fmt;
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 300, 40); /* reports come after whole paths: many paths */
+    for (fmt = 0; fmt < 2; fmt++) {
+        amp_buf plain, reported;
+        heard h = {0.0, 0, 1};
+        amp_buf_init(&plain, NULL);
+        amp_buf_init(&reported, NULL);
+        amp_preview_opts_default(&o);
+        ck_assert_int_eq(o.width, 1600);
+        o.width = 800;
+        o.progress = hear;
+        o.progress_user = &h;
+        ck_assert_int_eq(fmt ? amp_preview_svg(&ps, 800, amp_buf_sink, &plain, NULL, &err)
+                             : amp_preview_png(&ps, 800, amp_buf_sink, &plain, NULL, &err),
+                         AMP_OK);
+        ck_assert_int_eq(fmt ? amp_preview_svg_opts(&ps, &o, amp_buf_sink, &reported, NULL, &err)
+                             : amp_preview_png_opts(&ps, &o, amp_buf_sink, &reported, NULL, &err),
+                         AMP_OK);
+        ck_assert_uint_eq(plain.len, reported.len);
+        ck_assert(memcmp(plain.data, reported.data, plain.len) == 0);
+        ck_assert_msg(h.n >= 100 && h.n <= 300, "%lu reports", (unsigned long)h.n);
+        ck_assert(h.rising);
+        ck_assert_double_eq_tol(h.last, 1.0, 1e-12);
+        amp_buf_free(&plain);
+        amp_buf_free(&reported);
+    }
+    ck_assert_int_eq(amp_preview_png_opts(&ps, NULL, amp_buf_sink, NULL, NULL, &err), AMP_ERR_ARG);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+/* On a terminal, `preview` draws its bar, and a job of 16 MB or more a bar while it is read (the commands
+ * that read a job all read it through one function); into a pipe, neither. */
+START_TEST(preview_and_the_reading_of_a_large_job_draw_bars_on_a_terminal_only)
+{
+    amp_pathset ps;
+    const char *in = fx_tmp("big.amp"), *out = fx_tmp("big.png"), *small = fx_tmp("small.amp");
+    char args[1024], *err = malloc(1 << 16);
+    FILE *f;
+    long size;
+    if (!getenv("AMP_TOOL"))
+        return;
+    ck_assert_ptr_nonnull(err);
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 100, 4000);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, in, NULL, NULL), AMP_OK);
+    f = fopen(in, "rb");
+    ck_assert_ptr_nonnull(f);
+    fseek(f, 0, SEEK_END);
+    size = ftell(f);
+    fclose(f);
+    ck_assert_int_ge(size, 16L << 20);
+    snprintf(args, sizeof args, "preview %s -o %s --width 400", in, out);
+    ck_assert_int_eq(fx_run_tool_tty(args, err, 1 << 16), 0);
+    ck_assert_msg(strstr(err, "reading      [") && strstr(err, "preview      ["), "no bars on the terminal: '%.300s'",
+                  err);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 1, err, 1 << 16), 0);
+    ck_assert_msg(!strstr(err, "["), "a bar in a pipe: '%.300s'", err);
+    /* a small job is read without a bar (the command's own bar stays) */
+    amp_pathset_free(&ps);
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 10, 100);
+    ck_assert_int_eq(amp_pathset_write_file(&ps, small, NULL, NULL), AMP_OK);
+    snprintf(args, sizeof args, "preview %s -o %s --width 400", small, out);
+    ck_assert_int_eq(fx_run_tool_tty(args, err, 1 << 16), 0);
+    ck_assert_msg(!strstr(err, "reading") && strstr(err, "preview      ["), "bars of a small job: '%.300s'", err);
+    remove(in);
+    remove(small);
+    remove(out);
+    free(err);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *preview_suite(void)
 {
     Suite *s = suite_create("preview");
@@ -503,6 +600,8 @@ static Suite *preview_suite(void)
     tcase_add_test(tc, preview_bad_usage_exits_2);
     tcase_add_test(tc, library_pictures_are_the_tool_files_byte_for_byte);
     tcase_add_test(tc, library_preview_reports_sink_memory_and_argument_errors);
+    tcase_add_test(tc, preview_progress_reports_the_vertices_walked_and_changes_no_byte);
+    tcase_add_test(tc, preview_and_the_reading_of_a_large_job_draw_bars_on_a_terminal_only);
     suite_add_tcase(s, tc);
     return s;
 }

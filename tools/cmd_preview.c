@@ -23,6 +23,8 @@ int cmd_preview(int argc, char **argv)
     amp_status s;
     amp_pathset ps;
     amp_preview_stats st;
+    amp_preview_opts po;
+    cli_progress bar;
     double t0;
     amp_out f;
     amp_error err;
@@ -58,8 +60,14 @@ int cmd_preview(int argc, char **argv)
         return cli_fail_err("preview", &err);
     }
     /* the renderer lives in the library (lib/preview.c) so that bindings write the same bytes */
-    s = png ? amp_preview_png(&ps, (int)width, amp_out_sink, &f, &st, &err)
-            : amp_preview_svg(&ps, (int)width, amp_out_sink, &f, &st, &err);
+    amp_preview_opts_default(&po);
+    po.width = (int)width;
+    po.progress = cli_progress_fn;
+    po.progress_user = &bar;
+    cli_progress_begin(&bar, "preview");
+    s = png ? amp_preview_png_opts(&ps, &po, amp_out_sink, &f, &st, &err)
+            : amp_preview_svg_opts(&ps, &po, amp_out_sink, &f, &st, &err);
+    cli_progress_end(&bar);
     if (s != AMP_OK) {
         if (f.werr)
             amp_fail(&err, AMP_ERR_IO, 0, "%s: %s", f.target, strerror(f.werr));

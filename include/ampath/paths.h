@@ -171,6 +171,20 @@ amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_
 amp_status amp_pathset_read_file(amp_pathset *ps, const char *path, amp_error *err);
 
 /**
+ * amp_pathset_parse() reporting its progress: @p progress (may be NULL: then exactly amp_pathset_parse()) is
+ * called from the calling thread with the fraction of the text read (0..1), at most 64 times. The same paths,
+ * errors and messages; a text over a megabyte is read in chunks even on one thread (their counting costs
+ * about a tenth of the read).
+ */
+amp_status amp_pathset_parse_progress(amp_pathset *ps, const char *text, size_t len,
+                                      void (*progress)(void *user, double fraction), void *user, amp_error *err);
+
+/** amp_pathset_read_file() reporting the parse's progress as amp_pathset_parse_progress() does. */
+amp_status amp_pathset_read_file_progress(amp_pathset *ps, const char *path,
+                                          void (*progress)(void *user, double fraction), void *user,
+                                          amp_error *err);
+
+/**
  * Write @p ps as `.amp` text through @p sink (`path <role> <n> [<h>]`, h
  * only for planar beads). Coordinates are written with 10 significant digits (sub-micron for parts up to 1 m). @p comment, if not
  * NULL, is written as `# ` lines after the header (newlines allowed).

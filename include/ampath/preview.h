@@ -54,6 +54,26 @@ amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, v
 amp_status amp_preview_svg(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
                            amp_error *err);
 
+/** Options of amp_preview_png_opts() and amp_preview_svg_opts(). */
+typedef struct amp_preview_opts {
+    int width; /**< picture width, pixels (AMP_PREVIEW_MIN_WIDTH..AMP_PREVIEW_MAX_WIDTH; default 1600) */
+    /** Optional progress report: the fraction (0..1) of the paths' vertices walked for both views, from the
+     * calling thread, a few hundred times at most (a job of a few hundred MB takes seconds to draw). */
+    void (*progress)(void *user, double fraction);
+    void *progress_user; /**< passed to progress */
+} amp_preview_opts;
+
+/** Defaults: width 1600, no progress report. */
+void amp_preview_opts_default(amp_preview_opts *o);
+
+/** amp_preview_png() with options (the same bytes for the same width); AMP_ERR_ARG when @p o is NULL. */
+amp_status amp_preview_png_opts(const amp_pathset *ps, const amp_preview_opts *o, amp_sink_fn sink, void *user,
+                                amp_preview_stats *st, amp_error *err);
+
+/** amp_preview_svg() with options (the same bytes for the same width); AMP_ERR_ARG when @p o is NULL. */
+amp_status amp_preview_svg_opts(const amp_pathset *ps, const amp_preview_opts *o, amp_sink_fn sink, void *user,
+                                amp_preview_stats *st, amp_error *err);
+
 /** CRC-32 (ISO 3309, as PNG uses) of @p n bytes, continuing from @p crc (start with 0). Pure function. */
 unsigned long amp_preview_crc32(unsigned long crc, const unsigned char *p, size_t n);
 
