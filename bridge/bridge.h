@@ -51,10 +51,11 @@ typedef struct br_job {
  * state the job had reached before that line. An `.amp` job is written for the
  * printer profile @p printer (a built-in name or a PrusaSlicer `.ini`, as
  * `ampath gcode --printer`; NULL = the generic profile): its bed, placement,
- * temperatures, speeds and start/end G-code. 0 or -1 with @p why.
+ * temperatures, speeds and start/end G-code. @p bars: draw bars on stderr while a job of 16 MB or more is
+ * read and checked (a terminal). 0 or -1 with @p why.
  */
 int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, long resume_from,
-                char *why, size_t whylen);
+                int bars, char *why, size_t whylen);
 /** Next command: 1 with @p buf and *jobline (0 for preamble lines), 0 at the end, -1 on a read error. */
 int br_job_next(br_job *j, char *buf, size_t cap, long *jobline);
 void br_job_close(br_job *j);

@@ -17,6 +17,47 @@
 #include "bridge.h"
 
 #define JOB_LINE_MAX 4096
+/* Jobs from this size on show bars while they are read and checked, before the first line goes out (a
+ * bed-sized .amp job is parsed and written twice there: seconds of silence otherwise). */
+#define JOB_BAR_BYTES ((off_t)16 << 20)
+
+/* The bar of the job's preparation on stderr (a terminal: the session's progress flag), as ampath's own. */
+typedef struct jbar {
+    int on, permille;
+    const char *label; /* the bar being drawn; NULL: none */
+} jbar;
+
+static void jbar_show(jbar *b, const char *label, double f)
+{
+    int p, i;
+    if (!b->on)
+        return;
+    p = (int)((f < 0.0 ? 0.0 : f > 1.0 ? 1.0 : f) * 1000.0);
+    if (label == b->label && p == b->permille)
+        return;
+    if (b->label && label != b->label)
+        fputc('\n', stderr);
+    b->label = label;
+    b->permille = p;
+    fprintf(stderr, "\r%-12s [", label);
+    for (i = 0; i < 30; i++)
+        fputc(i < p * 30 / 1000 ? '#' : ' ', stderr);
+    fprintf(stderr, "] %5.1f%%", p / 10.0);
+    fflush(stderr);
+}
+
+/* The bar's line ended (at 100 % when @p done). */
+static void jbar_end(jbar *b, int done)
+{
+    if (!b->on || !b->label)
+        return;
+    if (done)
+        jbar_show(b, b->label, 1.0);
+    fputc('\n', stderr);
+    b->label = NULL;
+}
+
+static void jbar_read(void *user, double f) { jbar_show(user, "reading", f); }
 
 /* Printer state reached by the lines before the resume point (what a restart must restore). */
 typedef struct job_state {
@@ -134,8 +175,8 @@ static int ends_with(const char *s, const char *suf)
 
 /* .amp: parse the paths and start the G-code writer for the printer profile;
  * the firmware flavour is the one the bridge speaks, whatever the profile says. */
-static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, char *why,
-                    size_t whylen)
+static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, jbar *bar,
+                    char *why, size_t whylen)
 {
     char *text = NULL;
     size_t len = 0;
@@ -143,7 +184,7 @@ static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const 
     amp_error_clear(&err);
     amp_pathset_init(&j->ps, NULL);
     if (amp_read_file(path, NULL, AMP_PATHS_READ_MAX, &text, &len, &err) != AMP_OK ||
-        amp_pathset_parse(&j->ps, text, len, &err) != AMP_OK) {
+        amp_pathset_parse_progress(&j->ps, text, len, bar->on ? jbar_read : NULL, bar, &err) != AMP_OK) {
         snprintf(why, whylen, "%s:%ld: %s", path, err.line, err.msg);
         amp_free(NULL, text);
         amp_pathset_free(&j->ps);
@@ -157,6 +198,9 @@ static int open_amp(br_job *j, const char *path, amp_proto_flavor flavor, const 
         return -1;
     }
     j->go.flavor = flavor == AMP_PROTO_KLIPPER ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN;
+    jbar_end(bar, 1);
+    if (bar->on) /* init runs the whole job once for the header's figures; no bar there */
+        fprintf(stderr, "preparing    the G-code of %lu paths (the writer's first run)\n", (unsigned long)j->ps.npaths);
     /* the profile's start/end macros see the placed job, as in `ampath gcode` */
     if (amp_printer_gcode_job(&j->pr, &j->go, &j->ps, &j->it, &err) != AMP_OK ||
         amp_gcode_iter_init(&j->it, &j->ps, &j->go, &err) != AMP_OK) {
@@ -279,21 +323,36 @@ static int check_command(const char *c, amp_proto_flavor flavor, char *bad, size
     return 0;
 }
 
+/* The share of the job's first pass done: paths written (.amp) or bytes read (.gcode). */
+static double pass_done(br_job *j, off_t size)
+{
+    if (j->is_amp)
+        return j->it.ps->npaths ? (double)j->it.path / (double)j->it.ps->npaths : 1.0;
+    return size > 0 ? (double)ftell(j->f) / (double)size : 1.0;
+}
+
 int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char *printer, long resume_from,
-                char *why, size_t whylen)
+                int bars, char *why, size_t whylen)
 {
     char buf[JOB_LINE_MAX];
     long line = 0, worst_n;
     job_state st;
+    struct stat sb;
+    jbar bar;
     memset(j, 0, sizeof *j);
     memset(&st, 0, sizeof st);
     snprintf(j->path, sizeof j->path, "%s", path);
     j->first_line = resume_from > 1 ? resume_from : 1;
     if (check_source(path, why, whylen) != 0)
         return -1;
+    bar.on = bars && stat(path, &sb) == 0 && sb.st_size >= JOB_BAR_BYTES;
+    bar.permille = -1;
+    bar.label = NULL;
     if (ends_with(path, ".amp")) {
-        if (open_amp(j, path, flavor, printer, why, whylen) != 0)
+        if (open_amp(j, path, flavor, printer, &bar, why, whylen) != 0) {
+            jbar_end(&bar, 0);
             return -1;
+        }
     } else {
         j->f = fopen(path, "r");
         if (!j->f) {
@@ -315,6 +374,8 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char
             break;
         n = strlen(buf);
         line++;
+        if ((line & 4095) == 0)
+            jbar_show(&bar, "checking", pass_done(j, bar.on ? sb.st_size : 0));
         if (!j->is_amp && ftell(j->f) - pos0 != (long)n) {
             snprintf(why, whylen, "%s:%ld: NUL byte: not a G-code text file; nothing was sent", path, line);
             goto fail;
@@ -360,8 +421,10 @@ int br_job_open(br_job *j, const char *path, amp_proto_flavor flavor, const char
         goto fail;
     }
     j->line = 0;
+    jbar_end(&bar, 1);
     return 0;
 fail:
+    jbar_end(&bar, 0);
     br_job_close(j);
     return -1;
 }

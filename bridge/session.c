@@ -258,7 +258,8 @@ int br_session_start_job(br_session *s, const char *path, long resume_from, char
             return -1;
         }
     }
-    if (br_job_open(&s->job, path, (amp_proto_flavor)s->cfg.flavor, s->cfg.printer, resume_from, why, whylen) != 0)
+    if (br_job_open(&s->job, path, (amp_proto_flavor)s->cfg.flavor, s->cfg.printer, resume_from, s->cfg.progress,
+                    why, whylen) != 0)
         return -1;
     s->have_job = 1;
     s->job_eof = 0;

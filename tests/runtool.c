@@ -63,8 +63,14 @@ static int drain(int m, int ms, char *err, size_t cap, size_t *n)
 
 int fx_run_tool_tty(const char *args, char *err, size_t cap)
 {
+    const char *tool = getenv("AMP_TOOL");
+    return fx_run_prog_tty(tool ? tool : "tools/ampath", args, err, cap);
+}
+
+int fx_run_prog_tty(const char *prog, const char *args, char *err, size_t cap)
+{
     char cmd[4096];
-    const char *tool = getenv("AMP_TOOL"), *slave;
+    const char *slave;
     size_t n = 0;
     int m = posix_openpt(O_RDWR | O_NOCTTY), s, st = 0;
     pid_t pid;
@@ -73,7 +79,7 @@ int fx_run_tool_tty(const char *args, char *err, size_t cap)
     /* the slave held open here too, so that the master never reads as hung up while the tool starts */
     if ((s = open(slave, O_RDWR | O_NOCTTY)) < 0)
         return -1;
-    snprintf(cmd, sizeof cmd, "exec %s %s </dev/null >/dev/null 2>%s", tool ? tool : "tools/ampath", args, slave);
+    snprintf(cmd, sizeof cmd, "exec %s %s </dev/null >/dev/null 2>%s", prog, args, slave);
     pid = fork();
     if (pid == 0) {
         close(m);

@@ -24,4 +24,7 @@ int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, ch
  */
 int fx_run_tool_tty(const char *args, char *err, size_t cap);
 
+/** As fx_run_tool_tty() for the program @p prog (a path: the bridge, the virtual printer). */
+int fx_run_prog_tty(const char *prog, const char *args, char *err, size_t cap);
+
 #endif

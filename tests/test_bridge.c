@@ -16,6 +16,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "fixture_geom.h"
+#include "runtool.h"
 #include "testutil.h"
 
 
@@ -1096,6 +1098,36 @@ static int only(const char *name)
     if (only(#fn))       \
     tcase_add_test(tc, fn)
 
+/* A large job (16 MB or more) shows bars while it is read and checked, before the first line goes out, on a
+ * terminal only: a bed-sized .amp job is parsed and written twice there, seconds of silence otherwise. The
+ * run stops after the checks (a resume line past the end: exit 2, nothing sent). */
+START_TEST(a_large_job_shows_bars_while_it_is_read_and_checked_on_a_terminal_only)
+{
+    vpr v;
+    amp_pathset ps;
+    const char *job = fx_tmp("large.amp");
+    char args[1024], *err = malloc(1 << 16), *out;
+    ck_assert_ptr_nonnull(err);
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 100, 4000); /* 400,000 vertices: 16 MB and more */
+    ck_assert_int_eq(amp_pathset_write_file(&ps, job, NULL, NULL), AMP_OK);
+    amp_pathset_free(&ps);
+    vp_start(&v, "");
+    snprintf(args, sizeof args, "%s %s --resume-from 999999999 --boot-wait 0", v.link, job);
+    ck_assert_int_eq(fx_run_prog_tty(fx_prog("AMP_BRIDGE"), args, err, 1 << 16), 2);
+    ck_assert_msg(strstr(err, "reading      [") && strstr(err, "preparing ") && strstr(err, "checking     [") &&
+                      strstr(err, "past the end"),
+                  "no bars before the refusal: '%.600s'", err);
+    ck_assert_int_eq(bridge_run(&v, job, "--resume-from 999999999 --boot-wait 0", &out), 2);
+    ck_assert_msg(!strstr(out, "reading") && !strstr(out, "checking") && strstr(out, "past the end"),
+                  "bars into a file: '%.300s'", out);
+    vp_stop(&v);
+    ck_assert_int_eq(count_in_file(v.log, "G1"), 0);
+    remove(job);
+    free(err);
+}
+END_TEST
+
 static Suite *bridge_suite(void)
 {
     Suite *s = suite_create("bridge");
@@ -1139,6 +1171,7 @@ static Suite *bridge_suite(void)
     ADD_TEST(tc, settle_time_sweep_zero_to_fifty_ms_same_exact_result);
     ADD_TEST(tc, reset_with_garbled_replies_names_the_lines_that_may_have_run);
     ADD_TEST(tc, virtual_printer_refuses_what_each_firmware_refuses);
+    ADD_TEST(tc, a_large_job_shows_bars_while_it_is_read_and_checked_on_a_terminal_only);
     suite_add_tcase(s, tc);
     return s;
 }
