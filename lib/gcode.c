@@ -26,10 +26,17 @@
 #error "AMP_GCODE_GRID must be a power of two from 16 to 32768 (the head-cone test's max-pyramid halves it)"
 #endif
 #define GC_CONE_GROUP 8 /* travel samples sharing one head-cone floor */
+/* E is set back to 0 (G92 E0) at a travel once it has reached 100 mm: Marlin keeps positions in single
+ * precision floats, whose step at E = 10^5 mm (a bed-sized job's filament) is 0.008 mm, the whole E of a
+ * short segment; below 128 mm it is finer than the 10^-5 mm written (PrusaSlicer resets E every layer). */
+#define GC_E_RESET_UNITS 10000000LL
 
 enum { PH_HEADER, PH_START, PH_SETUP, PH_PATHS, PH_TEARDOWN, PH_END, PH_DONE };
 /* sub-steps of PH_PATHS */
-enum { PS_COMMENT, PS_HOTEND, PS_BED, PS_FAN, PS_PLAN, PS_RETRACT, PS_LIFT, PS_HULL, PS_DESCEND, PS_UNRETRACT, PS_SEGS };
+enum {
+    PS_COMMENT, PS_HOTEND, PS_BED, PS_FAN, PS_PLAN, PS_RETRACT, PS_ERESET, PS_LIFT, PS_HULL, PS_DESCEND, PS_UNRETRACT,
+    PS_SEGS
+};
 /* sub-steps of PH_START around a caller's sequence (PrusaSlicer's automatic temperatures) */
 enum { ST_BED_WAIT, ST_HOT_SET, ST_TEXT, ST_HOT_WAIT, ST_DONE };
 enum { MOVE_NONE = 0, MOVE_PRINT = 1, MOVE_TRAVEL = 2, MOVE_E = 3 };
@@ -1626,9 +1633,18 @@ static int travel_step(amp_gcode_iter *it, lb *l, const amp_pvert *v)
         it->sub = plan_travel(it, v) ? PS_RETRACT : PS_SEGS;
         return 0;
     case PS_RETRACT:
-        it->sub = PS_LIFT;
+        it->sub = PS_ERESET;
         if (it->travel_retract) {
             move_e(it, l, -1);
+            return 1;
+        }
+        return 0;
+    case PS_ERESET:
+        it->sub = PS_LIFT;
+        if ((it->e_units < 0 ? -it->e_units : it->e_units) >= GC_E_RESET_UNITS) { /* the E written from here on counts from 0 */
+            lb_str(l, "G92 E0");
+            it->e_exact -= (double)it->e_units * 1e-5;
+            it->e_units = 0;
             return 1;
         }
         return 0;
@@ -1702,6 +1718,7 @@ static int step_path(amp_gcode_iter *it, lb *l)
         return layer_settings(it, l);
     case PS_PLAN:
     case PS_RETRACT:
+    case PS_ERESET:
     case PS_LIFT:
     case PS_HULL:
     case PS_DESCEND:

@@ -266,6 +266,9 @@ static int gsim_line(gsim *s, const char *line)
 }
 
 /* Parse a whole text; returns 1 when every line is accepted. */
+/* Filament of the extruding moves read (defined with the tests that use it most). */
+static double gsim_filament(const gsim *s);
+
 static int gsim_run(gsim *s, const char *text)
 {
     char line[512];
@@ -620,6 +623,49 @@ START_TEST(gouge_checker_catches_a_travel_without_lift)
     gsim_init(&s);
     ck_assert_msg(gsim_run(&s, text), "%s", s.why);
     ck_assert_int_gt(count_gouges(&s, o.filament_diameter, o.flow, 1.0, o.z_hop, 0, &near), 0);
+    gsim_free(&s);
+    free(text);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
+/*
+ * E is set back to 0 (G92 E0) at travels once it has reached 100 mm, so that the firmware's single-precision
+ * position keeps the written resolution: on a job of over a metre of filament no E written exceeds 100 mm
+ * plus one path's filament, each reset comes at 100 mm or more, and the moves' E (read through the resets)
+ * and the filament are those of one long count.
+ */
+START_TEST(e_is_set_back_to_zero_at_travels_past_100_mm)
+{
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_stats st;
+    gsim s;
+    char *text, *line, *save = NULL;
+    double e = 0.0, emax = 0.0;
+    size_t resets = 0;
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 40, 400); /* strands of about 30 mm of filament each */
+    raw_opts(&o, AMP_FLAVOR_MARLIN);
+    o.relative_e = 0;
+    text = gen(&ps, &o, &st);
+    ck_assert(st.filament_length > 1000.0);
+    gsim_init(&s);
+    ck_assert_msg(gsim_run(&s, text), "%s", s.why);
+    ck_assert_near(gsim_filament(&s), st.filament_length, 1e-3);
+    for (line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        const char *ep = strstr(line, " E");
+        if (strncmp(line, "G92 E0", 6) == 0) {
+            ck_assert_msg(resets == 0 || e >= 100.0, "a reset at E %g", e);
+            resets++;
+            e = 0.0;
+        } else if ((line[0] == 'G') && ep) {
+            e = strtod(ep + 2, NULL);
+            emax = e > emax ? e : emax;
+        }
+    }
+    ck_assert_uint_ge(resets, (size_t)(st.filament_length / 150.0)); /* the set-up's own one and then some */
+    ck_assert_msg(emax < 160.0, "E written up to %g mm", emax);
     gsim_free(&s);
     free(text);
     amp_pathset_free(&ps);
@@ -1247,7 +1293,6 @@ START_TEST(gcode_command_writes_file_and_reports_json)
 END_TEST
 
 static void run_in_bed(gsim *s, const char *text, const amp_gcode_opts *o);
-static double gsim_filament(const gsim *s);
 
 /* "Any command that can run for more than a second shows progress on a terminal": `gcode` draws its bar on a
  * terminal's stderr while it writes a large job, and `check` one naming the check that runs, and neither
@@ -2325,6 +2370,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, travels_lift_above_printed_material);
     tcase_add_test(tc, gouge_checker_catches_a_travel_without_lift);
     tcase_add_test(tc, relative_and_absolute_e_agree);
+    tcase_add_test(tc, e_is_set_back_to_zero_at_travels_past_100_mm);
     tcase_add_test(tc, reader_parses_every_line_of_both_flavors);
     tcase_add_loop_test(tc, reader_rejects_broken_gcode, 0, (int)(sizeof broken_gcode / sizeof broken_gcode[0]));
     tcase_add_test(tc, time_estimate_follows_trapezoids_and_junction_limit);
