@@ -293,6 +293,10 @@ class amp_preview_stats(Structure):
                 ("vertices", c_size_t), ("drawn", c_size_t), ("bytes", c_size_t)]
 
 
+class amp_preview_opts(Structure):
+    _fields_ = [("width", c_int), ("progress", PROGRESS_FN), ("progress_user", c_void_p)]
+
+
 _D = c_double
 _GCODE_OPTS = [
     ("flavor", c_int), ("filament_diameter", _D), ("flow", _D), ("max_volumetric_flow", _D), ("print_feed", _D),
@@ -348,7 +352,7 @@ STRUCTS = {cls.__name__: cls for cls in (
     amp_order_stats, amp_mdr_opts, amp_mdr_stats, amp_support_opts, amp_support_stats, amp_ring, amp_polyset,
     amp_slice_opts, amp_layer, amp_slices, amp_contpath_opts, amp_contpath_stats, amp_stroke_report,
     amp_gouge_violation, amp_coverage_domain, amp_field, amp_field_opts, amp_field_stats, amp_sweep, amp_hold_opts,
-    amp_hold_report, amp_preview_stats, amp_gcode_opts, amp_gcode_stats,
+    amp_hold_report, amp_preview_stats, amp_preview_opts, amp_gcode_opts, amp_gcode_stats,
     amp_printer)}
 
 # ---------------------------------------------------------------- prototypes
@@ -368,6 +372,7 @@ _PROTOS = {
     "amp_pathset_append": (c_int, [P(amp_pathset), P(amp_pathset), E]),
     "amp_pathset_parse": (c_int, [P(amp_pathset), c_char_p, c_size_t, E]),
     "amp_pathset_read_file": (c_int, [P(amp_pathset), c_char_p, E]),
+    "amp_pathset_read_file_progress": (c_int, [P(amp_pathset), c_char_p, PROGRESS_FN, c_void_p, E]),
     "amp_pathset_write": (c_int, [P(amp_pathset), c_char_p, c_void_p, c_void_p, E]),
     "amp_pathset_write_file": (c_int, [P(amp_pathset), c_char_p, c_char_p, E]),
     "amp_pathset_length": (c_double, [P(amp_pathset), c_int]),
@@ -443,6 +448,10 @@ _PROTOS = {
     "amp_check_gouge": (c_int, [P(amp_pathset), P(amp_head), c_int, c_double, P(amp_gouge_violation), E]),
     "amp_preview_png": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
     "amp_preview_svg": (c_int, [P(amp_pathset), c_int, c_void_p, c_void_p, P(amp_preview_stats), E]),
+    "amp_preview_png_opts": (c_int, [P(amp_pathset), P(amp_preview_opts), c_void_p, c_void_p, P(amp_preview_stats),
+                                     E]),
+    "amp_preview_svg_opts": (c_int, [P(amp_pathset), P(amp_preview_opts), c_void_p, c_void_p, P(amp_preview_stats),
+                                     E]),
     "amp_printer_builtin_count": (c_size_t, []),
     "amp_printer_builtin_name": (c_char_p, [c_size_t]),
     "amp_printer_builtin_about": (c_char_p, [c_size_t]),
@@ -457,7 +466,8 @@ _PROTOS = {
 }
 
 # newer than some installed libraries: their absence makes only the feature unavailable
-OPTIONAL = {"amp_preview_png", "amp_preview_svg"}
+OPTIONAL = {"amp_preview_png", "amp_preview_svg", "amp_preview_png_opts", "amp_preview_svg_opts",
+            "amp_pathset_read_file_progress"}
 MISSING = set()
 for _name, (_res, _args) in _PROTOS.items():
     try:

@@ -215,12 +215,21 @@ class PathSet(_Owner):
         return ctypes.byref(self._ps)
 
     @classmethod
-    def read(cls, filename):
+    def read(cls, filename, progress=None):
+        """The paths of a .amp file; @progress (a callable taking the fraction read) hears of the parse."""
         ps, err = cls(), _err()
-        st = lib.amp_pathset_read_file(ps._ref, _b(filename), ctypes.byref(err))
-        if st:
-            ps.close()
-        _check(st, err)
+        if progress is not None and "amp_pathset_read_file_progress" not in L.MISSING:
+            pr = _Progress(progress)
+            st = lib.amp_pathset_read_file_progress(ps._ref, _b(filename), pr.c, None, ctypes.byref(err))
+            if st:
+                ps.close()
+            _check(st, err)
+            pr.done()
+        else:
+            st = lib.amp_pathset_read_file(ps._ref, _b(filename), ctypes.byref(err))
+            if st:
+                ps.close()
+            _check(st, err)
         ps.source = os.fsdecode(filename)
         return ps
 

@@ -22,6 +22,21 @@ class Preview(TmpCase):
                     self.assertSameBytes(read(self.p("py." + fmt)), read(out), "file " + out)
         self.assertTrue(data.startswith(b"\x89PNG\r\n\x1a\n"))
 
+    def test_progress_of_the_read_and_the_drawing_rises_to_one_and_changes_no_byte(self):
+        with ampath.Trivariate.model("helix") as v, ampath.cover(v, eps=3) as ps:
+            ps.write(self.p("c.amp"))
+        heard = {"read": [], "draw": []}
+        with ampath.PathSet.read(self.p("c.amp"), progress=heard["read"].append) as back:
+            plain = ampath.preview(back, "svg", width=800)
+            drawn = ampath.preview(back, "svg", width=800, progress=heard["draw"].append)
+            self.assertSameBytes(drawn, plain, "svg with a progress report")
+            with self.assertRaises(ZeroDivisionError):  # the callable's exception, after the call
+                ampath.preview(back, "png", width=400, progress=lambda f: 1 / 0)
+        for name, fs in heard.items():
+            self.assertTrue(fs, name)
+            self.assertEqual(fs, sorted(fs), name)
+            self.assertEqual(fs[-1], 1.0, name)
+
     def test_bad_width_and_empty_set_raise(self):
         with ampath.PathSet() as empty:
             with self.assertRaises(ampath.Error) as cm:
