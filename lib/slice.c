@@ -185,6 +185,48 @@ static amp_status pair_gaps(const amp_allocator *al, const amp_vec2 *pt, const o
     return AMP_OK;
 }
 
+/* Widest needle cut out of a section ring, mm: a spike A-B-C of no material (the ring runs out to B and back
+ * along the same line) within 10 micrometres of its line, a fiftieth of a bead. */
+#define NEEDLE_TOL 1e-2
+
+/* Does the ring turn back at b (a -> b -> c) along one line, within NEEDLE_TOL of it? */
+static int needle_at(amp_vec2 a, amp_vec2 b, amp_vec2 c)
+{
+    double ux = b.x - a.x, uy = b.y - a.y, vx = c.x - b.x, vy = c.y - b.y;
+    double lu = sqrt(ux * ux + uy * uy), lv = sqrt(vx * vx + vy * vy);
+    return ux * vx + uy * vy < 0.0 && fabs(ux * vy - uy * vx) <= NEEDLE_TOL * (lu > lv ? lu : lv);
+}
+
+/*
+ * Cut needles out of ring p[0..n) in place; returns the new count (below 3: nothing is left). Coplanar faces
+ * that overlap with opposite orientations (a non-convex polygon split into a fan of triangles by an OFF or OBJ
+ * converter, a zero-thickness fin) cut into segments that run out and back along one line: the chained ring
+ * gets spikes of no area whose near-collinear edges the union cannot order, and the section is left with
+ * pieces on both sides of a line (CGAL's `mpi` fan-triangulated: 7,146 stroke points outside their layer).
+ * The spike's tip goes (a stack: a tip cut may leave another), then the same across the ring's seam.
+ */
+static size_t cut_needles(amp_vec2 *p, size_t n)
+{
+    size_t m = 0, i, pass;
+    for (i = 0; i < n; i++) {
+        p[m++] = p[i];
+        while (m >= 3 && needle_at(p[m - 3], p[m - 2], p[m - 1])) {
+            p[m - 2] = p[m - 1];
+            m--;
+        }
+    }
+    for (pass = 0; pass < n && m >= 3; pass++) {
+        if (needle_at(p[m - 2], p[m - 1], p[0]))
+            m--;
+        else if (needle_at(p[m - 1], p[0], p[1])) {
+            memmove(p, p + 1, (m - 1) * sizeof *p);
+            m--;
+        } else
+            break;
+    }
+    return m;
+}
+
 /* Open chains joined across their gaps into rings (added to @p out,
  * counted in st0->gaps_closed); the chains of a run too short for a ring
  * are dropped and counted in st0->open_chains. */
@@ -233,7 +275,9 @@ static amp_status close_gaps(const amp_vec2 *pt, const ochain *c, size_t k, amp_
                 if (gap_dist(ring[len - 1], ring[0]) == 0)
                     len--;
                 st0->gaps_closed += nch;
-                st = amp_polyset_add(out, ring, len, err);
+                len = cut_needles(ring, len);
+                if (len >= 3)
+                    st = amp_polyset_add(out, ring, len, err);
             } else if (st == AMP_OK)
                 st0->open_chains += nch;
         }
@@ -276,7 +320,9 @@ static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t 
             if (st != AMP_OK)
                 break;
             if (closed) {
-                st = amp_polyset_add(out, loop + start, len - start, err);
+                size_t k = cut_needles(loop + start, len - start);
+                if (k >= 3)
+                    st = amp_polyset_add(out, loop + start, k, err);
                 len = start;
                 continue;
             }

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "fx_meshes.h"
+#include "meshfix.h"
 #include "runtool.h"
 #include "testutil.h"
 
@@ -533,6 +534,101 @@ START_TEST(cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer)
 }
 END_TEST
 
+/*
+ * A comb (a non-convex polygon in the x-z plane, teeth up) extruded 12 mm along y, whose two big faces are
+ * fans of triangles from one vertex, as OFF/OBJ converters split polygons: the fan's triangles overlap with
+ * opposite orientations, and each vertex is moved up to @p eps off its face (the faces are not quite planar).
+ * Its section at height z is the comb's width there times 12 mm, returned in area_at (per z step of 0.1 mm up
+ * to 20 mm) with NAN where a notch's floor (moved by eps) lies within 0.05 mm.
+ */
+static void add_fanned_comb(amp_mesh *m, unsigned long long *seed, double eps, double *area_at)
+{
+    double px[32], pz[32], x = 40.0, w, notch[8];
+    int n = 0, teeth = 2 + (int)(3.0 * fx_rand(seed)), t, k, apex;
+    uint32_t base = (uint32_t)m->nverts;
+    w = 40.0 / (2 * teeth - 1);
+    px[n] = 0, pz[n++] = 0;
+    px[n] = 40, pz[n++] = 0;
+    for (t = 0; t < teeth; t++) {
+        px[n] = x, pz[n++] = 20;
+        px[n] = x - w, pz[n++] = 20;
+        x -= w;
+        if (t < teeth - 1) {
+            notch[t] = 6.0 + 6.0 * fx_rand(seed);
+            px[n] = x, pz[n++] = notch[t];
+            px[n] = x - w, pz[n++] = notch[t];
+            x -= w;
+        }
+    }
+    for (k = 0; k <= 200; k++) { /* width at z: the teeth, and the gaps below their notch */
+        double z = 0.1 * k, width = teeth * w;
+        for (t = 0; t < teeth - 1; t++) {
+            width += z < notch[t] ? w : 0.0;
+            if (fabs(z - notch[t]) < 0.05)
+                width = NAN;
+        }
+        area_at[k] = 12.0 * width;
+    }
+    for (k = 0; k < 2 * n; k++) {
+        double jx = eps * (2 * fx_rand(seed) - 1), jy = eps * (2 * fx_rand(seed) - 1), jz = eps * (2 * fx_rand(seed) - 1);
+        ck_assert_int_eq(amp_mesh_add_vertex(m, amp_v3(px[k % n] + jx, (k < n ? 0.0 : 12.0) + jy, pz[k % n] + jz), NULL, NULL),
+                         AMP_OK);
+    }
+    apex = (int)(n * fx_rand(seed)) % n;
+    for (k = 1; k < n - 1; k++) { /* the fans: front (y = 0) seen from -y, back seen from +y */
+        uint32_t a = (uint32_t)apex, i = (uint32_t)((apex + k) % n), j = (uint32_t)((apex + k + 1) % n);
+        ck_assert_int_eq(amp_mesh_add_tri(m, base + a, base + i, base + j, NULL), AMP_OK);
+        ck_assert_int_eq(amp_mesh_add_tri(m, base + (uint32_t)n + a, base + (uint32_t)n + j, base + (uint32_t)n + i, NULL),
+                         AMP_OK);
+    }
+    for (k = 0; k < n; k++) { /* the walls around */
+        uint32_t a = (uint32_t)k, b = (uint32_t)((k + 1) % n), an = a + (uint32_t)n, bn = b + (uint32_t)n;
+        ck_assert_int_eq(amp_mesh_add_tri(m, base + a, base + bn, base + b, NULL), AMP_OK);
+        ck_assert_int_eq(amp_mesh_add_tri(m, base + a, base + an, base + bn, NULL), AMP_OK);
+    }
+}
+
+/* Fan-triangulated faces (overlapping coplanar triangles, slightly off their plane) cut into rings that run out
+ * and back along one line: needles the union cannot order. They are cut out of the rings, and every layer is
+ * the comb's section (to within the faces' own offsets) and prints as a checked stroke. Without the cut the
+ * second comb already loses part of a tooth's section, and `slice --continuous` failed its own check on such
+ * parts (stroke points outside their layer), as on CGAL's fan-triangulated `mpi`. */
+START_TEST(fan_triangulated_faces_slice_to_their_section)
+{
+    unsigned long long seed = 0x5eed5eedULL;
+    int trial, failed = 0;
+    for (trial = 0; trial < 16; trial++) {
+        amp_mesh m;
+        amp_slices sl;
+        amp_slice_opts so = {0.2, 0};
+        amp_error err;
+        double area_at[201], eps = trial % 2 ? 0.01 : 0.001;
+        char args[1024], out[1 << 16];
+        const char *stl = fx_tmp("comb.stl"), *amp = fx_tmp("comb.amp");
+        size_t i;
+        amp_mesh_init(&m, NULL);
+        amp_slices_init(&sl, NULL);
+        add_fanned_comb(&m, &seed, eps, area_at);
+        ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+        for (i = 0; i < sl.nlayers; i++) {
+            double z = sl.layers[i].z_cut, want = area_at[lround(10.0 * z)], got = amp_polyset_area(&sl.layers[i].polys);
+            /* the faces' offsets (eps) along the section's 2 x 12 mm of wall and the comb's 40 mm length */
+            ck_assert_msg(isnan(want) || fabs(got - want) < 200.0 * eps, "trial %d layer %lu at z %g: area %g, want %g",
+                          trial, (unsigned long)i, z, got, want);
+        }
+        ck_assert_int_eq(amp_mesh_write_stl_file(&m, stl, 1, &err), AMP_OK);
+        snprintf(args, sizeof args, "slice %s --layer 0.2 --continuous --json -o %s", stl, amp);
+        if (fx_run_tool(args, out, sizeof out) != 0)
+            failed++;
+        amp_slices_free(&sl);
+        amp_mesh_free(&m);
+        remove(stl);
+        remove(amp);
+    }
+    ck_assert_int_eq(failed, 0);
+}
+END_TEST
+
 START_TEST(check_fails_a_job_with_a_layer_left_out_or_without_paths)
 {
     /* a continuous job of the overlapping bodies passes; the same job with
@@ -685,6 +781,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, overhang_of_consecutive_layers_measures_eps_continuity);
     tcase_add_test(tc, cli_slice_names_a_piece_that_starts_in_mid_air);
     tcase_add_test(tc, overlapping_shells_are_sliced_as_their_union);
+    tcase_add_test(tc, fan_triangulated_faces_slice_to_their_section);
     tcase_add_test(tc, cli_prints_overlapping_bodies_as_one_checked_stroke_per_layer);
     tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);
     tcase_add_test(tc, thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all);
