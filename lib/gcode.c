@@ -1641,7 +1641,8 @@ static int travel_step(amp_gcode_iter *it, lb *l, const amp_pvert *v)
         return 0;
     case PS_ERESET:
         it->sub = PS_LIFT;
-        if ((it->e_units < 0 ? -it->e_units : it->e_units) >= GC_E_RESET_UNITS) { /* the E written from here on counts from 0 */
+        if ((it->e_units < 0 ? -it->e_units : it->e_units) >= GC_E_RESET_UNITS) {
+            /* the E written from here on counts from 0; the moves' E are the same */
             lb_str(l, "G92 E0");
             it->e_exact -= (double)it->e_units * 1e-5;
             it->e_units = 0;
