@@ -190,7 +190,7 @@ static double nearest_perimeter(const amp_pathset *ps, const sgrid *g, size_t np
             for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
                 size_t id = g->item[k];
                 amp_vec2 a, b;
-                double dx, dy, l2, t, d;
+                double dx, dy, l2, t, d, ex, ey;
                 if (id >= end)
                     continue; /* not a perimeter segment */
                 a = xy(ps->verts[id].p);
@@ -199,7 +199,12 @@ static double nearest_perimeter(const amp_pathset *ps, const sgrid *g, size_t np
                 dy = b.y - a.y;
                 l2 = dx * dx + dy * dy;
                 t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-                d = hypot(a.x + t * dx - q.x, a.y + t * dy - q.y);
+                ex = a.x + t * dx - q.x;
+                ey = a.y + t * dy - q.y;
+                /* clearly farther than the best (the margin covers hypot's rounding): no hypot */
+                if (ex * ex + ey * ey > best * best * (1.0 + 1e-9))
+                    continue;
+                d = hypot(ex, ey);
                 if (d < best || (d == best && id < bestk)) {
                     best = d;
                     bestk = id;
@@ -308,7 +313,7 @@ static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_
             for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
                 size_t id = g->item[k];
                 amp_vec2 a, b;
-                double dx, dy, l2, t;
+                double dx, dy, l2, t, ex, ey;
                 if (id < end || !(ps->verts[id].r > 0) || !(ps->verts[id + 1].r > 0))
                     continue;
                 a = xy(ps->verts[id].p);
@@ -317,8 +322,10 @@ static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_
                 dy = b.y - a.y;
                 l2 = dx * dx + dy * dy;
                 t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-                if (hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) <= lim)
-                    return 1;
+                ex = a.x + t * dx - q.x;
+                ey = a.y + t * dy - q.y;
+                if (ex * ex + ey * ey <= lim * lim * (1.0 + 1e-9) && hypot(ex, ey) <= lim)
+                    return 1; /* (hypot only near the bound: most segments are clearly farther) */
             }
     return 0;
 }
