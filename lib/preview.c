@@ -384,13 +384,23 @@ void amp_preview_opts_default(amp_preview_opts *o)
     o->progress_user = NULL;
 }
 
-amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
-                           amp_error *err)
+/* The calls without options: the defaults at @p width. */
+typedef amp_status (*opts_fn)(const amp_pathset *, const amp_preview_opts *, amp_sink_fn, void *, amp_preview_stats *,
+                              amp_error *);
+
+static amp_status at_width(opts_fn fn, const amp_pathset *ps, int width, amp_sink_fn sink, void *user,
+                           amp_preview_stats *st, amp_error *err)
 {
     amp_preview_opts o;
     amp_preview_opts_default(&o);
     o.width = width;
-    return amp_preview_png_opts(ps, &o, sink, user, st, err);
+    return fn(ps, &o, sink, user, st, err);
+}
+
+amp_status amp_preview_png(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
+                           amp_error *err)
+{
+    return at_width(amp_preview_png_opts, ps, width, sink, user, st, err);
 }
 
 amp_status amp_preview_png_opts(const amp_pathset *ps, const amp_preview_opts *opt, amp_sink_fn sink, void *user,
@@ -500,10 +510,7 @@ static void svg_legend(pv_out *o, const amp_pathset *ps, int width, int h, size_
 amp_status amp_preview_svg(const amp_pathset *ps, int width, amp_sink_fn sink, void *user, amp_preview_stats *st,
                            amp_error *err)
 {
-    amp_preview_opts o;
-    amp_preview_opts_default(&o);
-    o.width = width;
-    return amp_preview_svg_opts(ps, &o, sink, user, st, err);
+    return at_width(amp_preview_svg_opts, ps, width, sink, user, st, err);
 }
 
 amp_status amp_preview_svg_opts(const amp_pathset *ps, const amp_preview_opts *opt, amp_sink_fn sink, void *user,
