@@ -269,15 +269,6 @@ static size_t check_pairwise(const gctx *c, amp_gouge_violation *out)
  * earlier segments. A pyramid of per-cell maximum heights prunes every region
  * whose highest earlier point is below the cone of the segment under test.
  */
-/* A column's entry: the segment and its top rounded up to a float. Most segments of a column that reaches the
- * cone lie below the tested segment by more than z_offs; their tops, read beside the ids, turn them away without
- * a load of their vertices or stamp (80 % of the pairs on the demo; test_pair's first test, with a top never
- * lower than the exact one, so no pair it would test is left out). */
-typedef struct gent {
-    uint32_t s;
-    float top;
-} gent;
-
 /* The column grid over the earlier segments with its max-height pyramid. */
 typedef struct gpyramid {
     const amp_allocator *a;
@@ -289,7 +280,13 @@ typedef struct gpyramid {
     size_t *start;      /* column x's segments: ent[start[x] .. start[x] + fill[x]), in print order */
     uint32_t *fill;
     uint32_t *stamp;    /* segment s was tested against segment i when stamp[s] == i + 1 */
-    gent *ent;          /* every column's room for all the segments whose box covers it (counted first:
+    /* segment s's top rounded up to a float: most segments of a column that reaches the cone lie below the
+     * tested segment by more than z_offs, and their tops turn them away without a load of their vertices or
+     * stamp (80 % of the pairs on the demo; test_pair's first test, with a top never lower than the exact one,
+     * so no pair it would test is left out). Per segment, not per column entry: a long segment over fine
+     * columns has hundreds of entries */
+    float *top;
+    uint32_t *ent;      /* every column's room for all the segments whose box covers it (counted first:
                          * a column is read as one run, not a linked list chased through memory) */
 } gpyramid;
 
@@ -326,7 +323,8 @@ static amp_status pyramid_init(gpyramid *g, const gctx *c, amp_error *err)
     g->start = amp_calloc(g->a, g->P * g->P + 1, sizeof *g->start);
     g->fill = amp_calloc(g->a, g->P * g->P, sizeof *g->fill);
     g->stamp = amp_calloc(g->a, c->n, sizeof *g->stamp);
-    if (!g->maxz || !g->start || !g->fill || !g->stamp)
+    g->top = amp_calloc(g->a, c->n, sizeof *g->top);
+    if (!g->maxz || !g->start || !g->fill || !g->stamp || !g->top)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory for the gouge grid");
     for (i = 0; i < total; i++)
         g->maxz[i] = -HUGE_VAL;
@@ -353,6 +351,7 @@ static void pyramid_free(gpyramid *g)
     amp_free(g->a, g->fill);
     amp_free(g->a, g->stamp);
     amp_free(g->a, g->ent);
+    amp_free(g->a, g->top);
 }
 
 /* May cell (x, y) of level l hold an earlier point inside the cone over segment t's box? Compares the cell's
@@ -408,8 +407,8 @@ static size_t earliest_gouged(gpyramid *g, const gctx *c, size_t i, amp_gouge_vi
             continue;
         }
         for (e = g->start[y * g->P + x], ee = e + g->fill[y * g->P + x]; e < ee; e++) {
-            uint32_t s = g->ent[e].s;
-            if ((double)g->ent[e].top - tb.min.z - c->zo <= c->tol || g->stamp[s] == i + 1 || s >= best)
+            uint32_t s = g->ent[e];
+            if ((double)g->top[s] - tb.min.z - c->zo <= c->tol || g->stamp[s] == i + 1 || s >= best)
                 continue;
             g->stamp[s] = (uint32_t)(i + 1);
             if (test_pair(c, s, i, &tb, &v)) {
@@ -429,13 +428,12 @@ static void pyramid_insert(gpyramid *g, const gctx *c, size_t i)
     float top = (float)tb.max.z;
     if ((double)top < tb.max.z)
         top = nextafterf(top, HUGE_VALF);
+    g->top[i] = top;
     columns_of(g, &tb, &x0, &x1, &y0, &y1);
     for (iy = y0; iy <= y1; iy++)
         for (ix = x0; ix <= x1; ix++) {
             size_t l, cx = ix, cy = iy, col = iy * g->P + ix;
-            gent *e = &g->ent[g->start[col] + g->fill[col]++];
-            e->s = (uint32_t)i;
-            e->top = top;
+            g->ent[g->start[col] + g->fill[col]++] = (uint32_t)i;
             for (l = 0; l < g->L; l++, cx /= 2, cy /= 2) {
                 double *m = &g->maxz[g->off[l] + cy * (g->P >> l) + cx];
                 if (*m >= tb.max.z)
