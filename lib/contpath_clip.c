@@ -120,10 +120,8 @@ static int rg_near(const rgrid *g, amp_vec2 q, double eps)
     for (y = cy0; y <= cy1; y++)
         for (x = cx0; x <= cx1; x++)
             for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
-                amp_vec2 a = g->a[g->item[k]], b = g->b[g->item[k]];
-                double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t;
-                t = l2 > 0 ? fmin(fmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-                if (hypot(a.x + t * dx - q.x, a.y + t * dy - q.y) <= eps)
+                amp_vec2 e = amp_cp_seg_offset(q, g->a[g->item[k]], g->b[g->item[k]], NULL);
+                if (hypot(e.x, e.y) <= eps)
                     return 1;
             }
     return 0;

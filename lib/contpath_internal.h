@@ -15,6 +15,18 @@
 
 #define NONE ((size_t)-1)
 
+/* The offset from q to the point of segment a-b nearest to it (that point at parameter *t of the segment,
+ * t NULL: not wanted): the one measure of the nearest-segment searches of the continuous paths (clipping,
+ * joining, support corners), so that they agree to the last bit. */
+static inline amp_vec2 amp_cp_seg_offset(amp_vec2 q, amp_vec2 a, amp_vec2 b, double *t)
+{
+    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    double u = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
+    if (t)
+        *t = u;
+    return amp_v2(a.x + u * dx - q.x, a.y + u * dy - q.y);
+}
+
 /* A free end: the node where a K̂ edge leaves the region, on ring `ring` at
  * position `pos` (segment index + parameter). */
 typedef struct amp_cp_fend {

@@ -205,18 +205,15 @@ static int nearest(const joiner *J, size_t *uf, size_t skip, amp_vec2 q, size_t 
                 uint32_t s = c->s[k];
                 const jvert *A = &J->v[s], *B = &J->v[A->next];
                 size_t l = loop_of(J, uf, s);
-                amp_vec2 a = P2v(A->v.p), b = P2v(B->v.p);
-                double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t, d, ex, ey;
+                amp_vec2 e;
+                double t, d;
                 if (J->lp[l].wall || l == skip || !(A->v.r == J->r) || !(B->v.r == J->r))
                     continue; /* printed at the nominal radius: not a pseudo edge, not a corner */
-                t = l2 > 0 ? ((q.x - a.x) * dx + (q.y - a.y) * dy) / l2 : 0;
-                t = amp_dmin(amp_dmax(t, 0.0), 1.0);
-                ex = a.x + t * dx - q.x;
-                ey = a.y + t * dy - q.y;
+                e = amp_cp_seg_offset(q, P2v(A->v.p), P2v(B->v.p), &t);
                 /* clearly farther than the best (the margin covers hypot's rounding): no hypot */
-                if (ex * ex + ey * ey > best * best * (1.0 + 1e-9))
+                if (e.x * e.x + e.y * e.y > best * best * (1.0 + 1e-9))
                     continue;
-                d = hypot(ex, ey);
+                d = hypot(e.x, e.y);
                 if (d < best || (d == best && found)) {
                     jkey key;
                     key.rank = (A->c[1] > cy - 1 ? A->c[1] - (cy - 1) : 0) * 3 + (A->c[0] > cx - 1 ? A->c[0] - (cx - 1) : 0);

@@ -78,13 +78,11 @@ static amp_pvert at_len(const amp_pathset *ps, size_t i, const double *cl, doubl
  * tooth leg)? Segments ending at a or b do not count. */
 static int near_seg(amp_vec2 q, amp_vec2 a, amp_vec2 b, double tol)
 {
-    double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy, t;
+    amp_vec2 e;
     if ((q.x == a.x && q.y == a.y) || (q.x == b.x && q.y == b.y))
         return 0; /* a shared vertex (the leg's own base) */
-    t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-    dx = a.x + t * dx - q.x;
-    dy = a.y + t * dy - q.y;
-    return dx * dx + dy * dy < tol * tol; /* squared: hypot() was a tenth of the support corners' time */
+    e = amp_cp_seg_offset(q, a, b, NULL);
+    return e.x * e.x + e.y * e.y < tol * tol; /* squared: hypot() was a tenth of the support corners' time */
 }
 
 /* Uniform grid of the segments of a pathset (segment = global index of its
@@ -189,22 +187,15 @@ static double nearest_perimeter(const amp_pathset *ps, const sgrid *g, size_t np
         for (x = cx0; x <= cx1; x++)
             for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
                 size_t id = g->item[k];
-                amp_vec2 a, b;
-                double dx, dy, l2, t, d, ex, ey;
+                amp_vec2 e;
+                double t, d;
                 if (id >= end)
                     continue; /* not a perimeter segment */
-                a = xy(ps->verts[id].p);
-                b = xy(ps->verts[id + 1].p);
-                dx = b.x - a.x;
-                dy = b.y - a.y;
-                l2 = dx * dx + dy * dy;
-                t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-                ex = a.x + t * dx - q.x;
-                ey = a.y + t * dy - q.y;
+                e = amp_cp_seg_offset(q, xy(ps->verts[id].p), xy(ps->verts[id + 1].p), &t);
                 /* clearly farther than the best (the margin covers hypot's rounding): no hypot */
-                if (ex * ex + ey * ey > best * best * (1.0 + 1e-9))
+                if (e.x * e.x + e.y * e.y > best * best * (1.0 + 1e-9))
                     continue;
-                d = hypot(ex, ey);
+                d = hypot(e.x, e.y);
                 if (d < best || (d == best && id < bestk)) {
                     best = d;
                     bestk = id;
@@ -312,19 +303,11 @@ static int infill_within(const amp_pathset *ps, const sgrid *g, size_t end, amp_
         for (x = cx0; x <= cx1; x++)
             for (k = g->start[y * g->nx + x]; k < g->start[y * g->nx + x + 1]; k++) {
                 size_t id = g->item[k];
-                amp_vec2 a, b;
-                double dx, dy, l2, t, ex, ey;
+                amp_vec2 e;
                 if (id < end || !(ps->verts[id].r > 0) || !(ps->verts[id + 1].r > 0))
                     continue;
-                a = xy(ps->verts[id].p);
-                b = xy(ps->verts[id + 1].p);
-                dx = b.x - a.x;
-                dy = b.y - a.y;
-                l2 = dx * dx + dy * dy;
-                t = l2 > 0 ? amp_dmin(amp_dmax(((q.x - a.x) * dx + (q.y - a.y) * dy) / l2, 0.0), 1.0) : 0;
-                ex = a.x + t * dx - q.x;
-                ey = a.y + t * dy - q.y;
-                if (ex * ex + ey * ey <= lim * lim * (1.0 + 1e-9) && hypot(ex, ey) <= lim)
+                e = amp_cp_seg_offset(q, xy(ps->verts[id].p), xy(ps->verts[id + 1].p), NULL);
+                if (e.x * e.x + e.y * e.y <= lim * lim * (1.0 + 1e-9) && hypot(e.x, e.y) <= lim)
                     return 1; /* (hypot only near the bound: most segments are clearly farther) */
             }
     return 0;
