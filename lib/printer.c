@@ -168,8 +168,8 @@ amp_status amp_printer_load(amp_printer *p, const char *spec, amp_error *err)
 #define RANGE(v, lo, hi, what)                                                                                     \
     do {                                                                                                           \
         if (!(isfinite(v) && (v) >= (lo) && (v) <= (hi)))                                                          \
-            return amp_fail(err, AMP_ERR_RANGE, 0, "printer '%s': %s must lie in [%g, %g]", p->name, what,         \
-                            (double)(lo), (double)(hi));                                                           \
+            return amp_fail(err, AMP_ERR_RANGE, 0, "printer '%s': %s must lie in [%g, %g] (it is %g)", p->name,   \
+                            what, (double)(lo), (double)(hi), (double)(v));                                        \
     } while (0)
 
 amp_status amp_printer_check(const amp_printer *p, amp_error *err)
@@ -192,7 +192,7 @@ amp_status amp_printer_check(const amp_printer *p, amp_error *err)
     RANGE(p->first_layer_temp, 0.0, 500.0, "first_layer_temperature (C)");
     RANGE(p->bed_temp, 0.0, 200.0, "bed_temperature (C)");
     RANGE(p->first_layer_bed_temp, 0.0, 200.0, "first_layer_bed_temperature (C)");
-    RANGE(p->fan_percent, 0.0, 100.0, "fan speed (%)");
+    RANGE(p->fan_percent, 0.0, 100.0, "fan speed (%, min_fan_speed / max_fan_speed)");
     RANGE((double)p->fan_off_layers, 0.0, 100000.0, "disable_fan_first_layers");
     RANGE(p->retract_length, 0.0, 100.0, "retract_length (mm)");
     RANGE(p->retract_speed, 0.1, 1e4, "retract_speed (mm/s)");

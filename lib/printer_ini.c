@@ -125,15 +125,101 @@ static int bed_point(const char **s, const char *end, double *x, double *y)
     return dec_number(s, end, ',', y) ? 1 : -1;
 }
 
+/* bed_shape: 1 read, 0 malformed, -1 an outline that holds no rectangle about its centre (*fill: the share
+ * of its bounding box it covers). */
+#define BED_NOT_BOX (-1)
+
+/* Side a-b of an outline and the box (cx +- hx, cy +- hy): 1 when it meets the box's open interior
+ * (Liang-Barsky with strict bounds: a side along the box's edge does not). */
+static int side_meets_box(const double a[2], const double b[2], const double c[2], const double h[2])
+{
+    double t0 = 0.0, t1 = 1.0;
+    int k;
+    for (k = 0; k < 2; k++) {
+        double d = b[k] - a[k], lo = c[k] - h[k], hi = c[k] + h[k];
+        if (d == 0.0) {
+            if (!(a[k] > lo && a[k] < hi))
+                return 0;
+        } else {
+            double u = (lo - a[k]) / d, w = (hi - a[k]) / d;
+            t0 = fmax(t0, fmin(u, w));
+            t1 = fmin(t1, fmax(u, w));
+        }
+    }
+    return t0 < t1;
+}
+
+/* Does the box (c +- h) lie inside the outline of bed_shape value v? Its centre inside (even-odd) and no
+ * side meeting its interior: then the outline's boundary does not enter it. */
+static int box_inside(const char *v, size_t n, const double c[2], const double h[2])
+{
+    const char *s = v, *end = v + n;
+    double p[2], first[2] = {0, 0}, prev[2] = {0, 0};
+    int k, in = 0;
+    for (k = 0;; k++) {
+        int more = bed_point(&s, end, &p[0], &p[1]) == 1;
+        if (!more) { /* the closing side */
+            p[0] = first[0];
+            p[1] = first[1];
+        }
+        if (k == 0) {
+            first[0] = p[0];
+            first[1] = p[1];
+        } else {
+            if (side_meets_box(prev, p, c, h))
+                return 0;
+            if ((prev[1] > c[1]) != (p[1] > c[1]) &&
+                c[0] < prev[0] + (c[1] - prev[1]) * (p[0] - prev[0]) / (p[1] - prev[1]))
+                in = !in;
+        }
+        if (!more)
+            return in;
+        prev[0] = p[0];
+        prev[1] = p[1];
+    }
+}
+
+/* The largest box of the outline's bounding-box proportions about its centre that lies inside it (bisection
+ * of the scale); 0 when even a twentieth of the box does not fit (the centre on or outside the outline). */
+static int inner_box(amp_printer *p, const char *v, size_t n)
+{
+    double c[2], h[2], half[2], lo = 0.0, hi = 1.0;
+    int it;
+    c[0] = 0.5 * (p->bed_min_x + p->bed_max_x);
+    c[1] = 0.5 * (p->bed_min_y + p->bed_max_y);
+    half[0] = 0.5 * (p->bed_max_x - p->bed_min_x);
+    half[1] = 0.5 * (p->bed_max_y - p->bed_min_y);
+    for (it = 0; it < 50; it++) {
+        double m = 0.5 * (lo + hi);
+        h[0] = m * half[0];
+        h[1] = m * half[1];
+        if (box_inside(v, n, c, h))
+            lo = m;
+        else
+            hi = m;
+    }
+    if (lo < 0.05)
+        return 0;
+    p->bed_min_x = c[0] - lo * half[0];
+    p->bed_max_x = c[0] + lo * half[0];
+    p->bed_min_y = c[1] - lo * half[1];
+    p->bed_max_y = c[1] + lo * half[1];
+    return 1;
+}
+
 /*
  * bed_shape = 0x0,250x0,250x210,0x210: the bounding box of the outline, read in place. A delta's round bed
  * is a polygon of many corners (72 in exponent notation) about the box's centre: when every side of the
  * outline stays within 3 % of its farthest corner's distance from the centre (a regular 16-gon or finer),
- * the printable region is the disc inside it, its radius the nearest side's distance.
+ * the printable region is the disc inside it, its radius the nearest side's distance. Any other outline
+ * that does not fill its box (a rectangle, corners repeated or not) is the largest box of its proportions
+ * about its centre that fits inside it (cut corners: a box that misses them); none, as with a triangle
+ * whose box's centre lies on its long side, and it is refused: its box would put a job half off the bed.
  */
-static int bed_shape(amp_printer *p, const char *v, size_t n)
+static int bed_shape(amp_printer *p, const char *v, size_t n, double *fill)
 {
     double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL, x, y, cx, cy, dmin = HUGE_VAL, dmax = 0.0;
+    double area = 0.0;
     const char *s = v, *end = v + n;
     amp_vec3 o = amp_v3(0, 0, 0), first = o, prev = o;
     int pts = 0, r, k;
@@ -157,13 +243,19 @@ static int bed_shape(amp_printer *p, const char *v, size_t n)
         dmax = fmax(dmax, amp_v3_len(c));
         if (k == 0)
             first = c;
-        else /* the side from the previous corner */
+        else { /* the side from the previous corner */
             dmin = fmin(dmin, sqrt(amp_v3_seg_dist2(o, prev, c, NULL)));
+            area += prev.x * c.y - c.x * prev.y;
+        }
         prev = c;
     }
     dmin = fmin(dmin, sqrt(amp_v3_seg_dist2(o, prev, first, NULL))); /* the closing side */
+    area = 0.5 * fabs(area + prev.x * first.y - first.x * prev.y);
     p->bed_radius = pts >= 8 && dmin >= 0.97 * dmax ? dmin : 0.0;
-    return 1;
+    *fill = (x1 > x0 && y1 > y0) ? area / ((x1 - x0) * (y1 - y0)) : 0.0;
+    if (p->bed_radius > 0.0 || *fill >= 0.999)
+        return 1;
+    return inner_box(p, v, n) ? 1 : BED_NOT_BOX;
 }
 
 /* A G-code string with the slicers' C-style escapes; surrounding double quotes are removed. */
@@ -254,18 +346,21 @@ static void set_number(amp_printer *p, ini_ctx *c, int id, double x, int pct)
     case K_FAN_MIN: c->fan_min = x; c->have_fan = 1; break;
     case K_FAN_MAX: c->fan_max = x; c->have_fan = 1; break;
     case K_FAN_ALWAYS: c->fan_always = x != 0.0; c->fan_always_seen = 1; break;
-    case K_FAN_OFF: p->fan_off_layers = x < 0 ? 0 : x > 100000 ? 100000 : (int)x; break;
-    case K_ACCEL: if (x > 0) p->accel = x; break;
-    case K_FEED_X: if (x > 0) p->max_feed_xy = x; break;
-    case K_FEED_Y: if (x > 0 && x < p->max_feed_xy) p->max_feed_xy = x; break;
-    case K_FEED_Z: if (x > 0) p->max_feed_z = x; break;
-    case K_FEED_E: if (x > 0) p->max_feed_e = x; break;
-    case K_ACC_X: if (x > 0) p->max_accel_xy = x; break;
-    case K_ACC_Y: if (x > 0 && x < p->max_accel_xy) p->max_accel_xy = x; break;
-    case K_ACC_Z: if (x > 0) p->max_accel_z = x; break;
-    case K_ACC_E: if (x > 0) p->max_accel_e = x; break;
-    case K_ACC_RETRACT: if (x > 0) p->retract_accel = x; break;
-    case K_VOLUMETRIC: if (x > 0) p->max_volumetric_flow = x; break; /* 0 = unlimited: keep the hot end's default */
+    /* out of range is kept out of range (amp_printer_check refuses it, naming the key), never clamped into
+     * a value the user did not write: -2 first layers without fan would have run the fan on the first */
+    case K_FAN_OFF: p->fan_off_layers = x < -1e6 ? -1000000 : x > 100000 ? 100001 : (int)floor(x); break;
+    /* the machine limits and the volumetric speed: 0 is "not set" (PrusaSlicer: unlimited), the default stays */
+    case K_ACCEL: if (x != 0) p->accel = x; break;
+    case K_FEED_X: if (x != 0) p->max_feed_xy = x; break;
+    case K_FEED_Y: if (x < 0 || (x > 0 && x < p->max_feed_xy)) p->max_feed_xy = x; break;
+    case K_FEED_Z: if (x != 0) p->max_feed_z = x; break;
+    case K_FEED_E: if (x != 0) p->max_feed_e = x; break;
+    case K_ACC_X: if (x != 0) p->max_accel_xy = x; break;
+    case K_ACC_Y: if (x < 0 || (x > 0 && x < p->max_accel_xy)) p->max_accel_xy = x; break;
+    case K_ACC_Z: if (x != 0) p->max_accel_z = x; break;
+    case K_ACC_E: if (x != 0) p->max_accel_e = x; break;
+    case K_ACC_RETRACT: if (x != 0) p->retract_accel = x; break;
+    case K_VOLUMETRIC: if (x != 0) p->max_volumetric_flow = x; break;
     case K_MULTIPLIER: p->extrusion_multiplier = x; break;
     default: break; /* K_COOLING: no layer-time cooling in ampath */
     }
@@ -298,8 +393,17 @@ static amp_status ini_line(amp_printer *p, ini_ctx *c, const char *s, size_t n, 
     if (kn >= 3 && (strncmp(s, "fan_", 4) == 0 || strncmp(s, "close_fan", 9) == 0))
         c->orca_fan = 1;
     switch (id) {
-    case K_BED_SHAPE:
-        return bed_shape(p, v, vn) ? AMP_OK : amp_fail(err, AMP_ERR_PARSE, line, "bed_shape: expected XxY,XxY,...");
+    case K_BED_SHAPE: {
+        double fill = 0.0;
+        int r = bed_shape(p, v, vn, &fill);
+        if (r == BED_NOT_BOX)
+            return amp_fail(err, AMP_ERR_RANGE, line,
+                            "bed_shape: no rectangle about the outline's centre fits inside it (it fills %.0f %% "
+                            "of its bounding box): ampath places jobs on a rectangular or round bed; give the "
+                            "largest rectangle inside the bed",
+                            100.0 * fill);
+        return r ? AMP_OK : amp_fail(err, AMP_ERR_PARSE, line, "bed_shape: expected XxY,XxY,...");
+    }
     case K_FLAVOR: return flavor_of(p, v, vn, line, err);
     case K_START: return gcode_string(p->start_gcode, sizeof p->start_gcode, v, vn, line, err);
     case K_END: return gcode_string(p->end_gcode, sizeof p->end_gcode, v, vn, line, err);
@@ -334,8 +438,11 @@ static void ini_finish(amp_printer *p, const ini_ctx *c)
         p->first_layer_speed = c->first_speed_pct ? c->first_speed / 100.0 * p->print_speed : c->first_speed;
     if (c->have_fan || c->fan_always_seen)
         p->fan_percent = (c->fan_always_seen ? c->fan_always : c->orca_fan) ? c->fan_min : 0.0;
-    if (p->fan_percent > 100.0)
-        p->fan_percent = 100.0;
+    /* a fan speed outside 0..100 % is refused even where it would not be used (PrusaSlicer refuses it) */
+    if (c->have_fan && !(c->fan_min >= 0.0 && c->fan_min <= 100.0))
+        p->fan_percent = c->fan_min;
+    else if (c->have_fan && !(c->fan_max >= 0.0 && c->fan_max <= 100.0))
+        p->fan_percent = c->fan_max;
 }
 
 amp_status amp_printer_parse_ini(amp_printer *p, const char *text, size_t len, const char *name, amp_error *err)

@@ -185,6 +185,16 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
         {"bed_shape = 0x0,220\n", "bed_shape", 1},
         {"just a line\n", "key = value", 1},
         {"nozzle_diameter = 9\n", "nozzle_diameter", 0},
+        /* out of range is refused, never clamped to a value the user did not write */
+        {"max_volumetric_speed = -1\n", "max_volumetric_speed (mm^3/s) must lie in [0.01, 10000] (it is -1)", 0},
+        {"disable_fan_first_layers = -2\n", "disable_fan_first_layers must lie in [0, 100000] (it is -2)", 0},
+        {"min_fan_speed = 150\n", "min_fan_speed", 0},
+        {"max_fan_speed = 120\nfan_always_on = 1\n", "max_fan_speed", 0},
+        {"machine_max_acceleration_x = -5\n", "machine_max_acceleration_x", 0},
+        {"machine_max_feedrate_y = -1\n", "machine_max_feedrate_x/y", 0},
+        /* a triangular bed is not its bounding box (a centred job would stand half off it) */
+        {"bed_shape = 0x0,220x0,220x220\n", "no rectangle about the outline's centre fits inside it (it fills 50 %", 1},
+        {"bed_shape = 0x0,200x0,200x100,100x100,100x200,0x200\n", "fits inside it (it fills 75 %", 1}, /* an L */
     };
     size_t i;
     for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
@@ -193,6 +203,15 @@ START_TEST(bad_ini_and_placeholders_are_refused_with_the_line)
                       "case %lu accepted", (unsigned long)i);
         ck_assert_msg(strstr(err.msg, bad[i].why) != NULL, "case %lu: %s", (unsigned long)i, err.msg);
         ck_assert_int_eq(err.line, bad[i].line);
+    }
+    /* 0 leaves a limit unset (PrusaSlicer: unlimited volumetric speed): the default stays; a closed or
+     * subdivided rectangle is a rectangle */
+    {
+        static const char ok[] = "max_volumetric_speed = 0\nmachine_max_feedrate_z = 0\n"
+                                 "bed_shape = 0x0,125x0,250x0,250x210,0x210,0x0\n";
+        ck_assert_int_eq(amp_printer_parse_ini(&p, ok, strlen(ok), "ok", &err), AMP_OK);
+        ck_assert(p.max_volumetric_flow == 12.0 && p.max_feed_z == 10.0);
+        ck_assert(p.bed_max_x == 250.0 && p.bed_max_y == 210.0 && p.bed_radius == 0.0);
     }
     /* an unknown variable in a command is refused with its line; in a comment it is kept as it is */
     ck_assert_int_eq(amp_printer_builtin(&p, "generic", &err), AMP_OK);
@@ -678,7 +697,8 @@ START_TEST(stock_profiles_of_other_firmwares_round_beds_and_long_lines_are_taken
     ck_assert_msg(amp_gcode_write(&ps, &o, amp_buf_sink, &mb, NULL, &err) == AMP_OK, "%s", err.msg);
     amp_buf_free(&mb);
     amp_pathset_free(&ps);
-    /* a rectangle, and an octagon that is not regular (a bed with cut corners), stay rectangles */
+    /* a rectangle stays itself; an octagon that is not regular (a bed with cut corners, 20 mm) is the largest
+     * square about its centre that misses the corners: 10..190 (its box, 0..200, would reach them) */
     {
         const char *rect = "bed_shape = 0x0,250x0,250x210,0x210\n";
         const char *oct = "bed_shape = 20x0,180x0,200x20,200x180,180x200,20x200,0x180,0x20\n";
@@ -687,7 +707,10 @@ START_TEST(stock_profiles_of_other_firmwares_round_beds_and_long_lines_are_taken
         ck_assert_int_eq(amp_printer_parse_ini(&p, oct, strlen(oct), "o", &err), AMP_OK);
     }
     ck_assert_double_eq(p.bed_radius, 0.0);
-    ck_assert_double_eq(p.bed_max_x, 200.0);
+    ck_assert_double_eq_tol(p.bed_min_x, 10.0, 1e-9);
+    ck_assert_double_eq_tol(p.bed_max_x, 190.0, 1e-9);
+    ck_assert_double_eq_tol(p.bed_min_y, 10.0, 1e-9);
+    ck_assert_double_eq_tol(p.bed_max_y, 190.0, 1e-9);
 }
 END_TEST
 
