@@ -274,10 +274,14 @@ static amp_status close_gaps(const amp_vec2 *pt, const ochain *c, size_t k, amp_
             if (st == AMP_OK && pass == 1 && len >= 3) {
                 if (gap_dist(ring[len - 1], ring[0]) == 0)
                     len--;
-                st0->gaps_closed += nch;
                 len = cut_needles(ring, len);
-                if (len >= 3)
+                /* a chain closed by its own chord that is all needle (an arc of an open wall, 10 um deep) is
+                 * no region: it counts as open, so the layer it leaves empty is reported */
+                if (len >= 3) {
+                    st0->gaps_closed += nch;
                     st = amp_polyset_add(out, ring, len, err);
+                } else
+                    st0->open_chains += nch;
             } else if (st == AMP_OK)
                 st0->open_chains += nch;
         }

@@ -711,6 +711,44 @@ START_TEST(union_of_boxes_a_rounding_error_apart_is_their_union)
 }
 END_TEST
 
+/* Two rings a slit narrower than the union's side step apart (CGAL's anchor cut 0.4 um below the crest of
+ * its arches: three bars 9 um apart, the outer two lost). Each keeps its area, alone (the union leaves them as
+ * they are) and beside a pair that overlaps (the union rebuilds the set); the slit's long edges come first in
+ * their rings, so a ring decided by its longest edge sampled across the slit would be dropped whole. */
+START_TEST(union_keeps_rings_a_micrometre_slit_apart)
+{
+    static const double slit[] = {2e-6, 9e-6, 3e-5, 1e-3};
+    size_t i;
+    int overlap;
+    for (i = 0; i < sizeof slit / sizeof slit[0]; i++)
+        for (overlap = 0; overlap < 2; overlap++) {
+            amp_polyset P;
+            int changed;
+            double want = 2 * 20 * 5 - 20 * slit[i];
+            amp_polyset_init(&P, NULL);
+            {
+                amp_vec2 a[4] = {{100, 5 - 0.5 * slit[i]}, {100, 0}, {120, 0}, {120, 5 - 0.5 * slit[i]}};
+                amp_vec2 b[4] = {{120, 5 + 0.5 * slit[i]}, {120, 10}, {100, 10}, {100, 5 + 0.5 * slit[i]}};
+                /* clockwise written: the slit edge last for a (a->a[0] closes along it) and first for b */
+                amp_vec2 ra[4] = {a[3], a[0], a[1], a[2]};
+                ck_assert_int_eq(amp_polyset_add(&P, ra, 4, NULL), AMP_OK);
+                ck_assert_int_eq(amp_polyset_add(&P, b, 4, NULL), AMP_OK);
+            }
+            amp_polyset_organize(&P, NULL); /* counter-clockwise outers, as a section gives them */
+            if (overlap) {
+                add_rect(&P, 0, 0, 10, 10, 1);
+                add_rect(&P, 5, 5, 15, 15, 1);
+                want += 175.0;
+            }
+            ck_assert_int_eq(amp_polyset_union(&P, &changed, NULL), AMP_OK);
+            ck_assert_msg(fabs(amp_polyset_area(&P) - want) < 1e-6, "slit %g, overlap %d: area %.9f, want %.9f",
+                          slit[i], overlap, amp_polyset_area(&P), want);
+            ck_assert_int_eq(crossing_edges(&P), 0);
+            amp_polyset_free(&P);
+        }
+}
+END_TEST
+
 static Suite *polygon_suite(void)
 {
     Suite *s = suite_create("polygon");
@@ -732,6 +770,7 @@ static Suite *polygon_suite(void)
     tcase_add_test(tc, union_of_boxes_face_to_face_is_one_ring_and_reads_inward_sets_reversed);
     tcase_add_test(tc, union_of_bodies_meeting_a_rounding_error_apart_is_exact);
     tcase_add_test(tc, union_of_boxes_a_rounding_error_apart_is_their_union);
+    tcase_add_test(tc, union_keeps_rings_a_micrometre_slit_apart);
     suite_add_tcase(s, tc);
     return s;
 }

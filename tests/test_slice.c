@@ -207,6 +207,37 @@ START_TEST(open_mesh_sections_are_closed_across_the_gap)
 }
 END_TEST
 
+/* An open wall whose section is an arc flatter than a needle (CGAL's cylinder_locally_refined near its base:
+ * three arcs of radius 40 mm, none closing) is no region: the layer is empty and the arc counts as an open
+ * chain, so that the layer it leaves empty is reported, not a gap "closed" into nothing. */
+START_TEST(an_arc_too_flat_to_close_is_reported_open_not_closed)
+{
+    amp_mesh m;
+    amp_polyset ps;
+    amp_section_stats ss;
+    uint32_t v[2][41];
+    int i, k;
+    amp_mesh_init(&m, NULL);
+    amp_polyset_init(&ps, NULL);
+    for (k = 0; k < 2; k++) /* a strip of the wall: 4 degrees of a 100 mm circle in 40 facets, z 0..5 */
+        for (i = 0; i < 41; i++) {
+            double a = (88.0 + 0.1 * i) * AMP_PI / 180.0;
+            ck_assert_int_eq(amp_mesh_add_vertex(&m, amp_v3(100 * cos(a), 100 * sin(a), 5.0 * k), &v[k][i], NULL),
+                             AMP_OK);
+        }
+    for (i = 0; i < 40; i++) {
+        ck_assert_int_eq(amp_mesh_add_tri(&m, v[0][i], v[0][i + 1], v[1][i + 1], NULL), AMP_OK);
+        ck_assert_int_eq(amp_mesh_add_tri(&m, v[0][i], v[1][i + 1], v[1][i], NULL), AMP_OK);
+    }
+    ck_assert_int_eq(amp_slice_plane(&m, 2.5, &ps, &ss, NULL), AMP_OK);
+    ck_assert_uint_eq(ps.nrings, 0);
+    ck_assert_uint_eq(ss.open_chains, 1);
+    ck_assert_uint_eq(ss.gaps_closed, 0);
+    amp_polyset_free(&ps);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 START_TEST(cracked_mesh_is_sliced_as_if_welded)
 {
     /* a facet whose corners are 1 um off its neighbours' (unwelded STL from
@@ -774,6 +805,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, torus_sections_are_annuli_with_one_hole_and_analytic_area);
     tcase_add_test(tc, voxel_plate_gives_islands_holes_and_exact_areas);
     tcase_add_test(tc, open_mesh_sections_are_closed_across_the_gap);
+    tcase_add_test(tc, an_arc_too_flat_to_close_is_reported_open_not_closed);
     tcase_add_test(tc, cracked_mesh_is_sliced_as_if_welded);
     tcase_add_test(tc, layers_are_cut_at_mid_height_with_optional_first_layer);
     tcase_add_test(tc, cli_writes_closed_oriented_polygons_per_layer);
