@@ -475,8 +475,8 @@ amp_status amp_check_gouge(const amp_pathset *ps, const amp_head *h, amp_gouge_m
         h->theta >= 0.5 * AMP_PI)
         return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",
                         h->z_offs, h->theta * 57.295779513082320876);
-    if (!isfinite(tol) || tol < 0.0)
-        return amp_fail(err, AMP_ERR_RANGE, 0, "gouge tolerance must be >= 0 (got %g)", tol);
+    if (!isfinite(tol) || tol < -h->z_offs)
+        return amp_fail(err, AMP_ERR_RANGE, 0, "gouge tolerance must be finite and above -z_offs (got %g)", tol);
     memset(&c, 0, sizeof c);
     c.ps = ps;
     c.k = 1.0 / tan(h->theta);

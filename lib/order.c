@@ -1146,8 +1146,9 @@ amp_status amp_order(const amp_pathset *in, const amp_order_opts *opts, amp_path
     }
     if ((st = amp_head_validate(&opts->head, err)) != AMP_OK)
         return st;
-    /* Alg. 2, line 2: fragments shorter than z_offs, so that Lemma 5.1 holds */
-    if ((st = amp_fragments_build(&fs, in, opts->head.z_offs, out->alloc, err)) != AMP_OK)
+    /* Alg. 2, line 2: fragments shorter than z_offs, so that Lemma 5.1 holds (by the contact margin too: a
+     * fragment's rise stays clear of its own cone's tip) */
+    if ((st = amp_fragments_build(&fs, in, opts->head.z_offs + 4.0 * AMP_CONE_TOL, out->alloc, err)) != AMP_OK)
         return st;
     memset(&o, 0, sizeof o);
     o.a = out->alloc;

@@ -679,6 +679,33 @@ START_TEST(resequencing_flat_layers_is_gouge_free)
 }
 END_TEST
 
+/* A box field's rows stacked exactly z_offs apart (`field --spacing 0.5` with the default head): the cone's tip
+ * touches the row straight above, and contact counts (the closed cone of Fig. 10, AMP_CONE_TOL < 0), so every
+ * row is printed after the rows under it. Before, the longer upper rows came first (GetBest takes the longest
+ * run) and the tip ran through them while the rows under them printed; the checker now fails that order. */
+START_TEST(rows_stacked_exactly_z_offs_apart_print_from_the_bottom)
+{
+    amp_pathset ps, out;
+    amp_order_opts o;
+    amp_error err;
+    int j, i;
+    amp_pathset_init(&ps, NULL);
+    amp_pathset_init(&out, NULL);
+    for (j = 3; j >= 0; j--) /* top layer first, each layer's rows 2 mm longer than the layer's under it */
+        for (i = 0; i <= 8; i++)
+            line(&ps, amp_v3(0, 0.5 * i, 0.25 + 0.5 * j), amp_v3(4 + 2 * j, 0.5 * i, 0.25 + 0.5 * j));
+    amp_order_opts_default(&o);
+    ck_assert_int_eq(amp_check_gouge(&ps, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err), AMP_ERR_CHECK);
+    ck_assert_msg(strstr(err.msg, "is 0 mm inside the head") != NULL, "%s", err.msg);
+    ck_assert_int_eq(amp_order(&ps, &o, &out, NULL, &err), AMP_OK);
+    ck_assert_msg(amp_check_gouge(&out, &o.head, AMP_GOUGE_PAIRWISE, AMP_GOUGE_TOL, NULL, &err) == AMP_OK, "%s",
+                  err.msg);
+    ck_assert_double_eq_tol(amp_pathset_path_verts(&out, 0)[0].p.z, 0.25, 1e-12); /* the bottom layer first */
+    amp_pathset_free(&ps);
+    amp_pathset_free(&out);
+}
+END_TEST
+
 /* ---- the gouge checker ---- */
 
 START_TEST(pairwise_and_grid_checkers_agree_on_random_inputs)
@@ -935,6 +962,7 @@ static Suite *order_suite(void)
     tcase_add_test(tc, nearest_choice_shortens_travel_on_helix_covering);
     tcase_add_test(tc, resequencing_never_adds_cuts_and_shortens_z_weighted_travel);
     tcase_add_test(tc, resequencing_flat_layers_is_gouge_free);
+    tcase_add_test(tc, rows_stacked_exactly_z_offs_apart_print_from_the_bottom);
     tcase_add_test(tc, ordering_is_identical_on_one_and_two_threads);
     tcase_add_test(tc, pairwise_and_grid_checkers_agree_on_random_inputs);
     tcase_add_test(tc, gouge_checker_agrees_with_the_closed_form_clearance_near_the_edge);

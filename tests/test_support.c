@@ -636,7 +636,7 @@ static amp_support_stats settle_rows(const char *names, char *got, amp_hold_repo
     static const struct {
         char name;
         double x0, x1, y, z;
-    } rows[] = {{'T', 0.5, 9.5, 5, 0.25}, {'X', 8, 9.5, 4, 0.25}, {'A', 0.5, 9.5, 5, 1.5}, {'B', 0.5, 3, 5, 2.0}};
+    } rows[] = {{'T', 0.5, 9.5, 5, 0.25}, {'X', 8, 9.5, 4, 0.25}, {'A', 0.5, 9.5, 5, 1.5}, {'B', 0.5, 3, 5, 1.9}};
     amp_mesh m;
     amp_bvh *b = NULL;
     amp_pathset ps, out;
@@ -675,10 +675,11 @@ static amp_support_stats settle_rows(const char *names, char *got, amp_hold_repo
 }
 
 /*
- * Two beads stacked z_offs apart are in no Def. 5.1 relation, so the ordering may print the upper one first,
- * in the air with no room for a pad under it (CGAL's camel, man, cheese and hand covered by a 1 mm field).
- * Row B rests on row A alone (T, on the bed under both, is 1.25 mm under B's bead). Printed T B A, A moves
- * before B; printed T B X A, the short row X under A's far end must come before A, so B moves after A instead.
+ * Two beads stacked less than z_offs apart are in no Def. 5.1 relation, so the ordering may print the upper one
+ * first, in the air with no room for a pad under it (CGAL's camel, man, cheese and hand covered by a 1 mm field;
+ * exactly z_offs apart the cone's tip touches the upper one, which counts since AMP_CONE_TOL < 0). Row B rests
+ * 0.4 mm over row A alone (T, on the bed under both, is 1.15 mm under B's bead). Printed T B A, A moves before
+ * B; printed T B X A, the short row X under A's far end must come before A, so B moves after A instead.
  */
 START_TEST(an_object_bead_is_not_printed_before_the_bead_it_rests_on)
 {

@@ -58,11 +58,13 @@ typedef struct amp_gouge_violation {
     size_t later_path, later_seg;
     amp_vec3 earlier_point;           /**< the printed point inside the head ... */
     amp_vec3 later_point;             /**< ... while this point is printed */
-    double depth;                     /**< how far inside the cone, mm (> tol) */
+    double depth;                     /**< how far inside the cone, mm (> tol; 0 for contact) */
 } amp_gouge_violation;
 
-/** Default tolerance (mm): tiny contacts from rounding in the .amp text are not gouges. */
-#define AMP_GOUGE_TOL 1e-6
+/** Default tolerance (mm): a point within half a micrometre of the cone's surface, or outside, is no gouge;
+ *  contact (clearance 0) is one, as for the builders (AMP_CONE_TOL, whose margin is twice this: a pair they
+ *  keep apart stays apart through the .amp text's rounding). A negative tolerance counts contact. */
+#define AMP_GOUGE_TOL (-5e-7)
 
 /**
  * Check @p ps for gouging with head @p h. Returns AMP_OK when no violation

@@ -4,7 +4,9 @@
  * whose tip is z_offs above the point being printed, with half-angle theta
  * from the vertical (+z) axis ([P1 §5.1], Fig. 9; docs/interfaces.md §2).
  * A point q lies inside the head printing p when
- *     (q.z - p.z - z_offs) - cot(theta) * |q.xy - p.xy| > 0.
+ *     (q.z - p.z - z_offs) - cot(theta) * |q.xy - p.xy| > AMP_CONE_TOL,
+ * a small negative number: contact counts (the closed cone of [P1 §5.1],
+ * whose sweep along a curve "intersects" the curve z_offs straight above it).
  *
  * Thread-safety: pure functions.
  */
@@ -22,8 +24,14 @@ extern "C" {
 #define AMP_HEAD_DEFAULT_Z_OFFS 0.5
 #define AMP_HEAD_DEFAULT_THETA (0.4 * AMP_PI)
 
-/** Clearance (mm) above which the cone is considered to touch: contact at exactly 0 is allowed. */
-#define AMP_CONE_TOL 1e-9
+/**
+ * Clearance (mm) above which a point is inside the cone: -1 um, so that contact counts. Rows of a field
+ * stacked exactly z_offs apart (`field --spacing 0.5` with the default head) touch the cone's tip: with contact
+ * allowed, Algorithm 2 printed an upper row before the row straight under it, whose printing then put the tip
+ * in the upper row. The micrometre is a margin over the .amp text's rounding (10 digits: 0.2 um at 200 mm),
+ * so that the checker (AMP_GOUGE_TOL, half of it) sees every pair the builders kept apart as apart.
+ */
+#define AMP_CONE_TOL (-1e-6)
 
 /** The print-head cone. Angles in radians. */
 typedef struct amp_head {

@@ -21,7 +21,7 @@ from .core import Mesh, PathSet, Trivariate, _check, _err, _fail, _head, _hold
 
 _DEG = 57.295779513082320876
 _ERR_CHECK = -10
-_GOUGE_TOL = 1e-6  # AMP_GOUGE_TOL
+_GOUGE_TOL = -5e-7  # AMP_GOUGE_TOL
 _OUTSIDE_TOL = 0.01  # tools/check_mesh.c: vertices farther outside the mesh fail
 
 
