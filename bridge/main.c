@@ -26,7 +26,7 @@ static const char usage[] =
     "  --flavor F           marlin | klipper | auto (asks M115) (default marlin, or the --printer profile's)\n"
     "  --window W           pingpong | N lines in flight | advanced (ADVANCED_OK) (default 4; klipper 16)\n"
     "  --bufsize N          printer command queue, Marlin BUFSIZE (default 4)\n"
-    "  --rx-bytes N         printer serial RX buffer in bytes (default 128)\n"
+    "  --rx-bytes N         bytes the printer's serial RX buffer holds (default 127: RX_BUFFER_SIZE 128 on AVR)\n"
     "  --no-resend-ok       the firmware sends no ok after 'Resend:' (default: learned at the handshake)\n"
     "  --resend-ok          the firmware sends an ok after 'Resend:' (no learning either)\n"
     "  --ready-timeout S    wait at most S seconds for the printer to become ready (default 60)\n"

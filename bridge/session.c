@@ -34,7 +34,7 @@ void br_cfg_default(br_cfg *c)
     c->mode = AMP_PROTO_FIXED;
     c->window = 0; /* flavor default */
     c->bufsize = 4;
-    c->rx_bytes = 128;
+    c->rx_bytes = 127;
     c->resend_ok = 1;
     c->timeout_ms = 10000;
     c->boot_ms = 3000;

@@ -43,7 +43,7 @@ void amp_proto_opts_default(amp_proto_opts *o, amp_proto_flavor flavor)
     o->mode = AMP_PROTO_FIXED;
     o->window = flavor == AMP_PROTO_KLIPPER ? 16 : 4;
     o->bufsize = 4;
-    o->rx_bytes = 128;
+    o->rx_bytes = 127; /* RX_BUFFER_SIZE 128: an AVR ring buffer holds one byte less */
     o->resend_ok = 1;
     o->boot_ms = 3000;
     o->timeout_ms = 10000;
@@ -759,6 +759,30 @@ static int has_temp(const char *s)
     return strstr(s, " T:") != NULL || starts(s, "T:") || starts(s, "B:");
 }
 
+/* Is a heating wait (M109, M190, M191) among the lines sent and not acknowledged? While one runs, its
+   temperature reports (every second) are the printer's only sign of life. Auto-reports (M155) come whatever
+   happens to the oks: taken as life, they kept a link whose oks were lost from ever probing (the window
+   full, the printer idle, the job stalled for good). */
+static int heating_in_flight(const amp_proto *p)
+{
+    long n;
+    for (n = p->acked + 1; n <= p->top_sent && n <= p->acked + AMP_PROTO_MAX_INFLIGHT; n++) {
+        const char *c = p->ring[n & RING_MASK].text;
+        if (*c == 'N') { /* the line number and the blank after it */
+            while (*++c >= '0' && *c <= '9')
+                ;
+            while (*c == ' ')
+                c++;
+        }
+        if (c[0] == 'M' && c[1] == '1' && c[2] == '9' && (c[3] == '0' || c[3] == '1') &&
+            !(c[4] >= '0' && c[4] <= '9'))
+            return 1;
+        if (c[0] == 'M' && c[1] == '1' && c[2] == '0' && c[3] == '9' && !(c[4] >= '0' && c[4] <= '9'))
+            return 1;
+    }
+    return 0;
+}
+
 /* An `Error:` text (after the prefix) of the line-number/checksum protocol? Fuzzy, because on a noisy link
    a garbled protocol error must not pass for a firmware error that stops the job. */
 static int protocol_error(const char *s)
@@ -961,9 +985,11 @@ static void handle_marlin(amp_proto *p, const char *s, unsigned long now)
         return;
     }
     if (has_temp(s)) {
-        p->last_rx = now; /* M109/M190 report every second while heating */
-        if (p->relink)
-            p->t0 = now;
+        if (heating_in_flight(p)) {
+            p->last_rx = now; /* M109/M190 report every second while heating */
+            if (p->relink)
+                p->t0 = now;
+        }
         emit(p, AMP_EV_TEMP, 0, s);
         return;
     }
@@ -1117,8 +1143,9 @@ static int window_allows(const amp_proto *p)
     if (inflight >= lim)
         return 0;
     /* The oldest qslots lines sit in the command queue (ok comes after execution); the rest wait in the
-       serial RX buffer, which must not overflow: Marlin has no flow control. */
-    bytes = p->ring[p->send_n & RING_MASK].len;
+       serial RX buffer, which must not overflow: Marlin has no flow control. With the queue full Marlin
+       stops reading at the last queued line's newline: its guard newline stays in the buffer too. */
+    bytes = p->ring[p->send_n & RING_MASK].len + (p->o.guard_nl ? 1 : 0);
     for (k = p->acked + 1 + p->qslots; k < p->send_n; k++)
         bytes += p->ring[k & RING_MASK].len;
     return inflight < p->qslots || bytes <= p->o.rx_bytes;

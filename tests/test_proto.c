@@ -399,6 +399,44 @@ START_TEST(busy_keepalive_prevents_timeouts_for_ninety_seconds)
 }
 END_TEST
 
+/* Temperature reports keep the link alive only while a heating wait is in flight: M109's reports every second
+ * hold off the probe for as long as it heats; auto-reports (M155 S1) with the oks of the window lost do not,
+ * or the job stalls for good (an independent printer model hung the bridge so: 1697 of 3005 lines run). */
+START_TEST(auto_reports_do_not_hold_off_the_probe_but_m109s_reports_do)
+{
+    amp_proto p;
+    rec r;
+    unsigned long t;
+    long ln;
+    start_marlin(&p, &r, AMP_PROTO_FIXED, 2);
+    submit_moves(&p, 3);
+    ck_assert_int_eq(num(tx(&p, 100)), 1);
+    ck_assert_int_eq(num(tx(&p, 100)), 2);
+    /* both oks lost; the printer idles and auto-reports every 300 ms: the probe still comes after 1 s */
+    for (t = 400; t <= 1300; t += 300) {
+        feed1(&p, " T:200.0 /200.0 B:60.0 /60.0 @:0 B@:0\n", t);
+        if (*tx(&p, t))
+            break;
+    }
+    ck_assert_int_eq(count(&r, AMP_EV_TIMEOUT), 1); /* at 1300, a second after line 2 went out */
+    ck_assert_uint_eq(t, 1300);
+    feed1(&p, "Error:Line Number is not Last Line Number+1, Last Line: 2\nResend: 3\nok\n", 1400);
+    ck_assert_int_eq(p.acked, 2);
+    ck_assert_int_eq(num(tx(&p, 1400)), 3);
+    feed1(&p, "ok\n", 1450);
+    /* an M109 in flight: its reports keep the link alive for a minute of heating, no probe */
+    ck_assert_int_eq(amp_proto_submit(&p, "M109 S215", 9, &ln, NULL), AMP_OK);
+    ck_assert_int_eq(num(tx(&p, 1500)), 4);
+    for (t = 2000; t < 62000; t += 500) {
+        feed1(&p, " T:201.3 /215.0 B:60.0 /60.0 @:127 B@:0 W:?\n", t);
+        ck_assert_str_eq(tx(&p, t), "");
+    }
+    ck_assert_int_eq(count(&r, AMP_EV_TIMEOUT), 1);
+    feed1(&p, "ok\n", 62000);
+    ck_assert_int_eq(p.acked, 4);
+}
+END_TEST
+
 START_TEST(reset_mid_job_stops_and_reports_the_last_acknowledged_line)
 {
     amp_proto p;
@@ -452,6 +490,51 @@ START_TEST(advanced_ok_learns_the_queue_size_and_bounds_the_rx_bytes)
     feed1(&p, "ok N3 P15 B23\n", 120);
     feed1(&p, "ok N4 P15 B0\n", 120);
     ck_assert_int_eq(p.qslots, 9);
+}
+END_TEST
+
+/* With the command queue full, Marlin stops reading at the last queued line's newline: that line's guard
+ * newline stays in the RX buffer with the lines behind it (and an AVR ring buffer of 128 bytes holds 127, the
+ * default). A buffer exactly as large as three lines beyond the queue takes two of them: the third would
+ * leave no room for the stranded guard (before, it went, one byte too many). */
+static long queue_fill(int rx_bytes, long *len3)
+{
+    amp_proto p;
+    amp_proto_opts o;
+    long ln;
+    int i;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    o.mode = AMP_PROTO_FIXED;
+    o.window = 12;
+    o.learn = 0;
+    o.rx_bytes = rx_bytes;
+    ck_assert_int_eq(amp_proto_init(&p, &o, 0, NULL), AMP_OK);
+    feed1(&p, "start\n", 10);
+    ck_assert(*tx(&p, 10));
+    feed1(&p, "ok\n", 20);
+    ck_assert_int_eq(p.state, AMP_PROTO_RUNNING);
+    for (i = 0; i < 12; i++) {
+        char cmd[64];
+        snprintf(cmd, sizeof cmd, "G1 X1%02d.125 Y2%02d.25 E1.00%02d F1800", i, i, i);
+        ck_assert_int_eq(amp_proto_submit(&p, cmd, strlen(cmd), &ln, NULL), AMP_OK);
+    }
+    while (*tx(&p, 100))
+        ;
+    *len3 = p.ring[5 % AMP_PROTO_RING].len + p.ring[6 % AMP_PROTO_RING].len + p.ring[7 % AMP_PROTO_RING].len;
+    return p.send_n - 1 - p.acked - 4; /* lines beyond the queue of 4 */
+}
+
+START_TEST(lines_beyond_the_queue_and_the_stranded_guard_fit_the_rx_buffer)
+{
+    amp_proto_opts o;
+    long len3, again;
+    amp_proto_opts_default(&o, AMP_PROTO_MARLIN);
+    ck_assert_int_eq(o.rx_bytes, 127);
+    ck_assert_int_eq(o.guard_nl, 1);
+    ck_assert_int_eq(queue_fill(1000, &len3), 8); /* all 12 */
+    ck_assert_int_ge(len3, AMP_PROTO_LINE_MAX);
+    ck_assert_int_eq(queue_fill((int)len3, &again), 2);
+    ck_assert_int_eq(queue_fill((int)len3 + 1, &again), 3);
 }
 END_TEST
 
@@ -1223,8 +1306,10 @@ static Suite *proto_suite(void)
     tcase_add_test(tc, lost_ok_is_recovered_by_a_probe_without_running_a_line_twice);
     tcase_add_test(tc, lost_line_in_pingpong_is_sent_again_after_the_timeout);
     tcase_add_test(tc, busy_keepalive_prevents_timeouts_for_ninety_seconds);
+    tcase_add_test(tc, auto_reports_do_not_hold_off_the_probe_but_m109s_reports_do);
     tcase_add_test(tc, reset_mid_job_stops_and_reports_the_last_acknowledged_line);
     tcase_add_test(tc, advanced_ok_learns_the_queue_size_and_bounds_the_rx_bytes);
+    tcase_add_test(tc, lines_beyond_the_queue_and_the_stranded_guard_fit_the_rx_buffer);
     tcase_add_test(tc, garbled_and_overlong_replies_are_ignored_safely);
     tcase_add_test(tc, klipper_has_no_numbers_acks_errors_and_stops_on_shutdown);
     tcase_add_test(tc, klipper_shutdown_reports_the_last_acknowledged_line);

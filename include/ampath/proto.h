@@ -130,7 +130,8 @@ typedef struct amp_proto_opts {
     amp_proto_window mode;      /**< default AMP_PROTO_FIXED */
     int window;                 /**< max lines in flight, FIXED/Klipper (default 4 Marlin, 16 Klipper), 1..AMP_PROTO_MAX_INFLIGHT */
     int bufsize;                /**< printer command-queue slots (Marlin BUFSIZE, default 4) */
-    int rx_bytes;               /**< printer serial RX buffer bytes (default 128) */
+    int rx_bytes;               /**< bytes the printer's serial RX buffer holds (default 127: Marlin's RX_BUFFER_SIZE 128 as an
+                                     AVR ring buffer, one slot kept free; a full queue strands one guard newline) */
     int resend_ok;              /**< non-zero: an `ok` follows every `Resend:` and is no acknowledgement (Marlin, default 1) */
     unsigned long boot_ms;      /**< wait this long for `start` before the handshake (default 3000) */
     unsigned long timeout_ms;   /**< silence (no ok/busy/temperature) before a probe (default 10000) */
