@@ -821,6 +821,22 @@ START_TEST(cli_model_and_eval_print_full_precision_points)
     ck_assert_ptr_nonnull(strstr(out, "outside the domain"));
     snprintf(args, sizeof args, "eval %s --derivative q", spl);
     ck_assert_int_eq(run_tool(args, "0.5 0.5 0.5\n", out, sizeof out), 2);
+    /* --json: the points at full precision; a refused line leaves nothing on stdout (not the object of the
+     * points before it, well formed, that a caller reading stdout alone would take for the run) */
+    snprintf(args, sizeof args, "eval %s --json", spl);
+    ck_assert_int_eq(fx_run_tool_ex(args, "0.25 0.5 0.125\n", 0, out, sizeof out), 0);
+    ck_assert_int_eq(sscanf(out, "{\"points\":[[%lf,%lf,%lf]],\"count\":1}", &x, &y, &z), 3);
+    ck_assert(x == e.x || fabs(x - e.x) <= 1e-13 * 50);
+    {
+        char again[4096];
+        snprintf(args, sizeof args, "eval %s", spl);
+        ck_assert_int_eq(fx_run_tool_ex(args, "0.25 0.5 0.125\n", 0, again, sizeof again), 0);
+        ck_assert_int_eq(sscanf(again, "%lf", &d.x), 1);
+        ck_assert(d.x == x); /* the same 17 digits as the text output */
+    }
+    snprintf(args, sizeof args, "eval %s --json", spl);
+    ck_assert_int_eq(fx_run_tool_ex(args, "0.5 0.5 0.5\n0.5 0.5 1.5\n", 0, out, sizeof out), 2);
+    ck_assert_str_eq(out, "");
     /* .stl output gives the mesh of the model; a trivariate-only model gives its tessellated boundary */
     snprintf(args, sizeof args, "model helix -o %s --json", fx_tmp("helix.stl"));
     ck_assert_int_eq(run_tool(args, NULL, out, sizeof out), 0);

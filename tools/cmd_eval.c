@@ -1,5 +1,6 @@
 /* ampath eval SPLINE — points and derivatives of a .spl object at parameters read from stdin (docs/interfaces.md §4). */
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -15,7 +16,8 @@ const char cmd_eval_usage[] =
     "                   parameter u; or a word over u, v, w naming a partial derivative, e.g. 'v',\n"
     "                   'uv' (d2/du dv), 'ww'. At most 4 per direction.\n"
     "  --object I       which object of a multi-object file, counted from 0 (default 0)\n"
-    "  --json           print {\"count\": N, \"points\": [[x, y, z], ...]} instead\n"
+    "  --json           print {\"points\": [[x, y, z], ...], \"count\": N} instead (full precision; nothing\n"
+    "                   on stdout when a line is refused)\n"
     "Parameters outside the spline's domain are rejected (exit 2, with the line number);\n"
     "the library itself clamps them (see docs/splines.md).\n";
 
@@ -106,12 +108,10 @@ static int eval_lines(const amp_spline *s, const int k[3], cli_json *j, int *cou
         if (amp_spline_eval_partial(s, par, k, &out, &err) != AMP_OK)
             return cli_fail("eval", CLI_USAGE, "stdin line %ld: %s", lineno, err.msg);
         (*count)++;
-        if (j) {
-            cli_json_arr(j, NULL);
-            cli_json_num(j, NULL, out.x);
-            cli_json_num(j, NULL, out.y);
-            cli_json_num(j, NULL, out.z);
-            cli_json_close(j);
+        if (j) { /* full precision, as the text output */
+            char pt[96];
+            snprintf(pt, sizeof pt, "[%.17g,%.17g,%.17g]", out.x, out.y, out.z);
+            cli_json_members(j, pt);
         } else
             printf("%.17g %.17g %.17g\n", out.x, out.y, out.z);
     }
@@ -127,6 +127,7 @@ int cmd_eval(int argc, char **argv)
     size_t n = 0;
     amp_error err;
     cli_json j;
+    FILE *body = NULL;
     cli_opt opts[] = {{"derivative", CLI_STR, &deriv, 0},
                       {"object", CLI_LONG, &object, 0},
                       {"json", CLI_FLAG, &json, 0},
@@ -149,14 +150,25 @@ int cmd_eval(int argc, char **argv)
                         deriv, AMP_SPLINE_MAX_DERIV, dim);
     }
     if (json) {
-        cli_json_begin(&j, stdout);
+        /* the object goes out whole or not at all: a bad line after good ones must not leave a well-formed
+         * object of the points before it on stdout (a caller reading stdout alone would take it for the run) */
+        if (!(body = tmpfile())) {
+            amp_spline_list_free(NULL, list, n);
+            return cli_fail("eval", CLI_USAGE, "cannot create a temporary file for --json: %s", strerror(errno));
+        }
+        cli_json_begin(&j, body);
         cli_json_arr(&j, "points");
     }
     rc = eval_lines(s, k, json ? &j : NULL, &count);
     if (json) {
+        int c;
         cli_json_close(&j);
         cli_json_int(&j, "count", count);
         cli_json_end(&j);
+        rewind(body);
+        while (rc == CLI_OK && (c = getc(body)) != EOF)
+            putchar(c);
+        fclose(body);
     }
     amp_spline_list_free(NULL, list, n);
     return rc;
