@@ -535,6 +535,9 @@ START_TEST(cli_cover_and_check_report_and_fail_properly)
     ck_assert_ptr_nonnull(strstr(out, "\"ok\":false"));
     ck_assert_int_eq(run("cover vase --eps -1 -o /dev/null", out, sizeof out), 2);
     ck_assert_int_eq(run("cover vase --eps 1 --dir q -o /dev/null", out, sizeof out), 2);
+    /* an unknown name is named as one, with the built-ins (it read "nope: nope: No such file or directory") */
+    ck_assert_int_eq(run("cover nope --eps 1 -o /dev/null", out, sizeof out), 2);
+    ck_assert_ptr_nonnull(strstr(out, "'nope' is neither a built-in trivariate (helix, torus-quarter, vase)"));
     /* the default direction is chosen, and named in the report */
     ck_assert_int_eq(run("cover helix --eps 4 --samples 0 --json -o /dev/null", out, sizeof out), 0);
     ck_assert_ptr_nonnull(strstr(out, "\"dir\":\"v\",\"dir_scores\":{\"u\":"));

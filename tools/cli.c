@@ -564,8 +564,15 @@ int cli_load_trivariate(const char *cmd, const char *what, amp_spline *out)
                 return cli_fail_err(cmd, &err);
             return CLI_OK;
         }
+    if (!strchr(what, '/') && !cli_ends_with(what, ".spl") && access(what, F_OK) != 0) {
+        char known[256] = "";
+        for (i = 0; names[i]; i++) /* a name, not a file: say which names there are */
+            snprintf(known + strlen(known), sizeof known - strlen(known), "%s%s", i ? ", " : "", names[i]);
+        return cli_fail(cmd, CLI_USAGE, "'%s' is neither a built-in trivariate (%s) nor a .spl file", what, known);
+    }
     if (amp_spline_read_file(what, NULL, &list, &n, &err) != AMP_OK)
-        return cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
+        return strncmp(err.msg, what, strlen(what)) == 0 ? cli_fail(cmd, CLI_USAGE, "%s", err.msg) /* names it */
+                                                            : cli_fail(cmd, CLI_USAGE, "%s: %s", what, err.msg);
     for (i = 0; i < n && list[i].dim != 3; i++)
         ;
     if (i == n) {
