@@ -148,6 +148,8 @@ int br_session_start_job(br_session *s, const char *path, long resume_from, char
 void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms);
 /** Clean stop: nothing new is sent, the lines in flight are waited for. */
 void br_session_request_stop(br_session *s, br_stop why);
+/* The job line (file line) of engine line number @p n, 0 for a preamble line or one no longer mapped. */
+long br_session_job_line(const br_session *s, long n);
 void br_session_close(br_session *s);
 const char *br_stop_name(br_stop st);
 /** One-line status: "state=... job=... acked=N total=M line=L". */

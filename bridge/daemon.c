@@ -180,6 +180,14 @@ static void on_printer_event(void *user, const amp_proto_event *ev)
     case AMP_EV_SHUTDOWN: kind = "shutdown"; break;
     case AMP_EV_FATAL: kind = "fatal"; break;
     case AMP_EV_TIMEOUT: kind = "timeout"; break;
+    /* the firmware's own complaints stop a job too (Klipper `!!`, Marlin `Error:Probing Failed`, `// action:
+       cancel`, never ready): a subscriber hears why, not only the `end` that follows */
+    case AMP_EV_FWERROR: kind = "firmware"; break;
+    case AMP_EV_ACTION:
+        if (strncmp(text, "cancel", 6) == 0 || strncmp(text, "pause", 5) == 0)
+            kind = "action";
+        break;
+    case AMP_EV_NOTREADY: kind = "notready"; break;
     default: break;
     }
     if (ev->kind == AMP_EV_ERROR && protocol_reply(text))
@@ -194,7 +202,11 @@ static void on_printer_event(void *user, const amp_proto_event *ev)
         br_msg_event(&m, ev->kind == AMP_EV_TIMEOUT ? "warning" : "error");
         br_msg_str(&m, "kind", kind);
         br_msg_str(&m, "text", text);
-        br_msg_long(&m, "line", s->have_job ? s->last_acked_job_line : 0);
+        br_msg_long(&m, "line", s->have_job ? (ev->kind == AMP_EV_FWERROR || ev->kind == AMP_EV_ACTION) &&
+                                                      br_session_job_line(s, ev->line) > 0
+                                                  ? br_session_job_line(s, ev->line) /* the line it hit */
+                                                  : s->last_acked_job_line
+                                            : 0);
         broadcast(d, &m);
     }
     if (d->chained)
@@ -214,6 +226,8 @@ static void hook(dstate *d)
 }
 
 /* ---- jobs ---- */
+static void state_event(dstate *d);
+
 static void job_started(dstate *d)
 {
     br_session *s = d->s;
@@ -266,6 +280,17 @@ static void job_ended(dstate *d)
     }
     br_job_close(&s->job);
     s->have_job = 0;
+    if (d->errors == 0 && r->stop != BR_DONE && r->stop != BR_CANCELLED && r->stop != BR_INTERRUPTED) {
+        /* a stop no printer event announced (the device lost, a job line refused before sending): the error
+           event a subscriber waits for, before the end */
+        br_msg_event(&m, "error");
+        br_msg_str(&m, "kind", br_stop_name(r->stop));
+        br_msg_str(&m, "text", r->stop_text);
+        br_msg_long(&m, "line", r->line);
+        broadcast(d, &m);
+        d->errors++;
+    }
+    state_event(d); /* the last state before the end: a host that stops reading at "end" has read it */
     br_msg_event(&m, "end");
     fill_status(d, &m);
     br_msg_long(&m, "safe_end", r->safe_end);
@@ -293,7 +318,8 @@ static void watch_stops(dstate *d, double now)
     }
 }
 
-static void progress_events(dstate *d, double now)
+/* A "state" event when the state changed since the last one. */
+static void state_event(dstate *d)
 {
     br_msg m;
     const char *st = state_of(d);
@@ -304,6 +330,12 @@ static void progress_events(dstate *d, double now)
         br_msg_str(&m, "job", d->rec.have ? d->rec.path : NULL);
         broadcast(d, &m);
     }
+}
+
+static void progress_events(dstate *d, double now)
+{
+    br_msg m;
+    state_event(d);
     if (job_active(d->s) && d->s->acked_moves != d->prog_acked && now - d->t_prog >= 0.5) {
         long acked, total, sent, line, resume;
         figures(d, &acked, &total, &sent, &line, &resume);

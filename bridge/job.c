@@ -241,23 +241,37 @@ static void build_preamble(br_job *j, const job_state *st)
         pre(j, "G1 F%.0f", st->f, 0);
 }
 
+static int not_regular(const char *path, char *why, size_t whylen)
+{
+    snprintf(why, whylen,
+             "%s is not a regular file (a pipe or device cannot be checked before sending): save the job to a "
+             "file first",
+             path);
+    return -1;
+}
+
 /* Hardening: a job is a regular file. A FIFO would block the daemon in open(), /dev/zero would never end,
-   and neither can be read twice (checked whole, then sent). Opened without blocking to find out. */
+   and neither can be read twice (checked whole, then sent). stat() first: opening a device is not harmless
+   (a second printer's serial port resets its board, /dev/ptmx makes a terminal); then the file opened
+   without blocking is checked again, in case the name changed hands between the two. */
 static int check_source(const char *path, char *why, size_t whylen)
 {
     struct stat st;
-    int fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY);
+    int fd;
+    if (stat(path, &st) != 0) {
+        snprintf(why, whylen, "%s: %s", path, strerror(errno));
+        return -1;
+    }
+    if (!S_ISREG(st.st_mode))
+        return not_regular(path, why, whylen);
+    fd = open(path, O_RDONLY | O_NONBLOCK | O_NOCTTY);
     if (fd < 0) {
         snprintf(why, whylen, "%s: %s", path, strerror(errno));
         return -1;
     }
     if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         close(fd);
-        snprintf(why, whylen,
-                 "%s is not a regular file (a pipe or device cannot be checked before sending): save the job to a "
-                 "file first",
-                 path);
-        return -1;
+        return not_regular(path, why, whylen);
     }
     close(fd);
     return 0;

@@ -84,6 +84,8 @@ static long job_line_of(const br_session *s, long n)
     return n > 0 && n > s->p.top_sent - BR_MAP ? s->map[n % BR_MAP] : 0;
 }
 
+long br_session_job_line(const br_session *s, long n) { return job_line_of(s, n); }
+
 /* Firmware error or action: remember the first one with its job line and text, then stop or go on. */
 static void printer_complaint(br_session *s, const amp_proto_event *ev, br_stop why, int fatal)
 {
