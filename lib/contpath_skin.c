@@ -23,18 +23,21 @@ static int window_open(const amp_slices *sl, size_t li, double below, double abo
            (above > 0 && (li + 1 == sl->nlayers || sl->layers[sl->nlayers - 1].z_print - z < above - 1e-9));
 }
 
-/* Is q covered by the sections of every layer within [z - below, z + above]
- * (other than the layer itself)? Layers beyond the part's ends do not cover. */
+/* Is q covered by the sections of every layer within [z - below, z + above], ends included (other than the
+ * layer itself)? Layers beyond the part's ends do not cover. A face exposed under layer k (k - 1 lacks it)
+ * makes k .. k + 3 solid at 0.8 mm of 0.2 mm layers, as the bed makes layers 0 .. 3: layer k + 3 must still
+ * see k - 1, 0.8 mm below it (with the ends left out such skins were 0.6 mm thick; an independent coverage
+ * measure found them). */
 static int covered(const amp_slices *sl, const amp_polyindex *ix, size_t li, amp_vec2 q, double below, double above)
 {
     double z = sl->layers[li].z_print;
     size_t j;
     if (window_open(sl, li, below, above))
         return 0; /* the first or last layers: the bed is below, the top above */
-    for (j = li; j-- > 0 && z - sl->layers[j].z_print < below - 1e-9;)
+    for (j = li; j-- > 0 && z - sl->layers[j].z_print < below + 1e-9;)
         if ((ix ? amp_polyindex_contains(&ix[j], q) : amp_polyset_contains(&sl->layers[j].polys, q, 0.0)) != 1)
             return 0;
-    for (j = li + 1; j < sl->nlayers && sl->layers[j].z_print - z < above - 1e-9; j++)
+    for (j = li + 1; j < sl->nlayers && sl->layers[j].z_print - z < above + 1e-9; j++)
         if ((ix ? amp_polyindex_contains(&ix[j], q) : amp_polyset_contains(&sl->layers[j].polys, q, 0.0)) != 1)
             return 0;
     return 1;
@@ -139,9 +142,9 @@ static double edge_depth(const amp_slices *sl, const amp_polyindex *ix, size_t l
     double z = sl->layers[li].z_print, best = 0.0;
     size_t lo = li, hi = li + 1, j;
     /* the window as covered() walks it: down while within below, up while within above */
-    while (lo > 0 && z - sl->layers[lo - 1].z_print < below - 1e-9)
+    while (lo > 0 && z - sl->layers[lo - 1].z_print < below + 1e-9)
         lo--;
-    while (hi < sl->nlayers && sl->layers[hi].z_print - z < above - 1e-9)
+    while (hi < sl->nlayers && sl->layers[hi].z_print - z < above + 1e-9)
         hi++;
     for (j = lo; j < hi; j++) {
         double d;

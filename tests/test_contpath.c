@@ -1202,7 +1202,7 @@ static int skin_point(const amp_slices *sl, const amp_polyindex *ix, size_t li, 
     if (z - sl->layers[0].z_print < T - 1e-9 || sl->layers[sl->nlayers - 1].z_print - z < T - 1e-9)
         return 1;
     for (j = 0; j < sl->nlayers; j++)
-        if (j != li && fabs(sl->layers[j].z_print - z) < T - 1e-9 && amp_polyindex_contains(&ix[j], q) != 1)
+        if (j != li && fabs(sl->layers[j].z_print - z) < T + 1e-9 && amp_polyindex_contains(&ix[j], q) != 1)
             return 1;
     return 0;
 }
