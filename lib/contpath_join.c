@@ -704,6 +704,40 @@ static amp_status splice_all(joiner *J, size_t *uf, size_t sets)
     return st;
 }
 
+/* Loops the splices could not join that fit in a box of diagonal 2r (a lattice piece cutting a corner of the
+ * region, 0.3 mm, too small for a splice's two connectors): dropped and counted as specks, so that the island
+ * keeps one stroke (CGAL's `eight`, a layer of 2 islands and 3 strokes; the beads around cover the piece). The
+ * largest loop, and any larger straggler, stay. */
+static void drop_stragglers(joiner *J, size_t *nspeck)
+{
+    size_t k, big = (size_t)-1, alive = 0;
+    for (k = 0; k < J->nl; k++)
+        if (J->lp[k].alive && !J->lp[k].wall) {
+            alive++;
+            if (big == (size_t)-1 || J->lp[k].n > J->lp[big].n)
+                big = k;
+        }
+    if (alive < 2)
+        return;
+    for (k = 0; k < J->nl; k++) {
+        double x0 = HUGE_VAL, y0 = HUGE_VAL, x1 = -HUGE_VAL, y1 = -HUGE_VAL;
+        uint32_t s;
+        size_t i;
+        if (k == big || !J->lp[k].alive || J->lp[k].wall)
+            continue;
+        for (i = 0, s = J->lp[k].head; i < J->lp[k].n; i++, s = J->v[s].next) {
+            x0 = fmin(x0, J->v[s].v.p.x);
+            y0 = fmin(y0, J->v[s].v.p.y);
+            x1 = fmax(x1, J->v[s].v.p.x);
+            y1 = fmax(y1, J->v[s].v.p.y);
+        }
+        if (hypot(x1 - x0, y1 - y0) < 2.0 * J->r) {
+            J->lp[k].alive = 0;
+            (*nspeck)++;
+        }
+    }
+}
+
 /* The joined loops closed again, then the rest of @p in (open strokes,
  * support stretches) unchanged, at height @p h (> 0). */
 static amp_status write_joined(const joiner *J, const amp_pathset *in, size_t first, double h, amp_pathset *out,
@@ -763,6 +797,8 @@ amp_status amp_cp_join_loops(const amp_pathset *in, size_t first, const amp_poly
         add_walls(&J, uf, walls);
         if ((st = grid_build(&J)) == AMP_OK)
             st = splice_all(&J, uf, sets);
+        if (st == AMP_OK)
+            drop_stragglers(&J, nspeck);
     }
     if (st == AMP_OK)
         st = write_joined(&J, in, first, h, out, nout, err);

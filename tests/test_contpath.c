@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../lib/contpath_internal.h"
 #include "fx_meshes.h"
 #include "fx_parts.h"
 #include "runtool.h"
@@ -1469,6 +1470,46 @@ START_TEST(skins_cost_the_plastic_of_the_uncovered_rim_not_of_a_grid_cell)
 }
 END_TEST
 
+/* A loop the splices cannot join that fits in 2r (a lattice piece cutting a corner of the region, 0.3 mm:
+ * CGAL's `eight` had a layer of 2 islands and 3 strokes) is dropped as a speck, so the island keeps one stroke;
+ * a straggler larger than that stays. */
+START_TEST(a_tiny_loop_the_splices_cannot_join_is_a_speck_not_a_second_stroke)
+{
+    static const double size[2] = {0.3, 2.0};
+    int t;
+    for (t = 0; t < 2; t++) {
+        amp_pathset in, out;
+        amp_polyset walls;
+        amp_vec2 w[4] = {{-1, -1}, {11, -1}, {11, 11}, {-1, 11}};
+        size_t nout = 0, nspeck = 0;
+        double d = size[t];
+        amp_pathset_init(&in, NULL);
+        amp_pathset_init(&out, NULL);
+        amp_polyset_init(&walls, NULL);
+        ck_assert_int_eq(amp_polyset_add(&walls, w, 4, NULL), AMP_OK);
+        /* the perimeter loop, closed (last = first) */
+        amp_pathset_begin(&in, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_push(&in, amp_v3(0, 0, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(10, 0, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(10, 10, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(0, 10, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(0, 0, 0.2), 0.225, NULL);
+        /* a thin triangle loop in the middle, far from the perimeter (no splice reaches it) */
+        amp_pathset_begin(&in, AMP_ROLE_OBJECT, NULL);
+        amp_pathset_push(&in, amp_v3(5, 5, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(5 + 0.04, 5 + d, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(5 - 0.04, 5 + d, 0.2), 0.225, NULL);
+        amp_pathset_push(&in, amp_v3(5, 5, 0.2), 0.225, NULL);
+        ck_assert_int_eq(amp_cp_join_loops(&in, 0, &walls, 0.225, 0.2, &out, &nout, &nspeck, NULL), AMP_OK);
+        ck_assert_uint_eq(nout, t == 0 ? 1 : 2);
+        ck_assert_uint_eq(nspeck, t == 0 ? 1 : 0);
+        amp_pathset_free(&in);
+        amp_pathset_free(&out);
+        amp_polyset_free(&walls);
+    }
+}
+END_TEST
+
 static size_t verifier_calls;
 
 /* A verifier that rejects every path (counts its calls). */
@@ -1837,6 +1878,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, solid_regions_leave_no_sliver_bare_beside_their_strips);
     tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
     tcase_add_test(tc, skins_cost_the_plastic_of_the_uncovered_rim_not_of_a_grid_cell);
+    tcase_add_test(tc, a_tiny_loop_the_splices_cannot_join_is_a_speck_not_a_second_stroke);
     tcase_add_test(tc, offsets_at_the_edge_of_a_split_print_without_crossing);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
