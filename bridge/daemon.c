@@ -197,16 +197,13 @@ static void on_printer_event(void *user, const amp_proto_event *ev)
     if (kind) {
         br_msg m;
         const br_session *s = d->s;
+        long hit = ev->kind == AMP_EV_FWERROR || ev->kind == AMP_EV_ACTION ? br_session_job_line(s, ev->line) : 0;
         if (ev->kind != AMP_EV_TIMEOUT)
             d->errors++;
         br_msg_event(&m, ev->kind == AMP_EV_TIMEOUT ? "warning" : "error");
         br_msg_str(&m, "kind", kind);
         br_msg_str(&m, "text", text);
-        br_msg_long(&m, "line", s->have_job ? (ev->kind == AMP_EV_FWERROR || ev->kind == AMP_EV_ACTION) &&
-                                                      br_session_job_line(s, ev->line) > 0
-                                                  ? br_session_job_line(s, ev->line) /* the line it hit */
-                                                  : s->last_acked_job_line
-                                            : 0);
+        br_msg_long(&m, "line", !s->have_job ? 0 : hit > 0 ? hit /* the line it hit */ : s->last_acked_job_line);
         broadcast(d, &m);
     }
     if (d->chained)
