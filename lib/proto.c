@@ -377,13 +377,16 @@ static void ack_one(amp_proto *p)
     }
 }
 
-/* Is line k a job M105 still kept? */
-static int is_m105(const amp_proto *p, long k)
+/* Is line k still kept, and is its command @p cmd (a 4-character word such as M105)? */
+static int slot_is(const amp_proto *p, long k, const char *cmd)
 {
     const amp_proto_slot *sl = &p->ring[k & RING_MASK];
     const char *sp = memchr(sl->text, ' ', sl->len);
-    return sl->n == k && sp && strncmp(sp + 1, "M105", 4) == 0 && (sp[5] == '*' || sp[5] == ' ');
+    return sl->n == k && sp && strncmp(sp + 1, cmd, 4) == 0 && (sp[5] == '*' || sp[5] == ' ');
 }
+
+/* Is line k a job M105 still kept? */
+static int is_m105(const amp_proto *p, long k) { return slot_is(p, k, "M105"); }
 
 /* `ok T:` is M105's answer and nothing else's: it acknowledges the oldest M105 in flight and, since Marlin
    runs commands in order, every line before it, whose oks may have been garbled away. Returns 1 if used. */
@@ -766,20 +769,9 @@ static int has_temp(const char *s)
 static int heating_in_flight(const amp_proto *p)
 {
     long n;
-    for (n = p->acked + 1; n <= p->top_sent && n <= p->acked + AMP_PROTO_MAX_INFLIGHT; n++) {
-        const char *c = p->ring[n & RING_MASK].text;
-        if (*c == 'N') { /* the line number and the blank after it */
-            while (*++c >= '0' && *c <= '9')
-                ;
-            while (*c == ' ')
-                c++;
-        }
-        if (c[0] == 'M' && c[1] == '1' && c[2] == '9' && (c[3] == '0' || c[3] == '1') &&
-            !(c[4] >= '0' && c[4] <= '9'))
+    for (n = p->acked + 1; n <= p->top_sent && n <= p->acked + AMP_PROTO_MAX_INFLIGHT; n++)
+        if (slot_is(p, n, "M109") || slot_is(p, n, "M190") || slot_is(p, n, "M191"))
             return 1;
-        if (c[0] == 'M' && c[1] == '1' && c[2] == '0' && c[3] == '9' && !(c[4] >= '0' && c[4] <= '9'))
-            return 1;
-    }
     return 0;
 }
 
