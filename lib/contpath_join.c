@@ -458,6 +458,38 @@ static int spans(const joiner *J, size_t n, uint32_t j1, double u1, uint32_t j2,
     return 0;
 }
 
+/* Length of a loop forward from (j1, u1) to (j2, u2), all the way round when (j2, u2) lies just behind; the walk
+ * stops once the length passes @p cap. */
+static double forward_len(const joiner *J, uint32_t j1, double u1, uint32_t j2, double u2, double cap)
+{
+    double len;
+    uint32_t s;
+    if (j1 == j2 && u2 >= u1)
+        return (u2 - u1) * seg_len(J, j1);
+    len = (1 - u1) * seg_len(J, j1);
+    for (s = J->v[j1].next; s != j2 && len <= cap; s = J->v[s].next)
+        len += seg_len(J, s);
+    return len + u2 * seg_len(J, j2);
+}
+
+/* Is Y's left-out stretch the one forward from q1 to q2 (spans' fw segments)? The shorter by length: by
+ * segment count, a long thin loop of few segments (two 33 mm strands of a skin band, 7 segments in all,
+ * against 4 round its end) lost its strands to the splice and left a 1 mm strip of a top skin bare
+ * (CGAL's fandisk). The side of at most 8 segments is measured whole, the other only as far as it
+ * needs to be. */
+static int leave_forward(const joiner *J, const cut *c)
+{
+    double f, b;
+    if (c->fw <= c->bw) {
+        f = forward_len(J, c->j1, c->u1, c->j2, c->u2, HUGE_VAL);
+        b = forward_len(J, c->j2, c->u2, c->j1, c->u1, f);
+    } else {
+        b = forward_len(J, c->j2, c->u2, c->j1, c->u1, HUGE_VAL);
+        f = forward_len(J, c->j1, c->u1, c->j2, c->u2, b);
+    }
+    return f <= b;
+}
+
 /* Segments from..from+cnt (forward) all printed at the nominal radius r? */
 static int all_printed(const joiner *J, uint32_t from, size_t cnt)
 {
@@ -560,7 +592,7 @@ static int try_segment(joiner *J, size_t *uf, size_t lx, uint32_t sx, double ell
     /* the left-out stretch of Y must be short and printed throughout */
     if (!spans(J, J->lp[c.ly].n, c.j1, c.u1, c.j2, c.u2, &c.fw, &c.bw))
         return 0;
-    c.ybackward = c.fw <= c.bw;
+    c.ybackward = leave_forward(J, &c);
     if (!all_printed(J, c.ybackward ? c.j1 : c.j2, c.ybackward ? c.fw : c.bw))
         return 0;
     q1 = P2v(seg_point(J, c.j1, c.u1).p);

@@ -1510,6 +1510,55 @@ START_TEST(a_tiny_loop_the_splices_cannot_join_is_a_speck_not_a_second_stroke)
 }
 END_TEST
 
+/* The stretch of a loop a splice leaves out is the shorter one by length, not by segment count: a skin band's
+ * loop of two 32 mm strands (7 segments) spliced at its end, where 4 short segments round it off, lost both
+ * strands to the splice (the 3 segments of the long way were "fewer") and left a 1 mm strip of a top skin bare
+ * (CGAL's fandisk, layer 144: the loop and the perimeter with its corners, as the slicer made them). */
+START_TEST(a_splice_leaves_out_the_short_end_of_a_long_loop_with_few_segments)
+{
+    static const double perim[][2] = {
+        {31.166, 9.7315},  {31.9004, 9.7532}, {32.7162, 9.7518}, {32.7841, 9.9172}, {32.7972, 9.9490},
+        {32.8013, 9.9584}, {32.8204, 9.9992}, {33.1300, 10.6550}, {32.7709, 10.9484}, {33.2257, 10.8575},
+        {33.2903, 10.9944}, {33.2944, 11.0026}, {33.5755, 11.5402}, {33.2289, 11.8484}, {33.6798, 11.7396},
+        {33.7109, 11.7991}, {33.8360, 12.0366}, {33.8411, 12.0458}, {34.0630, 12.4233}, {33.7322, 12.7483},
+        {34.1771, 12.6172}, {34.2378, 12.7205}, {40.0, 12.7205}, {40.0, 9.7315}, {31.166, 9.7315}};
+    static const double strands[][2] = {{32.8772, 11.1734}, {0.675, 11.1734},   {0.675, 11.6234},
+                                        {33.1112, 11.6234}, {32.8956, 11.2111}, {32.8893, 11.1989},
+                                        {32.8834, 11.1865}, {32.8772, 11.1734}};
+    const double r = 0.225;
+    amp_pathset in, out;
+    amp_polyset walls;
+    amp_vec2 w[4] = {{0.0, 9.4}, {41.0, 9.4}, {41.0, 14.0}, {0.0, 14.0}};
+    size_t nout = 0, nspeck = 0, i, k;
+    double len_in, len_out, probe[2] = {8.0, 11.1734}, best = HUGE_VAL;
+    amp_pathset_init(&in, NULL);
+    amp_pathset_init(&out, NULL);
+    amp_polyset_init(&walls, NULL);
+    ck_assert_int_eq(amp_polyset_add(&walls, w, 4, NULL), AMP_OK);
+    amp_pathset_begin(&in, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < sizeof perim / sizeof perim[0]; k++)
+        amp_pathset_push(&in, amp_v3(perim[k][0], perim[k][1], 29.0), r, NULL);
+    amp_pathset_begin(&in, AMP_ROLE_OBJECT, NULL);
+    for (k = 0; k < sizeof strands / sizeof strands[0]; k++)
+        amp_pathset_push(&in, amp_v3(strands[k][0], strands[k][1], 29.0), r, NULL);
+    len_in = amp_pathset_length(&in, AMP_ROLE_OBJECT);
+    ck_assert_int_eq(amp_cp_join_loops(&in, 0, &walls, r, 0.2, &out, &nout, &nspeck, NULL), AMP_OK);
+    ck_assert_uint_eq(nout, 1); /* the case is exercised: the two loops were spliced into one */
+    len_out = amp_pathset_length(&out, AMP_ROLE_OBJECT);
+    /* a splice leaves out about 2r of each loop and adds two connectors: the strands' 64 mm stay */
+    ck_assert_msg(len_out > len_in - 8 * r, "joined %.3f mm of %.3f mm", len_out, len_in);
+    for (i = 0; i < out.npaths; i++) {
+        const amp_pvert *v = amp_pathset_path_verts(&out, i);
+        for (k = 0; k + 1 < out.paths[i].n; k++)
+            best = fmin(best, amp_v3_seg_dist2(amp_v3(probe[0], probe[1], 29.0), v[k].p, v[k + 1].p, NULL));
+    }
+    ck_assert_msg(sqrt(best) < 1e-9, "the lower strand at x 8 is %.3f mm from the stroke", sqrt(best));
+    amp_pathset_free(&in);
+    amp_pathset_free(&out);
+    amp_polyset_free(&walls);
+}
+END_TEST
+
 static size_t verifier_calls;
 
 /* A verifier that rejects every path (counts its calls). */
@@ -1879,6 +1928,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, skins_are_solid_only_where_a_layer_is_uncovered);
     tcase_add_test(tc, skins_cost_the_plastic_of_the_uncovered_rim_not_of_a_grid_cell);
     tcase_add_test(tc, a_tiny_loop_the_splices_cannot_join_is_a_speck_not_a_second_stroke);
+    tcase_add_test(tc, a_splice_leaves_out_the_short_end_of_a_long_loop_with_few_segments);
     tcase_add_test(tc, offsets_at_the_edge_of_a_split_print_without_crossing);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
