@@ -6,7 +6,9 @@
 #   and klipper) -> preview (svg, png); the twisted-bridge mesh -> slice
 #   --polygons, slice --continuous -> gcode -> preview; a direction-field cover.
 # Only products are hashed (not the --json figures, which hold timings).
-# tools/identity.ref holds the listing of the current behaviour (renewed at stop 39: a face exposed under a
+# tools/identity.ref holds the listing of the current behaviour (renewed at stop 40: a splice of two loops leaves
+# out the shorter stretch of the other loop by length, not by segment count, so the twisted bridge's continuous
+# paths, their G-code and picture changed, nothing else; at stop 39: a face exposed under a
 # layer makes that layer and the three above it solid at 0.8 mm skins, as the bed does (it made two more), so
 # the twisted bridge's continuous paths, their G-code and picture changed, nothing else; twice at stop 38: the G-code sets E
 # back to 0 at a travel once it has reached 100 mm, so the three G-code files gained G92 E0 lines, the moves'
