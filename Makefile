@@ -272,7 +272,7 @@ HEADERS := $(sort $(wildcard include/ampath/*.h))
 MANPAGES := $(sort $(wildcard docs/man/*.1))
 $(B)/ampath.pc: FORCE
 	@mkdir -p $(dir $@)
-	@printf 'prefix=$(PREFIX)\nlibdir=$(LIBDIR)\nincludedir=$(INCDIR)\n\nName: ampath\nDescription: print paths for additive manufacturing (volumetric covering, continuous tool paths)\nVersion: $(VERSION)\nLibs: -L$${libdir} -lampath\nLibs.private: -lm\nCflags: -I$${includedir}\n' > $@
+	@printf 'prefix=$(PREFIX)\nlibdir=$(LIBDIR)\nincludedir=$(INCDIR)\n\nName: ampath\nDescription: print paths for additive manufacturing (volumetric covering, continuous tool paths)\nVersion: $(VERSION)\nLibs: -L$${libdir} -lampath\nLibs.private: -lm$(if $(filter 1,$(OPENMP)), -fopenmp)\nCflags: -I$${includedir}\n' > $@
 
 install: all $(B)/ampath.pc
 	install -d $(DESTDIR)$(BINDIR) $(DESTDIR)$(LIBDIR)/pkgconfig $(DESTDIR)$(INCDIR)/ampath $(DESTDIR)$(MANDIR)/man1

@@ -471,6 +471,8 @@ amp_status amp_check_gouge(const amp_pathset *ps, const amp_head *h, amp_gouge_m
     amp_status st = AMP_OK;
     if (!ps || !h)
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_gouge: NULL argument");
+    if (m != AMP_GOUGE_AUTO && m != AMP_GOUGE_PAIRWISE && m != AMP_GOUGE_GRID)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_gouge: unknown method %d", (int)m);
     if (!isfinite(h->z_offs) || h->z_offs <= 0.0 || !isfinite(h->theta) || h->theta <= 0.0 ||
         h->theta >= 0.5 * AMP_PI)
         return amp_fail(err, AMP_ERR_RANGE, 0, "head needs z_offs > 0 and theta in (0, 90) degrees (got %g mm, %g deg)",

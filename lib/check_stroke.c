@@ -440,6 +440,8 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
 {
     const amp_allocator *al = region ? region->alloc : NULL;
     stroke_scan s;
+    if (!pts && n)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_stroke: NULL points");
     amp_skey *key = NULL, *tmp = NULL;
     seg2 *sg = NULL, *by_x = NULL;
     ekey2 *ek = NULL;
@@ -497,11 +499,17 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
 amp_status amp_check_path_stroke(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
                                  amp_stroke_report *rep, amp_error *err)
 {
-    const amp_pvert *v = amp_pathset_path_verts(ps, i);
-    size_t n = ps->paths[i].n, k;
-    amp_vec2 *p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
-    double *r = amp_alloc(ps->alloc, (n + 1) * sizeof *r);
+    const amp_pvert *v;
+    size_t n, k;
+    amp_vec2 *p;
+    double *r;
     amp_status st;
+    if (!ps || i >= ps->npaths)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_path_stroke: no path %lu", (unsigned long)i);
+    v = amp_pathset_path_verts(ps, i);
+    n = ps->paths[i].n;
+    p = amp_alloc(ps->alloc, (n + 1) * sizeof *p);
+    r = amp_alloc(ps->alloc, (n + 1) * sizeof *r);
     if (!p || !r) {
         amp_free(ps->alloc, p);
         amp_free(ps->alloc, r);

@@ -289,6 +289,8 @@ amp_status amp_check_hold_runs(const amp_pathset *ps, double max_gap, amp_bead_r
     amp_hold_opts o;
     amp_hold_report rep;
     amp_status st;
+    if (!ps || !run)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_hold_runs: NULL argument");
     memset(&rep, 0, sizeof rep);
     amp_hold_opts_default(&o);
     o.max_gap = max_gap;

@@ -480,19 +480,6 @@ static amp_status island_once(lctx *c, size_t li, double h, amp_pathset *out, si
     return rc;
 }
 
-/* Do the island's paths [first, npaths) pass the caller's verifier
- * (o->verify_stroke; none: they pass)? */
-static int island_clean(const amp_contpath_opts *o, const amp_pathset *out, size_t first, const amp_polyset *sec)
-{
-    size_t i;
-    if (!o->verify_stroke)
-        return 1;
-    for (i = first; i < out->npaths; i++)
-        if (o->verify_stroke(out, i, sec, 1e-6, NULL, NULL) != AMP_OK)
-            return 0;
-    return 1;
-}
-
 /* Bead height of layer li: the first layer from the plate, the others from the layer below. */
 static double layer_h(const amp_slices *sl, size_t li)
 {
@@ -513,6 +500,26 @@ typedef struct ijob {
     amp_status rc;
     amp_error err;
 } ijob;
+
+/* Do the island's paths pass the caller's verifier (o->verify_stroke; none: they pass)? A verifier out of
+ * memory is the job's error (j->rc), not a rejection (the island was made again, and its paths changed, for an
+ * allocation that failed): the answer is then 1, so that no retry follows. */
+static int island_clean(const amp_contpath_opts *o, const amp_pathset *out, const amp_polyset *sec, ijob *j)
+{
+    size_t i;
+    if (!o->verify_stroke)
+        return 1;
+    for (i = 0; i < out->npaths; i++) {
+        amp_status st = o->verify_stroke(out, i, sec, 1e-6, NULL, NULL);
+        if (st == AMP_ERR_NOMEM) {
+            j->rc = amp_fail(&j->err, AMP_ERR_NOMEM, 0, "out of memory verifying the strokes of an island");
+            return 1;
+        }
+        if (st != AMP_OK)
+            return 0;
+    }
+    return 1;
+}
 
 /* Radius of a planar bead of height @p h whose cross-section is @p a (the inverse of amp_bead_area). */
 static double bead_radius(double a, double h)
@@ -578,7 +585,7 @@ static void shift_retry(lctx *w, ijob *j, double h)
         w->no_bands = 0;
         if (j->rc != AMP_OK)
             return;
-        if (island_clean(w->o, &w->retry, 0, &w->isl)) {
+        if (island_clean(w->o, &w->retry, &w->isl, j) && j->rc == AMP_OK) {
             amp_pathset_clear(&j->ps);
             j->rc = amp_pathset_append(&j->ps, &w->retry, &j->err);
             j->nobj = nobj;
@@ -607,7 +614,7 @@ static void island_job(lctx *w, ijob *j)
     if (j->rc == AMP_OK)
         j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
     /* each version of the island checked once (island_clean is 1 without a verifier) */
-    if (j->rc == AMP_OK && !island_clean(w->o, &j->ps, 0, &w->isl)) {
+    if (j->rc == AMP_OK && !island_clean(w->o, &j->ps, &w->isl, j)) {
         if (j->s.skin_bands > 0) {
             amp_pathset_clear(&j->ps);
             memset(&j->s, 0, sizeof j->s);
@@ -616,7 +623,7 @@ static void island_job(lctx *w, ijob *j)
             j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
             w->no_bands = 0;
         }
-        if (j->rc == AMP_OK && (j->s.band_retries == 0 || !island_clean(w->o, &j->ps, 0, &w->isl)))
+        if (j->rc == AMP_OK && (j->s.band_retries == 0 || !island_clean(w->o, &j->ps, &w->isl, j)) && j->rc == AMP_OK)
             shift_retry(w, j, h);
     }
     if (j->rc == AMP_OK && w->o->overlap_cap) {
@@ -883,12 +890,16 @@ static amp_status plan_jobs(const amp_slices *sl, size_t l0, ijob **jobs, size_t
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err)
 {
-    const amp_allocator *al = out->alloc;
+    const amp_allocator *al;
     lctx c, *w;
     ijob *jobs = NULL;
-    size_t li, q, p0 = out->npaths, nw = 0, nj = 0, cap = 0;
+    size_t li, q, p0, nw = 0, nj = 0, cap = 0;
     amp_contpath_stats s0;
     amp_status rc;
+    if (!sl || !o || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_contpath_layers: NULL argument");
+    al = out->alloc;
+    p0 = out->npaths;
     memset(&s0, 0, sizeof s0);
     memset(&c, 0, sizeof c);
     c.sl = sl;

@@ -451,10 +451,12 @@ static amp_status place_corner(corner_ctx *c, amp_vec2 ctr, double hw, amp_error
         c->st->corners_left_out++;
         return AMP_OK;
     }
-    if (amp_grow(c->al, &q, &c->cap_t, c->nt + 1, sizeof *c->t) != AMP_OK ||
-        amp_grow(c->al, &ql, &c->cap_l, 4 * (c->nt + 1), sizeof *c->legs) != AMP_OK)
+    /* each array is taken back as soon as it has grown: the other's failure must not leave it dangling */
+    if (amp_grow(c->al, &q, &c->cap_t, c->nt + 1, sizeof *c->t) != AMP_OK)
         return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
     c->t = q;
+    if (amp_grow(c->al, &ql, &c->cap_l, 4 * (c->nt + 1), sizeof *c->legs) != AMP_OK)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory adding support corners");
     c->legs = ql;
     c->legs[4 * c->nt] = xy(a0.p);
     c->legs[4 * c->nt + 1] = ctr;

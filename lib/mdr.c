@@ -649,7 +649,7 @@ done:
 
 amp_status amp_tubes_union_volume(const amp_pathset *ps, size_t samples, double *volume, amp_error *err)
 {
-    const amp_allocator *a = ps->alloc;
+    const amp_allocator *a;
     size_t i, k, nseg = 0, hits = 0, s;
     double rmax = 0.0, maxlen = 0.0;
     amp_vec3 *mid = NULL;
@@ -658,6 +658,9 @@ amp_status amp_tubes_union_volume(const amp_pathset *ps, size_t samples, double 
     amp_box3 box;
     uint64_t x = 0x9e3779b97f4a7c15ULL;
     amp_status st;
+    if (!ps || !volume)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_tubes_union_volume: NULL argument");
+    a = ps->alloc;
     memset(&g, 0, sizeof g);
     *volume = 0.0;
     for (i = 0; i < ps->npaths; i++)

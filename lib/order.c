@@ -70,6 +70,8 @@ amp_status amp_below_graph_build(amp_below_graph *g, const amp_fragments *fs, co
     size_t i, total = 0;
     long n, f;
     int over = 0;
+    if (!g || !fs || !h)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_below_graph_build: NULL argument");
     memset(g, 0, sizeof *g);
     g->alloc = fs->alloc;
     if ((st = amp_head_validate(h, err)) != AMP_OK)

@@ -29,7 +29,10 @@ void amp_pathset_clear(amp_pathset *ps)
 
 amp_status amp_pathset_begin(amp_pathset *ps, amp_role role, amp_error *err)
 {
-    void *p = ps->paths;
+    void *p;
+    if (!ps)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_pathset_begin: NULL path set");
+    p = ps->paths;
     if (role != AMP_ROLE_OBJECT && role != AMP_ROLE_SUPPORT)
         return amp_fail(err, AMP_ERR_ARG, 0, "unknown path role %d", (int)role);
     if (amp_grow(ps->alloc, &p, &ps->cap_paths, ps->npaths + 1, sizeof *ps->paths) != AMP_OK)
@@ -318,7 +321,10 @@ amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sin
 {
     wblock b[WBLOCKS];
     size_t i = 0, k = 0, nb, q, cap[WBLOCKS];
-    amp_status st = sink(user, "ampath-paths 1\n", 15);
+    amp_status st;
+    if (!ps || !sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_pathset_write: NULL argument");
+    st = sink(user, "ampath-paths 1\n", 15);
     memset(b, 0, sizeof b);
     memset(cap, 0, sizeof cap);
     if (st == AMP_OK)

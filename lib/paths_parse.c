@@ -338,6 +338,8 @@ amp_status amp_pathset_parse_chunks_progress(amp_pathset *ps, const char *text, 
 amp_status amp_pathset_parse(amp_pathset *ps, const char *text, size_t len, amp_error *err)
 {
     size_t n = len / CHUNK_MIN_BYTES;
+    if (!ps || (!text && len))
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_pathset_parse: NULL argument");
 #ifdef _OPENMP
     if (n > (size_t)omp_get_max_threads())
         n = (size_t)omp_get_max_threads();

@@ -311,8 +311,10 @@ static amp_status chain_segments(const amp_mesh *m, double z, sseg *seg, size_t 
                 continue;
             while (at != SIZE_MAX && !seg[at].used && st == AMP_OK) {
                 p = loop;
-                if (amp_grow(al, &p, &cap_loop, len + 2, sizeof *loop) != AMP_OK)
+                if (amp_grow(al, &p, &cap_loop, len + 2, sizeof *loop) != AMP_OK) {
                     st = AMP_ERR_NOMEM;
+                    break;
+                }
                 loop = p;
                 seg[at].used = 1;
                 loop[len++] = edge_point(m, seg[at].ks, z);

@@ -41,6 +41,8 @@ amp_status amp_spline_create(amp_spline *s, const amp_allocator *a, int dim, con
 {
     int d;
     size_t i, ncp = 1;
+    if (!s)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_create: NULL spline");
     amp_spline_init(s);
     s->alloc = a;
     if (dim < 1 || dim > AMP_SPLINE_MAX_DIM || !order || !count)
@@ -88,7 +90,10 @@ amp_status amp_spline_create(amp_spline *s, const amp_allocator *a, int dim, con
 amp_status amp_spline_copy(amp_spline *dst, const amp_spline *src, const amp_allocator *a, amp_error *err)
 {
     int d;
-    amp_status st = amp_spline_create(dst, a, src->dim, src->order, src->count, src->rational, err);
+    amp_status st;
+    if (!dst || !src)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_copy: NULL argument");
+    st = amp_spline_create(dst, a, src->dim, src->order, src->count, src->rational, err);
     if (st != AMP_OK)
         return st;
     for (d = 0; d < src->dim; d++)
@@ -384,7 +389,10 @@ amp_status amp_spline_eval(const amp_spline *s, const double *par, amp_vec3 *out
 {
     size_t span[AMP_SPLINE_MAX_DIM];
     double N[AMP_SPLINE_MAX_DIM][AMP_SPLINE_MAX_ORDER], h[4];
-    amp_status st = prepare(s, par, span, N, err);
+    amp_status st;
+    if (!s || !par || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_eval: NULL argument");
+    st = prepare(s, par, span, N, err);
     if (st != AMP_OK)
         return st;
     contract(s, span, N, h);

@@ -210,6 +210,8 @@ amp_status amp_spline_parse(const char *text, size_t len, const amp_allocator *a
     int r, isk;
     amp_status st = AMP_OK;
 
+    if (!list || !n)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_parse: NULL output");
     *list = NULL;
     *n = 0;
     if (!text && len)
@@ -278,6 +280,8 @@ amp_status amp_spline_write(const amp_spline *s, int header, amp_sink_fn sink, v
     amp_status st = AMP_OK;
     size_t i;
     int d;
+    if (!s || !sink)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_write: NULL argument");
 #define W(...)                                                                                                       \
     do {                                                                                                             \
         st = amp_sinkf(sink, user, __VA_ARGS__);                                                                     \

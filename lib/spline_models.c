@@ -147,6 +147,8 @@ static amp_status vase(const amp_allocator *al, amp_spline *s, amp_error *err)
 
 amp_status amp_trivariate_model(const char *name, const amp_allocator *a, amp_spline *out, amp_error *err)
 {
+    if (!out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_trivariate_model: NULL output");
     amp_spline_init(out);
     if (name && strcmp(name, "helix") == 0)
         return helix(a, out, err);

@@ -82,6 +82,8 @@ amp_status amp_spline_insert_knot(amp_spline *s, int d, double t, int times, amp
 {
     double lo, hi;
     int i;
+    if (!s)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_insert_knot: NULL spline");
     if (d < 0 || d >= s->dim || times < 0)
         return amp_fail(err, AMP_ERR_ARG, 0, "bad direction %d or count %d", d, times);
     amp_spline_domain(s, d, &lo, &hi);
@@ -92,23 +94,43 @@ amp_status amp_spline_insert_knot(amp_spline *s, int d, double t, int times, amp
                         s->order[d]);
     if (s->count[d] + (size_t)times > AMP_SPLINE_MAX_COUNT)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "too many control points");
-    for (i = 0; i < times; i++) {
-        amp_status st = insert_once(s, d, t, err);
-        if (st != AMP_OK)
-            return st;
+    if (times == 1)
+        return insert_once(s, d, t, err); /* leaves s as it was when it fails */
+    /* several insertions on a copy, swapped in at the end: a failure half way leaves s unchanged */
+    if (times > 1) {
+        amp_spline c;
+        amp_status st = amp_spline_copy(&c, s, s->alloc, err);
+        for (i = 0; i < times && st == AMP_OK; i++)
+            st = insert_once(&c, d, t, err);
+        if (st == AMP_OK) {
+            amp_spline_free(s);
+            *s = c;
+        } else
+            amp_spline_free(&c);
+        return st;
     }
     return AMP_OK;
 }
 
 amp_status amp_spline_refine(amp_spline *s, int d, const double *t, size_t n, amp_error *err)
 {
+    amp_spline c;
     size_t i;
-    for (i = 0; i < n; i++) {
-        amp_status st = amp_spline_insert_knot(s, d, t[i], 1, err);
-        if (st != AMP_OK)
-            return st;
-    }
-    return AMP_OK;
+    amp_status st;
+    if (!s || (!t && n))
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_refine: NULL argument");
+    if (n == 0)
+        return AMP_OK;
+    /* on a copy, swapped in at the end: any failure leaves s unchanged */
+    st = amp_spline_copy(&c, s, s->alloc, err);
+    for (i = 0; i < n && st == AMP_OK; i++)
+        st = amp_spline_insert_knot(&c, d, t[i], 1, err);
+    if (st == AMP_OK) {
+        amp_spline_free(s);
+        *s = c;
+    } else
+        amp_spline_free(&c);
+    return st;
 }
 
 /* A new spline equal to s except that direction d keeps control points first..first+cnt-1 with knots K. */

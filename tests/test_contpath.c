@@ -1559,6 +1559,90 @@ START_TEST(a_splice_leaves_out_the_short_end_of_a_long_loop_with_few_segments)
 }
 END_TEST
 
+/* Step 6 out of memory at every allocation in turn: AMP_ERR_NOMEM until the budget suffices, and every block the
+ * corners allocated freed exactly once (the tooth array grown and then the legs' growth failing left the
+ * grown array unowned and the old one freed twice: a black-box allocation sweep found it). */
+START_TEST(support_corners_out_of_memory_frees_every_block_once)
+{
+    const double r = 0.225;
+    long budget, need = -1;
+    size_t corners = 0;
+    for (budget = 0; budget < 4000 && need < 0; budget++) {
+        fx_failalloc fa;
+        amp_pathset ps, bare;
+        amp_contpath_stats st;
+        amp_status rc;
+        size_t k;
+        fx_failalloc_init(&fa, 1L << 30);
+        amp_pathset_init(&ps, &fa.a);
+        amp_pathset_init(&bare, NULL);
+        memset(&st, 0, sizeof st);
+        /* the perimeter loop of a 10 mm square at r, and its ring R̃ at 3r bare along the bottom and right */
+        ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+        amp_pathset_push(&ps, amp_v3(r, r, 0.2), r, NULL);
+        amp_pathset_push(&ps, amp_v3(10 - r, r, 0.2), r, NULL);
+        amp_pathset_push(&ps, amp_v3(10 - r, 10 - r, 0.2), r, NULL);
+        amp_pathset_push(&ps, amp_v3(r, 10 - r, 0.2), r, NULL);
+        amp_pathset_push(&ps, amp_v3(r, r, 0.2), r, NULL);
+        amp_pathset_begin(&bare, AMP_ROLE_SUPPORT, NULL);
+        for (k = 0; k <= 40; k++)
+            amp_pathset_push(&bare, amp_v3(3 * r + (10 - 6 * r) * (double)k / 40, 3 * r, 0.2), 0, NULL);
+        amp_pathset_push(&bare, amp_v3(10 - 3 * r, 5, 0.2), 0, NULL);
+        fa.count = 0;
+        fa.budget = budget;
+        rc = amp_cp_support_corners(&ps, 1, &bare, r, 0.0, &st, NULL);
+        fa.budget = 1L << 30;
+        if (rc == AMP_OK) {
+            need = budget;
+            corners = st.support_corners;
+        } else
+            ck_assert_int_eq(rc, AMP_ERR_NOMEM);
+        amp_pathset_free(&ps);
+        amp_pathset_free(&bare);
+        ck_assert_msg(fa.live == 0, "budget %ld: %ld blocks left", budget, fa.live);
+    }
+    ck_assert_msg(need > 0, "the corners never succeeded");
+    /* the case is exercised: enough corners that their arrays grew several times */
+    ck_assert_uint_gt(corners, 20);
+}
+END_TEST
+
+/* A verifier out of memory is an error of the slice, not a rejected stroke: the island is not made again (the
+ * tool would print paths that differ from the unfailed run's, with exit 0). */
+static amp_status verifier_out_of_memory(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                         struct amp_stroke_report *rep, amp_error *err)
+{
+    (void)ps, (void)i, (void)region, (void)tol, (void)rep;
+    return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+}
+
+START_TEST(a_verifier_out_of_memory_stops_the_slice_with_that_error)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so = {0.5, 0};
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_pathset ps;
+    amp_error e;
+    amp_error_clear(&e);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_model("twisted-bridge", 1.0, &m, NULL), AMP_OK);
+    amp_slices_init(&sl, NULL);
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+    amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = verifier_out_of_memory;
+    amp_pathset_init(&ps, NULL);
+    memset(&st, 0, sizeof st);
+    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &e), AMP_ERR_NOMEM);
+    ck_assert_uint_eq(st.shift_retries + st.band_retries, 0);
+    ck_assert_msg(strstr(e.msg, "out of memory") != NULL, "%s", e.msg);
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static size_t verifier_calls;
 
 /* A verifier that rejects every path (counts its calls). */
@@ -1929,6 +2013,8 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, skins_cost_the_plastic_of_the_uncovered_rim_not_of_a_grid_cell);
     tcase_add_test(tc, a_tiny_loop_the_splices_cannot_join_is_a_speck_not_a_second_stroke);
     tcase_add_test(tc, a_splice_leaves_out_the_short_end_of_a_long_loop_with_few_segments);
+    tcase_add_test(tc, support_corners_out_of_memory_frees_every_block_once);
+    tcase_add_test(tc, a_verifier_out_of_memory_stops_the_slice_with_that_error);
     tcase_add_test(tc, offsets_at_the_edge_of_a_split_print_without_crossing);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);

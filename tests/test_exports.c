@@ -111,6 +111,52 @@ START_TEST(geometry_tool_links_neither_the_bridge_nor_libserialport)
 }
 END_TEST
 
+/* The public functions refuse a NULL where they need an object, and an out-of-range index or method, with
+ * AMP_ERR_ARG and a message (status.h) — a black-box test of the headers found 14 that dereferenced it. */
+START_TEST(public_functions_refuse_null_arguments_with_amp_err_arg)
+{
+    amp_pathset ps;
+    amp_spline sp, *list = NULL;
+    amp_fragments fs;
+    amp_below_graph g;
+    amp_head h;
+    amp_error e;
+    amp_vec3 pt;
+    size_t n = 0;
+    double par[3] = {0.5, 0.5, 0.5}, knot = 0.5;
+    amp_status st[18];
+    int k;
+    amp_pathset_init(&ps, NULL);
+    amp_spline_init(&sp);
+    amp_head_default(&h);
+    memset(&fs, 0, sizeof fs);
+    amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL);
+    amp_pathset_push(&ps, amp_v3(0, 0, 0), 0.5, NULL);
+    amp_pathset_push(&ps, amp_v3(1, 0, 0), 0.5, NULL);
+    st[0] = amp_pathset_parse(NULL, "ampath-paths 1\n", 15, &e);
+    st[1] = amp_pathset_begin(NULL, AMP_ROLE_OBJECT, &e);
+    st[2] = amp_pathset_write(&ps, NULL, NULL, NULL, &e);
+    st[3] = amp_spline_parse("ampath-spline 1\n", 16, NULL, NULL, &n, &e);
+    st[4] = amp_spline_parse("ampath-spline 1\n", 16, NULL, &list, NULL, &e);
+    st[5] = amp_spline_create(NULL, NULL, 1, NULL, NULL, 0, &e);
+    st[6] = amp_spline_eval(NULL, par, &pt, &e);
+    st[7] = amp_spline_eval(&sp, par, NULL, &e);
+    st[8] = amp_trivariate_model("helix", NULL, NULL, &e);
+    st[9] = amp_below_graph_build(&g, NULL, &h, 0, &e);
+    st[10] = amp_tubes_union_volume(&ps, 100, NULL, &e);
+    st[11] = amp_contpath_layers(NULL, NULL, &ps, NULL, &e);
+    st[12] = amp_check_stroke(NULL, 3, NULL, 0.0, NULL, &e);
+    st[13] = amp_check_path_stroke(&ps, 7, NULL, 0.0, NULL, &e);
+    st[14] = amp_spline_write(&sp, 1, NULL, NULL, &e);
+    st[15] = amp_check_gouge(&ps, &h, (amp_gouge_method)99, 0.0, NULL, &e);
+    st[16] = amp_check_hold_runs(&ps, 1.0, NULL, NULL, &e);
+    st[17] = amp_spline_refine(NULL, 0, &knot, 1, &e);
+    for (k = 0; k < 18; k++)
+        ck_assert_msg(st[k] == AMP_ERR_ARG, "call %d: status %d", k, (int)st[k]);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 static Suite *exports_suite(void)
 {
     Suite *s = suite_create("exports");
@@ -118,6 +164,7 @@ static Suite *exports_suite(void)
     tcase_add_test(tc, shared_library_exports_exactly_the_declared_api);
     tcase_add_test(tc, comparison_names_an_internal_symbol_that_leaks);
     tcase_add_test(tc, geometry_tool_links_neither_the_bridge_nor_libserialport);
+    tcase_add_test(tc, public_functions_refuse_null_arguments_with_amp_err_arg);
     suite_add_tcase(s, tc);
     return s;
 }

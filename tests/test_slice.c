@@ -797,6 +797,40 @@ START_TEST(cli_warns_that_a_part_under_3_mm_may_be_in_inches)
 }
 END_TEST
 
+/* Slicing out of memory at every allocation in turn: AMP_ERR_NOMEM until the budget suffices, nothing written
+ * through a pointer whose growth failed (the chain of a section went on writing its next point: a crash about
+ * every 25th allocation of a black-box sweep), nothing leaked. */
+START_TEST(slicing_out_of_memory_fails_cleanly_at_every_allocation)
+{
+    amp_mesh m;
+    amp_slice_opts so = {1.0, 0};
+    long budget, need = -1;
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(fx_torus(&m, amp_v3(0, 0, 0), 10.0, 3.0, 32, 16), AMP_OK);
+    for (budget = 0; budget < 100000 && need < 0; budget++) {
+        fx_failalloc fa;
+        amp_slices sl;
+        amp_polyset one;
+        amp_status rc, rp;
+        fx_failalloc_init(&fa, budget);
+        amp_slices_init(&sl, &fa.a);
+        rc = amp_slice_mesh(&m, &so, &sl, NULL);
+        ck_assert_msg(rc == AMP_OK || rc == AMP_ERR_NOMEM, "budget %ld: status %d", budget, (int)rc);
+        amp_slices_free(&sl);
+        fx_failalloc_init(&fa, budget);
+        amp_polyset_init(&one, &fa.a);
+        rp = amp_slice_plane(&m, 3.3, &one, NULL, NULL);
+        ck_assert_msg(rp == AMP_OK || rp == AMP_ERR_NOMEM, "budget %ld: status %d", budget, (int)rp);
+        amp_polyset_free(&one);
+        ck_assert_msg(fa.live == 0, "budget %ld: %ld blocks left", budget, fa.live);
+        if (rc == AMP_OK && rp == AMP_OK)
+            need = budget;
+    }
+    ck_assert_msg(need > 20, "the sweep reached only %ld allocations", need);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static Suite *slice_suite(void)
 {
     Suite *s = suite_create("slice");
@@ -818,6 +852,7 @@ static Suite *slice_suite(void)
     tcase_add_test(tc, check_fails_a_job_with_a_layer_left_out_or_without_paths);
     tcase_add_test(tc, thin_walls_print_once_small_islands_deeper_and_slivers_not_at_all);
     tcase_add_test(tc, cli_warns_that_a_part_under_3_mm_may_be_in_inches);
+    tcase_add_test(tc, slicing_out_of_memory_fails_cleanly_at_every_allocation);
     suite_add_tcase(s, tc);
     return s;
 }

@@ -55,24 +55,31 @@ const char *fx_tmp(const char *name)
 static void *fa_alloc(void *user, size_t size)
 {
     fx_failalloc *f = user;
+    void *p;
     if (f->count >= f->budget)
         return NULL;
     f->count++;
-    return malloc(size);
+    p = malloc(size);
+    f->live += p != NULL;
+    return p;
 }
 
 static void *fa_realloc(void *user, void *ptr, size_t size)
 {
     fx_failalloc *f = user;
+    void *p;
     if (f->count >= f->budget)
         return NULL;
     f->count++;
-    return realloc(ptr, size);
+    p = realloc(ptr, size);
+    f->live += p != NULL && ptr == NULL;
+    return p;
 }
 
 static void fa_free(void *user, void *ptr)
 {
-    (void)user;
+    fx_failalloc *f = user;
+    f->live -= ptr != NULL;
     free(ptr);
 }
 
@@ -84,6 +91,7 @@ void fx_failalloc_init(fx_failalloc *f, long budget)
     f->a.user = f;
     f->budget = budget;
     f->count = 0;
+    f->live = 0;
 }
 
 void fx_assert_same_paths(const amp_pathset *a, const amp_pathset *b)

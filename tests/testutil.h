@@ -57,11 +57,13 @@ void fx_msleep(int ms);
  */
 int fx_split(char *s, char **argv, int n);
 
-/** An allocator that fails after @p budget successful allocations (for out-of-memory paths). */
+/** An allocator that fails after @p budget successful allocations (for out-of-memory paths); live counts the
+ * blocks not yet freed (0 once the caller has freed what it owns: nothing leaked). */
 typedef struct fx_failalloc {
     amp_allocator a;
     long budget;
     long count;
+    long live;
 } fx_failalloc;
 void fx_failalloc_init(fx_failalloc *f, long budget);
 

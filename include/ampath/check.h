@@ -94,8 +94,10 @@ typedef struct amp_stroke_report {
  * segment is printed twice, and, if @p region is not NULL, every vertex and
  * segment midpoint lies in the region or within @p tol of it. Fills @p rep
  * (optional) and returns AMP_ERR_CHECK with a reason on any violation,
- * AMP_ERR_NOMEM, else AMP_OK. Shares no code with the stroke builder.
- * Every segment counts as printed (see amp_check_stroke_radii()).
+ * AMP_ERR_NOMEM, AMP_ERR_ARG for NULL @p pts with n > 0, else AMP_OK. Shares
+ * no code with the stroke builder. Every segment counts as printed (see
+ * amp_check_stroke_radii()). Scratch memory comes from @p region's allocator
+ * (the default allocator when @p region is NULL) and is freed before return.
  */
 amp_status amp_check_stroke(const amp_vec2 *pts, size_t n, const amp_polyset *region, double tol,
                             amp_stroke_report *rep, amp_error *err);
@@ -114,7 +116,7 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
 /**
  * amp_check_stroke_radii() on path @p i of @p ps (its x, y and radii; z is
  * ignored). A scratch copy is allocated with the set's allocator
- * (AMP_ERR_NOMEM).
+ * (AMP_ERR_NOMEM); AMP_ERR_ARG for NULL @p ps or no path @p i.
  */
 amp_status amp_check_path_stroke(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
                                     amp_stroke_report *rep, amp_error *err);

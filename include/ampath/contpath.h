@@ -85,7 +85,8 @@ typedef struct amp_contpath_opts {
                                 (counted in band_retries); every island it then still rejects is printed
                                 again with its infill region moved in, then out, by r/20 (shift_retries), so it
                                 is called on every island. Set it to amp_check_path_stroke (check.h) for the
-                                behaviour of the ampath tool. With OpenMP it is called from the threads that
+                                behaviour of the ampath tool. AMP_ERR_NOMEM from it stops the run with that
+                                error; any other status rejects the path. With OpenMP it is called from the threads that
                                 make the islands: it must be thread-safe (amp_check_path_stroke is). */
     /** Optional progress report of amp_contpath_layers() (fraction 0..1 of the layers, from the calling
      *  thread, a few hundred times at most). */
@@ -184,7 +185,11 @@ amp_status amp_contpath_region(const amp_cx2 *khat, const amp_polyset *region, d
  * appended to. Built with OpenMP, the islands of up to 256 of them at a time
  * are made on the OpenMP threads when @p out uses the default allocator (a
  * caller's allocator is only called from the calling thread); the output is
- * the same whatever the thread count.
+ * the same whatever the thread count. Errors: AMP_ERR_ARG (NULL @p sl, @p o
+ * or @p out, a radius or cell that is not positive), AMP_ERR_LIMIT (a lattice
+ * too large), AMP_ERR_GEOMETRY (no layer polygon), AMP_ERR_NOMEM — also when
+ * o->verify_stroke reports it (an island is never made again for a verifier
+ * out of memory); on an error @p out holds the layers finished before it.
  */
 amp_status amp_contpath_layers(const amp_slices *sl, const amp_contpath_opts *o, amp_pathset *out,
                                amp_contpath_stats *st, amp_error *err);

@@ -142,7 +142,8 @@ amp_status amp_mesh_read_stl_file_ex(amp_mesh *m, const char *path, amp_stl_stat
  */
 amp_status amp_mesh_write_stl(const amp_mesh *m, int binary, amp_sink_fn sink, void *user, amp_error *err);
 
-/** Write to a file, replaced atomically (written to PATH.tmp, then renamed). */
+/** Write to a file, replaced atomically through amp_out (io.h: a unique temporary beside it, renamed over it;
+ * on any failure the old file is left intact). AMP_ERR_IO with the system's reason. */
 amp_status amp_mesh_write_stl_file(const amp_mesh *m, const char *path, int binary, amp_error *err);
 
 /**

@@ -191,7 +191,8 @@ amp_status amp_pathset_read_file_progress(amp_pathset *ps, const char *path,
  */
 amp_status amp_pathset_write(const amp_pathset *ps, const char *comment, amp_sink_fn sink, void *user, amp_error *err);
 
-/** Write to a file (replaced atomically: written to PATH.tmp, then renamed). */
+/** Write to a file, replaced atomically through amp_out (io.h: a unique temporary beside it, renamed over it;
+ * on any failure the old file is left intact). AMP_ERR_IO with the system's reason. */
 amp_status amp_pathset_write_file(const amp_pathset *ps, const char *path, const char *comment, amp_error *err);
 
 #ifdef __cplusplus

@@ -159,7 +159,12 @@ amp_status amp_spline_eval_grid(const amp_spline *s, const double *const *params
  */
 amp_status amp_spline_insert_knot(amp_spline *s, int d, double t, int times, amp_error *err);
 
-/** Insert each of the @p n knots @p t (any order) once in direction @p d (knot refinement). */
+/**
+ * Insert each of the @p n knots @p t (any order) once in direction @p d (knot
+ * refinement), on a copy that replaces @p s at the end: any error (those of
+ * amp_spline_insert_knot(), AMP_ERR_NOMEM, AMP_ERR_ARG for NULL) leaves @p s
+ * unchanged.
+ */
 amp_status amp_spline_refine(amp_spline *s, int d, const double *t, size_t n, amp_error *err);
 
 /**
