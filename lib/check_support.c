@@ -102,6 +102,8 @@ static amp_status build_grid(hctx *c, double reach, amp_error *err)
     c->bb = amp_box3_empty();
     for (i = 0; i < c->n; i++)
         c->bb = amp_box3_add(c->bb, c->sm[i].p);
+    if (c->n == 0) /* nothing printed (pseudo edges only): one cell, not an empty box's infinite extent */
+        c->bb.min = c->bb.max = amp_v3(0, 0, 0);
     c->cs = fmax(0.5 * reach, 0.25);
     for (;;) {
         c->nx = (size_t)((c->bb.max.x - c->bb.min.x) / c->cs) + 1;

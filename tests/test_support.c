@@ -697,6 +697,24 @@ START_TEST(an_object_bead_is_not_printed_before_the_bead_it_rests_on)
 }
 END_TEST
 
+/* A job of pseudo edges only (radius 0: nothing printed) has no bead to hold and none to check: the check ends at
+ * once (the grid over no sample was sized from an empty box's infinite extent and grew its cells forever: a
+ * black-box run of `ampath support` on such a file never ended). */
+START_TEST(hold_check_of_a_job_with_nothing_printed_ends_at_once)
+{
+    amp_pathset ps;
+    amp_hold_report r;
+    amp_pathset_init(&ps, NULL);
+    ck_assert_int_eq(amp_pathset_begin(&ps, AMP_ROLE_OBJECT, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(5, 5, 5), 0.0, NULL), AMP_OK);
+    ck_assert_int_eq(amp_pathset_push(&ps, amp_v3(6, 5, 5), 0.0, NULL), AMP_OK);
+    r = hold(&ps);
+    ck_assert_uint_eq(r.failures, 0);
+    amp_hold_report_free(&r);
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 /* Bridges between two pillars: up to 5 mm pass, longer ones fail; a short tip off a pillar passes. */
 START_TEST(hold_check_allows_short_bridges_and_tips_only)
 {
@@ -833,6 +851,7 @@ static Suite *support_suite(void)
     tcase_add_test(tc, a_sliced_job_gets_planar_support_on_its_own_layers);
     tcase_add_test(tc, hold_check_needs_material_printed_earlier_under_each_bead);
     tcase_add_test(tc, hold_check_allows_short_bridges_and_tips_only);
+    tcase_add_test(tc, hold_check_of_a_job_with_nothing_printed_ends_at_once);
     tcase_add_test(tc, hold_check_applies_the_overhang_rule);
     tcase_add_test(tc, an_object_bead_is_not_printed_before_the_bead_it_rests_on);
 #ifdef _OPENMP
