@@ -11,6 +11,14 @@
 #include "runtool.h"
 #include "testutil.h"
 
+int fx_run_tool_stderr(const char *args, const char *stdin_text, char *err, size_t cap)
+{
+    char group[4096];
+    /* the group's stdout to /dev/null and its stderr into the pipe; the tool's own redirections in args win */
+    snprintf(group, sizeof group, "%s; } 2>&1 >/dev/null", args);
+    return fx_run_tool_ex(group, stdin_text, 2, err, cap);
+}
+
 int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap)
 {
     char cmd[4096], errfile[256], infile[256];
@@ -28,8 +36,12 @@ int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, ch
         fputs(stdin_text, f);
         fclose(f);
     }
-    snprintf(cmd, sizeof cmd, "%s %s <%s 2>%s", tool ? tool : "tools/ampath", args,
-             stdin_text ? infile : "/dev/null", with_stderr ? "&1" : errfile);
+    if (with_stderr == 2) /* fx_run_tool_stderr: args end the group it opens here */
+        snprintf(cmd, sizeof cmd, "{ %s <%s %s", tool ? tool : "tools/ampath", stdin_text ? infile : "/dev/null",
+                 args);
+    else
+        snprintf(cmd, sizeof cmd, "%s %s <%s 2>%s", tool ? tool : "tools/ampath", args,
+                 stdin_text ? infile : "/dev/null", with_stderr ? "&1" : errfile);
     p = popen(cmd, "r");
     if (!p)
         return -1;

@@ -19,6 +19,12 @@ int fx_run_tool(const char *args, char *out, size_t cap);
 int fx_run_tool_ex(const char *args, const char *stdin_text, int with_stderr, char *out, size_t cap);
 
 /**
+ * As fx_run_tool_ex() capturing only stderr into @p err; stdout goes where @p args redirect it (e.g.
+ * ">/dev/full"), else to /dev/null.
+ */
+int fx_run_tool_stderr(const char *args, const char *stdin_text, char *err, size_t cap);
+
+/**
  * As fx_run_tool() with stderr on a pseudo-terminal (as a user at a terminal sees it), which is read into
  * @p err (NUL-terminated, at most cap - 1 bytes); stdout is discarded. For the progress bars.
  */

@@ -598,6 +598,116 @@ START_TEST(an_oversized_mesh_is_refused_by_the_tool_at_once)
 }
 END_TEST
 
+/* Lines in @p s (a reason is exactly one). */
+static int count_lines(const char *s)
+{
+    int n = 0;
+    for (; *s; s++)
+        n += *s == '\n';
+    return n;
+}
+
+/* -o naming an input: refused (exit 2) and the input kept byte for byte; a path set rewritten in place by order
+ * is fine (a black-box sweep found `gcode j.amp -o j.amp` turning the paths into G-code, and the same for slice,
+ * cover, support --mesh and mdr --trivariate). */
+START_TEST(an_output_naming_an_input_is_refused_and_the_input_kept)
+{
+    const char *dir = scratch_dir("clobber");
+    static const char paths[] = "ampath-paths 1\npath object 2\n0 0 0.5 0.5\n10 0 0.5 0.5\n";
+    char args[1200], amp[300], stl[300], out[8192];
+    FILE *f;
+    size_t n;
+    snprintf(amp, sizeof amp, "%s/j.amp", dir);
+    snprintf(stl, sizeof stl, "%s/m.stl", dir);
+    put_file(amp, paths);
+    snprintf(args, sizeof args, "model twisted-bridge -o %s", stl);
+    expect_tool(args, 0, NULL);
+    snprintf(args, sizeof args, "gcode %s -o %s", amp, amp);
+    expect_tool(args, 2, "would be overwritten");
+    snprintf(args, sizeof args, "support %s --mesh %s -o %s", amp, stl, stl);
+    expect_tool(args, 2, "is the --mesh file");
+    snprintf(args, sizeof args, "slice %s --layer 1 -o %s", stl, stl);
+    expect_tool(args, 2, "would be overwritten");
+    snprintf(args, sizeof args, "preview %s -o %s", amp, amp);
+    expect_tool(args, 2, "would be overwritten");
+    f = fopen(amp, "rb");
+    ck_assert_ptr_nonnull(f);
+    n = fread(out, 1, sizeof out - 1, f);
+    fclose(f);
+    out[n] = 0;
+    ck_assert_str_eq(out, paths);
+    snprintf(args, sizeof args, "info %s --json", stl);
+    expect_tool(args, 0, "\"triangles\"");
+    /* order rewrites its own path file in place */
+    snprintf(args, sizeof args, "order %s -o %s", amp, amp);
+    expect_tool(args, 0, NULL);
+    remove_dir(dir);
+}
+END_TEST
+
+/* Bad usage at the top level and in arguments: exit 2 and a reason of exactly one line (an unknown command
+ * printed the whole overview, 22 lines; a newline in a file name split the reason in two); `--version` takes
+ * no argument; hexadecimal floats are not decimal numbers (--eps 0x10 covered at eps 16). */
+START_TEST(bad_usage_gets_exit_2_and_a_reason_of_one_line)
+{
+    static const char *const bad[] = {"frobnicate", "--frobnicate", "--version junk",
+                                      "order 'no\nsuch.amp' -o /dev/null",
+                                      "cover vase --eps 0x10 -o /dev/null",
+                                      "gcode x.amp --fan-off-layers 2.5",
+                                      "slice x.stl --layer 0.2 --first-layer 1e-300"};
+    char out[8192];
+    size_t i;
+    for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        int rc = fx_run_tool_stderr(bad[i], NULL, out, sizeof out);
+        ck_assert_msg(rc == 2, "ampath %s: exit %d", bad[i], rc);
+        ck_assert_msg(count_lines(out) == 1, "ampath %s: %d lines: %s", bad[i], count_lines(out), out);
+    }
+}
+END_TEST
+
+/* A product or figures lost on stdout (a full disk) are a failure, exit 2 with the reason; the same runs to
+ * /dev/null succeed (they exited 0 with nothing on stderr). */
+START_TEST(a_failed_write_to_stdout_is_exit_2)
+{
+    static const char *const cmds[] = {"--version", "info %s/j.amp --json", "eval %s/v.spl"};
+    const char *dir = scratch_dir("stdoutfull");
+    char args[600], amp[300], out[4096];
+    size_t i;
+    snprintf(amp, sizeof amp, "%s/j.amp", dir);
+    put_file(amp, "ampath-paths 1\npath object 2\n0 0 0.5 0.5\n10 0 0.5 0.5\n");
+    snprintf(args, sizeof args, "model vase -o %s/v.spl", dir);
+    expect_tool(args, 0, NULL);
+    for (i = 0; i < sizeof cmds / sizeof cmds[0]; i++) {
+        char cmd[400];
+        snprintf(cmd, sizeof cmd, cmds[i], dir);
+        snprintf(args, sizeof args, "%s >/dev/full", cmd);
+        ck_assert_int_eq(fx_run_tool_stderr(args, "0.5 0.5 0.5\n", out, sizeof out), 2);
+        ck_assert_msg(strstr(out, "No space left") != NULL, "ampath %s: %s", args, out);
+        snprintf(args, sizeof args, "%s >/dev/null", cmd);
+        ck_assert_int_eq(fx_run_tool_ex(args, "0.5 0.5 0.5\n", 1, out, sizeof out), 0);
+    }
+    remove_dir(dir);
+}
+END_TEST
+
+/* check refuses a bad model before any check runs: exit 2, one line, nothing on stdout (it printed a partial
+ * report and two lines on stderr). */
+START_TEST(check_refuses_a_bad_model_before_checking)
+{
+    const char *dir = scratch_dir("checkmodel");
+    char args[800], amp[300], out[8192];
+    snprintf(amp, sizeof amp, "%s/j.amp", dir);
+    put_file(amp, "ampath-paths 1\npath object 2\n0 0 0.5 0.5\n10 0 0.5 0.5\n");
+    snprintf(args, sizeof args, "check %s --trivariate %s/missing.spl 2>/dev/null", amp, dir);
+    ck_assert_int_eq(fx_run_tool_ex(args, NULL, 0, out, sizeof out), 2);
+    ck_assert_str_eq(out, "");
+    snprintf(args, sizeof args, "check %s --mesh %s", amp, dir);
+    ck_assert_int_eq(fx_run_tool_stderr(args, NULL, out, sizeof out), 2);
+    ck_assert_msg(count_lines(out) == 1, "%s", out);
+    remove_dir(dir);
+}
+END_TEST
+
 Suite *io_suite(void);
 Suite *io_suite(void)
 {
@@ -623,6 +733,10 @@ Suite *io_suite(void)
     tcase_add_test(t, cover_refuses_beyond_its_curve_estimate);
     tcase_add_test(t, slicing_refuses_beyond_its_segment_estimate);
     tcase_add_test(t, an_oversized_mesh_is_refused_by_the_tool_at_once);
+    tcase_add_test(t, an_output_naming_an_input_is_refused_and_the_input_kept);
+    tcase_add_test(t, bad_usage_gets_exit_2_and_a_reason_of_one_line);
+    tcase_add_test(t, a_failed_write_to_stdout_is_exit_2);
+    tcase_add_test(t, check_refuses_a_bad_model_before_checking);
     suite_add_tcase(s, w);
     suite_add_tcase(s, r);
     suite_add_tcase(s, t);

@@ -1,4 +1,5 @@
 /* ampath — command-line front end of libampath (docs/interfaces.md §4). */
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -46,12 +47,24 @@ static int overview(FILE *f)
     return f == stdout ? CLI_OK : CLI_USAGE;
 }
 
-int main(int argc, char **argv)
+/* A product or figures lost on a full disk or a closed pipe are a failure, not a success (exit 2, the system's
+ * reason); a failed check (1) or refusal (2) keeps its own code. */
+static int finish(const char *cmd, int rc)
+{
+    int bad = fflush(stdout) != 0 || ferror(stdout);
+    if (bad && rc == CLI_OK)
+        return cli_fail(cmd, CLI_USAGE, "writing standard output: %s", strerror(errno ? errno : EIO));
+    return rc;
+}
+
+static int run(int argc, char **argv)
 {
     const command *c;
     if (argc < 2)
         return overview(stderr);
     if (strcmp(argv[1], "--version") == 0 || strcmp(argv[1], "version") == 0) {
+        if (argc > 2)
+            return cli_fail("ampath", CLI_USAGE, "%s takes no argument, got '%s'", argv[1], argv[2]);
         printf("ampath %s\n", AMP_VERSION_STRING);
         return CLI_OK;
     }
@@ -65,14 +78,18 @@ int main(int argc, char **argv)
         return CLI_OK;
     }
     c = find(argv[1]);
-    if (!c) {
-        fprintf(stderr, "ampath: unknown command '%s'\n", argv[1]);
-        overview(stderr);
-        return CLI_USAGE;
-    }
+    if (!c)
+        return cli_fail("ampath", CLI_USAGE, "unknown %s '%s' (ampath help lists the commands)",
+                        argv[1][0] == '-' ? "option" : "command", argv[1]);
     if (argc >= 3 && (strcmp(argv[2], "--help") == 0 || strcmp(argv[2], "-h") == 0)) {
         fputs(c->usage, stdout);
         return CLI_OK;
     }
     return c->run(argc - 1, argv + 1);
+}
+
+int main(int argc, char **argv)
+{
+    errno = 0;
+    return finish(argc > 1 && argv[1][0] != '-' ? argv[1] : "ampath", run(argc, argv));
 }

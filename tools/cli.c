@@ -14,16 +14,28 @@
 /* A program of its own ("ampath-bridge") or a command of ampath ("cover"). */
 static int is_program(const char *cmd)
 {
-    return strncmp(cmd, "ampath-", 7) == 0;
+    return strncmp(cmd, "ampath-", 7) == 0 || strcmp(cmd, "ampath") == 0;
 }
 
+/* The reason is one line whatever the file names and values in it hold: control characters are written as
+ * escapes (a newline in a name made a reason of two lines). */
 int cli_fail(const char *cmd, int code, const char *fmt, ...)
 {
+    char msg[2048];
+    const unsigned char *c;
     va_list ap;
     fprintf(stderr, is_program(cmd) ? "%s: " : "ampath %s: ", cmd);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
+    for (c = (const unsigned char *)msg; *c; c++) {
+        if (*c == '\n')
+            fputs("\\n", stderr);
+        else if (*c < 0x20 || *c == 0x7f)
+            fprintf(stderr, "\\x%02x", *c);
+        else
+            fputc(*c, stderr);
+    }
     fputc('\n', stderr);
     return code;
 }
@@ -135,6 +147,9 @@ static int check_range(const char *cmd, const cli_opt *o, double v, const char *
             continue;
         if (v < r->lo || v > r->hi)
             return cli_fail(cmd, CLI_USAGE, "--%s must lie in [%g, %g], got '%s'", o->name, r->lo, r->hi, val);
+        if (strcmp(o->name, "first-layer") == 0 && v != 0 && v < 1e-3)
+            return cli_fail(cmd, CLI_USAGE, "--first-layer must be 0 (the --layer height) or lie in [0.001, 100], got '%s'",
+                            val);
         return CLI_OK;
     }
     return CLI_OK;
@@ -144,6 +159,8 @@ int cli_number(const char *s, double *out)
 {
     char *end;
     double d;
+    if (strpbrk(s, "xX"))
+        return -1; /* strtod's hexadecimal floats: 0x10 is not the 10 a user meant */
     errno = 0;
     d = strtod(s, &end);
     if (end == s || *end || !isfinite(d))
@@ -247,6 +264,42 @@ static const char *help_ref(const char *cmd)
     return buf;
 }
 
+/* Is @p path the file @p out names (both existing)? */
+static int same_file(const char *path, const struct stat *out)
+{
+    struct stat s;
+    return path && stat(path, &s) == 0 && s.st_dev == out->st_dev && s.st_ino == out->st_ino;
+}
+
+/* -o naming one of the command's input files: the product would replace it (`gcode job.amp -o job.amp` turned
+ * the .amp into G-code, `slice part.stl -o part.stl` the mesh into paths). Refused, except the path set that
+ * order, mdr and support rewrite in place (they read it whole before the output replaces it atomically). */
+static int clobbers_input(const char *cmd, const cli_opt *opts, const char **pos, int n)
+{
+    static const char *const in_place[] = {"order", "mdr", "support"};
+    const cli_opt *o;
+    const char *out = NULL;
+    struct stat so;
+    int k, keep = 0;
+    for (o = opts; o && o->name; o++)
+        if (o->kind == CLI_STR && o->seen && strcmp(o->name, "output") == 0)
+            out = *(const char *const *)o->dst;
+    if (!out || stat(out, &so) != 0 || !S_ISREG(so.st_mode))
+        return CLI_OK;
+    for (k = 0; k < 3; k++)
+        keep |= strcmp(cmd, in_place[k]) == 0;
+    for (k = 0; k < n; k++)
+        if (!(k == 0 && keep) && same_file(pos[k], &so))
+            return cli_fail(cmd, CLI_USAGE, "-o %s is the input %s: it would be overwritten (write to another file)",
+                            out, pos[k]);
+    for (o = opts; o && o->name; o++)
+        if (o->kind == CLI_STR && o->seen && strcmp(o->name, "output") != 0 &&
+            same_file(*(const char *const *)o->dst, &so))
+            return cli_fail(cmd, CLI_USAGE, "-o %s is the --%s file: it would be overwritten (write to another file)",
+                            out, o->name);
+    return CLI_OK;
+}
+
 int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char **pos, int min_pos, int max_pos,
               int *npos)
 {
@@ -304,7 +357,7 @@ int cli_parse(const char *cmd, int argc, char **argv, cli_opt *opts, const char 
         return cli_fail(cmd, CLI_USAGE, "missing argument (see %s)", help_ref(cmd));
     if (npos)
         *npos = n;
-    return CLI_OK;
+    return clobbers_input(cmd, opts, pos, n);
 }
 
 /* ---- JSON ---- */

@@ -146,6 +146,29 @@ static int run_checker(const checker *k, check_ctx *c, cli_json *j, double done)
     return rc;
 }
 
+/* The model is read once before any check runs, so that a bad --trivariate or --mesh is refused with its one
+ * line and no partial report (the checkers read it again themselves, each as it needs it). */
+static int probe_model(const check_ctx *c)
+{
+    amp_error err;
+    amp_mesh m;
+    amp_status st;
+    if (c->trivariate) {
+        amp_spline v;
+        int rc = cli_load_trivariate("check", c->trivariate, &v);
+        if (rc == CLI_OK)
+            amp_spline_free(&v);
+        return rc;
+    }
+    if (!c->mesh)
+        return CLI_OK;
+    amp_error_clear(&err);
+    amp_mesh_init(&m, NULL);
+    st = amp_mesh_read_stl_file(&m, c->mesh, &err);
+    amp_mesh_free(&m);
+    return st == AMP_OK ? CLI_OK : cli_fail_err("check", &err);
+}
+
 int cmd_check(int argc, char **argv)
 {
     int json = 0, rc, failed = 0, usage = 0;
@@ -162,6 +185,10 @@ int cmd_check(int argc, char **argv)
     amp_pathset_init(&ps, NULL);
     if ((rc = cli_load_paths("check", c.paths_file, &ps)) != CLI_OK)
         return rc;
+    if ((rc = probe_model(&c)) != CLI_OK) {
+        amp_pathset_free(&ps);
+        return rc;
+    }
     c.ps = &ps;
     if (json) {
         cli_json_begin(&j, stdout);

@@ -254,7 +254,8 @@ static void print_human(const char *in, const char *out, const amp_printer *pr, 
 /* Override the profile's values with the options the user gave. */
 typedef struct cli_vals {
     double filament, flow, max_flow, feed, first_feed, travel_feed, retract, retract_speed, retract_min, z_hop;
-    double hotend, bed, hotend1, bed1, fan, fan_off, accel, jd, max_xy, max_z, max_e, acc_xy, acc_z, acc_e, acc_r, xs;
+    long fan_off_n;
+    double hotend, bed, hotend1, bed1, fan, accel, jd, max_xy, max_z, max_e, acc_xy, acc_z, acc_e, acc_r, xs;
     double chord, rtol, minseg, corridor, end_lift, hop, zoffs, theta;
 } cli_vals;
 
@@ -291,7 +292,7 @@ static void apply_overrides(const cli_opt *opts, const cli_vals *v, amp_gcode_op
     OVR("first-layer-hotend", first_layer_hotend_temp, v->hotend1);
     OVR("first-layer-bed", first_layer_bed_temp, v->bed1);
     OVR("fan", fan_speed, v->fan / 100.0);
-    OVR("fan-off-layers", fan_off_layers, v->fan_off >= 0 && v->fan_off <= 100000 ? (int)v->fan_off : -1);
+    OVR("fan-off-layers", fan_off_layers, v->fan_off_n >= 0 && v->fan_off_n <= 100000 ? (int)v->fan_off_n : -1);
     OVR("accel", accel, v->accel);
     OVR("junction-deviation", junction_deviation, v->jd);
     OVR("max-feed-xy", max_feed_xy, v->max_xy);
@@ -383,7 +384,7 @@ int cmd_gcode(int argc, char **argv)
                       {"z-hop", CLI_DOUBLE, &v.z_hop, 0},       {"hotend", CLI_DOUBLE, &v.hotend, 0},
                       {"bed", CLI_DOUBLE, &v.bed, 0},           {"first-layer-hotend", CLI_DOUBLE, &v.hotend1, 0},
                       {"first-layer-bed", CLI_DOUBLE, &v.bed1, 0}, {"fan", CLI_DOUBLE, &v.fan, 0},
-                      {"fan-off-layers", CLI_DOUBLE, &v.fan_off, 0}, {"accel", CLI_DOUBLE, &v.accel, 0},
+                      {"fan-off-layers", CLI_LONG, &v.fan_off_n, 0}, {"accel", CLI_DOUBLE, &v.accel, 0},
                       {"junction-deviation", CLI_DOUBLE, &v.jd, 0}, {"max-feed-xy", CLI_DOUBLE, &v.max_xy, 0},
                       {"max-feed-z", CLI_DOUBLE, &v.max_z, 0},  {"max-feed-e", CLI_DOUBLE, &v.max_e, 0},
                       {"max-accel-xy", CLI_DOUBLE, &v.acc_xy, 0}, {"max-accel-z", CLI_DOUBLE, &v.acc_z, 0},
