@@ -3,7 +3,10 @@
  *
  * Every allocation libampath makes goes through an amp_allocator supplied by
  * the caller (or the default one, which wraps malloc/realloc/free). Objects
- * remember the allocator they were created with and free through it.
+ * remember the allocator they were created with and free through it. The
+ * one exception is the C library's own qsort(), which the library sorts
+ * with: glibc's may take a temporary buffer from malloc for a large array
+ * (newlib's, on the Cortex-M build, takes none).
  * Functions taking `const amp_allocator *` accept NULL for the default.
  */
 #ifndef AMPATH_ALLOC_H
