@@ -150,6 +150,9 @@ void br_session_step(br_session *s, struct pollfd *extra, int nextra, int max_ms
 void br_session_request_stop(br_session *s, br_stop why);
 /* The job line (file line) of engine line number @p n, 0 for a preamble line or one no longer mapped. */
 long br_session_job_line(const br_session *s, long n);
+/** The --resume-from line of the job: the first line not acknowledged, or the refused line itself when the
+ *  printer refused the last line it acknowledged (nothing after it ran). */
+long br_session_resume_line(const br_session *s);
 void br_session_close(br_session *s);
 const char *br_stop_name(br_stop st);
 /** One-line status: "state=... job=... acked=N total=M line=L". */

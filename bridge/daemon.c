@@ -80,7 +80,7 @@ static void figures(const dstate *d, long *acked, long *total, long *sent, long 
     const br_session *s = d->s;
     if (job_active(s)) {
         *acked = s->acked_moves, *total = s->job.total, *sent = s->sent_moves;
-        *line = s->last_acked_job_line, *resume = s->first_unacked_job_line;
+        *line = s->last_acked_job_line, *resume = br_session_resume_line(s);
     } else {
         *acked = d->rec.acked, *total = d->rec.total, *sent = d->rec.sent;
         *line = d->rec.line, *resume = d->rec.resume_from;
@@ -262,7 +262,7 @@ static void job_ended(dstate *d)
     r->stop = s->stop;
     snprintf(r->stop_text, sizeof r->stop_text, "%s", s->stop_text);
     r->acked = s->acked_moves, r->sent = s->sent_moves, r->line = s->last_acked_job_line;
-    r->resume_from = s->first_unacked_job_line;
+    r->resume_from = br_session_resume_line(s);
     fprintf(stderr, "ampath-bridge: job %s ended: %s%s%s\n", r->path, br_stop_name(r->stop), r->stop_text[0] ? ": " : "",
             r->stop_text);
     br_report(s, stdout);

@@ -86,6 +86,16 @@ static long job_line_of(const br_session *s, long n)
 
 long br_session_job_line(const br_session *s, long n) { return job_line_of(s, n); }
 
+/* The printer refused the last line it acknowledged (Klipper: `!!`, then its `ok`) and ran nothing after it: the
+ * job resumes with that line, once fixed (one past it was past the end when the job's last line was the one
+ * refused). Otherwise the first line not acknowledged. */
+long br_session_resume_line(const br_session *s)
+{
+    if (s->stop == BR_PRINTER_ERROR && s->err_jobline > 0 && s->err_jobline == s->last_acked_job_line)
+        return s->err_jobline;
+    return s->first_unacked_job_line;
+}
+
 /* Firmware error or action: remember the first one with its job line and text, then stop or go on. */
 static void printer_complaint(br_session *s, const amp_proto_event *ev, br_stop why, int fatal)
 {
@@ -521,7 +531,7 @@ void br_session_status(const br_session *s, char *buf, size_t cap)
              "state=%s job=%s acked=%ld total=%ld sent=%ld last_acked_line=%ld resume_from=%ld stop=%s errors=%ld "
              "warnings=%ld error_line=%ld message=%s",
              st, s->have_job ? s->job.path : "-", s->acked_moves, s->have_job ? s->job.total : 0, s->sent_moves,
-             s->last_acked_job_line, s->first_unacked_job_line, s->stop ? br_stop_name(s->stop) : "-", s->n_fwerrors,
+             s->last_acked_job_line, br_session_resume_line(s), s->stop ? br_stop_name(s->stop) : "-", s->n_fwerrors,
              s->n_warnings, s->err_jobline, s->err_text[0] ? s->err_text : s->waiting[0] ? s->waiting : "-");
 }
 
@@ -539,7 +549,7 @@ void br_session_report(const br_session *s, FILE *f)
     if (s->stop != BR_DONE) {
         fprintf(f, "stopped: %s%s%s; last acknowledged job line %ld; resume with --resume-from %ld\n",
                 br_stop_name(s->stop), s->stop_text[0] ? ": " : "", s->stop_text, s->last_acked_job_line,
-                s->first_unacked_job_line);
+                br_session_resume_line(s));
         if (s->maybe_from > 0 && s->maybe_to >= s->maybe_from)
             fprintf(f, "lines %ld..%ld may have run: they were sent and their acknowledgement never came "
                        "(check the part before resuming at %ld or %ld)\n",

@@ -790,6 +790,24 @@ START_TEST(klipper_rejected_move_stops_the_job_naming_the_line)
 }
 END_TEST
 
+/* A refusal of the job's last line: nothing after it ran, so the job resumes with that very line (it named the
+ * line after the end). */
+START_TEST(klipper_refusing_the_last_line_resumes_at_that_line)
+{
+    vpr v;
+    char *out;
+    const char *job;
+    job_homes = 1;
+    job = make_job("job.gcode", 10, "G1 X300 Y100 E0.5"); /* file line 16, the last */
+    job_homes = 0;
+    vp_start(&v, "--flavor klipper --turnaround 5");
+    ck_assert_int_eq(bridge_run(&v, job, "--flavor klipper --timeout 2", &out), 1);
+    vp_stop(&v);
+    ck_assert_msg(strstr(out, "stopped: printer error: job line 16 (G1 X300 Y100 E0.5)") != NULL, "%s", out);
+    ck_assert_msg(strstr(out, "last acknowledged job line 16; resume with --resume-from 16") != NULL, "%s", out);
+}
+END_TEST
+
 START_TEST(on_error_continue_reports_and_counts_and_goes_on)
 {
     vpr v;
@@ -1162,6 +1180,7 @@ static Suite *bridge_suite(void)
     ADD_TEST(tc, klipper_started_before_ready_runs_every_move_once_none_before_ready);
     ADD_TEST(tc, printer_never_ready_is_refused_after_the_ready_timeout);
     ADD_TEST(tc, klipper_rejected_move_stops_the_job_naming_the_line);
+    ADD_TEST(tc, klipper_refusing_the_last_line_resumes_at_that_line);
     ADD_TEST(tc, on_error_continue_reports_and_counts_and_goes_on);
     ADD_TEST(tc, marlin_action_cancel_stops_the_job);
     ADD_TEST(tc, marlin_halt_stops_reports_the_printer_words_and_the_line);
