@@ -69,7 +69,7 @@ static int run(int argc, char **argv)
         return CLI_OK;
     }
     if (strcmp(argv[1], "help") == 0 || strcmp(argv[1], "--help") == 0 || strcmp(argv[1], "-h") == 0) {
-        if (argc < 3)
+        if (argc < 3 || strcmp(argv[2], "help") == 0)
             return overview(stdout);
         c = find(argv[2]);
         if (!c)
