@@ -189,8 +189,23 @@ void amp_spline_cp_set(amp_spline *s, size_t idx, amp_vec3 p, double weight)
 
 void amp_spline_domain(const amp_spline *s, int d, double *lo, double *hi)
 {
+    if (!s || d < 0 || d >= s->dim || !s->knots[d]) { /* an empty spline (amp_spline_init) has no domain */
+        *lo = *hi = 0.0;
+        return;
+    }
     *lo = s->knots[d][s->order[d] - 1];
     *hi = s->knots[d][s->count[d]];
+}
+
+/* An evaluator's argument check: a spline with control points (not one fresh from amp_spline_init or freed),
+ * the parameters and the output. */
+static amp_status usable(const amp_spline *s, const void *par, const void *out, amp_error *err)
+{
+    if (!s || !par || !out)
+        return amp_fail(err, AMP_ERR_ARG, 0, "spline evaluation: NULL argument");
+    if (s->dim < 1 || s->dim > AMP_SPLINE_MAX_DIM || !s->cp)
+        return amp_fail(err, AMP_ERR_ARG, 0, "spline evaluation: an empty spline (no control points)");
+    return AMP_OK;
 }
 
 amp_box3 amp_spline_cp_bbox(const amp_spline *s)
@@ -389,9 +404,9 @@ amp_status amp_spline_eval(const amp_spline *s, const double *par, amp_vec3 *out
 {
     size_t span[AMP_SPLINE_MAX_DIM];
     double N[AMP_SPLINE_MAX_DIM][AMP_SPLINE_MAX_ORDER], h[4];
-    amp_status st;
-    if (!s || !par || !out)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_eval: NULL argument");
+    amp_status st = usable(s, par, out, err);
+    if (st != AMP_OK)
+        return st;
     st = prepare(s, par, span, N, err);
     if (st != AMP_OK)
         return st;
@@ -416,6 +431,8 @@ amp_status amp_spline_eval_derivs(const amp_spline *s, const double *par, int nd
     double A[M * M * M][4];
     size_t span[AMP_SPLINE_MAX_DIM], first[AMP_SPLINE_MAX_DIM];
     int d, ndd[AMP_SPLINE_MAX_DIM], kk[AMP_SPLINE_MAX_DIM], a, b, c, i, j, l, m1 = nd + 1;
+    if (usable(s, par, out, err) != AMP_OK)
+        return AMP_ERR_ARG;
     if (nd < 0 || nd > AMP_SPLINE_MAX_DERIV)
         return amp_fail(err, AMP_ERR_ARG, 0, "derivative order %d outside 0..%d", nd, AMP_SPLINE_MAX_DERIV);
     for (d = 0; d < AMP_SPLINE_MAX_DIM; d++) {
@@ -490,7 +507,11 @@ amp_status amp_spline_eval_partial(const amp_spline *s, const double *par, const
 {
     amp_vec3 all[(AMP_SPLINE_MAX_DERIV + 1) * (AMP_SPLINE_MAX_DERIV + 1) * (AMP_SPLINE_MAX_DERIV + 1)];
     int d, nd = 0, kk[AMP_SPLINE_MAX_DIM] = {0, 0, 0};
-    amp_status st;
+    amp_status st = usable(s, par, out, err);
+    if (st != AMP_OK)
+        return st;
+    if (!k)
+        return amp_fail(err, AMP_ERR_ARG, 0, "spline evaluation: NULL derivative orders");
     for (d = 0; d < s->dim; d++) {
         if (k[d] < 0 || k[d] > AMP_SPLINE_MAX_DERIV)
             return amp_fail(err, AMP_ERR_ARG, 0, "derivative order %d outside 0..%d", k[d], AMP_SPLINE_MAX_DERIV);
@@ -778,6 +799,8 @@ amp_status amp_spline_eval_list(const amp_spline *s, const double *par, size_t n
     long nb = (long)((n + BLOCK - 1) / BLOCK), b;
     int bad = 0, indexed = 0;
     span_index x;
+    if (n > 0 && usable(s, par, out, err) != AMP_OK)
+        return AMP_ERR_ARG;
     /* a polynomial curve and a list long enough to pay for the index: spans by table (unsorted lists) */
     if (s->dim == 1 && !s->rational && n >= 256)
         indexed = span_index_build(s, &x);
@@ -870,8 +893,11 @@ amp_status amp_spline_eval_grid(const amp_spline *s, const double *const *params
     double *scratch = NULL;
     int d, nthreads = 1, empty = 0;
     long outer, o;
-    amp_status st;
-    size_t n0c = s->count[0], cmin = 0, cmax = 0, i;
+    amp_status st = usable(s, params, out, err);
+    size_t n0c, cmin = 0, cmax = 0, i;
+    if (st != AMP_OK || !n)
+        return st != AMP_OK ? st : amp_fail(err, AMP_ERR_ARG, 0, "spline evaluation: NULL argument");
+    n0c = s->count[0];
 #ifdef _OPENMP
     nthreads = omp_get_max_threads();
 #endif

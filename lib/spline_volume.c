@@ -23,6 +23,10 @@ double amp_spl_volume(const amp_spline *v, double *jmax)
     enum { C = 12 };
     double lo[3], hi[3], vol = 0, jm = 0;
     int d, i, j, k, a, b, c;
+    if (jmax)
+        *jmax = 0.0;
+    if (!v || v->dim != 3 || !v->cp)
+        return 0.0; /* not a trivariate (an empty spline): no volume */
     for (d = 0; d < 3; d++)
         amp_spline_domain(v, d, &lo[d], &hi[d]);
     for (k = 0; k < C; k++)

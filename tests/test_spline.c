@@ -921,6 +921,29 @@ START_TEST(knot_insertion_out_of_memory_leaves_the_spline_unchanged)
 }
 END_TEST
 
+/* An empty spline (fresh from amp_spline_init, or freed) is refused by every evaluator with AMP_ERR_ARG and has
+ * no volume or domain; the Python binding's `Trivariate().eval()` crashed in the contraction. */
+START_TEST(an_empty_spline_is_refused_by_the_evaluators)
+{
+    amp_spline s;
+    double par[3] = {0.5, 0.5, 0.5}, lo = 1, hi = 1;
+    const double *grid[3] = {par, par + 1, par + 2};
+    size_t n[3] = {1, 1, 1};
+    int k[3] = {0, 0, 0};
+    amp_vec3 out[64];
+    amp_spline_init(&s);
+    ck_assert_int_eq(amp_spline_eval(&s, par, out, NULL), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_spline_eval_derivs(&s, par, 1, out, NULL), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_spline_eval_partial(&s, par, k, out, NULL), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_spline_eval_list(&s, par, 1, out, NULL), AMP_ERR_ARG);
+    ck_assert_int_eq(amp_spline_eval_grid(&s, grid, n, out, NULL), AMP_ERR_ARG);
+    ck_assert(amp_trivariate_volume(&s) == 0.0);
+    amp_spline_domain(&s, 0, &lo, &hi);
+    ck_assert(lo == 0.0 && hi == 0.0);
+    amp_spline_free(&s);
+}
+END_TEST
+
 static Suite *spline_suite(void)
 {
     Suite *s = suite_create("spline");
@@ -931,6 +954,7 @@ static Suite *spline_suite(void)
     tcase_add_test(tc, rational_trivariate_partials_match_finite_differences);
     tcase_add_test(tc, knot_insertion_and_refinement_leave_the_shape_unchanged);
     tcase_add_test(tc, knot_insertion_out_of_memory_leaves_the_spline_unchanged);
+    tcase_add_test(tc, an_empty_spline_is_refused_by_the_evaluators);
     tcase_add_test(tc, split_halves_reproduce_the_spline);
     tcase_add_test(tc, evaluation_near_knots_is_exact_and_continuous);
     tcase_add_test(tc, isoparametric_extraction_matches_the_trivariate);

@@ -103,7 +103,7 @@ amp_vec3 amp_spline_cp_get(const amp_spline *s, size_t idx, double *weight);
 /** Set control point @p idx from a Euclidean point and weight (weight is forced to 1 unless rational). */
 void amp_spline_cp_set(amp_spline *s, size_t idx, amp_vec3 p, double weight);
 
-/** Parameter domain of direction @p d (0 <= d < dim). */
+/** Parameter domain of direction @p d (0 <= d < dim); [0, 0] for any other d and for an empty spline. */
 void amp_spline_domain(const amp_spline *s, int d, double *lo, double *hi);
 
 /** Bounding box of the Euclidean control points (contains the spline when weights are positive). */
@@ -255,7 +255,7 @@ amp_status amp_trivariate_model(const char *name, const amp_allocator *a, amp_sp
 const char *const *amp_trivariate_model_names(void);
 
 /** Volume of a trivariate (mm^3): Gauss–Legendre quadrature of |det J| (3 points per direction per cell of a
- * 12^3 grid). Pure function; 0 where evaluation fails. */
+ * 12^3 grid). Pure function; 0 where evaluation fails, and for anything but a trivariate with control points. */
 double amp_trivariate_volume(const amp_spline *v);
 
 #ifdef __cplusplus
