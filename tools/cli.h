@@ -59,8 +59,8 @@ int cli_given(const cli_opt *opts, const char *name);
  * --max-segments N (slice, euler, check) raise for one run. Documented in the
  * README section "Limits" and ampath(1).
  */
-#define CLI_DEFAULT_MAX_CURVES 1e6   /* covering curves of cover (Lemma A.2 estimate) */
-#define CLI_DEFAULT_MAX_LENGTH 5e7   /* their total length, mm (the same estimate) */
+#define CLI_DEFAULT_MAX_CURVES AMP_COVER_MAX_CURVES /* covering curves of cover (amp_cover_estimate) */
+#define CLI_DEFAULT_MAX_LENGTH AMP_COVER_MAX_LENGTH /* their total length, mm (the same estimate) */
 #define CLI_DEFAULT_MAX_SEGMENTS 2e7 /* section segments over all layers: slice, euler, check --mesh */
 typedef struct cli_limits {
     double max_curves;

@@ -28,53 +28,6 @@ const char cmd_cover_usage[] =
     "  --json          {dir, dir_scores, surfaces, curves, vertices, length_mm, coverage_gap_mm, over_coverage, volume_mm3,\n"
     "                   deposited_mm3, time_s, depth_limited}\n";
 
-/*
- * Lemma A.2 on the whole control net: the arc length of every direction-@p d
- * isoparametric curve is at most the sum over control segments k of the longest
- * |P_{k+1} - P_k| across the net (weights ignored: an estimate, not a bound).
- */
-static double net_length(const amp_spline *v, int d)
-{
-    size_t idx[3], k, i, j, n = v->count[d];
-    int a = d == 0 ? 1 : 0, b = d == 2 ? 1 : 2;
-    double total = 0;
-    for (k = 0; k + 1 < n; k++) {
-        double mx = 0;
-        for (j = 0; j < v->count[b]; j++)
-            for (i = 0; i < v->count[a]; i++) {
-                amp_vec3 p0, p1;
-                idx[a] = i;
-                idx[b] = j;
-                idx[d] = k;
-                p0 = amp_spline_cp_get(v, amp_spline_index(v, idx[0], idx[1], idx[2]), NULL);
-                idx[d] = k + 1;
-                p1 = amp_spline_cp_get(v, amp_spline_index(v, idx[0], idx[1], idx[2]), NULL);
-                mx = fmax(mx, amp_v3_dist(p0, p1));
-            }
-        total += mx;
-    }
-    return total;
-}
-
-/*
- * Work estimate before covering: Algorithm 1 halves the covering direction
- * until neighbouring surfaces are within thr = eps - delta by the Lemma A.2 measure, and
- * each surface is covered the same way by curves, so about (L_d / thr + 1) surfaces of
- * (L_e0 / thr + 1) curves each, every one at most L_e1 long (*length: their total). Measured
- * on the built-in models the count is within a factor of a few of the real one, which is all a
- * refusal needs; the length counts too, because the curves of one direction may be few and
- * long (the helix along w at eps 0.02: 4e5 curves, 100 s and 3.7 GB before it was stopped).
- */
-static double estimate_curves(const amp_spline *v, int d, double eps, double chord, double *length)
-{
-    int e0 = d == 0 ? 1 : 0, e1 = d == 2 ? 1 : 2;
-    double delta = chord > 0 ? fmin(chord, 0.5 * eps) : eps / 20, thr = eps - delta;
-    double n = (ceil(net_length(v, d) / thr) + 1) * (ceil(net_length(v, e0) / thr) + 1);
-    *length = n * net_length(v, e1);
-    return n;
-}
-
-
 /* The command line, validated; o holds the covering options but the direction of auto. */
 typedef struct cover_args {
     const char *input, *out, *measure;
@@ -150,7 +103,8 @@ static int cover_direction(cover_args *a, const amp_spline *v, cover_figures *f)
     if (a->o.dir == AMP_COVER_AUTO)
         a->o.dir = picked;
     f->dirname[0] = "uvw"[a->o.dir];
-    curves = estimate_curves(v, a->o.dir, a->eps, a->chord, &length);
+    if (amp_cover_estimate(v, &a->o, &curves, &length, &err) != AMP_OK)
+        return cli_fail_err("cover", &err);
     if (!(curves <= cli_work.max_curves))
         return cli_work_refuse("cover", "covering curves", curves, cli_work.max_curves, "max-curves");
     if (!(length <= cli_work.max_length))

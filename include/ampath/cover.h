@@ -114,6 +114,25 @@ amp_status amp_trivariate_slopes(const amp_spline *v, double slope[3], amp_error
 amp_status amp_cover_trivariate(const amp_spline *v, const amp_cover_opts *opts, amp_pathset *out,
                                 amp_cover_stats *stats, amp_error *err);
 
+/** The work limits `ampath cover` and the Python binding refuse a covering above (overridable per run). */
+#define AMP_COVER_MAX_CURVES 1e6 /**< covering curves */
+#define AMP_COVER_MAX_LENGTH 5e7 /**< their total length, mm */
+
+/**
+ * The work of amp_cover_trivariate(@p v, @p o) estimated before it starts (a
+ * small eps grows it without bound): *@p curves, the number of covering curves
+ * by Lemma A.2 on the control net (about (L_d / thr + 1) surfaces of
+ * (L_e0 / thr + 1) curves, thr = eps - delta, in the direction o->dir, or the
+ * one amp_cover_pick_dir() takes for auto), and *@p length, their total length
+ * in mm. Within a factor of a few of the real counts on the built-in models:
+ * enough to refuse a runaway covering (the helix along w at eps 0.02 took 100 s
+ * and 3.7 GB before it was stopped). Thread-safe, no allocation. Errors:
+ * AMP_ERR_ARG (not a trivariate, NULL, eps not positive, a bad direction),
+ * those of amp_cover_pick_dir().
+ */
+amp_status amp_cover_estimate(const amp_spline *v, const amp_cover_opts *o, double *curves, double *length,
+                              amp_error *err);
+
 /* The independent coverage measure (amp_check_coverage): check.h. */
 
 /**

@@ -412,6 +412,7 @@ _PROTOS = {
     "amp_bvh_free": (None, [c_void_p]),
     "amp_cover_opts_default": (None, [P(amp_cover_opts)]),
     "amp_cover_trivariate": (c_int, [P(amp_spline), P(amp_cover_opts), P(amp_pathset), P(amp_cover_stats), E]),
+    "amp_cover_estimate": (c_int, [P(amp_spline), P(amp_cover_opts), P(c_double), P(c_double), E]),
     "amp_check_coverage": (c_int, [P(amp_pathset), P(amp_coverage_domain), c_size_t, c_ulong, P(amp_coverage), E]),
     "amp_head_default": (None, [P(amp_head)]),
     "amp_head_validate": (c_int, [P(amp_head), E]),

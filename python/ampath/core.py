@@ -363,6 +363,18 @@ def _hold(*objs):
         yield
 
 
+def _write_bytes(output, data):
+    """Write @data to the file @output through the library's one safe writer (amp_out: a temporary beside it,
+    renamed over it; a failure leaves the old file as it was)."""
+    f, err = L.amp_out(), _err()
+    _check(lib.amp_out_open(ctypes.byref(f), os.fsencode(output), ctypes.byref(err)), err)
+    if lib.amp_out_sink(ctypes.byref(f), data, len(data)) != 0:
+        lib.amp_out_abort(ctypes.byref(f))
+        err.msg = ("%s: %s" % (f.target.decode(errors="replace"), os.strerror(f.werr))).encode()[:199]
+        _check(-5, err)
+    _check(lib.amp_out_commit(ctypes.byref(f), ctypes.byref(err)), err)
+
+
 def _to_buf(write):
     """Run a library writer into an amp_buf and return the bytes (the buffer is always freed)."""
     buf, err = L.amp_buf(), _err()
@@ -447,8 +459,8 @@ class Trivariate(_Owner):
         return _to_buf(lambda sink, buf, err: lib.amp_spline_write(self._ref, 1, sink, buf, err)).decode()
 
     def write(self, filename):
-        with open(filename, "w") as f:
-            f.write(self.to_spl())
+        """Write the `.spl` file (replaced atomically: a failure leaves the old file as it was)."""
+        _write_bytes(filename, self.to_spl().encode())
 
     def eval(self, u, v, w):
         par, out, err = (ctypes.c_double * 3)(u, v, w), L.amp_vec3(), _err()

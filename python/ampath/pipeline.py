@@ -42,9 +42,11 @@ def _run(fn, out, progress=None, inputs=()):
     return out
 
 
-def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, **opts):
+def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, max_curves=1e6, max_length=5e7, **opts):
     """Paper 1 §4.1 (`ampath cover`): paths covering @trivariate within @eps mm.
-    Options: dir (auto|u|v|w; auto: the direction whose curves are the most level), min_depth, measure (arclen|iso), radius, chord_tol, cells, max_depth."""
+    Options: dir (auto|u|v|w; auto: the direction whose curves are the most level), min_depth, measure (arclen|iso), radius, chord_tol, cells, max_depth.
+    As the tool, a covering estimated (amp_cover_estimate) above @max_curves curves or @max_length mm of paths is
+    refused before it starts (ampath.Error AMP_ERR_LIMIT): a small eps grows the work without bound."""
     o = L.amp_cover_opts()
     lib.amp_cover_opts_default(ctypes.byref(o))
     o.eps = eps
@@ -53,6 +55,17 @@ def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, **opts):
         _fail("measure must be arclen or iso")
     o.measure = 0 if measure == "arclen" else 1
     _apply(o, opts, "cover", skip=("eps", "dir", "measure"))
+    curves, length, err = ctypes.c_double(), ctypes.c_double(), _err()
+    with _hold(trivariate):
+        trivariate._live()
+        _check(lib.amp_cover_estimate(trivariate._ref, ctypes.byref(o), ctypes.byref(curves), ctypes.byref(length),
+                                      ctypes.byref(err)), err)
+    for n, limit, what, opt in ((curves.value, max_curves, "covering curves", "max_curves"),
+                                (length.value, max_length, "mm of paths", "max_length")):
+        if not n <= limit:
+            err.msg = ("refused: about %.3g %s estimated, more than the limit of %.3g (raise it with %s=N)"
+                       % (n, what, limit, opt)).encode()
+            _check(-7, err)
     pr = _Progress(progress)
     o.progress = pr.c
     out, st, err = PathSet(), L.new(L.amp_cover_stats), _err()

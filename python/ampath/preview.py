@@ -6,7 +6,7 @@ import os
 
 from . import _lib as L
 from ._lib import lib
-from .core import _Progress, _check, _err, _fail, _hold, _to_buf, _todict
+from .core import _Progress, _fail, _hold, _to_buf, _todict, _write_bytes
 
 
 def preview(paths, format="png", width=1600, output=None, stats=None, progress=None):
@@ -36,18 +36,8 @@ def preview(paths, format="png", width=1600, output=None, stats=None, progress=N
         with _hold(paths):
             data = _to_buf(lambda sink, buf, err: fn(paths._ref, int(width), sink, buf, ctypes.byref(st), err))
     if output is not None:
-        f, err = L.amp_out(), _err()
-        _check(lib.amp_out_open(ctypes.byref(f), os.fsencode(output), ctypes.byref(err)), err)
-        if lib.amp_out_sink(ctypes.byref(f), data, len(data)) != 0:
-            lib.amp_out_abort(ctypes.byref(f))
-            _check(-5, _msg(err, "%s: %s" % (f.target.decode(), os.strerror(f.werr))))
-        _check(lib.amp_out_commit(ctypes.byref(f), ctypes.byref(err)), err)
+        _write_bytes(output, data)
     if stats is not None:
         stats.update(_todict(st))
     return data
-
-
-def _msg(err, text):
-    err.msg = text.encode()[:199]
-    return err
 

@@ -33,6 +33,32 @@ class Errors(TmpCase):
         self.assertEqual(e.message, tool_message("order", r.stderr))
         self.assertIn(e.message, str(e))
 
+    def test_an_empty_trivariate_raises_instead_of_crashing(self):
+        # Trivariate() (no control points) crashed the interpreter in eval and volume
+        t = ampath.Trivariate()
+        with self.assertRaises(ampath.Error) as cm:
+            t.eval(0.5, 0.5, 0.5)
+        self.assertEqual(cm.exception.name, "AMP_ERR_ARG")
+        self.assertEqual(t.volume(), 0.0)
+
+    def test_a_failed_spl_write_keeps_the_old_file(self):
+        old = self.write("old.spl", "old")
+        with self.assertRaises(ampath.Error):
+            ampath.Trivariate().write(old)  # nothing to write: it emptied the file before
+        with open(old) as f:
+            self.assertEqual(f.read(), "old")
+
+    def test_cover_refuses_a_runaway_covering_as_the_tool_does(self):
+        with ampath.Trivariate.model("helix") as v:
+            with self.assertRaises(ampath.Error) as cm:
+                ampath.cover(v, eps=0.001)
+            self.assertEqual(cm.exception.name, "AMP_ERR_LIMIT")
+            self.assertIn("covering curves estimated", cm.exception.message)
+            r = tool("cover", "helix", "--eps", "0.001", "-o", self.p("x.amp"), ok=False)
+            self.assertEqual(r.returncode, 2)
+            self.assertIn("2.26e+08 covering curves", r.stderr)
+            self.assertIn("2.26e+08 covering curves", cm.exception.message)
+
     def test_bad_stl_and_spl_raise(self):
         stl = self.write("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n")
         with self.assertRaises(ampath.Error) as cm:
