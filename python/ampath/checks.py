@@ -53,13 +53,13 @@ def _eps_from_comment(ps):
     """The eps recorded by `ampath cover` (its eps), else by `ampath field` (its covering radius), in the file @ps
     was read from (tools/check_trivariate.c, check_eps_from_comment), or 0."""
     src = getattr(ps, "source", None)
-    if not src:
-        return 0.0
-    try:
-        with open(src, "rb") as f:
-            text = f.read().decode("utf-8", "replace")
-    except OSError:
-        return 0.0
+    text = "".join("# %s\n" % h for h in getattr(ps, "history", []))  # the stages' lines, as the file would hold
+    if src and not text:
+        try:
+            with open(src, "rb") as f:
+                text = f.read().decode("utf-8", "replace")
+        except OSError:
+            return 0.0
     for tag in ("cover", "field"):
         for m in re.finditer(r"# ampath " + tag + r"[^\n]*? eps ([-+0-9.eE]+)", text):
             try:

@@ -205,6 +205,9 @@ class PathSet(_Owner):
         lib.amp_pathset_init(ctypes.byref(self._ps), None)
         self.stats = {}
         self.source = None  # the file it was read from (ampath.check reads the eps `ampath cover` noted there)
+        # the tool's `# ampath ...` history lines, newest first: read from a file's header, set by the stages,
+        # written back by to_amp()/write() (so `ampath check` finds the eps `cover` or `field` noted)
+        self.history = []
 
     def _release(self):
         lib.amp_pathset_free(ctypes.byref(self._ps))
@@ -231,6 +234,11 @@ class PathSet(_Owner):
                 ps.close()
             _check(st, err)
         ps.source = os.fsdecode(filename)
+        try:
+            with open(filename, "rb") as f:
+                ps.history = _history_of(f.read(65536).decode("utf-8", "replace"))
+        except OSError:
+            pass
         return ps
 
     @classmethod
@@ -241,6 +249,7 @@ class PathSet(_Owner):
         if st:
             ps.close()
         _check(st, err)
+        ps.history = _history_of(data[:65536].decode("utf-8", "replace"))
         return ps
 
     def add(self, points, role="object", radius=None, h=0.0):
@@ -327,8 +336,13 @@ class PathSet(_Owner):
         b = lib.amp_pathset_bbox(self._ref)
         return {"min": (b.min.x, b.min.y, b.min.z), "max": (b.max.x, b.max.y, b.max.z)}
 
+    def _comment(self, comment):
+        return "\n".join(self.history) if comment is None and self.history else comment
+
     def to_amp(self, comment=None):
-        """The `.amp` text (docs/interfaces.md §3) as a str; @comment becomes `# ` lines after the header."""
+        """The `.amp` text (docs/interfaces.md §3) as a str; @comment (default: the history lines, as the tool
+        writes them) becomes `# ` lines after the header."""
+        comment = self._comment(comment)
         with self._using():
             return _to_buf(lambda sink, buf, err: lib.amp_pathset_write(
                 self._ref, None if comment is None else comment.encode(), sink, buf, err)).decode()
@@ -340,8 +354,9 @@ class PathSet(_Owner):
         return PathSet.parse(self.to_amp())
 
     def write(self, filename, comment=None):
-        """Write the `.amp` file (replaced atomically)."""
+        """Write the `.amp` file (replaced atomically); @comment as for to_amp()."""
         err = _err()
+        comment = self._comment(comment)
         with self._using():
             _check(lib.amp_pathset_write_file(self._ref, _b(filename),
                                               None if comment is None else comment.encode(), ctypes.byref(err)),
@@ -373,6 +388,22 @@ def _write_bytes(output, data):
         err.msg = ("%s: %s" % (f.target.decode(errors="replace"), os.strerror(f.werr))).encode()[:199]
         _check(-5, err)
     _check(lib.amp_out_commit(ctypes.byref(f), ctypes.byref(err)), err)
+
+
+def _history_of(text):
+    """The `# ampath ...` lines of a `.amp` header (before its first path), without the `# `, at most 16."""
+    out = []
+    for line in text.split("\n")[1:]:
+        if not line.startswith("#"):
+            break
+        if line.startswith("# ampath ") and len(out) < 16:
+            out.append(line[2:].rstrip("\r"))
+    return out
+
+
+def _derive(out, line, inp):
+    """@out's history: the stage's own line, then @inp's (the tool's cli_save_derived)."""
+    out.history = [line] + [h for h in getattr(inp, "history", []) if h != line][:15]
 
 
 def _to_buf(write):
@@ -408,6 +439,7 @@ class Trivariate(_Owner):
         super().__init__()
         self._s = L.amp_spline()
         lib.amp_spline_init(ctypes.byref(self._s))
+        self.name = None  # the built-in name or file it came from (the tool's cover line names it)
 
     def _release(self):
         lib.amp_spline_free(ctypes.byref(self._s))
@@ -422,6 +454,7 @@ class Trivariate(_Owner):
         """Built-in trivariate (helix, torus-quarter, vase)."""
         t, err = cls(), _err()
         _check(lib.amp_trivariate_model(_b(name), None, t._ref, ctypes.byref(err)), err)
+        t.name = name
         return t
 
     @classmethod
@@ -446,7 +479,9 @@ class Trivariate(_Owner):
             return cls.model(what)
         lst, n, err = ctypes.POINTER(L.amp_spline)(), ctypes.c_size_t(), _err()
         st = lib.amp_spline_read_file(_b(what), None, ctypes.byref(lst), ctypes.byref(n), ctypes.byref(err))
-        return cls._take_first(st, lst, n, err, what)
+        t = cls._take_first(st, lst, n, err, what)
+        t.name = os.fsdecode(what)
+        return t
 
     @classmethod
     def parse(cls, text):

@@ -13,8 +13,8 @@ import warnings
 
 from . import _lib as L
 from ._lib import lib
-from .core import (Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _err, _fail, _head, _hold, _Owner,
-                   _Progress, _todict)
+from .core import (Error, Mesh, PathSet, Trivariate, _apply, _b, _check, _derive, _err, _fail, _head, _hold,
+                   _Owner, _Progress, _todict)
 
 _DIRS = {"u": 0, "v": 1, "w": 2, 0: 0, 1: 1, 2: 2}
 
@@ -75,6 +75,9 @@ def cover(trivariate, eps, dir="auto", measure="arclen", progress=None, max_curv
                                         ctypes.byref(err)), err)
         out.stats = _todict(st)
         out.stats["dir"] = "uvw"[out.stats["dir"]]
+        _derive(out, "ampath cover %s: eps %.17g measure %s dir %s min-depth %d"
+                % (getattr(trivariate, "name", None) or "trivariate", eps, measure, out.stats["dir"], o.min_depth),
+                None)
     return _run(go, out, pr, (trivariate,))
 
 
@@ -176,6 +179,8 @@ def field(mesh, field, spacing=1.0, pattern="grid", dir="auto", along=None, side
                 _check(lib.amp_field_cover(ctypes.byref(f), mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
                                            ctypes.byref(err)), err)
                 out.stats = _todict(st)
+                _derive(out, "ampath field: direction-field curves clipped to the mesh, eps %.10g (covering radius)"
+                        % st.target, None)
             _run(go, out, pr, [mesh] + [k for k in keep if isinstance(k, Trivariate)])
         del arr
     except BaseException:
@@ -202,6 +207,8 @@ def order(paths, z_offs=0.5, theta_deg=72.0, improve=True, progress=None, **opts
     def go():
         _check(lib.amp_order(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
         out.stats = _todict(st)
+        _derive(out, "ampath order: z_offs %g mm, theta %g deg, %s, %d subdivisions"
+                % (z_offs, theta_deg, "improved" if improve else "plain greedy", st.subdivisions), paths)
     return _run(go, out, pr, (paths,))
 
 
@@ -217,6 +224,7 @@ def mdr(paths, nominal=0.5, progress=None, **opts):
     def go():
         _check(lib.amp_mdr(paths._ref, ctypes.byref(o), out._ref, ctypes.byref(st), ctypes.byref(err)), err)
         out.stats = _todict(st)
+        _derive(out, "ampath mdr", paths)
     return _run(go, out, pr, (paths,))
 
 
@@ -242,6 +250,7 @@ def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, pads=True, *
         _check(lib.amp_support(paths._ref, mesh.bvh(), ctypes.byref(o), out._ref, ctypes.byref(st),
                                ctypes.byref(err)), err)
         out.stats = _todict(st)
+        _derive(out, "ampath support", paths)
     return _run(go, out, pr, (paths, mesh))
 
 

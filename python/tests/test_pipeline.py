@@ -63,6 +63,28 @@ class HelixPipeline(TmpCase):
         self.assertEqual(stats["lines"], job.text.count("\n"))
 
 
+class History(TmpCase):
+    def test_written_paths_keep_the_tools_history_lines(self):
+        # the `# ampath ...` lines of each stage, as the tool writes them: the file is the tool's byte for byte,
+        # and `ampath check` (and ampath.check) find the eps cover noted (without them: the largest radius)
+        for args in (("cover", "helix", "--eps", 2, "--dir", "u", "-o", self.p("c.amp")),
+                     ("order", self.p("c.amp"), "-o", self.p("o.amp")),
+                     ("mdr", self.p("o.amp"), "--nominal", 0.5, "-o", self.p("m.amp")),
+                     ("model", "helix", "-o", self.p("h.stl")),
+                     ("support", self.p("m.amp"), "--mesh", self.p("h.stl"), "-o", self.p("s.amp"))):
+            tool(*args)
+        with ampath.Trivariate.model("helix") as v, ampath.Mesh.model("helix") as mesh:
+            ps = ampath.cover(v, eps=2, dir="u").as_written()
+            ps = ampath.order(ps).as_written()
+            ps = ampath.mdr(ps, nominal=0.5).as_written()
+            ps = ampath.support(ps, mesh).as_written()
+            ps.write(self.p("py.amp"))
+            report = ampath.check(ps, trivariate=v)
+        self.assertSameBytes(read(self.p("py.amp")), read(self.p("s.amp")), "support output with its history")
+        self.assertEqual((report["coverage"]["eps"], report["coverage"]["eps_from"]), (2.0, "path file"))
+        tool("check", self.p("py.amp"), "--trivariate", "helix", "--no-gouge", "--no-support")
+
+
 class SupportPads(TmpCase):
     def test_pads_are_on_by_default_and_off_with_pads_false_as_in_the_tool(self):
         tool("cover", "helix", "--eps", 3, "--dir", "u", "-o", self.p("c.amp"))
