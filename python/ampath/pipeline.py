@@ -236,6 +236,12 @@ def support(paths, mesh, z_offs=0.5, theta_deg=72.0, progress=None, pads=True, *
     if isinstance(mesh, Trivariate):
         with Mesh.from_trivariate(mesh) as m:
             return support(paths, m, z_offs, theta_deg, progress, pads, **opts)
+    if isinstance(mesh, (str, bytes)) or hasattr(mesh, "__fspath__"):  # a file name, as check and field take
+        with Mesh.load(mesh) as m:
+            return support(paths, m, z_offs, theta_deg, progress, pads, **opts)
+    if not isinstance(mesh, Mesh):
+        raise TypeError("support: mesh must be a Mesh, a Trivariate or an .stl file name, not %s"
+                        % type(mesh).__name__)
     o = L.amp_support_opts()
     lib.amp_support_opts_default(ctypes.byref(o))
     o.head = _head(z_offs, theta_deg)

@@ -59,6 +59,16 @@ class Errors(TmpCase):
             self.assertIn("2.26e+08 covering curves", r.stderr)
             self.assertIn("2.26e+08 covering curves", cm.exception.message)
 
+    def test_support_takes_a_mesh_file_name_and_refuses_other_types(self):
+        # check and field took a file name, support an AttributeError
+        tool("model", "twisted-bridge", "-o", self.p("m.stl"))
+        ps = ampath.PathSet()
+        ps.add([(0, 0, 0.5), (10, 0, 0.5)], radius=0.5)
+        with ampath.Mesh.load(self.p("m.stl")) as m:
+            self.assertEqual(ampath.support(ps, self.p("m.stl")).to_amp(), ampath.support(ps, m).to_amp())
+        with self.assertRaises(TypeError):
+            ampath.support(ps, None)
+
     def test_bad_stl_and_spl_raise(self):
         stl = self.write("bad.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0\n")
         with self.assertRaises(ampath.Error) as cm:
