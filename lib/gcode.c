@@ -392,6 +392,9 @@ static amp_status check_opts(const amp_gcode_opts *o, amp_error *err)
         return AMP_ERR_LIMIT;
     if (o->end_gcode && check_text(o->end_gcode, "end", err) != AMP_OK)
         return AMP_ERR_LIMIT;
+    if (amp_gc_klipper_sequence_fits(o, o->start_gcode, "start", err) != AMP_OK ||
+        amp_gc_klipper_sequence_fits(o, o->end_gcode, "end", err) != AMP_OK)
+        return AMP_ERR_LIMIT;
     return AMP_OK;
 }
 

@@ -18,6 +18,11 @@ void amp_gc_plan_single(amp_gcode_iter *it, double len, double v);
 /* Execute every planned block and come to rest. */
 void amp_gc_plan_flush(amp_gcode_iter *it);
 
+/* The start or end sequence @p text (@p what: "start", "end") for Klipper: AMP_ERR_LIMIT naming the line when a
+ * move of it would stop a Klipper job (max_extrude_cross_section, max_extrude_only_distance); AMP_OK for any
+ * other flavour (gcode_seqcheck.c). */
+amp_status amp_gc_klipper_sequence_fits(const amp_gcode_opts *o, const char *text, const char *what, amp_error *err);
+
 /* A helical arc from the current vertex to vertex @p end: centre (cx, cy), clockwise or not, length in XYZ. */
 typedef struct amp_gc_arc {
     double cx, cy, len;

@@ -936,6 +936,46 @@ END_TEST
 /* Klipper corners by its square_corner_velocity (5 mm/s by default): a right angle is taken at exactly that
  * speed whatever the acceleration (klippy/toolhead.py turns it into a junction deviation); Marlin's rule with
  * its 0.05 mm takes the same corner at 11 mm/s at 1000 mm/s^2. */
+/* A start or end sequence with a move Klipper would stop at is refused up front, naming the line: the MK3S's
+ * intro line (12.5 mm of filament over 40 mm: 0.75 mm^2 against 0.64) stopped a Klipper print before its first
+ * layer; an unload of 60 mm beyond max_extrude_only_distance. Marlin takes both. Every built-in profile's own
+ * sequences pass under either flavour (the MK3S's intro line is thinner under Klipper). */
+START_TEST(klipper_refuses_a_start_or_end_sequence_it_would_stop_at)
+{
+    static const char intro[] = "G28\nG1 Z0.2 F720\nG1 X10 Y1 F3000\nM83\nG1 X70 Y1 E9 F1000\nG1 X110 Y1 E12.5 F1000\n";
+    amp_pathset ps;
+    amp_gcode_opts o;
+    amp_gcode_iter it;
+    amp_error err;
+    size_t i;
+    int f;
+    amp_pathset_init(&ps, NULL);
+    fx_helix(&ps, 6, 60);
+    set_radius(&ps, 0.3);
+    amp_gcode_opts_default(&o, AMP_FLAVOR_KLIPPER);
+    o.start_gcode = intro;
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_LIMIT);
+    ck_assert_msg(strstr(err.msg, "start sequence's line 6") && strstr(err.msg, "0.752 mm^2"), "%s", err.msg);
+    o.flavor = AMP_FLAVOR_MARLIN;
+    free(gen(&ps, &o, NULL));
+    o.flavor = AMP_FLAVOR_KLIPPER;
+    o.start_gcode = NULL;
+    o.end_gcode = "G91\nG1 E-60 F3000\n";
+    ck_assert_int_eq(amp_gcode_iter_init(&it, &ps, &o, &err), AMP_ERR_LIMIT);
+    ck_assert_msg(strstr(err.msg, "end sequence's line 2") && strstr(err.msg, "max_extrude_only_distance"), "%s",
+                  err.msg);
+    for (i = 0; i < amp_printer_builtin_count(); i++)
+        for (f = 0; f < 2; f++) {
+            amp_printer p;
+            ck_assert_int_eq(amp_printer_builtin(&p, amp_printer_builtin_name(i), &err), AMP_OK);
+            p.flavor = f ? AMP_FLAVOR_KLIPPER : AMP_FLAVOR_MARLIN;
+            ck_assert_msg(amp_printer_gcode_opts(&p, &o, &err) == AMP_OK, "%s: %s", p.name, err.msg);
+            ck_assert_msg(amp_gcode_iter_init(&it, &ps, &o, &err) == AMP_OK, "%s %d: %s", p.name, f, err.msg);
+        }
+    amp_pathset_free(&ps);
+}
+END_TEST
+
 START_TEST(klipper_takes_a_right_angle_at_its_square_corner_velocity)
 {
     amp_pathset ps;
@@ -2377,6 +2417,7 @@ static Suite *gcode_suite(void)
     tcase_add_test(tc, moves_accelerate_within_each_axis_limit);
     tcase_add_test(tc, klipper_jobs_stay_within_its_extrusion_cross_section);
     tcase_add_test(tc, klipper_takes_a_right_angle_at_its_square_corner_velocity);
+    tcase_add_test(tc, klipper_refuses_a_start_or_end_sequence_it_would_stop_at);
     tcase_add_test(tc, caller_start_and_end_sequences_replace_the_built_in_ones);
     tcase_add_test(tc, lines_stay_within_the_length_limit_at_extreme_coordinates);
     tcase_add_test(tc, bad_input_gives_clear_errors);
