@@ -21,6 +21,8 @@
 
 #define EXTRUDE_ONLY_MAX 50.0 /* Klipper's default max_extrude_only_distance, mm */
 
+static const char axes[3] = {'X', 'Y', 'Z'};
+
 typedef struct seq_state {
     double pos[3], e;
     int known[3], rel, rel_e;
@@ -54,7 +56,6 @@ static int command(const char *s, const char *end, char *letter)
  * E is under nozzle x the ratio limit is not measured (the nozzle taken as sqrt(max_cross_section / 4)). */
 static int move_fails(seq_state *q, const amp_gcode_opts *o, const char *s, const char *end, double *area)
 {
-    static const char axes[3] = {'X', 'Y', 'Z'};
     double d2 = 0.0, de = 0.0, v, fil = AMP_PI * 0.25 * o->filament_diameter * o->filament_diameter;
     int a, measured = 1, xy = 0;
     for (a = 0; a < 3; a++) {
@@ -127,7 +128,6 @@ amp_status amp_gc_klipper_sequence_fits(const amp_gcode_opts *o, const char *tex
         } else if (letter == 'M' && (c == 82 || c == 83)) {
             q.rel_e = c == 83;
         } else if (letter == 'G' && c == 92) {
-            static const char axes[3] = {'X', 'Y', 'Z'};
             int a;
             for (a = 0; a < 3; a++)
                 if (word(s, stop, axes[a], &v)) {
