@@ -440,8 +440,6 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
 {
     const amp_allocator *al = region ? region->alloc : NULL;
     stroke_scan s;
-    if (!pts && n)
-        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_stroke: NULL points");
     amp_skey *key = NULL, *tmp = NULL;
     seg2 *sg = NULL, *by_x = NULL;
     ekey2 *ek = NULL;
@@ -449,6 +447,8 @@ amp_status amp_check_stroke_radii(const amp_vec2 *pts, const double *rad, size_t
     amp_status st = AMP_OK;
     yrows yr;
     double lo = 0, hi = 0;
+    if (!pts && n)
+        return amp_fail(err, AMP_ERR_ARG, 0, "amp_check_stroke: NULL points");
     memset(&s, 0, sizeof s);
     memset(&yr, 0, sizeof yr);
     s.al = al;

@@ -585,7 +585,9 @@ static void shift_retry(lctx *w, ijob *j, double h)
         w->no_bands = 0;
         if (j->rc != AMP_OK)
             return;
-        if (island_clean(w->o, &w->retry, &w->isl, j) && j->rc == AMP_OK) {
+        if (island_clean(w->o, &w->retry, &w->isl, j)) {
+            if (j->rc != AMP_OK)
+                return; /* the verifier ran out of memory: no further try */
             amp_pathset_clear(&j->ps);
             j->rc = amp_pathset_append(&j->ps, &w->retry, &j->err);
             j->nobj = nobj;
@@ -623,7 +625,7 @@ static void island_job(lctx *w, ijob *j)
             j->rc = island_once(w, j->li, h, &j->ps, 0, &j->nobj, &j->s, &j->err);
             w->no_bands = 0;
         }
-        if (j->rc == AMP_OK && (j->s.band_retries == 0 || !island_clean(w->o, &j->ps, &w->isl, j)) && j->rc == AMP_OK)
+        if (j->rc == AMP_OK && (j->s.band_retries == 0 || !island_clean(w->o, &j->ps, &w->isl, j)))
             shift_retry(w, j, h);
     }
     if (j->rc == AMP_OK && w->o->overlap_cap) {
@@ -695,7 +697,8 @@ static amp_status layer_emit(lctx *c, size_t li, const ijob *jobs, amp_pathset *
         c->done[k] = 1;
         j = &jobs[k];
         if (j->rc != AMP_OK) {
-            *err = j->err;
+            if (err)
+                *err = j->err;
             return j->rc;
         }
         if ((rc = amp_pathset_append(out, &j->ps, err)) != AMP_OK)

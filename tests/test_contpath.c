@@ -1643,6 +1643,48 @@ START_TEST(a_verifier_out_of_memory_stops_the_slice_with_that_error)
 }
 END_TEST
 
+/* A verifier that rejects its first path and then runs out of memory once: the retry that follows the rejection
+ * must stop at the failure too (it went on with the next try, which passed: exit 0 with other paths). */
+static int reject_then_oom_calls;
+static amp_status reject_then_out_of_memory(const amp_pathset *ps, size_t i, const amp_polyset *region, double tol,
+                                            struct amp_stroke_report *rep, amp_error *err)
+{
+    (void)ps, (void)i, (void)region, (void)tol, (void)rep;
+    reject_then_oom_calls++;
+    if (reject_then_oom_calls == 1)
+        return AMP_ERR_GEOMETRY;
+    if (reject_then_oom_calls == 2)
+        return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
+    return AMP_OK;
+}
+
+START_TEST(a_verifier_out_of_memory_in_a_retry_stops_the_slice_too)
+{
+    amp_mesh m;
+    amp_slices sl;
+    amp_slice_opts so = {0.5, 0};
+    amp_contpath_opts o;
+    amp_contpath_stats st;
+    amp_pathset ps;
+    fx_failalloc fa; /* a caller's allocator: the islands are made on this thread, in order */
+    fx_failalloc_init(&fa, 1L << 40);
+    amp_mesh_init(&m, NULL);
+    ck_assert_int_eq(amp_mesh_model("twisted-bridge", 1.0, &m, NULL), AMP_OK);
+    amp_slices_init(&sl, NULL);
+    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
+    amp_contpath_opts_default(&o, 0.225);
+    o.verify_stroke = reject_then_out_of_memory;
+    amp_pathset_init(&ps, &fa.a);
+    memset(&st, 0, sizeof st);
+    reject_then_oom_calls = 0;
+    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, NULL), AMP_ERR_NOMEM);
+    ck_assert_int_ge(reject_then_oom_calls, 2); /* the islands computed beside it are verified too */
+    amp_pathset_free(&ps);
+    amp_slices_free(&sl);
+    amp_mesh_free(&m);
+}
+END_TEST
+
 static size_t verifier_calls;
 
 /* A verifier that rejects every path (counts its calls). */
@@ -2015,6 +2057,7 @@ static Suite *contpath_suite(void)
     tcase_add_test(tc, a_splice_leaves_out_the_short_end_of_a_long_loop_with_few_segments);
     tcase_add_test(tc, support_corners_out_of_memory_frees_every_block_once);
     tcase_add_test(tc, a_verifier_out_of_memory_stops_the_slice_with_that_error);
+    tcase_add_test(tc, a_verifier_out_of_memory_in_a_retry_stops_the_slice_too);
     tcase_add_test(tc, offsets_at_the_edge_of_a_split_print_without_crossing);
     tcase_add_test(tc, the_band_retry_asks_the_callers_verifier);
     tcase_add_test(tc, islands_made_on_many_threads_equal_those_made_on_one);
