@@ -78,6 +78,19 @@ static amp_status insert_once(amp_spline *s, int d, double t, amp_error *err)
     return AMP_OK;
 }
 
+/* Several insertions work on a copy @p c: it replaces @p s when they all succeeded (@p st AMP_OK) and is dropped
+ * otherwise, so that s changes all at once or not at all (spline.h). */
+static amp_status swap_in(amp_spline *s, amp_spline *c, amp_status st)
+{
+    if (st == AMP_OK) {
+        amp_spline_free(s);
+        *s = *c;
+    } else {
+        amp_spline_free(c);
+    }
+    return st;
+}
+
 amp_status amp_spline_insert_knot(amp_spline *s, int d, double t, int times, amp_error *err)
 {
     double lo, hi;
@@ -94,22 +107,15 @@ amp_status amp_spline_insert_knot(amp_spline *s, int d, double t, int times, amp
                         s->order[d]);
     if (s->count[d] + (size_t)times > AMP_SPLINE_MAX_COUNT)
         return amp_fail(err, AMP_ERR_LIMIT, 0, "too many control points");
-    if (times == 1)
-        return insert_once(s, d, t, err); /* leaves s as it was when it fails */
-    /* several insertions on a copy, swapped in at the end: a failure half way leaves s unchanged */
-    if (times > 1) {
+    if (times <= 1)
+        return times == 1 ? insert_once(s, d, t, err) : AMP_OK; /* one insertion leaves s as it was on failure */
+    {
         amp_spline c;
         amp_status st = amp_spline_copy(&c, s, s->alloc, err);
         for (i = 0; i < times && st == AMP_OK; i++)
             st = insert_once(&c, d, t, err);
-        if (st == AMP_OK) {
-            amp_spline_free(s);
-            *s = c;
-        } else
-            amp_spline_free(&c);
-        return st;
+        return swap_in(s, &c, st);
     }
-    return AMP_OK;
 }
 
 amp_status amp_spline_refine(amp_spline *s, int d, const double *t, size_t n, amp_error *err)
@@ -121,16 +127,10 @@ amp_status amp_spline_refine(amp_spline *s, int d, const double *t, size_t n, am
         return amp_fail(err, AMP_ERR_ARG, 0, "amp_spline_refine: NULL argument");
     if (n == 0)
         return AMP_OK;
-    /* on a copy, swapped in at the end: any failure leaves s unchanged */
     st = amp_spline_copy(&c, s, s->alloc, err);
     for (i = 0; i < n && st == AMP_OK; i++)
         st = amp_spline_insert_knot(&c, d, t[i], 1, err);
-    if (st == AMP_OK) {
-        amp_spline_free(s);
-        *s = c;
-    } else
-        amp_spline_free(&c);
-    return st;
+    return swap_in(s, &c, st);
 }
 
 /* A new spline equal to s except that direction d keeps control points first..first+cnt-1 with knots K. */
