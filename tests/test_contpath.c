@@ -1616,30 +1616,40 @@ static amp_status verifier_out_of_memory(const amp_pathset *ps, size_t i, const 
     return amp_fail(err, AMP_ERR_NOMEM, 0, "out of memory checking a stroke");
 }
 
-START_TEST(a_verifier_out_of_memory_stops_the_slice_with_that_error)
+/* The twisted bridge at 0.5 mm layers made into strokes with verifier @p v, the output allocating with @p al
+ * (a caller's allocator: the islands are made on the calling thread, in order); every object freed. */
+static amp_status bridge_strokes_verified_by(amp_contpath_verify_fn v, const amp_allocator *al, amp_contpath_stats *st,
+                                             amp_error *e)
 {
     amp_mesh m;
     amp_slices sl;
     amp_slice_opts so = {0.5, 0};
     amp_contpath_opts o;
-    amp_contpath_stats st;
     amp_pathset ps;
-    amp_error e;
-    amp_error_clear(&e);
+    amp_status rc;
     amp_mesh_init(&m, NULL);
     ck_assert_int_eq(amp_mesh_model("twisted-bridge", 1.0, &m, NULL), AMP_OK);
     amp_slices_init(&sl, NULL);
     ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
     amp_contpath_opts_default(&o, 0.225);
-    o.verify_stroke = verifier_out_of_memory;
-    amp_pathset_init(&ps, NULL);
-    memset(&st, 0, sizeof st);
-    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, &e), AMP_ERR_NOMEM);
-    ck_assert_uint_eq(st.shift_retries + st.band_retries, 0);
-    ck_assert_msg(strstr(e.msg, "out of memory") != NULL, "%s", e.msg);
+    o.verify_stroke = v;
+    amp_pathset_init(&ps, al);
+    memset(st, 0, sizeof *st);
+    rc = amp_contpath_layers(&sl, &o, &ps, st, e);
     amp_pathset_free(&ps);
     amp_slices_free(&sl);
     amp_mesh_free(&m);
+    return rc;
+}
+
+START_TEST(a_verifier_out_of_memory_stops_the_slice_with_that_error)
+{
+    amp_contpath_stats st;
+    amp_error e;
+    amp_error_clear(&e);
+    ck_assert_int_eq(bridge_strokes_verified_by(verifier_out_of_memory, NULL, &st, &e), AMP_ERR_NOMEM);
+    ck_assert_uint_eq(st.shift_retries + st.band_retries, 0);
+    ck_assert_msg(strstr(e.msg, "out of memory") != NULL, "%s", e.msg);
 }
 END_TEST
 
@@ -1660,28 +1670,13 @@ static amp_status reject_then_out_of_memory(const amp_pathset *ps, size_t i, con
 
 START_TEST(a_verifier_out_of_memory_in_a_retry_stops_the_slice_too)
 {
-    amp_mesh m;
-    amp_slices sl;
-    amp_slice_opts so = {0.5, 0};
-    amp_contpath_opts o;
     amp_contpath_stats st;
-    amp_pathset ps;
     fx_failalloc fa; /* a caller's allocator: the islands are made on this thread, in order */
     fx_failalloc_init(&fa, 1L << 40);
-    amp_mesh_init(&m, NULL);
-    ck_assert_int_eq(amp_mesh_model("twisted-bridge", 1.0, &m, NULL), AMP_OK);
-    amp_slices_init(&sl, NULL);
-    ck_assert_int_eq(amp_slice_mesh(&m, &so, &sl, NULL), AMP_OK);
-    amp_contpath_opts_default(&o, 0.225);
-    o.verify_stroke = reject_then_out_of_memory;
-    amp_pathset_init(&ps, &fa.a);
-    memset(&st, 0, sizeof st);
     reject_then_oom_calls = 0;
-    ck_assert_int_eq(amp_contpath_layers(&sl, &o, &ps, &st, NULL), AMP_ERR_NOMEM);
+    /* NULL err: an island's error is not written through it */
+    ck_assert_int_eq(bridge_strokes_verified_by(reject_then_out_of_memory, &fa.a, &st, NULL), AMP_ERR_NOMEM);
     ck_assert_int_ge(reject_then_oom_calls, 2); /* the islands computed beside it are verified too */
-    amp_pathset_free(&ps);
-    amp_slices_free(&sl);
-    amp_mesh_free(&m);
 }
 END_TEST
 
